@@ -1,0 +1,77 @@
+//! The `thorarena` command line: the argument tree and one module per subcommand.
+
+mod bench_physics;
+mod robot_info;
+mod sim_trace;
+
+use clap::{Parser, Subcommand};
+
+/// ThorArena: force-aware benchmark for humanoid whole-body control policies.
+///
+/// A simulated Unitree G1 (rapier multibody) tracks retargeted human motion while the
+/// recorded two-hand interaction forces are replayed on its hands; policies are scored with
+/// the Force-Aware Tracking Score (FATS) with and without force.
+#[derive(Debug, Parser)]
+#[command(name = "thorarena", version, about, long_about)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Inspect a robot model.
+    #[command(subcommand)]
+    Robot(RobotCommand),
+    /// Run open-loop physics scenarios (used by the MuJoCo cross-check).
+    #[command(subcommand)]
+    Sim(SimCommand),
+    /// Measure performance.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+/// `thorarena robot …`
+#[derive(Debug, Subcommand)]
+pub enum RobotCommand {
+    /// Print joints (order, limits, effort, armature), bodies with masses, keypoints, hands.
+    Info(robot_info::Args),
+}
+
+/// `thorarena sim …`
+#[derive(Debug, Subcommand)]
+pub enum SimCommand {
+    /// Run an open-loop scenario and print its inputs and trajectory as one JSON object.
+    Trace(sim_trace::Args),
+}
+
+/// `thorarena bench …`
+#[derive(Debug, Subcommand)]
+pub enum BenchCommand {
+    /// Cost of one physics step of the standing G1, against MuJoCo when available.
+    Physics(bench_physics::Args),
+}
+
+/// Parses the command line and runs it.
+pub fn run() -> anyhow::Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Robot(RobotCommand::Info(args)) => robot_info::run(&args),
+        Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
+        Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
+    }
+}
+
+/// Loads a bundled robot by name, or a robot directory when the argument is a path.
+pub(crate) fn load_robot(name_or_dir: &str) -> anyhow::Result<crate::robot::RobotModel> {
+    use anyhow::Context;
+    let path = std::path::Path::new(name_or_dir);
+    let model = if path.join("robot.toml").is_file() {
+        crate::robot::load_robot_dir(path)
+    } else {
+        crate::robot::load_bundled(name_or_dir)
+    };
+    model.with_context(|| format!("loading robot `{name_or_dir}`"))
+}

@@ -1,0 +1,58 @@
+//! A `Physics` trait (reset, PD targets, hand forces, step, read state) and its rapier
+//! multibody backend.
+//!
+//! Everything engine-specific stays behind the trait, so episodes, force replay and
+//! metrics never see rapier types, and another backend can run the same conformance tests.
+
+mod gains;
+mod rapier;
+mod settings;
+mod state;
+
+pub use gains::{armature_derived_gains, legged_gym_gains, standing_gains};
+pub use rapier::{standing_default_pose, RapierPhysics};
+pub use settings::{ContactMode, PdForm, PhysicsSettings};
+pub use state::{ExternalForce, PdGains, PhysicsState, ResetState, RootState};
+
+use crate::robot::RobotModel;
+
+/// A simulated robot that tracks PD targets under gravity, contacts and external forces.
+///
+/// Stepping never fails; loading and construction do. Joint vectors are in the model's
+/// canonical order; body indices are those of [`RobotModel::bodies`].
+pub trait Physics {
+    /// The robot being simulated.
+    fn model(&self) -> &RobotModel;
+
+    /// The settings in force.
+    fn settings(&self) -> &PhysicsSettings;
+
+    /// Puts the robot in `state`, clears external forces and resets time to zero.
+    /// Nothing of the previous episode (contact caches, warm starts) survives a reset.
+    fn reset(&mut self, state: &ResetState);
+
+    /// Sets PD gains and torque limits; they hold until changed (also across resets).
+    fn set_gains(&mut self, gains: &PdGains);
+
+    /// Sets the joint position targets of the PD law for the coming steps, rad.
+    fn set_targets(&mut self, q_target: &[f64]);
+
+    /// Holds a world-frame force at a point of a body for the coming steps, replacing any
+    /// force previously set on that body.
+    fn set_external_force(&mut self, force: ExternalForce);
+
+    /// Removes every external force.
+    fn clear_external_forces(&mut self);
+
+    /// Advances one physics step.
+    fn step(&mut self);
+
+    /// Writes the current state into `out` (reusing its buffers).
+    fn read_state(&self, out: &mut PhysicsState);
+
+    /// Simulated time since the last reset, s.
+    fn time_s(&self) -> f64;
+
+    /// Number of active contact points in the last step (for diagnostics and benchmarks).
+    fn contact_count(&self) -> usize;
+}

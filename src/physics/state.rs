@@ -1,0 +1,97 @@
+//! Plain data exchanged with a physics backend.
+
+use nalgebra::{Isometry3, Point3, Vector3};
+
+/// Pose and velocity of the root body (the pelvis frame, not its centre of mass).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RootState {
+    /// Root frame in the world.
+    pub world_from_root: Isometry3<f64>,
+    /// Linear velocity of the root frame origin, world frame, m/s.
+    pub lin_vel_w: Vector3<f64>,
+    /// Angular velocity, world frame, rad/s.
+    pub ang_vel_w: Vector3<f64>,
+}
+
+impl RootState {
+    /// At rest at a pose.
+    pub fn at_rest(world_from_root: Isometry3<f64>) -> Self {
+        Self {
+            world_from_root,
+            lin_vel_w: Vector3::zeros(),
+            ang_vel_w: Vector3::zeros(),
+        }
+    }
+
+    /// Linear velocity in the root (base) frame, m/s.
+    pub fn lin_vel_b(&self) -> Vector3<f64> {
+        self.world_from_root
+            .rotation
+            .inverse_transform_vector(&self.lin_vel_w)
+    }
+
+    /// Angular velocity in the root (base) frame, rad/s — what an IMU on the pelvis reads.
+    pub fn ang_vel_b(&self) -> Vector3<f64> {
+        self.world_from_root
+            .rotation
+            .inverse_transform_vector(&self.ang_vel_w)
+    }
+
+    /// Gravity direction in the base frame (unit vector), as policies observe it.
+    pub fn projected_gravity_b(&self) -> Vector3<f64> {
+        self.world_from_root
+            .rotation
+            .inverse_transform_vector(&-Vector3::z())
+    }
+}
+
+/// The full state a reset puts the robot in.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResetState {
+    /// Root pose and velocity.
+    pub root: RootState,
+    /// Joint angles, canonical order, rad.
+    pub q: Vec<f64>,
+    /// Joint velocities, canonical order, rad/s.
+    pub qd: Vec<f64>,
+}
+
+/// PD gains and torque limits, canonical order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PdGains {
+    /// Stiffness, N·m/rad.
+    pub kp: Vec<f64>,
+    /// Damping, N·m·s/rad.
+    pub kd: Vec<f64>,
+    /// Torque limit applied to the PD torque, N·m.
+    pub effort_limit_nm: Vec<f64>,
+}
+
+/// Everything a backend reports after a step.
+#[derive(Debug, Clone, Default)]
+pub struct PhysicsState {
+    /// Simulated time since reset, s.
+    pub time_s: f64,
+    /// Root pose and velocity.
+    pub root: Option<RootState>,
+    /// Joint angles, rad.
+    pub q: Vec<f64>,
+    /// Joint velocities, rad/s.
+    pub qd: Vec<f64>,
+    /// World pose of every body of the model.
+    pub world_from_body: Vec<Isometry3<f64>>,
+    /// Joint torques of the PD law as applied in the last step (including the damping
+    /// part), N·m.
+    pub applied_torque_nm: Vec<f64>,
+}
+
+/// A force held on a body until changed or cleared.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ExternalForce {
+    /// Body index in the robot model.
+    pub body: usize,
+    /// Force, world frame, N.
+    pub force_w: Vector3<f64>,
+    /// Application point in the body frame, m (it moves with the body).
+    pub point_b: Point3<f64>,
+}

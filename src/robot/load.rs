@@ -1,0 +1,457 @@
+//! Reading `robot.toml` and the URDF, merging fixed links, and validating the result.
+
+use super::config::{FrameConfig, HandConfig, RobotConfig};
+use super::error::RobotError;
+use super::model::{Body, Frame, Geometry, Hand, Joint, KeypointSet, RobotModel, Shape};
+use nalgebra::{Isometry3, Matrix3, Point3, Translation3, Unit, UnitQuaternion, Vector3};
+use std::path::{Path, PathBuf};
+
+/// Loads `<dir>/robot.toml` and the URDF it names.
+pub fn load_robot_dir(dir: &Path) -> Result<RobotModel, RobotError> {
+    let toml_path = dir.join("robot.toml");
+    let text = read(&toml_path)?;
+    let config: RobotConfig = toml::from_str(&text).map_err(|e| RobotError::Toml {
+        path: toml_path.clone(),
+        message: e.to_string(),
+    })?;
+    let urdf_path = dir.join(&config.urdf);
+    let urdf_text = read(&urdf_path)?;
+    let urdf = urdf_rs::read_from_string(&urdf_text).map_err(|e| RobotError::Urdf {
+        path: urdf_path.clone(),
+        message: e.to_string(),
+    })?;
+    build_model(&config, &urdf, &toml_path, &urdf_path)
+}
+
+fn read(path: &Path) -> Result<String, RobotError> {
+    std::fs::read_to_string(path).map_err(|source| RobotError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Assembles and validates a model from an already parsed config and URDF.
+pub fn build_model(
+    config: &RobotConfig,
+    urdf: &urdf_rs::Robot,
+    toml_path: &Path,
+    urdf_path: &Path,
+) -> Result<RobotModel, RobotError> {
+    let bad = |path: &Path, field: String, reason: String| RobotError::BadField {
+        path: path.to_path_buf(),
+        field,
+        reason,
+    };
+    let link_index = |name: &str| urdf.links.iter().position(|l| l.name == name);
+    let root_link = link_index(&config.root_body).ok_or_else(|| {
+        bad(
+            toml_path,
+            "root_body".into(),
+            format!("no URDF link named `{}`", config.root_body),
+        )
+    })?;
+
+    // Every URDF joint must be either fixed or listed in robot.toml, and vice versa.
+    let mut seen = std::collections::HashSet::new();
+    for (i, jc) in config.joints.iter().enumerate() {
+        if !seen.insert(jc.name.as_str()) {
+            return Err(bad(
+                toml_path,
+                format!("joints[{i}].name"),
+                format!("`{}` is listed twice", jc.name),
+            ));
+        }
+        let Some(uj) = urdf.joints.iter().find(|j| j.name == jc.name) else {
+            return Err(bad(
+                toml_path,
+                format!("joints[{i}].name"),
+                format!(
+                    "unknown joint `{}`: not in {}",
+                    jc.name,
+                    urdf_path.display()
+                ),
+            ));
+        };
+        if uj.joint_type != urdf_rs::JointType::Revolute {
+            return Err(bad(
+                toml_path,
+                format!("joints[{i}].name"),
+                format!(
+                    "`{}` is a {:?} joint; only revolute joints can be actuated",
+                    jc.name, uj.joint_type
+                ),
+            ));
+        }
+        for (field, v) in [
+            ("effort_nm", jc.effort_nm),
+            ("velocity_rad_s", jc.velocity_rad_s),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(bad(
+                    toml_path,
+                    format!("joints[{i}].{field}"),
+                    format!("must be > 0, got {v}"),
+                ));
+            }
+        }
+        if !(jc.armature_kgm2.is_finite() && jc.armature_kgm2 >= 0.0) {
+            return Err(bad(
+                toml_path,
+                format!("joints[{i}].armature_kgm2"),
+                format!("must be >= 0, got {}", jc.armature_kgm2),
+            ));
+        }
+    }
+    let n_moving = urdf
+        .joints
+        .iter()
+        .filter(|j| j.joint_type != urdf_rs::JointType::Fixed)
+        .count();
+    if n_moving != config.joints.len() {
+        let missing: Vec<&str> = urdf
+            .joints
+            .iter()
+            .filter(|j| {
+                j.joint_type != urdf_rs::JointType::Fixed && !seen.contains(j.name.as_str())
+            })
+            .map(|j| j.name.as_str())
+            .collect();
+        return Err(bad(
+            toml_path,
+            "joints".into(),
+            format!(
+                "lists {} joints but the URDF has {} non-fixed joints (missing: {})",
+                config.joints.len(),
+                n_moving,
+                missing.join(", ")
+            ),
+        ));
+    }
+
+    // Walk the tree from the root: moving joints start a new body, fixed ones merge.
+    let mut bodies: Vec<Body> = Vec::new();
+    let mut frames: Vec<Frame> = Vec::new();
+    let mut joints: Vec<Option<Joint>> = vec![None; config.joints.len()];
+    let mut stack: Vec<(usize, usize, Isometry3<f64>)> = Vec::new(); // (link, body, body_from_link)
+    let root = new_body(
+        &urdf.links[root_link],
+        None,
+        None,
+        Isometry3::identity(),
+        Vector3::x_axis(),
+    );
+    bodies.push(root);
+    stack.push((root_link, 0, Isometry3::identity()));
+    let mut visited = vec![false; urdf.links.len()];
+    let mut order: Vec<(usize, usize, Isometry3<f64>)> = Vec::new();
+    while let Some((link, body, body_from_link)) = stack.pop() {
+        if std::mem::replace(&mut visited[link], true) {
+            return Err(bad(
+                urdf_path,
+                format!("link `{}`", urdf.links[link].name),
+                "appears twice in the tree".into(),
+            ));
+        }
+        order.push((link, body, body_from_link));
+        frames.push(Frame {
+            name: urdf.links[link].name.clone(),
+            body,
+            body_from_frame: body_from_link,
+        });
+        // Bodies are numbered in URDF declaration order; the stack is filled in reverse so
+        // that it pops them in that order too.
+        let mut children = Vec::new();
+        for uj in urdf
+            .joints
+            .iter()
+            .filter(|j| j.parent.link == urdf.links[link].name)
+        {
+            let child = link_index(&uj.child.link).ok_or_else(|| {
+                bad(
+                    urdf_path,
+                    format!("joint `{}`.child", uj.name),
+                    format!("no link `{}`", uj.child.link),
+                )
+            })?;
+            let link_from_joint = pose_of(&uj.origin);
+            if uj.joint_type == urdf_rs::JointType::Fixed {
+                children.push((child, body, body_from_link * link_from_joint));
+                continue;
+            }
+            let ji = config
+                .joints
+                .iter()
+                .position(|j| j.name == uj.name)
+                .expect("checked above");
+            let axis = Vector3::from(uj.axis.xyz.0);
+            let axis = Unit::try_new(axis, 1e-9).ok_or_else(|| {
+                bad(
+                    urdf_path,
+                    format!("joint `{}`.axis", uj.name),
+                    "zero-length axis".into(),
+                )
+            })?;
+            let new = bodies.len();
+            bodies.push(new_body(
+                &urdf.links[child],
+                Some(body),
+                Some(ji),
+                body_from_link * link_from_joint,
+                axis,
+            ));
+            let jc = &config.joints[ji];
+            joints[ji] = Some(Joint {
+                name: jc.name.clone(),
+                body: new,
+                lower_rad: uj.limit.lower,
+                upper_rad: uj.limit.upper,
+                effort_nm: jc.effort_nm,
+                velocity_rad_s: jc.velocity_rad_s,
+                armature_kgm2: jc.armature_kgm2,
+                default_rad: jc.default_rad,
+            });
+            children.push((child, new, Isometry3::identity()));
+        }
+        stack.extend(children.into_iter().rev());
+    }
+    let joints: Vec<Joint> = joints
+        .into_iter()
+        .enumerate()
+        .map(|(i, j)| {
+            j.ok_or_else(|| {
+                bad(
+                    toml_path,
+                    format!("joints[{i}].name"),
+                    format!(
+                        "`{}` is not reachable from root `{}`",
+                        config.joints[i].name, config.root_body
+                    ),
+                )
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    for (i, j) in joints.iter().enumerate() {
+        if !(j.lower_rad <= j.default_rad && j.default_rad <= j.upper_rad) {
+            return Err(bad(
+                toml_path,
+                format!("joints[{i}].default_rad"),
+                format!(
+                    "{} is outside the URDF limits [{}, {}]",
+                    j.default_rad, j.lower_rad, j.upper_rad
+                ),
+            ));
+        }
+    }
+
+    // Mass properties and shapes: every link adds to the body it belongs to.
+    let mut acc: Vec<MassAccumulator> = vec![MassAccumulator::default(); bodies.len()];
+    for &(link, body, body_from_link) in &order {
+        let l = &urdf.links[link];
+        acc[body].add(&l.inertial, &body_from_link);
+        for (ci, c) in l.collision.iter().enumerate() {
+            let geometry = geometry_of(&c.geometry).ok_or_else(|| {
+                bad(
+                    urdf_path,
+                    format!("link `{}`.collision[{ci}]", l.name),
+                    "only box, sphere, capsule and cylinder collisions are supported".into(),
+                )
+            })?;
+            let name = c.name.clone().unwrap_or_default();
+            bodies[body].shapes.push(Shape {
+                is_sole: name == config.sole_collision,
+                name,
+                body_from_shape: body_from_link * pose_of(&c.origin),
+                geometry,
+            });
+        }
+    }
+    for (b, a) in bodies.iter_mut().zip(acc) {
+        let (m, com, inertia) = a.finish();
+        if !(m > 0.0) {
+            return Err(bad(
+                urdf_path,
+                format!("link `{}`.inertial", b.name),
+                "moving body without mass".into(),
+            ));
+        }
+        b.mass_kg = m;
+        b.com_b = com;
+        b.inertia_kgm2 = inertia;
+    }
+
+    // Extra frames, keypoints, hands.
+    for (name, fc) in &config.frames {
+        if frames.iter().any(|f| &f.name == name) {
+            return Err(bad(
+                toml_path,
+                format!("frames.{name}"),
+                "a URDF link has that name already".into(),
+            ));
+        }
+        let frame = extra_frame(name, fc, &frames).ok_or_else(|| {
+            bad(
+                toml_path,
+                format!("frames.{name}.parent"),
+                format!("no URDF link `{}`", fc.parent),
+            )
+        })?;
+        frames.push(frame);
+    }
+    let frame_of = |name: &str, field: String| {
+        frames
+            .iter()
+            .position(|f| f.name == name)
+            .ok_or_else(|| bad(toml_path, field, format!("unknown body or frame `{name}`")))
+    };
+    if !config.keypoints.contains_key("default") {
+        return Err(bad(
+            toml_path,
+            "keypoints.default".into(),
+            "the `default` keypoint set is required".into(),
+        ));
+    }
+    let mut keypoint_sets = Vec::new();
+    for (name, kc) in &config.keypoints {
+        let mut idx = Vec::new();
+        for (part, list) in [("upper", &kc.upper), ("lower", &kc.lower)] {
+            for (k, f) in list.iter().enumerate() {
+                idx.push(frame_of(f, format!("keypoints.{name}.{part}[{k}]"))?);
+            }
+        }
+        if idx.is_empty() {
+            return Err(bad(
+                toml_path,
+                format!("keypoints.{name}"),
+                "empty keypoint set".into(),
+            ));
+        }
+        keypoint_sets.push(KeypointSet {
+            name: name.clone(),
+            frames: idx,
+            n_upper: kc.upper.len(),
+        });
+    }
+    let hand = |side: &str, hc: &HandConfig| -> Result<Hand, RobotError> {
+        Ok(Hand {
+            frame: frame_of(&hc.frame, format!("hands.{side}.frame"))?,
+            point_hand: Point3::from(hc.point_xyz),
+            hand_from_sensor: rpy(hc.hand_from_sensor_rpy),
+        })
+    };
+    let hands = [
+        hand("left", &config.hands.left)?,
+        hand("right", &config.hands.right)?,
+    ];
+
+    Ok(RobotModel {
+        name: config.name.clone(),
+        joints,
+        bodies,
+        frames,
+        keypoint_sets,
+        hands,
+    })
+}
+
+fn new_body(
+    link: &urdf_rs::Link,
+    parent: Option<usize>,
+    joint: Option<usize>,
+    parent_from_joint: Isometry3<f64>,
+    axis: Unit<Vector3<f64>>,
+) -> Body {
+    Body {
+        name: link.name.clone(),
+        parent,
+        joint,
+        parent_from_joint,
+        axis,
+        mass_kg: 0.0,
+        com_b: Vector3::zeros(),
+        inertia_kgm2: Matrix3::zeros(),
+        shapes: Vec::new(),
+    }
+}
+
+fn extra_frame(name: &str, fc: &FrameConfig, frames: &[Frame]) -> Option<Frame> {
+    let parent = frames.iter().find(|f| f.name == fc.parent)?;
+    let parent_from_frame =
+        Isometry3::from_parts(Translation3::from(Vector3::from(fc.xyz)), rpy(fc.rpy));
+    Some(Frame {
+        name: name.to_string(),
+        body: parent.body,
+        body_from_frame: parent.body_from_frame * parent_from_frame,
+    })
+}
+
+/// URDF roll-pitch-yaw (fixed axes x, then y, then z).
+pub(crate) fn rpy(r: [f64; 3]) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_euler_angles(r[0], r[1], r[2])
+}
+
+fn pose_of(p: &urdf_rs::Pose) -> Isometry3<f64> {
+    Isometry3::from_parts(Translation3::from(Vector3::from(p.xyz.0)), rpy(p.rpy.0))
+}
+
+fn geometry_of(g: &urdf_rs::Geometry) -> Option<Geometry> {
+    Some(match *g {
+        urdf_rs::Geometry::Box { ref size } => Geometry::Box {
+            half_extents: [size.0[0] / 2.0, size.0[1] / 2.0, size.0[2] / 2.0],
+        },
+        urdf_rs::Geometry::Sphere { radius } => Geometry::Sphere { radius },
+        urdf_rs::Geometry::Capsule { radius, length } => Geometry::Capsule {
+            radius,
+            half_length: length / 2.0,
+        },
+        urdf_rs::Geometry::Cylinder { radius, length } => Geometry::Cylinder {
+            radius,
+            half_length: length / 2.0,
+        },
+        urdf_rs::Geometry::Mesh { .. } => return None,
+    })
+}
+
+/// Sums link inertials expressed in a common body frame (parallel-axis theorem).
+#[derive(Debug, Clone, Default)]
+struct MassAccumulator {
+    parts: Vec<(f64, Vector3<f64>, Matrix3<f64>)>, // mass, com in body frame, inertia about own com in body axes
+}
+
+impl MassAccumulator {
+    fn add(&mut self, inertial: &urdf_rs::Inertial, body_from_link: &Isometry3<f64>) {
+        let m = inertial.mass.value;
+        if m <= 0.0 {
+            return;
+        }
+        let i = &inertial.inertia;
+        let i_inertial = Matrix3::new(
+            i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
+        );
+        let body_from_inertial = body_from_link * pose_of(&inertial.origin);
+        let r = body_from_inertial.rotation.to_rotation_matrix();
+        let inertia_b = r.matrix() * i_inertial * r.matrix().transpose();
+        self.parts
+            .push((m, body_from_inertial.translation.vector, inertia_b));
+    }
+
+    fn finish(self) -> (f64, Vector3<f64>, Matrix3<f64>) {
+        let m: f64 = self.parts.iter().map(|p| p.0).sum();
+        if m <= 0.0 {
+            return (0.0, Vector3::zeros(), Matrix3::zeros());
+        }
+        let com = self.parts.iter().map(|p| p.1 * p.0).sum::<Vector3<f64>>() / m;
+        let inertia = self
+            .parts
+            .iter()
+            .fold(Matrix3::zeros(), |acc, (mk, ck, ik)| {
+                let d = ck - com;
+                acc + ik + (Matrix3::identity() * d.dot(&d) - d * d.transpose()) * *mk
+            });
+        (m, com, inertia)
+    }
+}
+
+/// The directory of a robot shipped with ThorArena (`data/robots/<name>`).
+pub fn bundled_robot_dir(name: &str) -> PathBuf {
+    crate::data_dir().join("robots").join(name)
+}

@@ -1,0 +1,23 @@
+//! The robot model: joints in canonical order, bodies, keypoints and hands, loaded from
+//! `data/robots/<name>/` (a URDF plus `robot.toml`), and forward kinematics on it.
+
+mod config;
+mod error;
+mod kinematics;
+mod load;
+mod model;
+
+pub use config::{
+    FrameConfig, HandConfig, HandsConfig, JointConfig, KeypointSetConfig, RobotConfig,
+};
+pub use error::RobotError;
+pub use kinematics::{
+    center_of_mass, forward_kinematics, frame_pose, keypoint_positions, lowest_sole_point_z,
+};
+pub use load::{build_model, bundled_robot_dir, load_robot_dir};
+pub use model::{Body, Frame, Geometry, Hand, Joint, KeypointSet, RobotModel, Shape};
+
+/// Loads a robot shipped in `data/robots/<name>`.
+pub fn load_bundled(name: &str) -> Result<RobotModel, RobotError> {
+    load_robot_dir(&bundled_robot_dir(name))
+}
