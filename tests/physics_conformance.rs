@@ -489,28 +489,40 @@ fn g1_stands_five_seconds_in_its_default_pose_with_stiff_gains() {
 
 #[test]
 fn robot_never_falls_asleep() {
-    // Islands sleep after 0.5 s of rest by default; a sleeping robot would ignore a push.
-    let m = g1();
-    let mut p = backend(&m, PhysicsSettings::default(), standing_gains(&m));
-    let start = standing_default_pose(&m);
-    p.reset(&start);
-    p.set_targets(&start.q);
+    // Islands sleep after 0.5 s of rest by default; a sleeping robot ignores new targets
+    // and pushes. Hold still for 2 s, then ask for motion.
+    let m = pendulum();
+    let settings = PhysicsSettings {
+        fixed_base: true,
+        contacts: ContactMode::None,
+        ..Default::default()
+    };
+    let mut p = backend(
+        &m,
+        settings,
+        PdGains {
+            kp: vec![2.0],
+            kd: vec![0.2],
+            effort_limit_nm: vec![100.0],
+        },
+    );
+    p.reset(&ResetState {
+        root: RootState::at_rest(Isometry3::identity()),
+        q: vec![0.0],
+        qd: vec![0.0],
+    });
+    p.set_targets(&[0.0]);
     for _ in 0..400 {
         p.step();
     }
-    let torso = m.body_index("torso_link").unwrap();
-    p.set_external_force(ExternalForce {
-        body: torso,
-        force_w: Vector3::new(40.0, 0.0, 0.0),
-        point_b: Point3::origin(),
-    });
+    p.set_targets(&[0.5]);
     for _ in 0..20 {
         p.step();
     }
-    let v = state_of(p.as_ref()).root.unwrap().lin_vel_w;
+    let q = state_of(p.as_ref()).q[0];
     assert!(
-        v.x > 0.01,
-        "a 40 N push after 2 s of rest must move the robot (v = {v:?})"
+        q > 0.05,
+        "the joint must follow a new target after 2 s at rest (q = {q})"
     );
 }
 

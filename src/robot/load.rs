@@ -267,7 +267,7 @@ pub fn build_model(
     }
     for (b, a) in bodies.iter_mut().zip(acc) {
         let (m, com, inertia) = a.finish();
-        if !(m > 0.0) {
+        if m <= 0.0 || m.is_nan() {
             return Err(bad(
                 urdf_path,
                 format!("link `{}`.inertial", b.name),

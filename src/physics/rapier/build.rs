@@ -35,12 +35,14 @@ pub(super) fn build_world(
     gains: &PdGains,
     state: &ResetState,
 ) -> World {
-    let mut world = PhysicsWorld::default();
-    world.gravity = Vector::new(
-        settings.gravity[0] as f32,
-        settings.gravity[1] as f32,
-        settings.gravity[2] as f32,
-    );
+    let mut world = PhysicsWorld {
+        gravity: Vector::new(
+            settings.gravity[0] as f32,
+            settings.gravity[1] as f32,
+            settings.gravity[2] as f32,
+        ),
+        ..PhysicsWorld::default()
+    };
     world.integration_parameters.dt = settings.dt_s as f32;
     world.integration_parameters.num_solver_iterations = settings.solver_iterations.max(1);
 

@@ -1,0 +1,61 @@
+//! The `thorarena` binary: help, `robot info`, `sim trace`, and clean errors on bad input.
+
+use std::process::Command;
+
+fn thorarena(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(args)
+        .output()
+        .expect("run thorarena")
+}
+
+#[test]
+fn help_lists_the_subcommands() {
+    let out = thorarena(&["--help"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for sub in ["robot", "sim", "bench"] {
+        assert!(text.contains(sub), "--help lacks `{sub}`:\n{text}");
+    }
+}
+
+#[test]
+fn robot_info_prints_joints_bodies_mass_and_keypoints() {
+    let out = thorarena(&["robot", "info"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("29 joints, 30 bodies, total mass 33.341 kg"),
+        "{text}"
+    );
+    assert!(text.contains("right_wrist_yaw_joint") && text.contains("twist9 (9 points)"));
+}
+
+#[test]
+fn unknown_robot_is_an_error_message_not_a_panic() {
+    let out = thorarena(&["robot", "info", "--robot", "h1_nonexistent"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.starts_with("error: loading robot `h1_nonexistent`") && err.contains("robot.toml"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"));
+}
+
+#[test]
+fn sim_trace_prints_one_json_object_with_a_step_per_physics_step() {
+    let out = thorarena(&["sim", "trace", "--scenario", "fixed-base"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["scenario"], "fixed-base");
+    assert_eq!(v["q"].as_array().unwrap().len(), 800); // 4 s at 5 ms
+    assert_eq!(v["targets"].as_array().unwrap().len(), 200); // 4 s at 50 Hz
+    assert_eq!(v["joint_names"].as_array().unwrap().len(), 29);
+    let bad = thorarena(&["sim", "trace", "--scenario", "fixed-base", "--dt", "0"]);
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--dt"));
+}
