@@ -9,9 +9,11 @@ but only ``mj_step`` is timed, so the figure is MuJoCo's cost alone.
 
 Prints one JSON object on stdout: the median microseconds per step over the
 repeats, the timestep, the contact count at the end, simulated seconds per wall
-second and the MuJoCo version, plus the final pelvis height: these gains cannot
-hold the pose open loop (ankle kp 40 is below the toppling stiffness), so the
-robot tips over after about 1.5 s and most timed steps are of it lying down. If the MJCF is missing it prints
+second and the MuJoCo version, plus the final pelvis height: the default
+legged-gym gains cannot hold the pose open loop (ankle kp 40 is below the
+toppling stiffness), so the robot tips over after about 1.5 s. ``thorarena bench
+physics`` therefore passes its own stiffer standing gains with ``--gains-json``,
+so both engines time the same upright robot. If the MJCF is missing it prints
 ``{"skipped": reason}`` and exits 0.
 """
 
@@ -61,7 +63,7 @@ def gains(joint: str) -> tuple[float, float]:
 class StandingPd:
     """The G1 in its standing pose, with a PD controller holding that pose."""
 
-    def __init__(self, model: mujoco.MjModel) -> None:
+    def __init__(self, model: mujoco.MjModel, gains_override: dict[str, Any] | None = None) -> None:
         hinges = [j for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
         if len(hinges) != model.njnt - 1 or model.jnt_type[0] != mujoco.mjtJoint.mjJNT_FREE:
             raise ValueError("expected a floating base (freejoint first) and hinge joints only")
@@ -72,6 +74,13 @@ class StandingPd:
         self.dof_adr = model.jnt_dofadr[hinges]
         self.q_default = np.array([default_angle(n) for n in names])
         self.kp, self.kd = (np.array(g) for g in zip(*(gains(n) for n in names)))
+        if gains_override is not None:
+            by_name = dict(zip(gains_override["joint_names"], zip(gains_override["kp"], gains_override["kd"])))
+            missing = [n for n in names if n not in by_name]
+            if missing:
+                raise ValueError(f"--gains-json lacks joints: {', '.join(missing)}")
+            self.kp = np.array([by_name[n][0] for n in names])
+            self.kd = np.array([by_name[n][1] for n in names])
         self.effort_limit = model.jnt_actfrcrange[hinges, 1]
         # Root pose (pelvis height) from the file's qpos0; joints at the default pose.
         self.data.qpos[:] = model.qpos0
@@ -96,9 +105,9 @@ class StandingPd:
         return spent
 
 
-def bench(mjcf: Path, steps: int, repeats: int) -> dict[str, Any]:
+def bench(mjcf: Path, steps: int, repeats: int, gains_override: dict[str, Any] | None = None) -> dict[str, Any]:
     model = mujoco.MjModel.from_xml_path(str(mjcf))
-    sim = StandingPd(model)
+    sim = StandingPd(model, gains_override)
     sim.run(WARMUP_STEPS)
     us_per_step = [sim.run(steps) / steps * 1e6 for _ in range(repeats)]
     median_us = statistics.median(us_per_step)
@@ -133,13 +142,18 @@ def main(argv: list[str] | None = None) -> int:
                         help="timed steps per repeat (default: %(default)s)")
     parser.add_argument("--repeats", type=positive_int, default=5,
                         help="number of timed repeats; the median is reported (default: %(default)s)")
+    parser.add_argument("--gains-json", type=str, default=None,
+                        help='gains to use instead of the legged-gym ones, as JSON '
+                             '{"joint_names": [...], "kp": [...], "kd": [...]} (thorarena bench physics '
+                             'passes its standing gains so that both engines hold the same robot upright)')
     args = parser.parse_args(argv)
     if not args.mjcf.is_file():
         reason = f"reference MJCF not found at {args.mjcf}"
         print(f"[step_bench] skipped: {reason}", file=sys.stderr)
         print(json.dumps({"skipped": reason}))
         return 0
-    print(json.dumps(bench(args.mjcf.resolve(), args.steps, args.repeats)))
+    gains_override = json.loads(args.gains_json) if args.gains_json else None
+    print(json.dumps(bench(args.mjcf.resolve(), args.steps, args.repeats, gains_override)))
     return 0
 
 

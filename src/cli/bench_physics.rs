@@ -52,6 +52,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         ..Default::default()
     };
     let gains = crate::physics::standing_gains(&model);
+    let gains_for_mujoco = gains.clone();
     let mut physics = RapierPhysics::new(model.clone(), settings, gains);
     let start = standing_default_pose(&model);
     let mut per_repeat_us = Vec::new();
@@ -94,10 +95,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.no_mujoco {
         return Ok(());
     }
-    match mujoco_baseline(args) {
-        Ok(Some((mj_us, mj_dt))) => {
+    let gains_json = serde_json::json!({
+        "joint_names": model.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>(),
+        "kp": gains_for_mujoco.kp,
+        "kd": gains_for_mujoco.kd,
+    })
+    .to_string();
+    match mujoco_baseline(args, &gains_json) {
+        Ok(Some((mj_us, mj_dt, mj_z))) => {
             let mj_rtf = mj_dt / (mj_us * 1e-6);
-            println!("mujoco  : {mj_us:8.1} µs per {:.1} ms step (reference MJCF at its own dt), {mj_rtf:.1}× real time per core", mj_dt * 1e3);
+            println!(
+                "mujoco  : {mj_us:8.1} µs per {:.1} ms step (reference MJCF at its own dt, same gains), pelvis z at end {mj_z:.3} m, {mj_rtf:.1}× real time per core",
+                mj_dt * 1e3
+            );
             println!("ratio   : rapier simulates {:.2}× as many seconds per wall second as MuJoCo (goal ≥ 2)", ours_rtf / mj_rtf);
         }
         Ok(None) => println!(
@@ -113,8 +123,9 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-/// Runs `tools/mujoco_step_bench.py`; `None` when MuJoCo or the model is not available.
-fn mujoco_baseline(args: &Args) -> anyhow::Result<Option<(f64, f64)>> {
+/// Runs `tools/mujoco_step_bench.py` with our gains; returns µs per step, its dt and the
+/// final pelvis height, or `None` when MuJoCo or the model is not available.
+fn mujoco_baseline(args: &Args, gains_json: &str) -> anyhow::Result<Option<(f64, f64, f64)>> {
     let script =
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/mujoco_step_bench.py");
     let has_mujoco = std::process::Command::new(&args.python)
@@ -127,7 +138,14 @@ fn mujoco_baseline(args: &Args) -> anyhow::Result<Option<(f64, f64)>> {
     }
     let out = std::process::Command::new(&args.python)
         .arg(&script)
-        .args(["--mjcf", &args.mjcf, "--repeats", &args.repeats.to_string()])
+        .args([
+            "--mjcf",
+            &args.mjcf,
+            "--repeats",
+            &args.repeats.to_string(),
+            "--gains-json",
+            gains_json,
+        ])
         .output()
         .with_context(|| format!("running {}", script.display()))?;
     anyhow::ensure!(
@@ -147,5 +165,6 @@ fn mujoco_baseline(args: &Args) -> anyhow::Result<Option<(f64, f64)>> {
     let dt = v["dt_s"]
         .as_f64()
         .context("no dt_s in MuJoCo benchmark output")?;
-    Ok(Some((us, dt)))
+    let z = v["pelvis_z_end_m"].as_f64().unwrap_or(f64::NAN);
+    Ok(Some((us, dt, z)))
 }
