@@ -1,0 +1,62 @@
+//! Importers: motion files in the formats users already have, turned into canonical
+//! sequences. Each format reader produces a [`RawMotion`]; mapping to the robot's
+//! canonical joint order, attaching forces and validating happen once, here.
+
+pub mod force_csv;
+pub mod lafan_csv;
+pub mod npz;
+pub mod twist_pkl;
+
+use std::path::PathBuf;
+
+/// A motion as a format reader found it, before it becomes a canonical sequence.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RawMotion {
+    /// Frame rate, Hz.
+    pub fps: f64,
+    /// Root (pelvis) position per frame, world frame, m, z up.
+    pub root_pos: Vec<[f64; 3]>,
+    /// Root orientation per frame as (w, x, y, z) — readers convert from the file's order.
+    pub root_quat_wxyz: Vec<[f64; 4]>,
+    /// Names of the columns of `joint_pos` (robot joint names, e.g. `left_knee_joint`).
+    pub joint_names: Vec<String>,
+    /// Joint angles per frame, rad, in the order of `joint_names`.
+    pub joint_pos: Vec<Vec<f64>>,
+    /// Joint velocities per frame if the file has them, rad/s, same order.
+    pub joint_vel: Option<Vec<Vec<f64>>>,
+    /// What the reader wants recorded about the source (format, file, notes).
+    pub provenance: serde_json::Map<String, serde_json::Value>,
+}
+
+/// Why a file could not be imported. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ImportError {
+    /// The file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The file's content is not what the format requires.
+    #[error("{path}: field `{field}`: {reason}")]
+    BadField {
+        /// The file.
+        path: PathBuf,
+        /// The entry or column at fault (e.g. `dof_pos`, `row 12`).
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The file is not in the expected format at all.
+    #[error("{path}: not a {format} file: {reason}")]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// The format expected.
+        format: &'static str,
+        /// The decoder's explanation.
+        reason: String,
+    },
+}
