@@ -1,6 +1,7 @@
 //! The `thorarena` command line: the argument tree and one module per subcommand.
 
 mod bench_physics;
+mod data;
 mod robot_info;
 mod sim_trace;
 
@@ -28,6 +29,9 @@ pub enum Command {
     /// Run open-loop physics scenarios (used by the MuJoCo cross-check).
     #[command(subcommand)]
     Sim(SimCommand),
+    /// Import motion data and inspect datasets.
+    #[command(subcommand)]
+    Data(data::DataCommand),
     /// Measure performance.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -61,6 +65,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Robot(RobotCommand::Info(args)) => robot_info::run(&args),
         Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
+        Command::Data(cmd) => data::run(&cmd),
     }
 }
 

@@ -1,4 +1,13 @@
 //! Reference clips and datasets: the canonical format (safetensors + manifest), importers,
 //! resampling and forward kinematics of references.
 
+mod dataset;
+mod error;
+mod format;
 pub mod import;
+mod sequence;
+
+pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
+pub use error::DataError;
+pub use format::{decode_sequence, encode_sequence, sha256_hex, write_sequence, SCHEMA_VERSION};
+pub use sequence::{Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};

@@ -2,6 +2,7 @@
 //! sequences. Each format reader produces a [`RawMotion`]; mapping to the robot's
 //! canonical joint order, attaching forces and validating happen once, here.
 
+pub mod canonical;
 pub mod force_csv;
 pub mod lafan_csv;
 pub mod npz;

@@ -1,0 +1,234 @@
+//! `thorarena data …`: import motion files, describe a dataset.
+
+use crate::motion::import::canonical::{to_sequence, ImportOptions};
+use crate::motion::import::{force_csv, lafan_csv, npz, twist_pkl, RawMotion};
+use crate::motion::{Dataset, DatasetWriter, Sequence};
+use crate::robot::RobotModel;
+use anyhow::{bail, Context};
+use std::path::{Path, PathBuf};
+
+/// `thorarena data …`
+#[derive(Debug, clap::Subcommand)]
+pub enum DataCommand {
+    /// Import motion files (and optional force logs) into a canonical dataset.
+    Import(ImportArgs),
+    /// Per task: sequences, total duration, force percentiles, joint-limit margin.
+    Info(InfoArgs),
+}
+
+/// Input formats of `data import`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum Format {
+    /// GMR / TWIST / TWIST2 / GMT pickles (root_rot xyzw; 29 or 23 DoF).
+    TwistPkl,
+    /// BeyondMimic / mjlab npz (body 0 = root, wxyz; IsaacLab joint order by default).
+    BeyondmimicNpz,
+    /// Unitree's retargeted LAFAN1 CSV (no header, 36 columns, xyzw).
+    LafanCsv,
+}
+
+/// Arguments of `data import`.
+#[derive(Debug, clap::Args)]
+pub struct ImportArgs {
+    /// Input format.
+    #[arg(long, value_enum)]
+    pub format: Format,
+    /// Motion files; each becomes one sequence named after its file stem.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Dataset directory (created, or appended to when it holds a manifest).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Task name of the imported sequences.
+    #[arg(long)]
+    pub task: String,
+    /// Robot the motions are retargeted to.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+    /// Force logs (CSV: time, fx, fy, fz) of the left and right hand; only with one input.
+    #[arg(long, num_args = 2, value_names = ["LEFT", "RIGHT"])]
+    pub forces: Option<Vec<PathBuf>>,
+    /// Force-log time minus motion time, s.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub force_offset: f64,
+    /// Multiply logged forces by −1 (sensor reports the force the hand exerts).
+    #[arg(long)]
+    pub flip_force_sign: bool,
+    /// Frame rate of CSV motions, Hz.
+    #[arg(long, default_value_t = 30.0)]
+    pub fps: f64,
+    /// Joint names of npz columns, comma separated (default: the IsaacLab G1 order).
+    #[arg(long, value_delimiter = ',')]
+    pub joint_names: Option<Vec<String>>,
+    /// Renormalise root quaternions that are off unit norm instead of rejecting the file.
+    #[arg(long)]
+    pub renormalize_quaternions: bool,
+}
+
+/// Arguments of `data info`.
+#[derive(Debug, clap::Args)]
+pub struct InfoArgs {
+    /// Dataset directory.
+    pub dataset: PathBuf,
+    /// Robot of the dataset.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+}
+
+pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
+    match cmd {
+        DataCommand::Import(a) => import(a),
+        DataCommand::Info(a) => info(a),
+    }
+}
+
+fn read_raw(format: Format, path: &Path, args: &ImportArgs) -> anyhow::Result<RawMotion> {
+    Ok(match format {
+        Format::TwistPkl => twist_pkl::read_twist_pkl(path)?,
+        Format::BeyondmimicNpz => npz::read_beyondmimic_npz(path, args.joint_names.as_deref())?,
+        Format::LafanCsv => lafan_csv::read_lafan_csv(path, args.fps)?,
+    })
+}
+
+fn import(args: &ImportArgs) -> anyhow::Result<()> {
+    let robot = super::load_robot(&args.robot)?;
+    if args.forces.is_some() && args.inputs.len() != 1 {
+        bail!("--forces pairs one left and one right log with one motion; import motions with forces one at a time");
+    }
+    let forces = match &args.forces {
+        Some(files) => Some([
+            force_csv::read_force_csv(&files[0])?,
+            force_csv::read_force_csv(&files[1])?,
+        ]),
+        None => None,
+    };
+    let mut writer = DatasetWriter::append(&args.out, &robot)?;
+    for input in &args.inputs {
+        let stem = input
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .with_context(|| format!("{}: no file name", input.display()))?;
+        let raw = read_raw(args.format, input, args)?;
+        let opts = ImportOptions {
+            task: args.task.clone(),
+            sequence_id: stem.to_string(),
+            renormalize_quaternions: args.renormalize_quaternions,
+            forces: forces.clone(),
+            force_offset_s: args.force_offset,
+            force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
+        };
+        let seq = to_sequence(raw, &robot, &opts, input)?;
+        eprintln!(
+            "imported {} → {}/{} ({} frames at {} fps, {:.1} s)",
+            input.display(),
+            seq.task,
+            seq.sequence_id,
+            seq.n_frames(),
+            seq.fps,
+            seq.duration_s()
+        );
+        writer.add(&seq)?;
+    }
+    let ds = writer.finish()?;
+    eprintln!("{}: {} sequences", ds.dir.display(), ds.len());
+    Ok(())
+}
+
+fn info(args: &InfoArgs) -> anyhow::Result<()> {
+    let robot = super::load_robot(&args.robot)?;
+    let ds = Dataset::open(&args.dataset, &robot)?;
+    let seqs = ds.load_all()?;
+    print!("{}", describe(&ds, &seqs, &robot));
+    Ok(())
+}
+
+/// The table `data info` prints.
+pub fn describe(ds: &Dataset, seqs: &[Sequence], robot: &RobotModel) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "dataset {} ({} sequences, robot {}, content sha256 {})",
+        ds.dir.display(),
+        seqs.len(),
+        ds.manifest.robot,
+        &ds.content_hash()[..16]
+    );
+    let _ = writeln!(
+        s,
+        "{:<16} {:>5} {:>10} {:>9} {:>9} {:>9} {:>12}",
+        "task", "seqs", "duration", "F p33", "F p66", "F max", "limit margin"
+    );
+    let _ = writeln!(
+        s,
+        "{:<16} {:>5} {:>10} {:>9} {:>9} {:>9} {:>12}",
+        "", "", "s", "N", "N", "N", "rad"
+    );
+    let mut tasks: Vec<&str> = seqs.iter().map(|q| q.task.as_str()).collect();
+    tasks.dedup();
+    for task in tasks {
+        let group: Vec<&Sequence> = seqs.iter().filter(|q| q.task == task).collect();
+        let duration: f64 = group.iter().map(|q| q.duration_s()).sum();
+        let mut total: Vec<f64> = group.iter().flat_map(|q| total_hand_force(q)).collect();
+        total.sort_by(f64::total_cmp);
+        let margin = group
+            .iter()
+            .map(|q| joint_limit_margin(q, robot))
+            .fold(f64::INFINITY, f64::min);
+        let _ = writeln!(
+            s,
+            "{:<16} {:>5} {:>10.1} {:>9.1} {:>9.1} {:>9.1} {:>12.3}",
+            task,
+            group.len(),
+            duration,
+            percentile(&total, 33.0),
+            percentile(&total, 66.0),
+            total.last().copied().unwrap_or(0.0),
+            margin
+        );
+    }
+    s
+}
+
+/// `|F_left| + |F_right|` per frame, N.
+pub fn total_hand_force(seq: &Sequence) -> impl Iterator<Item = f64> + '_ {
+    let norm = |f: &[f64; 3]| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+    seq.force_sensor[0]
+        .iter()
+        .zip(&seq.force_sensor[1])
+        .map(move |(l, r)| norm(l) + norm(r))
+}
+
+/// Smallest distance of any joint to its limits over the sequence (negative: outside), rad.
+pub fn joint_limit_margin(seq: &Sequence, robot: &RobotModel) -> f64 {
+    let limits: Vec<(f64, f64)> = seq
+        .joint_names
+        .iter()
+        .map(|n| {
+            robot
+                .joint_index(n)
+                .map_or((f64::NEG_INFINITY, f64::INFINITY), |j| {
+                    (robot.joints[j].lower_rad, robot.joints[j].upper_rad)
+                })
+        })
+        .collect();
+    seq.joint_pos
+        .iter()
+        .flat_map(|row| {
+            row.iter()
+                .zip(&limits)
+                .map(|(q, (lo, hi))| (q - lo).min(hi - q))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Linear-interpolated percentile of sorted values (`p` in 0..=100).
+pub fn percentile(sorted: &[f64], p: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let x = p / 100.0 * (sorted.len() - 1) as f64;
+    let (i, f) = (x.floor() as usize, x - x.floor());
+    let j = (i + 1).min(sorted.len() - 1);
+    sorted[i] * (1.0 - f) + sorted[j] * f
+}
