@@ -7,39 +7,10 @@ use serde_json::json;
 use std::collections::HashMap;
 use std::path::Path;
 use thorarena::motion::{self, DataError, Dataset, DatasetWriter, Sequence, MANIFEST};
-use thorarena::robot::{self, RobotModel};
+use thorarena::robot::RobotModel;
 
-fn g1() -> RobotModel {
-    robot::load_bundled("g1_29dof").unwrap()
-}
-
-fn sample_sequence(robot: &RobotModel, id: &str) -> Sequence {
-    let t = 40;
-    let q0 = robot.default_pose();
-    let yaw = |k: usize| 0.01 * k as f64;
-    Sequence {
-        task: "clean_table".into(),
-        sequence_id: id.into(),
-        fps: 30.0,
-        joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
-        root_pos: (0..t).map(|k| [0.01 * k as f64, 0.0, 0.78]).collect(),
-        root_quat_wxyz: (0..t)
-            .map(|k| [(yaw(k) / 2.0).cos(), 0.0, 0.0, (yaw(k) / 2.0).sin()])
-            .collect(),
-        joint_pos: (0..t)
-            .map(|k| q0.iter().map(|q| q + 0.001 * k as f64).collect())
-            .collect(),
-        joint_vel: None,
-        force_sensor: [
-            (0..t).map(|k| [k as f64, 0.0, -5.0]).collect(),
-            vec![[0.0, 1.0, 2.0]; t],
-        ],
-        hand_from_sensor_wxyz: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]],
-        force_point_hand: [[0.0; 3], [0.01, 0.0, 0.0]],
-        forces_recorded: true,
-        provenance: json!({"format": "test"}),
-    }
-}
+mod common;
+use common::{g1, sample_sequence};
 
 fn write_dataset(dir: &Path, seqs: &[Sequence]) -> Dataset {
     let robot = g1();

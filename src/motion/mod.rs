@@ -5,9 +5,13 @@ mod dataset;
 mod error;
 mod format;
 pub mod import;
+mod reference;
 mod sequence;
 
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use error::DataError;
 pub use format::{decode_sequence, encode_sequence, sha256_hex, write_sequence, SCHEMA_VERSION};
+pub use reference::{
+    ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference, ReferenceFrame,
+};
 pub use sequence::{Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};

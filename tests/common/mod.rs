@@ -1,0 +1,41 @@
+//! Builders shared by the integration tests.
+#![allow(dead_code)]
+
+use serde_json::json;
+use thorarena::motion::Sequence;
+use thorarena::robot::{self, RobotModel};
+
+/// The bundled G1.
+pub fn g1() -> RobotModel {
+    robot::load_bundled("g1_29dof").unwrap()
+}
+
+/// 40 frames at 30 fps: the root moves +x at 0.3 m/s and yaws at 0.3 rad/s, every joint
+/// ramps at 0.03 rad/s from the default pose, forces are simple ramps.
+pub fn sample_sequence(robot: &RobotModel, id: &str) -> Sequence {
+    let t = 40;
+    let q0 = robot.default_pose();
+    let yaw = |k: usize| 0.01 * k as f64;
+    Sequence {
+        task: "clean_table".into(),
+        sequence_id: id.into(),
+        fps: 30.0,
+        joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
+        root_pos: (0..t).map(|k| [0.01 * k as f64, 0.0, 0.78]).collect(),
+        root_quat_wxyz: (0..t)
+            .map(|k| [(yaw(k) / 2.0).cos(), 0.0, 0.0, (yaw(k) / 2.0).sin()])
+            .collect(),
+        joint_pos: (0..t)
+            .map(|k| q0.iter().map(|q| q + 0.001 * k as f64).collect())
+            .collect(),
+        joint_vel: None,
+        force_sensor: [
+            (0..t).map(|k| [k as f64, 0.0, -5.0]).collect(),
+            vec![[0.0, 1.0, 2.0]; t],
+        ],
+        hand_from_sensor_wxyz: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]],
+        force_point_hand: [[0.0; 3], [0.01, 0.0, 0.0]],
+        forces_recorded: true,
+        provenance: json!({"format": "test"}),
+    }
+}
