@@ -7,7 +7,6 @@ use serde_json::json;
 use std::collections::HashMap;
 use std::path::Path;
 use thorarena::motion::{self, DataError, Dataset, DatasetWriter, Sequence, MANIFEST};
-use thorarena::robot::RobotModel;
 
 mod common;
 use common::{g1, sample_sequence};
