@@ -2,7 +2,7 @@
 
 use crate::motion::import::canonical::{to_sequence, ImportOptions};
 use crate::motion::import::{force_csv, lafan_csv, npz, twist_pkl, RawMotion};
-use crate::motion::{Dataset, DatasetWriter, Sequence};
+use crate::motion::{ground_check, shift_root_height, Dataset, DatasetWriter, Sequence};
 use crate::robot::RobotModel;
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
@@ -63,6 +63,11 @@ pub struct ImportArgs {
     /// Renormalise root quaternions that are off unit norm instead of rejecting the file.
     #[arg(long)]
     pub renormalize_quaternions: bool,
+    /// Shift each motion vertically so that its feet touch the ground in stance (the
+    /// median lowest sole point over the motion goes to z = 0). Without it the offset is
+    /// only reported.
+    #[arg(long)]
+    pub ground_correct: bool,
 }
 
 /// Arguments of `data info`.
@@ -117,7 +122,20 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
             force_offset_s: args.force_offset,
             force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
         };
-        let seq = to_sequence(raw, &robot, &opts, input)?;
+        let mut seq = to_sequence(raw, &robot, &opts, input)?;
+        if let Some(g) = ground_check(&robot, &seq) {
+            eprintln!(
+                "  ground check: median lowest sole point {:+.1} mm, lowest {:+.1} mm",
+                1e3 * g.offset_m,
+                1e3 * g.min_m
+            );
+            if args.ground_correct {
+                shift_root_height(&mut seq, -g.offset_m);
+                if let Some(p) = seq.provenance.as_object_mut() {
+                    p.insert("ground_shift_m".into(), serde_json::json!(-g.offset_m));
+                }
+            }
+        }
         eprintln!(
             "imported {} → {}/{} ({} frames at {} fps, {:.1} s)",
             input.display(),
@@ -175,16 +193,23 @@ pub fn describe(ds: &Dataset, seqs: &[Sequence], robot: &RobotModel) -> String {
             .iter()
             .map(|q| joint_limit_margin(q, robot))
             .fold(f64::INFINITY, f64::min);
+        // The largest per-sequence ground offset, signed.
+        let ground = group
+            .iter()
+            .filter_map(|q| ground_check(robot, q))
+            .map(|g| g.offset_m)
+            .fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
         let _ = writeln!(
             s,
-            "{:<16} {:>5} {:>10.1} {:>9.1} {:>9.1} {:>9.1} {:>12.3}",
+            "{:<16} {:>5} {:>10.1} {:>9.1} {:>9.1} {:>9.1} {:>12.3} {:>12.1}",
             task,
             group.len(),
             duration,
             percentile(&total, 33.0),
             percentile(&total, 66.0),
             total.last().copied().unwrap_or(0.0),
-            margin
+            margin,
+            1e3 * ground
         );
     }
     s

@@ -1,0 +1,252 @@
+//! `thorarena data import` end to end: motions become canonical sequences with joints
+//! mapped by name (missing ones zeroed and recorded), force logs resampled onto the motion
+//! clock with offset and sign, no forces flagged, and repairs only on request.
+
+use std::path::Path;
+use std::process::Command;
+use thorarena::motion::import::canonical::{to_sequence, ImportOptions};
+use thorarena::motion::import::force_csv::ForceLog;
+use thorarena::motion::import::lafan_csv::G1_CANONICAL_JOINTS;
+use thorarena::motion::import::{twist_pkl, RawMotion};
+use thorarena::motion::Dataset;
+
+mod common;
+use common::g1;
+
+fn thorarena(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(args)
+        .output()
+        .expect("run thorarena")
+}
+
+/// A LAFAN-style CSV: 31 frames at 30 fps, root moving +x, joints at the default pose.
+fn write_lafan(path: &Path, quat_scale: f64) {
+    let q0 = g1().default_pose();
+    let mut text = String::new();
+    for k in 0..31 {
+        let mut row = vec![0.01 * k as f64, 0.0, 0.78, 0.0, 0.0, 0.0, quat_scale];
+        row.extend(&q0);
+        text += &row
+            .iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(",");
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn csv_motion_with_force_logs_is_resampled_shifted_and_sign_flipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let motion = dir.path().join("wipe_01.csv");
+    write_lafan(&motion, 1.0);
+    // Left: fx = 10·t at 100 Hz; right: constant fz = 4 N.
+    let left: String = "time,fx,fy,fz\n".to_string()
+        + &(0..=200)
+            .map(|i| format!("{},{},0,0\n", i as f64 * 0.01, 10.0 * i as f64 * 0.01))
+            .collect::<String>();
+    let right: String = (0..=200)
+        .map(|i| format!("{},0,0,4\n", i as f64 * 0.01))
+        .collect();
+    std::fs::write(dir.path().join("l.csv"), left).unwrap();
+    std::fs::write(dir.path().join("r.csv"), right).unwrap();
+    let out = dir.path().join("ds");
+    let o = thorarena(&[
+        "data",
+        "import",
+        "--format",
+        "lafan-csv",
+        motion.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--task",
+        "clean_table",
+        "--forces",
+        dir.path().join("l.csv").to_str().unwrap(),
+        dir.path().join("r.csv").to_str().unwrap(),
+        "--force-offset",
+        "0.5",
+        "--flip-force-sign",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let seq = Dataset::open(&out, &g1()).unwrap().load(0).unwrap();
+    assert_eq!(
+        (seq.task.as_str(), seq.sequence_id.as_str(), seq.n_frames()),
+        ("clean_table", "wipe_01", 31)
+    );
+    assert!(seq.forces_recorded);
+    // Frame 15 is t = 0.5 s on the motion clock, t = 1.0 s in the log: fx = −10 N after the flip.
+    assert!(
+        (seq.force_sensor[0][15][0] + 10.0).abs() < 1e-4,
+        "{:?}",
+        seq.force_sensor[0][15]
+    );
+    assert!((seq.force_sensor[1][30][2] + 4.0).abs() < 1e-5);
+    assert_eq!(seq.provenance["force_offset_s"], 0.5);
+}
+
+#[test]
+fn motion_without_forces_gets_zero_forces_and_a_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let motion = dir.path().join("m.csv");
+    write_lafan(&motion, 1.0);
+    let out = dir.path().join("ds");
+    let o = thorarena(&[
+        "data",
+        "import",
+        "--format",
+        "lafan-csv",
+        motion.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--task",
+        "walk",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let seq = Dataset::open(&out, &g1()).unwrap().load(0).unwrap();
+    assert!(!seq.forces_recorded);
+    assert!(seq
+        .force_sensor
+        .iter()
+        .flatten()
+        .flatten()
+        .all(|f| *f == 0.0));
+    assert!(seq.provenance["forces"]
+        .as_str()
+        .unwrap()
+        .contains("none recorded"));
+}
+
+#[test]
+fn quaternions_off_unit_norm_are_rejected_unless_repair_is_asked_for() {
+    let dir = tempfile::tempdir().unwrap();
+    let motion = dir.path().join("m.csv");
+    write_lafan(&motion, 1.05);
+    let out = dir.path().join("ds");
+    let args = [
+        "data",
+        "import",
+        "--format",
+        "lafan-csv",
+        motion.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--task",
+        "walk",
+    ];
+    let o = thorarena(&args);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("m.csv") && err.contains("--renormalize-quaternions"),
+        "{err}"
+    );
+    let mut repaired = args.to_vec();
+    repaired.push("--renormalize-quaternions");
+    let o = thorarena(&repaired);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let seq = Dataset::open(&out, &g1()).unwrap().load(0).unwrap();
+    assert_eq!(seq.provenance["renormalized_quaternion_frames"], 31);
+}
+
+#[test]
+fn a_gmt_motion_without_wrists_gets_zero_wrist_angles_recorded_in_provenance() {
+    let robot = g1();
+    let names: Vec<String> = G1_CANONICAL_JOINTS
+        .iter()
+        .filter(|n| !n.contains("wrist"))
+        .map(|n| n.to_string())
+        .collect();
+    assert_eq!(names.len(), 23);
+    let raw = RawMotion {
+        fps: 30.0,
+        root_pos: vec![[0.0, 0.0, 0.8]; 3],
+        root_quat_wxyz: vec![[1.0, 0.0, 0.0, 0.0]; 3],
+        joint_pos: vec![(0..23).map(|i| 0.01 * i as f64).collect(); 3],
+        joint_names: names,
+        joint_vel: None,
+        provenance: Default::default(),
+    };
+    let opts = ImportOptions {
+        task: "walk".into(),
+        sequence_id: "gmt".into(),
+        renormalize_quaternions: false,
+        forces: None::<[ForceLog; 2]>,
+        force_offset_s: 0.0,
+        force_sign: 1.0,
+    };
+    let seq = to_sequence(raw, &robot, &opts, Path::new("gmt.pkl")).unwrap();
+    let wrist = robot.joint_index("left_wrist_pitch_joint").unwrap();
+    let elbow = robot.joint_index("right_elbow_joint").unwrap();
+    assert_eq!(seq.joint_pos[0][wrist], 0.0);
+    assert!(
+        (seq.joint_pos[0][elbow] - 0.22).abs() < 1e-12,
+        "right elbow is GMT column 22"
+    );
+    assert_eq!(
+        seq.provenance["missing_joints_set_to_zero"]
+            .as_array()
+            .unwrap()
+            .len(),
+        6
+    );
+}
+
+#[test]
+fn imported_twist2_walks_equal_the_pickles_arrays() {
+    let motions = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/reference/twist2/motions");
+    if !motions.is_dir() {
+        eprintln!("SKIPPED: {} not found", motions.display());
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mut files: Vec<_> = std::fs::read_dir(&motions)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    let mut args = vec![
+        "data".to_string(),
+        "import".into(),
+        "--format".into(),
+        "twist-pkl".into(),
+    ];
+    args.extend(files.iter().map(|f| f.to_str().unwrap().to_string()));
+    args.extend([
+        "--out".into(),
+        dir.path().to_str().unwrap().into(),
+        "--task".into(),
+        "walk".into(),
+    ]);
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ds = Dataset::open(dir.path(), &g1()).unwrap();
+    assert_eq!(ds.len(), files.len());
+    for (i, f) in files.iter().enumerate() {
+        let raw = twist_pkl::read_twist_pkl(f).unwrap();
+        let seq = ds.load(i).unwrap();
+        assert_eq!(seq.n_frames(), raw.root_pos.len());
+        // Stored as float32: equal to the pickle's float64 values rounded to float32.
+        for (a, b) in seq
+            .joint_pos
+            .iter()
+            .flatten()
+            .zip(raw.joint_pos.iter().flatten())
+        {
+            assert_eq!(*a, *b as f32 as f64);
+        }
+        for (a, b) in seq
+            .root_pos
+            .iter()
+            .flatten()
+            .zip(raw.root_pos.iter().flatten())
+        {
+            assert_eq!(*a, *b as f32 as f64);
+        }
+    }
+}
