@@ -6,8 +6,7 @@ use std::path::Path;
 use std::process::Command;
 use thorarena::motion::import::canonical::{to_sequence, ImportOptions};
 use thorarena::motion::import::force_csv::ForceLog;
-use thorarena::motion::import::lafan_csv::G1_CANONICAL_JOINTS;
-use thorarena::motion::import::{twist_pkl, RawMotion};
+use thorarena::motion::import::{twist_pkl, RawMotion, G1_CANONICAL_JOINTS};
 use thorarena::motion::Dataset;
 
 mod common;

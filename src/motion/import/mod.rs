@@ -10,6 +10,40 @@ pub mod twist_pkl;
 
 use std::path::PathBuf;
 
+/// The G1 29-DoF joint order of the Unitree URDF, MJCF and SDK motor indices, which this
+/// project treats as canonical (GMR/TWIST pickles and LAFAN CSVs use it too): left leg, right leg, waist, left arm, right arm.
+pub const G1_CANONICAL_JOINTS: [&str; 29] = [
+    "left_hip_pitch_joint",
+    "left_hip_roll_joint",
+    "left_hip_yaw_joint",
+    "left_knee_joint",
+    "left_ankle_pitch_joint",
+    "left_ankle_roll_joint",
+    "right_hip_pitch_joint",
+    "right_hip_roll_joint",
+    "right_hip_yaw_joint",
+    "right_knee_joint",
+    "right_ankle_pitch_joint",
+    "right_ankle_roll_joint",
+    "waist_yaw_joint",
+    "waist_roll_joint",
+    "waist_pitch_joint",
+    "left_shoulder_pitch_joint",
+    "left_shoulder_roll_joint",
+    "left_shoulder_yaw_joint",
+    "left_elbow_joint",
+    "left_wrist_roll_joint",
+    "left_wrist_pitch_joint",
+    "left_wrist_yaw_joint",
+    "right_shoulder_pitch_joint",
+    "right_shoulder_roll_joint",
+    "right_shoulder_yaw_joint",
+    "right_elbow_joint",
+    "right_wrist_roll_joint",
+    "right_wrist_pitch_joint",
+    "right_wrist_yaw_joint",
+];
+
 /// A motion as a format reader found it, before it becomes a canonical sequence.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RawMotion {

@@ -5,7 +5,7 @@
 //! `body_pos_w` `[T, B, 3]`, `body_quat_w` `[T, B, 4]` (**wxyz**). Names are not stored,
 //! so the caller says which joint each column is; BeyondMimic (IsaacLab) files use
 //! [`ISAACLAB_G1_JOINT_ORDER`]; mjlab runs MuJoCo, whose joint order follows the MJCF
-//! tree (for the Unitree G1 model, [`super::lafan_csv::G1_CANONICAL_JOINTS`]), so pass that
+//! tree (for the Unitree G1 model, [`super::G1_CANONICAL_JOINTS`]), so pass that
 //! list for mjlab files. Body 0 is the pelvis, which becomes the root.
 //! `body_lin_vel_w` / `body_ang_vel_w` are ignored: velocities are re-derived downstream.
 //!
@@ -30,7 +30,7 @@ use super::{ImportError, RawMotion};
 /// `joint_ids_map` `[0, 6, 12, 1, 7, 13, 2, 8, 14, 3, 9, 15, 22, 4, 10, 16, 23, 5, 11, 17,
 /// 24, 18, 25, 19, 26, 20, 27, 21, 28]` maps each policy (IsaacLab) index to the Unitree SDK
 /// motor index, and the SDK order is the canonical one
-/// ([`super::lafan_csv::G1_CANONICAL_JOINTS`]); the same list appears verbatim in several
+/// ([`super::G1_CANONICAL_JOINTS`]); the same list appears verbatim in several
 /// public BeyondMimic / SONIC deployment scripts.
 #[rustfmt::skip]
 pub const ISAACLAB_G1_JOINT_ORDER: [&str; 29] = [

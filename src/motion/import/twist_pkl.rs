@@ -38,21 +38,9 @@ use super::{ImportError, RawMotion};
 
 const FORMAT: &str = "twist-pkl";
 
-/// The G1 29-DoF joints in the order GMR/TWIST write `dof_pos` columns. GMT's 23-DoF files
-/// use the same order without the six `*_wrist_*` joints.
-#[rustfmt::skip]
-const G1_29: [&str; 29] = [
-    "left_hip_pitch_joint", "left_hip_roll_joint", "left_hip_yaw_joint", "left_knee_joint",
-    "left_ankle_pitch_joint", "left_ankle_roll_joint",
-    "right_hip_pitch_joint", "right_hip_roll_joint", "right_hip_yaw_joint", "right_knee_joint",
-    "right_ankle_pitch_joint", "right_ankle_roll_joint",
-    "waist_yaw_joint", "waist_roll_joint", "waist_pitch_joint",
-    "left_shoulder_pitch_joint", "left_shoulder_roll_joint", "left_shoulder_yaw_joint",
-    "left_elbow_joint", "left_wrist_roll_joint", "left_wrist_pitch_joint", "left_wrist_yaw_joint",
-    "right_shoulder_pitch_joint", "right_shoulder_roll_joint", "right_shoulder_yaw_joint",
-    "right_elbow_joint", "right_wrist_roll_joint", "right_wrist_pitch_joint",
-    "right_wrist_yaw_joint",
-];
+/// GMR/TWIST write `dof_pos` columns in the canonical order; GMT's 23-DoF files use the
+/// same order without the six `*_wrist_*` joints.
+const G1_29: [&str; 29] = super::G1_CANONICAL_JOINTS;
 
 fn is_wrist(name: &&str) -> bool {
     name.contains("_wrist_")
