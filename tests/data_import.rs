@@ -249,3 +249,50 @@ fn imported_twist2_walks_equal_the_pickles_arrays() {
         }
     }
 }
+
+#[test]
+fn exported_npz_holds_the_datasets_arrays_and_an_index() {
+    let dir = tempfile::tempdir().unwrap();
+    let motion = dir.path().join("m.csv");
+    write_lafan(&motion, 1.0);
+    let ds_dir = dir.path().join("ds");
+    let o = thorarena(&[
+        "data",
+        "import",
+        "--format",
+        "lafan-csv",
+        motion.to_str().unwrap(),
+        "--out",
+        ds_dir.to_str().unwrap(),
+        "--task",
+        "walk",
+    ]);
+    assert!(o.status.success());
+    let out = dir.path().join("npz");
+    let o = thorarena(&[
+        "data",
+        "export",
+        "--format",
+        "npz",
+        ds_dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let seq = Dataset::open(&ds_dir, &g1()).unwrap().load(0).unwrap();
+    let mut npz = npyz::npz::NpzArchive::open(out.join("walk/m.npz")).unwrap();
+    let joint_pos: Vec<f32> = npz
+        .by_name("joint_pos")
+        .unwrap()
+        .unwrap()
+        .into_vec()
+        .unwrap();
+    let expected: Vec<f32> = seq.joint_pos.iter().flatten().map(|v| *v as f32).collect();
+    assert_eq!(joint_pos, expected);
+    let fps: Vec<f64> = npz.by_name("fps").unwrap().unwrap().into_vec().unwrap();
+    assert_eq!(fps, vec![30.0]);
+    let index: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("index.json")).unwrap()).unwrap();
+    assert_eq!(index["joint_names"].as_array().unwrap().len(), 29);
+    assert_eq!(index["sequences"][0]["file"], "walk/m.npz");
+}

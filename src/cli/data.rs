@@ -14,6 +14,31 @@ pub enum DataCommand {
     Import(ImportArgs),
     /// Per task: sequences, total duration, force percentiles, joint-limit margin.
     Info(InfoArgs),
+    /// Export a dataset for Python users (one .npz per sequence plus index.json).
+    Export(ExportArgs),
+}
+
+/// Export formats.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum ExportFormat {
+    /// numpy .npz files (`numpy.load`), float32 arrays.
+    Npz,
+}
+
+/// Arguments of `data export`.
+#[derive(Debug, clap::Args)]
+pub struct ExportArgs {
+    /// Output format.
+    #[arg(long, value_enum, default_value = "npz")]
+    pub format: ExportFormat,
+    /// Dataset directory.
+    pub dataset: PathBuf,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Robot of the dataset.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
 }
 
 /// Input formats of `data import`.
@@ -84,6 +109,7 @@ pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
     match cmd {
         DataCommand::Import(a) => import(a),
         DataCommand::Info(a) => info(a),
+        DataCommand::Export(a) => export(a),
     }
 }
 
@@ -149,6 +175,17 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
     }
     let ds = writer.finish()?;
     eprintln!("{}: {} sequences", ds.dir.display(), ds.len());
+    Ok(())
+}
+
+fn export(args: &ExportArgs) -> anyhow::Result<()> {
+    let robot = super::load_robot(&args.robot)?;
+    let ds = Dataset::open(&args.dataset, &robot)?;
+    let ExportFormat::Npz = args.format;
+    let files = crate::motion::export_npz(&ds, &args.out, |done, total| {
+        eprint!("\rexported {done}/{total}")
+    })?;
+    eprintln!("\n{}: {} files", args.out.display(), files.len());
     Ok(())
 }
 

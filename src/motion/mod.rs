@@ -3,6 +3,7 @@
 
 mod dataset;
 mod error;
+mod export;
 mod format;
 pub mod import;
 mod reference;
@@ -10,6 +11,7 @@ mod sequence;
 
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use error::DataError;
+pub use export::export_npz;
 pub use format::{decode_sequence, encode_sequence, sha256_hex, write_sequence, SCHEMA_VERSION};
 pub use reference::{
     ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference, ReferenceFrame,
