@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod metrics;
 pub mod motion;
 pub mod physics;
 pub mod robot;

@@ -1,5 +1,6 @@
 //! `thorarena data …`: import motion files, describe a dataset.
 
+use crate::metrics::percentile;
 use crate::motion::import::canonical::{to_sequence, ImportOptions};
 use crate::motion::import::{force_csv, lafan_csv, npz, twist_pkl, RawMotion};
 use crate::motion::{ground_check, shift_root_height, Dataset, DatasetWriter, Sequence};
@@ -282,15 +283,4 @@ pub fn joint_limit_margin(seq: &Sequence, robot: &RobotModel) -> f64 {
                 .map(|(q, (lo, hi))| (q - lo).min(hi - q))
         })
         .fold(f64::INFINITY, f64::min)
-}
-
-/// Linear-interpolated percentile of sorted values (`p` in 0..=100).
-pub fn percentile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
-    }
-    let x = p / 100.0 * (sorted.len() - 1) as f64;
-    let (i, f) = (x.floor() as usize, x - x.floor());
-    let j = (i + 1).min(sorted.len() - 1);
-    sorted[i] * (1.0 - f) + sorted[j] * f
 }
