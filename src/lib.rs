@@ -13,6 +13,7 @@ pub mod cli;
 pub mod metrics;
 pub mod motion;
 pub mod physics;
+pub mod profile;
 pub mod robot;
 pub mod scenario;
 

@@ -1,0 +1,242 @@
+//! Dynamics profiles (`data/profiles/*.toml`): the fixed deployment settings a policy is
+//! evaluated under — robot, control and physics steps, action mapping, delay, PD gains and
+//! torque limits — resolved against the robot model and validated on load.
+
+use crate::physics::PdGains;
+use crate::robot::RobotModel;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Why a profile could not be loaded. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ProfileError {
+    /// The file could not be read.
+    #[error("cannot read {path}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// Not valid TOML, or not the schema.
+    #[error("{path}: {message}")]
+    Toml {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message (with line and column).
+        message: String,
+    },
+    /// A field contradicts the robot or the rules of a profile.
+    #[error("{path}: field `{field}`: {reason}")]
+    BadField {
+        /// The file.
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// A value per joint: keyed by the full joint name (`left_shoulder_roll_joint`), by its
+/// group — the name without side prefix and `_joint` suffix (`hip_pitch`, `knee`,
+/// `waist_yaw`, …) — or `default`; the most specific key wins.
+type PerGroup = BTreeMap<String, f64>;
+
+/// The profile file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileFile {
+    name: String,
+    robot: String,
+    control_dt_s: f64,
+    physics_dt_s: f64,
+    #[serde(default)]
+    action_delay_steps: usize,
+    action_clip: Option<f64>,
+    action_scale: PerGroup,
+    #[serde(default)]
+    action_offset_rad: Option<PerGroup>,
+    kp: PerGroup,
+    kd: PerGroup,
+    #[serde(default)]
+    effort_limit_nm: PerGroup,
+    #[serde(default)]
+    source: String,
+}
+
+/// A resolved profile: every per-joint quantity in the robot's canonical order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Profile {
+    /// Profile name.
+    pub name: String,
+    /// Robot name.
+    pub robot: String,
+    /// Policy period, s.
+    pub control_dt_s: f64,
+    /// Physics step, s.
+    pub physics_dt_s: f64,
+    /// Physics steps per control step.
+    pub substeps: usize,
+    /// Control steps between a policy output and its effect.
+    pub action_delay_steps: usize,
+    /// Raw actions are clipped to ±this before scaling (no clip when `None`).
+    pub action_clip: Option<f64>,
+    /// Target = offset + scale · action, per joint.
+    pub action_scale: Vec<f64>,
+    /// The action offset (the policy's default pose; the robot's unless the profile gives
+    /// one), rad.
+    pub action_offset_rad: Vec<f64>,
+    /// PD gains and torque limits.
+    pub gains: PdGains,
+    /// Where the numbers come from.
+    pub source: String,
+}
+
+impl Profile {
+    /// Joint position targets for a raw policy action (clip, scale, offset).
+    pub fn targets_from_action(&self, action: &[f64], targets: &mut [f64]) {
+        for (i, t) in targets.iter_mut().enumerate() {
+            let a = match self.action_clip {
+                Some(c) => action[i].clamp(-c, c),
+                None => action[i],
+            };
+            *t = self.action_offset_rad[i] + self.action_scale[i] * a;
+        }
+    }
+}
+
+/// `data/profiles/<name>.toml` of the bundled profiles.
+pub fn bundled_profile_path(name: &str) -> PathBuf {
+    crate::data_dir()
+        .join("profiles")
+        .join(format!("{name}.toml"))
+}
+
+/// Loads and resolves a profile file for `robot`.
+pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ProfileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let file: ProfileFile = toml::from_str(&text).map_err(|e| ProfileError::Toml {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let bad = |field: &str, reason: String| ProfileError::BadField {
+        path: path.to_path_buf(),
+        field: field.into(),
+        reason,
+    };
+    if file.robot != robot.name {
+        return Err(bad(
+            "robot",
+            format!("`{}`, but the robot loaded is `{}`", file.robot, robot.name),
+        ));
+    }
+    for (field, v) in [
+        ("control_dt_s", file.control_dt_s),
+        ("physics_dt_s", file.physics_dt_s),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad(field, format!("must be > 0, got {v}")));
+        }
+    }
+    let ratio = file.control_dt_s / file.physics_dt_s;
+    let substeps = ratio.round();
+    if substeps < 1.0 || (ratio - substeps).abs() > 1e-6 {
+        return Err(bad(
+            "control_dt_s",
+            format!(
+                "{} s is not a whole multiple of physics_dt_s {} s",
+                file.control_dt_s, file.physics_dt_s
+            ),
+        ));
+    }
+    if let Some(c) = file.action_clip {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(bad("action_clip", format!("must be > 0, got {c}")));
+        }
+    }
+    let resolve_signed = |field: &str,
+                          table: &PerGroup,
+                          fallback: Option<&dyn Fn(usize) -> f64>,
+                          allow_negative: bool|
+     -> Result<Vec<f64>, ProfileError> {
+        let groups: Vec<String> = robot.joints.iter().map(|j| joint_group(&j.name)).collect();
+        for key in table.keys() {
+            if key != "default"
+                && !groups.iter().any(|g| g == key)
+                && robot.joint_index(key).is_none()
+            {
+                return Err(bad(
+                    &format!("{field}.{key}"),
+                    format!("no joint of {} is named or grouped `{key}`", robot.name),
+                ));
+            }
+        }
+        groups
+            .iter()
+            .enumerate()
+            .map(|(j, g)| {
+                let v = table
+                    .get(&robot.joints[j].name)
+                    .or_else(|| table.get(g))
+                    .or_else(|| table.get("default"))
+                    .copied()
+                    .or_else(|| fallback.map(|f| f(j)));
+                match v {
+                    Some(v) if v.is_finite() && (allow_negative || v >= 0.0) => Ok(v),
+                    Some(v) => Err(bad(
+                        &format!("{field}.{g}"),
+                        format!("must be a finite value >= 0, got {v}"),
+                    )),
+                    None => Err(bad(
+                        field,
+                        format!(
+                            "no value for joint `{}` (group `{g}`) and no `default`",
+                            robot.joints[j].name
+                        ),
+                    )),
+                }
+            })
+            .collect()
+    };
+    let resolve = |field: &str, table: &PerGroup, fallback: Option<&dyn Fn(usize) -> f64>| {
+        resolve_signed(field, table, fallback, false)
+    };
+    let effort = |j: usize| robot.joints[j].effort_nm;
+    let default_pose = |j: usize| robot.joints[j].default_rad;
+    let action_offset_rad = match &file.action_offset_rad {
+        Some(t) => resolve_signed("action_offset_rad", t, Some(&default_pose), true)?,
+        None => robot.default_pose(),
+    };
+    Ok(Profile {
+        name: file.name,
+        robot: file.robot,
+        control_dt_s: file.control_dt_s,
+        physics_dt_s: file.physics_dt_s,
+        substeps: substeps as usize,
+        action_delay_steps: file.action_delay_steps,
+        action_clip: file.action_clip,
+        action_scale: resolve("action_scale", &file.action_scale, None)?,
+        action_offset_rad,
+        gains: PdGains {
+            kp: resolve("kp", &file.kp, None)?,
+            kd: resolve("kd", &file.kd, None)?,
+            effort_limit_nm: resolve("effort_limit_nm", &file.effort_limit_nm, Some(&effort))?,
+        },
+        source: file.source,
+    })
+}
+
+/// `left_hip_pitch_joint` → `hip_pitch`; `waist_yaw_joint` → `waist_yaw`.
+pub fn joint_group(joint: &str) -> String {
+    let s = joint.strip_suffix("_joint").unwrap_or(joint);
+    let s = s
+        .strip_prefix("left_")
+        .or_else(|| s.strip_prefix("right_"))
+        .unwrap_or(s);
+    s.to_string()
+}
