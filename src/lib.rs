@@ -14,6 +14,7 @@ pub mod metrics;
 pub mod motion;
 pub mod physics;
 pub mod profile;
+pub mod replay;
 pub mod robot;
 pub mod scenario;
 

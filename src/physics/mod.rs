@@ -38,7 +38,7 @@ pub trait Physics {
     fn set_targets(&mut self, q_target: &[f64]);
 
     /// Holds a world-frame force at a point of a body for the coming steps, replacing any
-    /// force previously set on that body.
+    /// force previously set at that same point of that body (forces at other points add).
     fn set_external_force(&mut self, force: ExternalForce);
 
     /// Removes every external force.
