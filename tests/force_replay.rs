@@ -71,7 +71,7 @@ fn coefficient_zero_applies_nothing_and_one_applies_the_recorded_impulse() {
         let replay = ForceReplay::new(&robot, &seq, coefficient);
         let mut state = PhysicsState::default();
         let mut impulse = Vector3::zeros();
-        let mut com = |p: &RapierPhysics, st: &mut PhysicsState| {
+        let com = |p: &RapierPhysics, st: &mut PhysicsState| {
             p.read_state(st);
             robot::center_of_mass(&robot, &st.world_from_body)
         };
