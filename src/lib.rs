@@ -10,9 +10,11 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod episode;
 pub mod metrics;
 pub mod motion;
 pub mod physics;
+pub mod policy;
 pub mod profile;
 pub mod replay;
 pub mod robot;

@@ -1,0 +1,260 @@
+//! One episode as a state machine the runner can batch: start (reset to the first reference
+//! frame), observe, advance one control step (action delay, force replay and PD at the
+//! physics rate, metrics, termination), finish.
+
+use crate::metrics::{keypoint_error_m, reanchor, EpisodeSeries};
+use crate::motion::{Reference, ReferenceFrame, Sequence};
+use crate::physics::{Physics, PhysicsState, ResetState, RootState};
+use crate::policy::Observation;
+use crate::profile::Profile;
+use crate::replay::ForceReplay;
+use crate::robot::{forward_kinematics, frame_pose, lowest_sole_point_z, KeypointSet, RobotModel};
+use nalgebra::{Isometry3, Point3, Vector3};
+use serde::{Deserialize, Serialize};
+use std::collections::VecDeque;
+
+/// When an episode counts as failed (the same rule for every policy; BRIEF.md).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TerminationRule {
+    /// Torso height off its reference by more than this, m.
+    pub max_torso_height_error_m: f64,
+    /// Torso tilt (angle between robot and reference projected gravity) above this, rad.
+    pub max_torso_tilt_error_rad: f64,
+}
+
+impl Default for TerminationRule {
+    fn default() -> Self {
+        Self {
+            max_torso_height_error_m: 0.25,
+            max_torso_tilt_error_rad: 0.8,
+        }
+    }
+}
+
+/// Why an episode ended early.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
+    /// Torso height error above the rule's limit.
+    TorsoHeight,
+    /// Torso tilt error above the rule's limit.
+    TorsoTilt,
+}
+
+/// Everything fixed across the episodes of a run.
+pub struct EpisodeSetup<'a> {
+    /// The robot.
+    pub robot: &'a RobotModel,
+    /// The dynamics profile.
+    pub profile: &'a Profile,
+    /// Keypoints of the tracking error.
+    pub keypoints: &'a KeypointSet,
+    /// Termination rule.
+    pub termination: TerminationRule,
+    /// Force replay coefficient (1 = force setting, 0 = no force).
+    pub force_coefficient: f64,
+    /// Reference offsets the policy asked for, s.
+    pub reference_offsets_s: Vec<f64>,
+}
+
+/// A running episode.
+pub struct Episode<'a> {
+    setup: &'a EpisodeSetup<'a>,
+    reference: Reference,
+    replay: ForceReplay,
+    torso_frame: usize,
+    step: usize,
+    steps_ref: usize,
+    pending: VecDeque<Vec<f64>>,
+    last_action: Vec<f64>,
+    targets: Vec<f64>,
+    state: PhysicsState,
+    series: EpisodeSeries,
+    termination: Option<Termination>,
+    /// Body poses of the reference at the current step (set by `record`).
+    reference_poses: Vec<Isometry3<f64>>,
+}
+
+impl<'a> Episode<'a> {
+    /// Resets `physics` to the first reference frame (with its velocities, lifted if the
+    /// feet would start below the ground) and sets the profile's gains.
+    pub fn start(setup: &'a EpisodeSetup<'a>, seq: &Sequence, physics: &mut dyn Physics) -> Self {
+        let robot = setup.robot;
+        let reference = Reference::new(seq);
+        let first = reference.sample(0.0);
+        let mut world_from_root = first.world_from_root;
+        let mut poses = Vec::new();
+        forward_kinematics(robot, &world_from_root, &first.joint_pos, &mut poses);
+        if let Some(low) = lowest_sole_point_z(robot, &poses) {
+            world_from_root.translation.vector.z += (-low).max(0.0);
+        }
+        physics.set_gains(&setup.profile.gains);
+        physics.reset(&ResetState {
+            root: RootState {
+                world_from_root,
+                lin_vel_w: first.root_lin_vel_w,
+                ang_vel_w: first.root_ang_vel_w,
+            },
+            q: first.joint_pos.clone(),
+            qd: first.joint_vel.clone(),
+        });
+        let n = robot.n_joints();
+        let steps_ref =
+            (reference.duration_s() / setup.profile.control_dt_s + 1e-9).floor() as usize;
+        let mut state = PhysicsState::default();
+        physics.read_state(&mut state);
+        Self {
+            setup,
+            replay: ForceReplay::new(robot, seq, setup.force_coefficient),
+            torso_frame: robot.frame_index("torso_link").unwrap_or(0),
+            reference,
+            step: 0,
+            steps_ref,
+            pending: (0..setup.profile.action_delay_steps)
+                .map(|_| vec![0.0; n])
+                .collect(),
+            last_action: vec![0.0; n],
+            targets: first.joint_pos,
+            state,
+            series: EpisodeSeries {
+                steps_ref,
+                ..Default::default()
+            },
+            termination: None,
+            reference_poses: poses,
+        }
+    }
+
+    /// True once the reference is over or the episode terminated.
+    pub fn is_done(&self) -> bool {
+        self.termination.is_some() || self.step >= self.steps_ref
+    }
+
+    /// The observation for the current control step.
+    pub fn observation(&self) -> Observation {
+        let t = self.step as f64 * self.setup.profile.control_dt_s;
+        Observation {
+            step: self.step,
+            time_s: t,
+            root: self.state.root.clone().expect("root state"),
+            q: self.state.q.clone(),
+            qd: self.state.qd.clone(),
+            last_action: self.last_action.clone(),
+            reference: self
+                .setup
+                .reference_offsets_s
+                .iter()
+                .map(|o| self.reference.sample(t + o))
+                .collect(),
+        }
+    }
+
+    /// Applies one raw action (after the profile's delay) for one control step.
+    pub fn advance(&mut self, physics: &mut dyn Physics, action: &[f64]) {
+        let profile = self.setup.profile;
+        let bad = action.iter().any(|a| !a.is_finite());
+        // A non-finite action never reaches the physics: the previous targets are held.
+        self.pending.push_back(if bad {
+            self.last_action.clone()
+        } else {
+            action.to_vec()
+        });
+        let applied = self
+            .pending
+            .pop_front()
+            .expect("queue holds delay + 1 actions");
+        profile.targets_from_action(&applied, &mut self.targets);
+        physics.set_targets(&self.targets);
+        if !bad {
+            self.last_action.copy_from_slice(action);
+        }
+        let mut power = 0.0;
+        for _ in 0..profile.substeps {
+            self.replay
+                .apply(physics, &self.reference, &self.state.world_from_body);
+            physics.step();
+            physics.read_state(&mut self.state);
+            power += self
+                .state
+                .applied_torque_nm
+                .iter()
+                .zip(&self.state.qd)
+                .map(|(t, v)| (t * v).abs())
+                .sum::<f64>();
+        }
+        self.step += 1;
+        let t = self.step as f64 * profile.control_dt_s;
+        let frame = self.reference.sample(t);
+        self.record(&frame, power / profile.substeps as f64);
+        self.check_termination();
+    }
+
+    fn record(&mut self, frame: &ReferenceFrame, power_w: f64) {
+        let robot = self.setup.robot;
+        let set = self.setup.keypoints;
+        let root = self.state.root.as_ref().expect("root state");
+        forward_kinematics(
+            robot,
+            &frame.world_from_root,
+            &frame.joint_pos,
+            &mut self.reference_poses,
+        );
+        let reference_w: Vec<Point3<f64>> = set
+            .frames
+            .iter()
+            .map(|&f| frame_pose(robot, &self.reference_poses, f) * Point3::origin())
+            .collect();
+        let mut anchored = Vec::with_capacity(reference_w.len());
+        reanchor(
+            &reference_w,
+            &frame.world_from_root,
+            &root.world_from_root,
+            &mut anchored,
+        );
+        let robot_w: Vec<Point3<f64>> = set
+            .frames
+            .iter()
+            .map(|&f| frame_pose(robot, &self.state.world_from_body, f) * Point3::origin())
+            .collect();
+        let u = set.n_upper;
+        self.series
+            .kp_err_m
+            .push(keypoint_error_m(&anchored, &robot_w));
+        self.series
+            .kp_err_upper_m
+            .push(keypoint_error_m(&anchored[..u], &robot_w[..u]));
+        self.series
+            .kp_err_lower_m
+            .push(keypoint_error_m(&anchored[u..], &robot_w[u..]));
+        self.series
+            .total_force_n
+            .push(frame.force_sensor[0].norm() + frame.force_sensor[1].norm());
+        self.series.power_w.push(power_w);
+        let d = root.world_from_root.translation.vector - frame.world_from_root.translation.vector;
+        self.series.root_drift_m.push(d.xy().norm());
+    }
+
+    /// Compares the robot's torso with the reference's (poses from `record`).
+    fn check_termination(&mut self) {
+        let rule = self.setup.termination;
+        let torso = frame_pose(
+            self.setup.robot,
+            &self.state.world_from_body,
+            self.torso_frame,
+        );
+        let torso_ref = frame_pose(self.setup.robot, &self.reference_poses, self.torso_frame);
+        let down = -Vector3::z();
+        let tilt = (torso.rotation.inverse() * down).angle(&(torso_ref.rotation.inverse() * down));
+        if (torso.translation.z - torso_ref.translation.z).abs() > rule.max_torso_height_error_m {
+            self.termination = Some(Termination::TorsoHeight);
+        } else if tilt > rule.max_torso_tilt_error_rad {
+            self.termination = Some(Termination::TorsoTilt);
+        }
+    }
+
+    /// The recorded series and why the episode ended early, if it did.
+    pub fn finish(self) -> (EpisodeSeries, Option<Termination>) {
+        (self.series, self.termination)
+    }
+}

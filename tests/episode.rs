@@ -1,0 +1,158 @@
+//! Episodes: a held pose tracks a standing reference and survives, a reference the robot
+//! cannot be near terminates at once, the action delay shifts actions by whole control
+//! steps, non-finite actions never reach the physics, and re-runs are bit-identical.
+
+use std::sync::Arc;
+use thorarena::episode::{Episode, EpisodeSetup, Termination, TerminationRule};
+use thorarena::motion::Sequence;
+use thorarena::physics::{standing_default_pose, PhysicsSettings, RapierPhysics};
+use thorarena::policy::{HoldPolicy, Policy, ReplayPolicy};
+use thorarena::profile::{bundled_profile_path, load_profile, Profile};
+use thorarena::robot::RobotModel;
+
+mod common;
+use common::{g1, sample_sequence};
+
+/// A 2 s reference standing in the default pose (feet on the ground), then bending the
+/// right elbow over the second half.
+fn standing_sequence(robot: &RobotModel) -> Sequence {
+    let mut seq = sample_sequence(robot, "stand");
+    let stand = standing_default_pose(robot);
+    let t = &stand.root.world_from_root.translation;
+    let n = 61;
+    let elbow = robot.joint_index("right_elbow_joint").unwrap();
+    seq.root_pos = vec![[t.x, t.y, t.z]; n];
+    seq.root_quat_wxyz = vec![[1.0, 0.0, 0.0, 0.0]; n];
+    seq.joint_pos = (0..n)
+        .map(|k| {
+            let mut q = stand.q.clone();
+            q[elbow] += 0.6 * ((k as f64 - 30.0) / 30.0).max(0.0);
+            q
+        })
+        .collect();
+    seq.force_sensor = [vec![[0.0; 3]; n], vec![[0.0; 3]; n]];
+    seq
+}
+
+fn run(
+    robot: &Arc<RobotModel>,
+    profile: &Profile,
+    seq: &Sequence,
+    policy: &mut dyn Policy,
+) -> (thorarena::metrics::EpisodeSeries, Option<Termination>) {
+    let setup = EpisodeSetup {
+        robot,
+        profile,
+        keypoints: robot.keypoint_set("default").unwrap(),
+        termination: TerminationRule::default(),
+        force_coefficient: 1.0,
+        reference_offsets_s: policy.reference_offsets_s(),
+    };
+    let settings = PhysicsSettings {
+        dt_s: profile.physics_dt_s,
+        ..Default::default()
+    };
+    let mut physics = RapierPhysics::new(robot.clone(), settings, profile.gains.clone());
+    let mut ep = Episode::start(&setup, seq, &mut physics);
+    let mut actions = vec![vec![0.0; robot.n_joints()]];
+    while !ep.is_done() {
+        policy.act(&[ep.observation()], &mut actions);
+        ep.advance(&mut physics, &actions[0]);
+    }
+    ep.finish()
+}
+
+fn default_profile(robot: &RobotModel) -> Profile {
+    load_profile(&bundled_profile_path("default"), robot).unwrap()
+}
+
+#[test]
+fn holding_the_pose_tracks_a_standing_reference_and_survives() {
+    let robot = Arc::new(g1());
+    let profile = default_profile(&robot);
+    let seq = standing_sequence(&robot);
+    let (series, end) = run(&robot, &profile, &seq, &mut HoldPolicy);
+    assert_eq!(end, None);
+    assert_eq!(series.kp_err_m.len(), series.steps_ref);
+    assert_eq!(series.steps_ref, 100); // 2 s at 50 Hz
+    let early = series.kp_err_m[..40].iter().copied().fold(0.0, f64::max);
+    assert!(
+        early < 0.01,
+        "standing still, the keypoint error stays under 1 cm (max {early} m)"
+    );
+    // The reference bends the elbow later; holding does not, so the error grows.
+    assert!(series.kp_err_m[99] > 2.0 * early.max(0.002));
+    let (replayed, end) = run(
+        &robot,
+        &profile,
+        &seq,
+        &mut ReplayPolicy::new(profile.action_offset_rad.clone()),
+    );
+    assert_eq!(end, None);
+    assert!(
+        replayed.kp_err_m[99] < 0.6 * series.kp_err_m[99],
+        "replay follows the elbow (both keep the few-mm gravity sag of PD)"
+    );
+}
+
+#[test]
+fn a_reference_far_above_the_robot_terminates_on_torso_height() {
+    let robot = Arc::new(g1());
+    let profile = default_profile(&robot);
+    let mut seq = standing_sequence(&robot);
+    // Reference jumps 0.5 m up after the first frame: unreachable.
+    for p in seq.root_pos.iter_mut().skip(1) {
+        p[2] += 0.5;
+    }
+    let (series, end) = run(&robot, &profile, &seq, &mut HoldPolicy);
+    assert_eq!(end, Some(Termination::TorsoHeight));
+    assert!(
+        series.kp_err_m.len() < 5,
+        "terminated after {} steps",
+        series.kp_err_m.len()
+    );
+}
+
+#[test]
+fn the_action_delay_shifts_actions_by_whole_control_steps() {
+    let robot = Arc::new(g1());
+    let mut profile = default_profile(&robot);
+    let seq = standing_sequence(&robot);
+    let (hold, _) = run(&robot, &profile, &seq, &mut HoldPolicy);
+    profile.action_delay_steps = 3;
+    let mut replay = ReplayPolicy::new(profile.action_offset_rad.clone());
+    let (delayed, _) = run(&robot, &profile, &seq, &mut replay);
+    // The first three steps apply the initial zero action: exactly the hold episode.
+    assert_eq!(delayed.kp_err_m[..3], hold.kp_err_m[..3]);
+    assert_ne!(delayed.kp_err_m[3..], hold.kp_err_m[3..]);
+}
+
+struct NanPolicy;
+impl Policy for NanPolicy {
+    fn name(&self) -> &str {
+        "nan"
+    }
+    fn act(&mut self, _o: &[thorarena::policy::Observation], actions: &mut [Vec<f64>]) {
+        actions.iter_mut().for_each(|a| a.fill(f64::NAN));
+    }
+}
+
+#[test]
+fn non_finite_actions_never_reach_the_physics() {
+    let robot = Arc::new(g1());
+    let profile = default_profile(&robot);
+    let seq = standing_sequence(&robot);
+    let (series, end) = run(&robot, &profile, &seq, &mut NanPolicy);
+    assert_eq!(end, None);
+    assert!(series.kp_err_m.iter().all(|e| e.is_finite()));
+}
+
+#[test]
+fn rerunning_an_episode_is_bit_identical() {
+    let robot = Arc::new(g1());
+    let profile = default_profile(&robot);
+    let seq = sample_sequence(&robot, "moving"); // moves and yaws: a harder reference
+    let a = run(&robot, &profile, &seq, &mut HoldPolicy);
+    let b = run(&robot, &profile, &seq, &mut HoldPolicy);
+    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+}
