@@ -17,7 +17,9 @@ pub mod physics;
 pub mod policy;
 pub mod profile;
 pub mod replay;
+pub mod report;
 pub mod robot;
+pub mod runner;
 pub mod scenario;
 
 use std::path::PathBuf;

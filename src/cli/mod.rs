@@ -2,6 +2,7 @@
 
 mod bench_physics;
 mod data;
+mod eval;
 mod robot_info;
 mod sim_trace;
 
@@ -23,6 +24,8 @@ pub struct Cli {
 /// Subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
+    /// Evaluate a policy on a dataset, with and without force (FATS and diagnostics).
+    Eval(eval::Args),
     /// Inspect a robot model.
     #[command(subcommand)]
     Robot(RobotCommand),
@@ -66,6 +69,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Data(cmd) => data::run(&cmd),
+        Command::Eval(args) => eval::run(&args),
     }
 }
 

@@ -1,0 +1,240 @@
+//! The full-coverage evaluation: every sequence of a dataset once per setting, spread over
+//! worker threads, each finished episode streamed to a JSON-lines file, and the scores
+//! aggregated per setting.
+//!
+//! Determinism: an episode's result depends only on its sequence, setting and policy (a
+//! reset rebuilds the physics world; policies are created per worker and reset per
+//! episode), and aggregates sum in (task, id) order, so results are identical for any
+//! number of workers.
+//!
+//! Interim design (issue 4 increment): each worker steps one environment with its own
+//! policy instance. The brief's batched lock-step loop over environment slots arrives with
+//! the policy server (issue 5), where a batch per request is what pays.
+
+use crate::episode::{Episode, EpisodeSetup, Termination, TerminationRule};
+use crate::metrics::{
+    aggregate, percentile, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary,
+};
+use crate::motion::{DataError, Dataset, Reference, Sequence};
+use crate::physics::{PhysicsSettings, RapierPhysics};
+use crate::policy::Policy;
+use crate::profile::Profile;
+use crate::robot::RobotModel;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// A force setting: a name and the replay coefficient.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Setting {
+    /// `force`, `no-force`, or `coef-<x>`.
+    pub name: String,
+    /// Replay coefficient.
+    pub coefficient: f64,
+}
+
+impl Setting {
+    /// Parses `force`, `no-force` or a number.
+    pub fn parse(s: &str) -> Option<Self> {
+        match s {
+            "force" => Some(Self {
+                name: "force".into(),
+                coefficient: 1.0,
+            }),
+            "no-force" => Some(Self {
+                name: "no-force".into(),
+                coefficient: 0.0,
+            }),
+            other => other
+                .parse::<f64>()
+                .ok()
+                .filter(|c| c.is_finite())
+                .map(|c| Self {
+                    name: format!("coef-{c}"),
+                    coefficient: c,
+                }),
+        }
+    }
+}
+
+/// One finished episode, as streamed to `episodes.jsonl`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EpisodeRecord {
+    /// Task.
+    pub task: String,
+    /// Sequence id.
+    pub sequence_id: String,
+    /// Setting name.
+    pub setting: String,
+    /// Replay coefficient.
+    pub coefficient: f64,
+    /// Policy name.
+    pub policy: String,
+    /// Why it ended early, if it did.
+    pub termination: Option<Termination>,
+    /// The per-step series the scores are computed from.
+    pub series: EpisodeSeries,
+}
+
+/// Everything an evaluation needs.
+pub struct EvalPlan<'a> {
+    /// Robot.
+    pub robot: &'a RobotModel,
+    /// Dynamics profile.
+    pub profile: &'a Profile,
+    /// Keypoint set name.
+    pub keypoints: &'a str,
+    /// Termination rule.
+    pub termination: TerminationRule,
+    /// Settings to run.
+    pub settings: Vec<Setting>,
+    /// Worker threads.
+    pub workers: usize,
+}
+
+/// The regime thresholds of each task: percentiles of `|F_L| + |F_R|` over every control
+/// step of the task's references (the steps the metrics record).
+pub fn task_thresholds(
+    sequences: &[Sequence],
+    control_dt_s: f64,
+) -> BTreeMap<String, RegimeThresholds> {
+    let mut forces: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for seq in sequences {
+        let r = Reference::new(seq);
+        let steps = (r.duration_s() / control_dt_s + 1e-9).floor() as usize;
+        let v = forces.entry(seq.task.clone()).or_default();
+        for k in 1..=steps {
+            let f = r.sample(k as f64 * control_dt_s).force_sensor;
+            v.push(f[0].norm() + f[1].norm());
+        }
+    }
+    forces
+        .into_iter()
+        .map(|(task, mut v)| {
+            v.sort_by(f64::total_cmp);
+            (
+                task,
+                RegimeThresholds {
+                    p33_n: percentile(&v, 33.0),
+                    p66_n: percentile(&v, 66.0),
+                },
+            )
+        })
+        .collect()
+}
+
+/// Runs every (sequence, setting) once; `on_record` sees each finished episode (in
+/// completion order) — stream it, count it; the returned records are in schedule order.
+pub fn run_eval(
+    plan: &EvalPlan,
+    sequences: &[Sequence],
+    make_policy: &(dyn Fn() -> Box<dyn Policy> + Sync),
+    on_record: &(dyn Fn(&EpisodeRecord) + Sync),
+) -> Vec<EpisodeRecord> {
+    let jobs: Vec<(usize, usize)> = (0..plan.settings.len())
+        .flat_map(|s| (0..sequences.len()).map(move |q| (q, s)))
+        .collect();
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Option<EpisodeRecord>>> = Mutex::new(vec![None; jobs.len()]);
+    let robot = Arc::new(plan.robot.clone());
+    let keypoints = plan
+        .robot
+        .keypoint_set(plan.keypoints)
+        .expect("keypoint set checked by the caller");
+    std::thread::scope(|scope| {
+        for _ in 0..plan.workers.max(1) {
+            scope.spawn(|| {
+                let mut policy = make_policy();
+                let settings = PhysicsSettings {
+                    dt_s: plan.profile.physics_dt_s,
+                    ..Default::default()
+                };
+                let mut physics =
+                    RapierPhysics::new(robot.clone(), settings, plan.profile.gains.clone());
+                loop {
+                    let j = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&(q, s)) = jobs.get(j) else { break };
+                    let setting = &plan.settings[s];
+                    let setup = EpisodeSetup {
+                        robot: plan.robot,
+                        profile: plan.profile,
+                        keypoints,
+                        termination: plan.termination,
+                        force_coefficient: setting.coefficient,
+                        reference_offsets_s: policy.reference_offsets_s(),
+                    };
+                    policy.reset(0);
+                    let mut ep = Episode::start(&setup, &sequences[q], &mut physics);
+                    let mut actions = vec![vec![0.0; plan.robot.n_joints()]];
+                    while !ep.is_done() {
+                        policy.act(&[ep.observation()], &mut actions);
+                        ep.advance(&mut physics, &actions[0]);
+                    }
+                    let (series, termination) = ep.finish();
+                    let record = EpisodeRecord {
+                        task: sequences[q].task.clone(),
+                        sequence_id: sequences[q].sequence_id.clone(),
+                        setting: setting.name.clone(),
+                        coefficient: setting.coefficient,
+                        policy: policy.name().to_string(),
+                        termination,
+                        series,
+                    };
+                    on_record(&record);
+                    results.lock().expect("no worker panicked")[j] = Some(record);
+                }
+            });
+        }
+    });
+    results
+        .into_inner()
+        .expect("no worker panicked")
+        .into_iter()
+        .map(|r| r.expect("every job ran"))
+        .collect()
+}
+
+/// Per setting: per-task summaries and the average over tasks.
+pub type SettingResults = BTreeMap<String, (Vec<TaskSummary>, Diagnostics)>;
+
+/// Scores records with the task thresholds.
+pub fn summarize(
+    records: &[EpisodeRecord],
+    thresholds: &BTreeMap<String, RegimeThresholds>,
+) -> SettingResults {
+    let mut by_setting: BTreeMap<String, Vec<(String, String, EpisodeSeries)>> = BTreeMap::new();
+    for r in records {
+        by_setting.entry(r.setting.clone()).or_default().push((
+            r.task.clone(),
+            r.sequence_id.clone(),
+            r.series.clone(),
+        ));
+    }
+    let th = |task: &str| {
+        thresholds.get(task).copied().unwrap_or(RegimeThresholds {
+            p33_n: 0.0,
+            p66_n: 0.0,
+        })
+    };
+    by_setting
+        .into_iter()
+        .map(|(setting, eps)| {
+            let (_, tasks, overall) = aggregate(&eps, &th);
+            (setting, (tasks, overall))
+        })
+        .collect()
+}
+
+/// Appends a record as one JSON line and flushes (a crash loses nothing finished).
+pub fn write_record(out: &mut impl Write, record: &EpisodeRecord) -> std::io::Result<()> {
+    serde_json::to_writer(&mut *out, record)?;
+    out.write_all(b"\n")?;
+    out.flush()
+}
+
+/// Loads all sequences of a dataset.
+pub fn load_sequences(ds: &Dataset) -> Result<Vec<Sequence>, DataError> {
+    ds.load_all()
+}
