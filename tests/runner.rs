@@ -104,7 +104,11 @@ fn force_and_no_force_differ_only_by_the_replay() {
         );
         // The push may end the force episode early; up to there the recorded forces (and so
         // the regimes) are the same in both settings.
-        let steps = f.series.total_force_n.len().min(n.series.total_force_n.len());
+        let steps = f
+            .series
+            .total_force_n
+            .len()
+            .min(n.series.total_force_n.len());
         assert_eq!(
             f.series.total_force_n[..steps],
             n.series.total_force_n[..steps],

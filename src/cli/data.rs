@@ -15,6 +15,8 @@ pub enum DataCommand {
     Import(ImportArgs),
     /// Per task: sequences, total duration, force percentiles, joint-limit margin.
     Info(InfoArgs),
+    /// Generate the synthetic six-task dataset (deterministic for a seed).
+    Synth(SynthArgs),
     /// Export a dataset for Python users (one .npz per sequence plus index.json).
     Export(ExportArgs),
 }
@@ -106,11 +108,35 @@ pub struct InfoArgs {
     pub robot: String,
 }
 
+/// Arguments of `data synth`.
+#[derive(Debug, clap::Args)]
+pub struct SynthArgs {
+    /// Dataset directory to create.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Sequences per task.
+    #[arg(long, default_value_t = 60)]
+    pub per_task: usize,
+    /// Master seed; the same seed gives the same files.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Tasks to generate, comma separated (default: all six).
+    #[arg(long, value_delimiter = ',')]
+    pub tasks: Vec<String>,
+    /// Robot to generate for.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+    /// Replace a dataset already in `--out` (its manifest and the files it lists).
+    #[arg(long)]
+    pub force: bool,
+}
+
 pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
     match cmd {
         DataCommand::Import(a) => import(a),
         DataCommand::Info(a) => info(a),
         DataCommand::Export(a) => export(a),
+        DataCommand::Synth(a) => super::data_synth::run(a),
     }
 }
 

@@ -2,6 +2,7 @@
 
 mod bench_physics;
 mod data;
+mod data_synth;
 mod eval;
 mod robot_info;
 mod sim_trace;

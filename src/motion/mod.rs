@@ -8,6 +8,7 @@ mod format;
 pub mod import;
 mod reference;
 mod sequence;
+pub mod synth;
 
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use error::DataError;

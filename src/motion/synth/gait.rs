@@ -1,0 +1,196 @@
+//! Walking: footholds, swing-foot arcs and the pelvis trajectory, kinematic only.
+//!
+//! A stance foot is exactly its foothold (flat, on the ground, not sliding); a swing foot
+//! travels on a smooth arc with zero velocity at lift-off and touch-down and stays flat.
+//! The pelvis follows the midpoint of the feet, piecewise linear in time between step
+//! ends, then smoothed by a moving average one step period wide: that gives a gentle
+//! start and stop and a constant speed in between. Leg IK turns this into joint angles.
+
+use super::skeleton::Skeleton;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector2, Vector3};
+
+/// One walking bout.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct GaitParams {
+    /// +1 walks forward, −1 backward.
+    pub direction: f64,
+    /// Distance between successive contralateral footholds along the path, m.
+    pub step_length_m: f64,
+    /// Duration of one step (double support then swing), s.
+    pub step_period_s: f64,
+    /// Peak swing-foot lift, m.
+    pub lift_m: f64,
+    /// Steps including the final one that brings the feet together.
+    pub n_steps: usize,
+    /// Heading change per step, rad (positive turns left).
+    pub turn_per_step_rad: f64,
+    /// Standing time before the first step, s.
+    pub start_s: f64,
+    /// The left foot swings first.
+    pub left_first: bool,
+    /// Pelvis height while standing, m.
+    pub height_m: f64,
+    /// Pelvis dip at double support while walking, m.
+    pub bob_m: f64,
+    /// Pelvis shift toward the stance foot at mid-swing, m.
+    pub sway_m: f64,
+    /// Lateral distance of each ankle from the path centre, m.
+    pub half_width_m: f64,
+}
+
+/// Kinematic targets of one frame.
+#[derive(Debug, Clone, Copy)]
+pub struct GaitFrame {
+    /// Pelvis pose (level, yawed).
+    pub pelvis: Isometry3<f64>,
+    /// Ankle-roll frame poses, left then right.
+    pub feet: [Isometry3<f64>; 2],
+    /// 0 standing … 1 walking, smoothed.
+    pub walking: f64,
+    /// Unit walking direction in the world (sign of `direction` included).
+    pub dir_world: Vector3<f64>,
+}
+
+impl GaitParams {
+    /// End of the last step, s.
+    pub fn end_s(&self) -> f64 {
+        self.start_s + self.n_steps as f64 * self.step_period_s
+    }
+}
+
+/// Fraction of each step spent in double support before the swing.
+const DOUBLE_SUPPORT: f64 = 0.2;
+
+#[derive(Clone, Copy)]
+struct Foothold {
+    pos: Vector2<f64>,
+    yaw: f64,
+}
+
+fn rot2(yaw: f64) -> nalgebra::Rotation2<f64> {
+    nalgebra::Rotation2::new(yaw)
+}
+
+/// Footholds per side after each step (index 0 = the initial stance).
+fn footholds(sk: &Skeleton, p: &GaitParams) -> Vec<[Foothold; 2]> {
+    let place = |c: Vector2<f64>, yaw: f64, side: usize| {
+        let y = if side == 0 {
+            p.half_width_m
+        } else {
+            -p.half_width_m
+        };
+        Foothold {
+            pos: c + rot2(yaw) * Vector2::new(sk.foot_x_m, y),
+            yaw,
+        }
+    };
+    let (mut c, mut yaw) = (Vector2::zeros(), 0.0);
+    let mut out = vec![[place(c, yaw, 0), place(c, yaw, 1)]];
+    for i in 1..=p.n_steps {
+        if i < p.n_steps {
+            yaw += p.turn_per_step_rad;
+            c += rot2(yaw) * Vector2::new(p.direction * p.step_length_m, 0.0);
+        }
+        let side = swing_side(p, i);
+        let mut next = out[i - 1];
+        next[side] = place(c, yaw, side);
+        out.push(next);
+    }
+    out
+}
+
+fn swing_side(p: &GaitParams, step: usize) -> usize {
+    usize::from((step % 2 == 1) != p.left_first)
+}
+
+fn smooth5(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
+}
+
+fn moving_average(v: &[f64], half: usize) -> Vec<f64> {
+    let n = v.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(half), (i + half).min(n - 1));
+            // Symmetric window, shrunk at the ends so the average stays centred.
+            let h = (i - a).min(b - i);
+            v[i - h..=i + h].iter().sum::<f64>() / (2 * h + 1) as f64
+        })
+        .collect()
+}
+
+/// Targets for `n_frames` frames at `fps`; standing still before and after the bout.
+pub fn walk(sk: &Skeleton, p: &GaitParams, fps: f64, n_frames: usize) -> Vec<GaitFrame> {
+    let holds = footholds(sk, p);
+    let step_of = |t: f64| -> Option<(usize, f64)> {
+        let x = (t - p.start_s) / p.step_period_s;
+        (x >= 0.0 && x < p.n_steps as f64).then(|| (x.floor() as usize + 1, x.fract()))
+    };
+    let after = |t: f64| -> usize {
+        (((t - p.start_s) / p.step_period_s).floor().max(0.0) as usize).min(p.n_steps)
+    };
+    // Raw pelvis track: midpoint of the footholds, linear between step ends.
+    let mid = |h: &[Foothold; 2]| {
+        let yaw = 0.5 * (h[0].yaw + h[1].yaw);
+        let c = 0.5 * (h[0].pos + h[1].pos) - rot2(yaw) * Vector2::new(sk.foot_x_m, 0.0);
+        (c, yaw)
+    };
+    let mut raw = [vec![], vec![], vec![], vec![]];
+    for k in 0..n_frames {
+        let t = k as f64 / fps;
+        let (i, f) = match step_of(t) {
+            Some((i, f)) => (i - 1, f),
+            None => (after(t), 0.0),
+        };
+        let (c0, y0) = mid(&holds[i]);
+        let (c1, y1) = mid(&holds[(i + 1).min(p.n_steps)]);
+        let c = c0.lerp(&c1, f);
+        let moving = step_of(t).map_or(0.0, |_| 1.0);
+        for (r, v) in raw.iter_mut().zip([c.x, c.y, y0 + (y1 - y0) * f, moving]) {
+            r.push(v);
+        }
+    }
+    let half = (0.5 * p.step_period_s * fps).round() as usize;
+    let [xs, ys, yaws, walking] = raw.map(|r| moving_average(&r, half));
+    let foot_pose = |h: &Foothold, lift: f64| {
+        Isometry3::from_parts(
+            Translation3::new(h.pos.x, h.pos.y, sk.ankle_height_m + lift),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), h.yaw) * sk.foot_rot,
+        )
+    };
+    (0..n_frames)
+        .map(|k| {
+            let t = k as f64 / fps;
+            let mut feet_h = holds[after(t)];
+            let (mut lift, mut sway, mut phase) = ([0.0; 2], 0.0, None);
+            if let Some((i, f)) = step_of(t) {
+                feet_h = holds[i - 1];
+                let side = swing_side(p, i);
+                let phi = ((f - DOUBLE_SUPPORT) / (1.0 - DOUBLE_SUPPORT)).clamp(0.0, 1.0);
+                let s = smooth5(phi);
+                let (a, b) = (holds[i - 1][side], holds[i][side]);
+                feet_h[side] = Foothold {
+                    pos: a.pos.lerp(&b.pos, s),
+                    yaw: a.yaw + (b.yaw - a.yaw) * s,
+                };
+                lift[side] = p.lift_m * 16.0 * phi * phi * (1.0 - phi) * (1.0 - phi);
+                // Toward the stance foot (the other side) during the swing.
+                let toward = if side == 0 { -1.0 } else { 1.0 };
+                sway = toward * p.sway_m * (std::f64::consts::PI * phi).sin();
+                phase = Some(phi);
+            }
+            let yaw = yaws[k];
+            let xy = Vector2::new(xs[k], ys[k]) + rot2(yaw) * Vector2::new(0.0, sway);
+            let swing = phase.map_or(0.0, |phi| (std::f64::consts::PI * phi).sin());
+            let z = p.height_m - p.bob_m * walking[k] * (1.0 - swing);
+            let rot = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw);
+            GaitFrame {
+                pelvis: Isometry3::from_parts(Translation3::new(xy.x, xy.y, z), rot),
+                feet: [0, 1].map(|s| foot_pose(&feet_h[s], lift[s])),
+                walking: walking[k],
+                dir_world: rot * Vector3::new(p.direction, 0.0, 0.0),
+            }
+        })
+        .collect()
+}
