@@ -59,3 +59,50 @@ fn sim_trace_prints_one_json_object_with_a_step_per_physics_step() {
     let bad = thorarena(&["sim", "trace", "--scenario", "fixed-base", "--dt", "0"]);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--dt"));
 }
+
+#[test]
+fn eval_on_the_sample_streams_every_episode_and_writes_the_tables() {
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+    let out = thorarena(&[
+        "eval",
+        "--dataset",
+        dataset,
+        "--policy",
+        "hold",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for task in [
+        "clean_table",
+        "liftdown_water",
+        "liftup_water",
+        "pull_chair",
+        "push_chair",
+        "syn_carry",
+    ] {
+        assert!(stdout.contains(&format!("| {task} |")), "{stdout}");
+    }
+    assert!(stdout.contains("FATS Std") && stdout.contains("torso height error > 0.25 m"));
+    let lines = std::fs::read_to_string(dir.path().join("episodes.jsonl")).unwrap();
+    assert_eq!(lines.lines().count(), 24, "12 sequences × 2 settings");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap())
+            .unwrap();
+    assert!(
+        summary["settings"]["force"]["average"]["fats"]
+            .as_f64()
+            .unwrap()
+            >= 0.0
+    );
+    let bad = thorarena(&["eval", "--dataset", dataset, "--policy", "twist9000"]);
+    assert!(
+        !bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("unknown policy")
+    );
+}
