@@ -36,6 +36,31 @@ fn write_lafan(path: &Path, quat_scale: f64) {
     std::fs::write(path, text).unwrap();
 }
 
+/// Imports a unit-norm `m.csv` as task `walk` into `<dir>/ds`; returns the dataset dir.
+fn import_walk_csv(dir: &Path) -> std::path::PathBuf {
+    let motion = dir.join("m.csv");
+    write_lafan(&motion, 1.0);
+    let out = dir.join("ds");
+    let (m, o) = (motion.to_str().unwrap(), out.to_str().unwrap());
+    let run = thorarena(&[
+        "data",
+        "import",
+        "--format",
+        "lafan-csv",
+        m,
+        "--out",
+        o,
+        "--task",
+        "walk",
+    ]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    out
+}
+
 #[test]
 fn csv_motion_with_force_logs_is_resampled_shifted_and_sign_flipped() {
     let dir = tempfile::tempdir().unwrap();
@@ -89,21 +114,7 @@ fn csv_motion_with_force_logs_is_resampled_shifted_and_sign_flipped() {
 #[test]
 fn motion_without_forces_gets_zero_forces_and_a_flag() {
     let dir = tempfile::tempdir().unwrap();
-    let motion = dir.path().join("m.csv");
-    write_lafan(&motion, 1.0);
-    let out = dir.path().join("ds");
-    let o = thorarena(&[
-        "data",
-        "import",
-        "--format",
-        "lafan-csv",
-        motion.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--task",
-        "walk",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = import_walk_csv(dir.path());
     let seq = Dataset::open(&out, &g1()).unwrap().load(0).unwrap();
     assert!(!seq.forces_recorded);
     assert!(seq
@@ -253,21 +264,7 @@ fn imported_twist2_walks_equal_the_pickles_arrays() {
 #[test]
 fn exported_npz_holds_the_datasets_arrays_and_an_index() {
     let dir = tempfile::tempdir().unwrap();
-    let motion = dir.path().join("m.csv");
-    write_lafan(&motion, 1.0);
-    let ds_dir = dir.path().join("ds");
-    let o = thorarena(&[
-        "data",
-        "import",
-        "--format",
-        "lafan-csv",
-        motion.to_str().unwrap(),
-        "--out",
-        ds_dir.to_str().unwrap(),
-        "--task",
-        "walk",
-    ]);
-    assert!(o.status.success());
+    let ds_dir = import_walk_csv(dir.path());
     let out = dir.path().join("npz");
     let o = thorarena(&[
         "data",
