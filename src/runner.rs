@@ -125,17 +125,85 @@ pub fn task_thresholds(
         .collect()
 }
 
-/// Runs every (sequence, setting) once; `on_record` sees each finished episode (in
-/// completion order) — stream it, count it; the returned records are in schedule order.
+/// The full-coverage schedule: `(sequence index, setting index)`, setting-major, in
+/// dataset order. A shard `i/n` takes every n-th job starting at i.
+pub fn schedule(
+    n_sequences: usize,
+    n_settings: usize,
+    shard: Option<(usize, usize)>,
+) -> Vec<(usize, usize)> {
+    (0..n_settings)
+        .flat_map(|s| (0..n_sequences).map(move |q| (q, s)))
+        .enumerate()
+        .filter(|(j, _)| shard.is_none_or(|(i, n)| j % n == i))
+        .map(|(_, job)| job)
+        .collect()
+}
+
+/// What identifies a run; runs may be merged or resumed only if these agree.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunHeader {
+    /// ThorArena version.
+    pub version: String,
+    /// Policy name.
+    pub policy: String,
+    /// Profile name.
+    pub profile: String,
+    /// The profile's control step (the clock of the metrics and regime thresholds), s.
+    pub control_dt_s: f64,
+    /// Dataset directory as given.
+    pub dataset: String,
+    /// Dataset content hash.
+    pub dataset_sha256: String,
+    /// Keypoint set.
+    pub keypoints: String,
+    /// Termination rule.
+    pub termination: TerminationRule,
+    /// Settings, in schedule order.
+    pub settings: Vec<Setting>,
+    /// `(i, n)` when this run is shard i of n.
+    pub shard: Option<(usize, usize)>,
+}
+
+/// Reads `episodes.jsonl`. A torn last line (a run killed mid-write) is ignored; the
+/// returned byte length is where the good records end, so the caller can cut the file
+/// there before appending.
+pub fn read_records(path: &std::path::Path) -> std::io::Result<(Vec<EpisodeRecord>, u64)> {
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0)),
+        Err(e) => return Err(e),
+    };
+    let mut records = Vec::new();
+    let mut good_end = 0u64;
+    let lines: Vec<&str> = text.split_inclusive('\n').collect();
+    for (i, line) in lines.iter().enumerate() {
+        let last = i + 1 == lines.len();
+        match serde_json::from_str::<EpisodeRecord>(line.trim_end()) {
+            Ok(r) if line.ends_with('\n') => {
+                records.push(r);
+                good_end += line.len() as u64;
+            }
+            _ if last => break, // torn final write
+            Err(e) => {
+                let msg = format!("{} line {}: {e}", path.display(), i + 1);
+                return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, msg));
+            }
+            Ok(_) => unreachable!("only the last line can lack its newline"),
+        }
+    }
+    Ok((records, good_end))
+}
+
+/// Runs the given jobs (from [`schedule`]); `on_record` sees each finished episode (in
+/// completion order) — stream it, count it; the returned records are in job order.
 pub fn run_eval(
     plan: &EvalPlan,
     sequences: &[Sequence],
+    jobs: &[(usize, usize)],
     make_policy: &(dyn Fn() -> Box<dyn Policy> + Sync),
     on_record: &(dyn Fn(&EpisodeRecord) + Sync),
 ) -> Vec<EpisodeRecord> {
-    let jobs: Vec<(usize, usize)> = (0..plan.settings.len())
-        .flat_map(|s| (0..sequences.len()).map(move |q| (q, s)))
-        .collect();
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<EpisodeRecord>>> = Mutex::new(vec![None; jobs.len()]);
     let robot = Arc::new(plan.robot.clone());

@@ -7,7 +7,7 @@ use thorarena::episode::TerminationRule;
 use thorarena::motion::Sequence;
 use thorarena::policy::{HoldPolicy, Policy};
 use thorarena::profile::{bundled_profile_path, load_profile};
-use thorarena::runner::{run_eval, summarize, task_thresholds, EvalPlan, Setting};
+use thorarena::runner::{run_eval, schedule, summarize, task_thresholds, EvalPlan, Setting};
 
 mod common;
 use common::{g1, sample_sequence};
@@ -49,7 +49,8 @@ fn results_are_identical_for_any_number_of_workers() {
             workers,
         };
         let streamed = AtomicUsize::new(0);
-        let records = run_eval(&plan, &seqs, &make, &|_| {
+        let jobs = schedule(seqs.len(), plan.settings.len(), None);
+        let records = run_eval(&plan, &seqs, &jobs, &make, &|_| {
             streamed.fetch_add(1, Ordering::Relaxed);
         });
         assert_eq!(streamed.load(Ordering::Relaxed), 8);
@@ -78,9 +79,11 @@ fn force_and_no_force_differ_only_by_the_replay() {
         ],
         workers: 2,
     };
+    let jobs = schedule(seqs.len(), plan.settings.len(), None);
     let records = run_eval(
         &plan,
         &seqs,
+        &jobs,
         &|| Box::new(HoldPolicy) as Box<dyn Policy>,
         &|_| {},
     );

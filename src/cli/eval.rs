@@ -1,13 +1,16 @@
 //! `thorarena eval`: the benchmark — every sequence of a dataset with and without force,
-//! scored with FATS and the diagnostics; results streamed to a run directory.
+//! scored with FATS and the diagnostics; results streamed to a run directory that can be
+//! resumed after a crash, or sharded across machines and merged.
 
+use super::run_output::{read_header, sort_records, write_header, write_results};
 use crate::episode::TerminationRule;
 use crate::motion::Dataset;
 use crate::policy::{HoldPolicy, Policy, ReplayPolicy};
 use crate::profile::{bundled_profile_path, load_profile};
-use crate::report::{diagnostics_table, task_fats_table};
-use crate::runner::{run_eval, summarize, task_thresholds, write_record, EvalPlan, Setting};
+use crate::runner::{read_records, run_eval, schedule, write_record, EvalPlan, RunHeader, Setting};
 use anyhow::{bail, Context};
+use std::collections::HashSet;
+use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
@@ -35,9 +38,27 @@ pub struct Args {
     /// Run directory (default: results/<policy>-<dataset name>).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Continue the run in `--out`: keep its finished episodes, run the rest.
+    #[arg(long)]
+    pub resume: bool,
+    /// Run only shard I of N of the schedule (`I/N`, 0-based); merge shards with `thorarena merge`.
+    #[arg(long, value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
     /// Robot.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/4")?;
+    let (i, n): (usize, usize) = (
+        i.parse().map_err(|_| "I is not a number")?,
+        n.parse().map_err(|_| "N is not a number")?,
+    );
+    if n == 0 || i >= n {
+        return Err(format!("shard {i}/{n}: need 0 <= I < N"));
+    }
+    Ok((i, n))
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -73,9 +94,18 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     };
     let ds = Dataset::open(&args.dataset, &robot)?;
     let sequences = ds.load_all()?;
-    let workers = args
-        .workers
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let header = RunHeader {
+        version: env!("CARGO_PKG_VERSION").into(),
+        policy: args.policy.clone(),
+        profile: profile.name.clone(),
+        control_dt_s: profile.control_dt_s,
+        dataset: args.dataset.display().to_string(),
+        dataset_sha256: ds.content_hash(),
+        keypoints: args.keypoints.clone(),
+        termination: TerminationRule::default(),
+        settings,
+        shard: args.shard,
+    };
     let name = args
         .dataset
         .file_name()
@@ -87,78 +117,98 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         .unwrap_or_else(|| PathBuf::from("results").join(format!("{}-{name}", args.policy)));
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     let episodes_path = out.join("episodes.jsonl");
-    let file = std::fs::File::create(&episodes_path)
-        .with_context(|| format!("creating {}", episodes_path.display()))?;
-    let writer = Mutex::new((
-        std::io::BufWriter::new(file),
-        0usize,
-        None::<std::io::Error>,
-    ));
-    let total = sequences.len() * settings.len();
+
+    // Resume: keep what a previous run of the same configuration finished.
+    let mut done = Vec::new();
+    if args.resume && out.join("run.json").exists() {
+        let previous = read_header(&out)?;
+        if previous != header {
+            bail!("--resume: {} was started with another configuration ({previous:?}); use another --out", out.display());
+        }
+        let (records, good_end) = read_records(&episodes_path)
+            .with_context(|| format!("reading {}", episodes_path.display()))?;
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&episodes_path)?;
+        file.set_len(good_end)?; // drop a torn last line
+        done = records;
+    } else if args.resume {
+        eprintln!(
+            "--resume: nothing to resume in {}, starting afresh",
+            out.display()
+        );
+    }
+    if !args.resume {
+        std::fs::File::create(&episodes_path)
+            .with_context(|| format!("creating {}", episodes_path.display()))?;
+    }
+    write_header(&out, &header)?;
+    let finished: HashSet<(String, String, String)> = done
+        .iter()
+        .map(|r| (r.task.clone(), r.sequence_id.clone(), r.setting.clone()))
+        .collect();
+    let jobs: Vec<(usize, usize)> = schedule(sequences.len(), header.settings.len(), header.shard)
+        .into_iter()
+        .filter(|&(q, s)| {
+            let key = (
+                sequences[q].task.clone(),
+                sequences[q].sequence_id.clone(),
+                header.settings[s].name.clone(),
+            );
+            !finished.contains(&key)
+        })
+        .collect();
+
+    let workers = args
+        .workers
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let plan = EvalPlan {
         robot: &robot,
         profile: &profile,
         keypoints: &args.keypoints,
-        termination: TerminationRule::default(),
-        settings,
+        termination: header.termination,
+        settings: header.settings.clone(),
         workers,
     };
     eprintln!(
-        "evaluating `{}` on {} ({} sequences × {} settings, {workers} workers)",
+        "evaluating `{}` on {}: {} episodes to run ({} already done), {workers} workers",
         args.policy,
         ds.dir.display(),
-        sequences.len(),
-        plan.settings.len()
+        jobs.len(),
+        done.len()
     );
-    let records = run_eval(&plan, &sequences, make_policy.as_ref(), &|r| {
+    let file = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&episodes_path)?;
+    let writer = Mutex::new((std::io::BufWriter::new(file), None::<std::io::Error>));
+    let bar = indicatif::ProgressBar::new(jobs.len() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} episodes  {elapsed} elapsed, ~{eta} left  {msg}",
+        )
+        .expect("valid template"),
+    );
+    let new = run_eval(&plan, &sequences, &jobs, make_policy.as_ref(), &|r| {
         let mut w = writer.lock().expect("writer");
         if let Err(e) = write_record(&mut w.0, r) {
-            w.2.get_or_insert(e);
+            w.1.get_or_insert(e);
         }
-        w.1 += 1;
-        eprint!("\r{}/{} episodes", w.1, total);
+        bar.set_message(format!("{}/{} ({})", r.task, r.sequence_id, r.setting));
+        bar.inc(1);
     });
-    eprintln!();
-    if let Some(e) = writer.into_inner().expect("writer").2 {
+    bar.finish_and_clear();
+    let (mut w, err) = writer.into_inner().expect("writer");
+    w.flush()?;
+    if let Some(e) = err {
         return Err(e).with_context(|| format!("writing {}", episodes_path.display()));
     }
-    let thresholds = task_thresholds(&sequences, profile.control_dt_s);
-    let results = summarize(&records, &thresholds);
-    let header = format!(
-        "ThorArena {} — policy `{}`, profile `{}`, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad",
-        env!("CARGO_PKG_VERSION"),
-        args.policy,
-        profile.name,
-        ds.dir.display(),
-        &ds.content_hash()[..16],
-        args.keypoints,
-        plan.termination.max_torso_height_error_m,
-        plan.termination.max_torso_tilt_error_rad
-    );
-    let tables = format!(
-        "{header}\n\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
-        task_fats_table(&results),
-        diagnostics_table(&results)
-    );
+    let mut records = done;
+    records.extend(new);
+    sort_records(&mut records, &header, &sequences);
+    let tables = write_results(&out, &header, &records, &sequences)?;
     println!("{tables}");
-    std::fs::write(out.join("tables.md"), &tables)?;
-    let summary = serde_json::json!({
-        "version": env!("CARGO_PKG_VERSION"),
-        "policy": args.policy,
-        "profile": profile.name,
-        "dataset": ds.dir,
-        "dataset_sha256": ds.content_hash(),
-        "keypoints": args.keypoints,
-        "termination": plan.termination,
-        "thresholds": thresholds,
-        "settings": results.iter().map(|(k, (tasks, overall))| (k.clone(), serde_json::json!({"tasks": tasks, "average": overall}))).collect::<serde_json::Map<_, _>>(),
-    });
-    std::fs::write(
-        out.join("summary.json"),
-        serde_json::to_string_pretty(&summary)? + "\n",
-    )?;
     eprintln!(
-        "wrote {}/{{episodes.jsonl, summary.json, tables.md}}",
+        "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md}}",
         out.display()
     );
     Ok(())

@@ -4,7 +4,9 @@ mod bench_physics;
 mod data;
 mod data_synth;
 mod eval;
+mod merge;
 mod robot_info;
+mod run_output;
 mod sim_trace;
 
 use clap::{Parser, Subcommand};
@@ -27,6 +29,8 @@ pub struct Cli {
 pub enum Command {
     /// Evaluate a policy on a dataset, with and without force (FATS and diagnostics).
     Eval(eval::Args),
+    /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
+    Merge(merge::Args),
     /// Inspect a robot model.
     #[command(subcommand)]
     Robot(RobotCommand),
@@ -71,6 +75,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
+        Command::Merge(args) => merge::run(&args),
     }
 }
 

@@ -1,0 +1,104 @@
+//! `thorarena merge`: combine the shards of one evaluation into the single run they add
+//! up to — the same records, summary and tables as an unsharded run.
+
+use super::run_output::{read_header, sort_records, write_header, write_results};
+use crate::motion::Dataset;
+use crate::runner::{read_records, schedule, write_record, EpisodeRecord};
+use anyhow::{bail, Context};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// Arguments of `merge`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Run directories (shards of the same evaluation).
+    #[arg(required = true)]
+    pub runs: Vec<PathBuf>,
+    /// Output run directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Robot.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let robot = super::load_robot(&args.robot)?;
+    let mut header = read_header(&args.runs[0])?;
+    let mut by_key: BTreeMap<(String, String, String), EpisodeRecord> = BTreeMap::new();
+    for run in &args.runs {
+        let mut h = read_header(run)?;
+        h.shard = header.shard;
+        if h != header {
+            bail!("{} is not a shard of the same evaluation as {} (policy, profile, dataset, keypoints, termination and settings must agree)", run.display(), args.runs[0].display());
+        }
+        let path = run.join("episodes.jsonl");
+        let (records, _) =
+            read_records(&path).with_context(|| format!("reading {}", path.display()))?;
+        for r in records {
+            let key = (r.task.clone(), r.sequence_id.clone(), r.setting.clone());
+            match by_key.get(&key) {
+                Some(existing) if existing != &r => bail!(
+                    "{}: episode {}/{} ({}) differs from another shard's",
+                    run.display(),
+                    key.0,
+                    key.1,
+                    key.2
+                ),
+                _ => {
+                    by_key.insert(key, r);
+                }
+            }
+        }
+    }
+    header.shard = None;
+    let ds = Dataset::open(std::path::Path::new(&header.dataset), &robot)?;
+    if ds.content_hash() != header.dataset_sha256 {
+        bail!(
+            "dataset {} changed since the shards ran (content hash differs)",
+            header.dataset
+        );
+    }
+    let sequences = ds.load_all()?;
+    let missing: Vec<String> = schedule(sequences.len(), header.settings.len(), None)
+        .into_iter()
+        .map(|(q, s)| {
+            (
+                sequences[q].task.clone(),
+                sequences[q].sequence_id.clone(),
+                header.settings[s].name.clone(),
+            )
+        })
+        .filter(|k| !by_key.contains_key(k))
+        .map(|(t, i, s)| format!("{t}/{i} ({s})"))
+        .collect();
+    if !missing.is_empty() {
+        bail!(
+            "{} episodes are in no shard: {}",
+            missing.len(),
+            missing
+                .iter()
+                .take(5)
+                .cloned()
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    let mut records: Vec<EpisodeRecord> = by_key.into_values().collect();
+    sort_records(&mut records, &header, &sequences);
+    std::fs::create_dir_all(&args.out)?;
+    let mut w = std::io::BufWriter::new(std::fs::File::create(args.out.join("episodes.jsonl"))?);
+    for r in &records {
+        write_record(&mut w, r)?;
+    }
+    write_header(&args.out, &header)?;
+    let tables = write_results(&args.out, &header, &records, &sequences)?;
+    println!("{tables}");
+    eprintln!(
+        "merged {} runs, {} episodes → {}",
+        args.runs.len(),
+        records.len(),
+        args.out.display()
+    );
+    Ok(())
+}
