@@ -42,6 +42,29 @@ pub enum Termination {
     TorsoTilt,
 }
 
+/// One control step of a rollout trace (`thorarena eval --trace`), for plots and replays.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TraceStep {
+    /// Time since the episode started (end of the step), s.
+    pub time_s: f64,
+    /// Robot root position, m.
+    pub root_pos: [f64; 3],
+    /// Robot root orientation (w, x, y, z).
+    pub root_quat_wxyz: [f64; 4],
+    /// Joint angles, rad.
+    pub q: Vec<f64>,
+    /// PD targets applied during the step, rad.
+    pub targets: Vec<f64>,
+    /// Replayed hand forces (left, right) during the last physics step, world frame, N.
+    pub hand_force_w: [[f64; 3]; 2],
+    /// Robot keypoints, world frame, m.
+    pub keypoints_w: Vec<[f64; 3]>,
+    /// Reference keypoints re-anchored to the robot's root, world frame, m.
+    pub reference_keypoints_w: Vec<[f64; 3]>,
+    /// Keypoint error, m.
+    pub kp_err_m: f64,
+}
+
 /// Everything fixed across the episodes of a run.
 pub struct EpisodeSetup<'a> {
     /// The robot.
@@ -72,6 +95,10 @@ pub struct Episode<'a> {
     state: PhysicsState,
     series: EpisodeSeries,
     termination: Option<Termination>,
+    /// Rollout trace, when asked for.
+    trace: Option<Vec<TraceStep>>,
+    /// Hand forces of the last physics step, world frame.
+    last_hand_force_w: [Vector3<f64>; 2],
     /// Body poses of the reference at the current step (set by `record`).
     reference_poses: Vec<Isometry3<f64>>,
 }
@@ -123,6 +150,8 @@ impl<'a> Episode<'a> {
             },
             termination: None,
             reference_poses: poses,
+            trace: None,
+            last_hand_force_w: [Vector3::zeros(); 2],
         }
     }
 
@@ -171,8 +200,9 @@ impl<'a> Episode<'a> {
         }
         let mut power = 0.0;
         for _ in 0..profile.substeps {
-            self.replay
-                .apply(physics, &self.reference, &self.state.world_from_body);
+            self.last_hand_force_w =
+                self.replay
+                    .apply(physics, &self.reference, &self.state.world_from_body);
             physics.step();
             physics.read_state(&mut self.state);
             power += self
@@ -233,6 +263,32 @@ impl<'a> Episode<'a> {
         self.series.power_w.push(power_w);
         let d = root.world_from_root.translation.vector - frame.world_from_root.translation.vector;
         self.series.root_drift_m.push(d.xy().norm());
+        if let Some(trace) = &mut self.trace {
+            let p = root.world_from_root.translation.vector;
+            let r = root.world_from_root.rotation;
+            let xyz = |v: &Point3<f64>| [v.x, v.y, v.z];
+            trace.push(TraceStep {
+                time_s: self.step as f64 * self.setup.profile.control_dt_s,
+                root_pos: [p.x, p.y, p.z],
+                root_quat_wxyz: [r.w, r.i, r.j, r.k],
+                q: self.state.q.clone(),
+                targets: self.targets.clone(),
+                hand_force_w: self.last_hand_force_w.map(|f| [f.x, f.y, f.z]),
+                keypoints_w: robot_w.iter().map(xyz).collect(),
+                reference_keypoints_w: anchored.iter().map(xyz).collect(),
+                kp_err_m: *self.series.kp_err_m.last().expect("pushed above"),
+            });
+        }
+    }
+
+    /// Records a rollout trace from now on (see [`TraceStep`]).
+    pub fn record_trace(&mut self) {
+        self.trace.get_or_insert_with(Vec::new);
+    }
+
+    /// The trace recorded so far, if tracing was on.
+    pub fn take_trace(&mut self) -> Option<Vec<TraceStep>> {
+        self.trace.take()
     }
 
     /// Compares the robot's torso with the reference's (poses from `record`).

@@ -11,7 +11,7 @@
 //! policy instance. The brief's batched lock-step loop over environment slots arrives with
 //! the policy server (issue 5), where a batch per request is what pays.
 
-use crate::episode::{Episode, EpisodeSetup, Termination, TerminationRule};
+use crate::episode::{Episode, EpisodeSetup, Termination, TerminationRule, TraceStep};
 use crate::metrics::{
     aggregate, percentile, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary,
 };
@@ -92,6 +92,8 @@ pub struct EvalPlan<'a> {
     pub settings: Vec<Setting>,
     /// Worker threads.
     pub workers: usize,
+    /// Record rollout traces of the sequences with these `task/sequence_id` names.
+    pub trace: Vec<String>,
 }
 
 /// The regime thresholds of each task: percentiles of `|F_L| + |F_R|` over every control
@@ -202,7 +204,7 @@ pub fn run_eval(
     sequences: &[Sequence],
     jobs: &[(usize, usize)],
     make_policy: &(dyn Fn() -> Box<dyn Policy> + Sync),
-    on_record: &(dyn Fn(&EpisodeRecord) + Sync),
+    on_record: &(dyn Fn(&EpisodeRecord, Option<&[TraceStep]>) + Sync),
 ) -> Vec<EpisodeRecord> {
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<EpisodeRecord>>> = Mutex::new(vec![None; jobs.len()]);
@@ -235,11 +237,16 @@ pub fn run_eval(
                     };
                     policy.reset(0);
                     let mut ep = Episode::start(&setup, &sequences[q], &mut physics);
+                    let name = format!("{}/{}", sequences[q].task, sequences[q].sequence_id);
+                    if plan.trace.contains(&name) {
+                        ep.record_trace();
+                    }
                     let mut actions = vec![vec![0.0; plan.robot.n_joints()]];
                     while !ep.is_done() {
                         policy.act(&[ep.observation()], &mut actions);
                         ep.advance(&mut physics, &actions[0]);
                     }
+                    let trace = ep.take_trace();
                     let (series, termination) = ep.finish();
                     let record = EpisodeRecord {
                         task: sequences[q].task.clone(),
@@ -250,7 +257,7 @@ pub fn run_eval(
                         termination,
                         series,
                     };
-                    on_record(&record);
+                    on_record(&record, trace.as_deref());
                     results.lock().expect("no worker panicked")[j] = Some(record);
                 }
             });

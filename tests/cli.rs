@@ -106,3 +106,68 @@ fn eval_on_the_sample_streams_every_episode_and_writes_the_tables() {
         !bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("unknown policy")
     );
 }
+
+#[test]
+fn eval_writes_a_rollout_trace_for_a_named_sequence() {
+    let dir = tempfile::tempdir().unwrap();
+    let dataset = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+    let args = [
+        "eval",
+        "--dataset",
+        dataset,
+        "--policy",
+        "hold",
+        "--settings",
+        "force",
+        "--trace",
+        "push_chair/push_chair_000",
+    ];
+    let out = thorarena(&[&args[..], &["--out", dir.path().to_str().unwrap()]].concat());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let path = dir
+        .path()
+        .join("traces/push_chair-push_chair_000-force.json");
+    let trace: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let steps = trace.as_array().unwrap();
+    let episode: serde_json::Value = std::fs::read_to_string(dir.path().join("episodes.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .find(|r| r["sequence_id"] == "push_chair_000")
+        .unwrap();
+    assert_eq!(
+        steps.len(),
+        episode["series"]["kp_err_m"].as_array().unwrap().len(),
+        "one trace step per control step"
+    );
+    assert_eq!(steps[0]["q"].as_array().unwrap().len(), 29);
+    assert_eq!(steps[0]["keypoints_w"].as_array().unwrap().len(), 13);
+    let force = |s: &serde_json::Value| {
+        s["hand_force_w"][0]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap().powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    assert!(
+        steps.iter().any(|s| force(s) > 1.0),
+        "the chair force is replayed"
+    );
+    let bad = thorarena(&[
+        "eval",
+        "--dataset",
+        dataset,
+        "--trace",
+        "push_chair/nope",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--trace"));
+}

@@ -47,10 +47,11 @@ fn results_are_identical_for_any_number_of_workers() {
                 Setting::parse("no-force").unwrap(),
             ],
             workers,
+            trace: Vec::new(),
         };
         let streamed = AtomicUsize::new(0);
         let jobs = schedule(seqs.len(), plan.settings.len(), None);
-        let records = run_eval(&plan, &seqs, &jobs, &make, &|_| {
+        let records = run_eval(&plan, &seqs, &jobs, &make, &|_, _| {
             streamed.fetch_add(1, Ordering::Relaxed);
         });
         assert_eq!(streamed.load(Ordering::Relaxed), 8);
@@ -78,6 +79,7 @@ fn force_and_no_force_differ_only_by_the_replay() {
             Setting::parse("0").unwrap(),
         ],
         workers: 2,
+        trace: Vec::new(),
     };
     let jobs = schedule(seqs.len(), plan.settings.len(), None);
     let records = run_eval(
@@ -85,7 +87,7 @@ fn force_and_no_force_differ_only_by_the_replay() {
         &seqs,
         &jobs,
         &|| Box::new(HoldPolicy) as Box<dyn Policy>,
-        &|_| {},
+        &|_, _| {},
     );
     let by = |setting: &str, id: &str| {
         records

@@ -44,6 +44,11 @@ pub struct Args {
     /// Run only shard I of N of the schedule (`I/N`, 0-based); merge shards with `thorarena merge`.
     #[arg(long, value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
+    /// Write a rollout trace (per control step: root, joints, targets, hand forces,
+    /// robot and reference keypoints) of these sequences, as `TASK/SEQUENCE_ID`, to
+    /// `<out>/traces/`.
+    #[arg(long, value_delimiter = ',')]
+    pub trace: Vec<String>,
     /// Robot.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
@@ -169,7 +174,23 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         termination: header.termination,
         settings: header.settings.clone(),
         workers,
+        trace: args.trace.clone(),
     };
+    for name in &args.trace {
+        if !sequences
+            .iter()
+            .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
+        {
+            bail!(
+                "--trace: no sequence `{name}` in {} (use TASK/SEQUENCE_ID)",
+                ds.dir.display()
+            );
+        }
+    }
+    let traces_dir = out.join("traces");
+    if !args.trace.is_empty() {
+        std::fs::create_dir_all(&traces_dir)?;
+    }
     eprintln!(
         "evaluating `{}` on {}: {} episodes to run ({} already done), {workers} workers",
         args.policy,
@@ -188,14 +209,30 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         )
         .expect("valid template"),
     );
-    let new = run_eval(&plan, &sequences, &jobs, make_policy.as_ref(), &|r| {
-        let mut w = writer.lock().expect("writer");
-        if let Err(e) = write_record(&mut w.0, r) {
-            w.1.get_or_insert(e);
-        }
-        bar.set_message(format!("{}/{} ({})", r.task, r.sequence_id, r.setting));
-        bar.inc(1);
-    });
+    let new = run_eval(
+        &plan,
+        &sequences,
+        &jobs,
+        make_policy.as_ref(),
+        &|r, trace| {
+            let mut w = writer.lock().expect("writer");
+            if let Err(e) = write_record(&mut w.0, r) {
+                w.1.get_or_insert(e);
+            }
+            if let Some(trace) = trace {
+                let path =
+                    traces_dir.join(format!("{}-{}-{}.json", r.task, r.sequence_id, r.setting));
+                let written = serde_json::to_vec(trace)
+                    .map_err(std::io::Error::other)
+                    .and_then(|b| std::fs::write(&path, b));
+                if let Err(e) = written {
+                    w.1.get_or_insert(e);
+                }
+            }
+            bar.set_message(format!("{}/{} ({})", r.task, r.sequence_id, r.setting));
+            bar.inc(1);
+        },
+    );
     bar.finish_and_clear();
     let (mut w, err) = writer.into_inner().expect("writer");
     w.flush()?;
