@@ -95,6 +95,8 @@ pub struct Episode<'a> {
     state: PhysicsState,
     series: EpisodeSeries,
     termination: Option<Termination>,
+    /// Wall time spent inside `Physics::step` (for `thorarena bench eval`; never in results).
+    physics_wall: std::time::Duration,
     /// Rollout trace, when asked for.
     trace: Option<Vec<TraceStep>>,
     /// Hand forces of the last physics step, world frame.
@@ -150,6 +152,7 @@ impl<'a> Episode<'a> {
             },
             termination: None,
             reference_poses: poses,
+            physics_wall: std::time::Duration::ZERO,
             trace: None,
             last_hand_force_w: [Vector3::zeros(); 2],
         }
@@ -203,7 +206,9 @@ impl<'a> Episode<'a> {
             self.last_hand_force_w =
                 self.replay
                     .apply(physics, &self.reference, &self.state.world_from_body);
+            let started = std::time::Instant::now();
             physics.step();
+            self.physics_wall += started.elapsed();
             physics.read_state(&mut self.state);
             power += self
                 .state
@@ -279,6 +284,11 @@ impl<'a> Episode<'a> {
                 kp_err_m: *self.series.kp_err_m.last().expect("pushed above"),
             });
         }
+    }
+
+    /// Wall time spent in physics steps so far (benchmarks only: not deterministic).
+    pub fn physics_wall(&self) -> std::time::Duration {
+        self.physics_wall
     }
 
     /// Records a rollout trace from now on (see [`TraceStep`]).

@@ -1,5 +1,6 @@
 //! The `thorarena` command line: the argument tree and one module per subcommand.
 
+mod bench_eval;
 mod bench_physics;
 mod data;
 mod data_synth;
@@ -64,6 +65,8 @@ pub enum SimCommand {
 pub enum BenchCommand {
     /// Cost of one physics step of the standing G1, against MuJoCo when available.
     Physics(bench_physics::Args),
+    /// Cost of the whole episode loop and the share spent outside physics.
+    Eval(bench_eval::Args),
 }
 
 /// Parses the command line and runs it.
@@ -73,6 +76,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Robot(RobotCommand::Info(args)) => robot_info::run(&args),
         Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
+        Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
