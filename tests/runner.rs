@@ -121,3 +121,48 @@ fn force_and_no_force_differ_only_by_the_replay() {
         );
     }
 }
+
+#[test]
+fn the_balance_baseline_keeps_the_standing_sample_tasks_upright_without_force() {
+    use thorarena::motion::Dataset;
+    use thorarena::policy::{BalanceGains, BalancePolicy};
+    let robot = g1();
+    let profile = load_profile(&bundled_profile_path("default"), &robot).unwrap();
+    let ds = Dataset::open(
+        std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample")),
+        &robot,
+    )
+    .unwrap();
+    let standing: Vec<Sequence> = ds
+        .load_all()
+        .unwrap()
+        .into_iter()
+        .filter(|s| ["clean_table", "liftup_water", "liftdown_water"].contains(&s.task.as_str()))
+        .collect();
+    assert_eq!(standing.len(), 6);
+    let plan = EvalPlan {
+        robot: &robot,
+        profile: &profile,
+        keypoints: "default",
+        termination: TerminationRule::default(),
+        settings: vec![Setting::parse("no-force").unwrap()],
+        workers: 2,
+        trace: Vec::new(),
+    };
+    let pose = profile.action_offset_rad.clone();
+    let make = || {
+        Box::new(BalancePolicy::new(&robot, pose.clone(), BalanceGains::default()).unwrap())
+            as Box<dyn Policy>
+    };
+    let jobs = schedule(standing.len(), 1, None);
+    let records = run_eval(&plan, &standing, &jobs, &make, &|_, _| {});
+    for r in &records {
+        assert_eq!(r.termination, None, "{} fell", r.sequence_id);
+        assert_eq!(r.series.kp_err_m.len(), r.series.steps_ref);
+    }
+    // And plain open-loop replay does not: the feedback is what keeps it up.
+    let make_replay =
+        || Box::new(thorarena::policy::ReplayPolicy::new(pose.clone())) as Box<dyn Policy>;
+    let replayed = run_eval(&plan, &standing, &jobs, &make_replay, &|_, _| {});
+    assert!(replayed.iter().any(|r| r.termination.is_some()));
+}

@@ -5,7 +5,7 @@
 use super::run_output::{read_header, sort_records, write_header, write_results};
 use crate::episode::TerminationRule;
 use crate::motion::Dataset;
-use crate::policy::{HoldPolicy, Policy, ReplayPolicy};
+use crate::policy::{BalanceGains, BalancePolicy, HoldPolicy, Policy, ReplayPolicy};
 use crate::profile::{bundled_profile_path, load_profile};
 use crate::runner::{read_records, run_eval, schedule, write_record, EvalPlan, RunHeader, Setting};
 use anyhow::{bail, Context};
@@ -95,7 +95,18 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         "replay" => {
             Box::new(move || Box::new(ReplayPolicy::new(default_pose.clone())) as Box<dyn Policy>)
         }
-        other => bail!("unknown policy `{other}` (built-in: hold, replay)"),
+        "balance" => {
+            let gains = BalanceGains::default();
+            let robot = robot.clone();
+            BalancePolicy::new(&robot, default_pose.clone(), gains)
+                .context("the robot lacks the leg joints `balance` needs")?;
+            Box::new(move || {
+                Box::new(
+                    BalancePolicy::new(&robot, default_pose.clone(), gains).expect("checked above"),
+                ) as Box<dyn Policy>
+            })
+        }
+        other => bail!("unknown policy `{other}` (built-in: hold, replay, balance)"),
     };
     let ds = Dataset::open(&args.dataset, &robot)?;
     let sequences = ds.load_all()?;

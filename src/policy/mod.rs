@@ -3,7 +3,7 @@
 
 mod builtin;
 
-pub use builtin::{HoldPolicy, ReplayPolicy};
+pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 
 use crate::motion::ReferenceFrame;
 use crate::physics::RootState;
