@@ -17,11 +17,12 @@ use std::sync::Mutex;
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Dataset directory (canonical format).
-    #[arg(long, default_value = "data/sample")]
-    pub dataset: PathBuf,
-    /// Policy: `hold` (default pose) or `replay` (reference joints, open loop).
-    #[arg(long, default_value = "replay")]
+    /// Dataset directory (canonical format) [default: the bundled data/sample].
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Built-in policy: `balance` (reference PD + tilt feedback), `replay` (reference
+    /// joints, open loop) or `hold` (default pose).
+    #[arg(long, default_value = "balance")]
     pub policy: String,
     /// Dynamics profile (a name under data/profiles or a .toml path).
     #[arg(long, default_value = "default")]
@@ -44,6 +45,12 @@ pub struct Args {
     /// Run only shard I of N of the schedule (`I/N`, 0-based); merge shards with `thorarena merge`.
     #[arg(long, value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
+    /// Termination: torso height off its reference by more than this, m.
+    #[arg(long, default_value_t = TerminationRule::default().max_torso_height_error_m)]
+    pub max_torso_height_error: f64,
+    /// Termination: torso tilt off its reference by more than this, rad.
+    #[arg(long, default_value_t = TerminationRule::default().max_torso_tilt_error_rad)]
+    pub max_torso_tilt_error: f64,
     /// Write a rollout trace (per control step: root, joints, targets, hand forces,
     /// robot and reference keypoints) of these sequences, as `TASK/SEQUENCE_ID`, to
     /// `<out>/traces/`.
@@ -67,6 +74,7 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let dataset = args.dataset.clone().unwrap_or_else(|| crate::data_dir().join("sample"));
     let robot = super::load_robot(&args.robot)?;
     let profile_path = if args.profile.ends_with(".toml") {
         PathBuf::from(&args.profile)
@@ -108,17 +116,28 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
         other => bail!("unknown policy `{other}` (built-in: hold, replay, balance)"),
     };
-    let ds = Dataset::open(&args.dataset, &robot)?;
+    for (flag, v) in [
+        ("--max-torso-height-error", args.max_torso_height_error),
+        ("--max-torso-tilt-error", args.max_torso_tilt_error),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("{flag} must be > 0, got {v}");
+        }
+    }
+    let ds = Dataset::open(&dataset, &robot)?;
     let sequences = ds.load_all()?;
     let header = RunHeader {
         version: env!("CARGO_PKG_VERSION").into(),
         policy: args.policy.clone(),
         profile: profile.name.clone(),
         control_dt_s: profile.control_dt_s,
-        dataset: args.dataset.display().to_string(),
+        dataset: dataset.display().to_string(),
         dataset_sha256: ds.content_hash(),
         keypoints: args.keypoints.clone(),
-        termination: TerminationRule::default(),
+        termination: TerminationRule {
+            max_torso_height_error_m: args.max_torso_height_error,
+            max_torso_tilt_error_rad: args.max_torso_tilt_error,
+        },
         settings,
         shard: args.shard,
     };
