@@ -74,7 +74,10 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let dataset = args.dataset.clone().unwrap_or_else(|| crate::data_dir().join("sample"));
+    let dataset = args
+        .dataset
+        .clone()
+        .unwrap_or_else(|| crate::data_dir().join("sample"));
     let robot = super::load_robot(&args.robot)?;
     let profile_path = if args.profile.ends_with(".toml") {
         PathBuf::from(&args.profile)
@@ -141,8 +144,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         settings,
         shard: args.shard,
     };
-    let name = args
-        .dataset
+    let name = dataset
         .file_name()
         .and_then(|s| s.to_str())
         .unwrap_or("dataset");
