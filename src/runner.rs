@@ -15,7 +15,7 @@ use crate::episode::{Episode, EpisodeSetup, Termination, TerminationRule, TraceS
 use crate::metrics::{
     aggregate, percentile, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary,
 };
-use crate::motion::{DataError, Dataset, Reference, Sequence};
+use crate::motion::{Reference, Sequence};
 use crate::physics::{PhysicsSettings, RapierPhysics};
 use crate::policy::Policy;
 use crate::profile::Profile;
@@ -307,9 +307,4 @@ pub fn write_record(out: &mut impl Write, record: &EpisodeRecord) -> std::io::Re
     serde_json::to_writer(&mut *out, record)?;
     out.write_all(b"\n")?;
     out.flush()
-}
-
-/// Loads all sequences of a dataset.
-pub fn load_sequences(ds: &Dataset) -> Result<Vec<Sequence>, DataError> {
-    ds.load_all()
 }
