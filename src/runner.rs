@@ -12,9 +12,7 @@
 //! the policy server (issue 5), where a batch per request is what pays.
 
 use crate::episode::{Episode, EpisodeSetup, Termination, TerminationRule, TraceStep};
-use crate::metrics::{
-    aggregate, percentile, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary,
-};
+use crate::metrics::{aggregate, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary};
 use crate::motion::{Reference, Sequence};
 use crate::physics::{PhysicsSettings, RapierPhysics};
 use crate::policy::Policy;
@@ -114,16 +112,7 @@ pub fn task_thresholds(
     }
     forces
         .into_iter()
-        .map(|(task, mut v)| {
-            v.sort_by(f64::total_cmp);
-            (
-                task,
-                RegimeThresholds {
-                    p33_n: percentile(&v, 33.0),
-                    p66_n: percentile(&v, 66.0),
-                },
-            )
-        })
+        .map(|(task, v)| (task, RegimeThresholds::from_forces(&v)))
         .collect()
 }
 

@@ -46,16 +46,7 @@ pub fn read_force_csv(path: &Path) -> Result<ForceLog, ImportError> {
     let mut record = csv::ByteRecord::new();
     let mut index = 0u64;
     let mut first = true;
-    loop {
-        index += 1;
-        let line = match reader.read_byte_record(&mut record) {
-            Ok(true) => record.position().map_or(index, |p| p.line()),
-            Ok(false) => break,
-            Err(e) => {
-                let line = e.position().map_or(index, |p| p.line());
-                return Err(bad(format!("row {line}"), format!("unreadable CSV: {e}")));
-            }
-        };
+    while let Some(line) = super::next_csv_row(&mut reader, &mut record, &mut index, path)? {
         let row = format!("row {line}");
         let parsed: Vec<Option<f64>> = record.iter().map(parse_number).collect();
         if std::mem::take(&mut first) && parsed.iter().any(Option::is_none) {

@@ -48,17 +48,7 @@ pub fn read_lafan_csv(path: &Path, fps: f64) -> Result<RawMotion, ImportError> {
     let mut joint_pos = Vec::new();
     let mut record = csv::ByteRecord::new();
     let mut index = 0u64;
-    loop {
-        index += 1;
-        // Rows are named by file line (the csv reader skips blank lines).
-        let line = match reader.read_byte_record(&mut record) {
-            Ok(true) => record.position().map_or(index, |p| p.line()),
-            Ok(false) => break,
-            Err(e) => {
-                let line = e.position().map_or(index, |p| p.line());
-                return Err(bad(format!("row {line}"), format!("unreadable CSV: {e}")));
-            }
-        };
+    while let Some(line) = super::next_csv_row(&mut reader, &mut record, &mut index, path)? {
         let row = format!("row {line}");
         if record.len() != COLUMNS {
             return Err(bad(

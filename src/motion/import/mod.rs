@@ -95,3 +95,24 @@ pub enum ImportError {
         reason: String,
     },
 }
+
+/// Reads the next CSV record; returns the 1-based file line it came from (rows are named by
+/// file line, as an editor shows them: the csv reader skips blank lines), `None` at the end,
+/// or a `row N` error.
+pub(crate) fn next_csv_row<R: std::io::Read>(
+    reader: &mut csv::Reader<R>,
+    record: &mut csv::ByteRecord,
+    index: &mut u64,
+    path: &std::path::Path,
+) -> Result<Option<u64>, ImportError> {
+    *index += 1;
+    match reader.read_byte_record(record) {
+        Ok(true) => Ok(Some(record.position().map_or(*index, |p| p.line()))),
+        Ok(false) => Ok(None),
+        Err(e) => Err(ImportError::BadField {
+            path: path.to_path_buf(),
+            field: format!("row {}", e.position().map_or(*index, |p| p.line())),
+            reason: format!("unreadable CSV: {e}"),
+        }),
+    }
+}
