@@ -1,0 +1,340 @@
+//! The policy's side of a session (the "client" of a ThorArena run): say hello, then each
+//! control step take the observation batch straight from shared memory and write the
+//! actions straight into the loaned response.
+//!
+//! In iceoryx2 terms the policy is the *server* of the step service (it answers the
+//! simulator's requests) and a *client* of the hello service.
+
+use crate::handshake::{
+    from_fixed, joint_names_hash, to_fixed, Hello, Status, Welcome, MAX_JOINTS,
+    MAX_REFERENCE_OFFSETS,
+};
+use crate::layout::{ActionBatchMut, Layout, ObsBatch, COMMAND_END};
+use crate::session::{
+    create_node, process_alive, service_names, transport, wait_for, IpcError, WaitPolicy, Waited,
+};
+use crate::PROTOCOL_VERSION;
+use iceoryx2::active_request::ActiveRequest;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::server::Server;
+use iceoryx2::prelude::*;
+use iceoryx2::response_mut::ResponseMut;
+use std::time::{Duration, Instant};
+
+type StepServer = Server<ipc::Service, [u64], (), [u64], ()>;
+type StepRequest = ActiveRequest<ipc::Service, [u64], (), [u64], ()>;
+type StepResponse = ResponseMut<ipc::Service, [u64], ()>;
+
+/// What the policy declares when it connects.
+#[derive(Debug, Clone)]
+pub struct PolicyConfig {
+    /// Session to join.
+    pub session: String,
+    /// Name recorded in the results.
+    pub name: String,
+    /// The joint order the policy assumes (checked against the robot's by hash).
+    pub joint_names: Vec<String>,
+    /// Times ahead of each step at which the policy wants reference frames, s.
+    pub reference_offsets_s: Vec<f64>,
+    /// How to wait for observations.
+    pub wait: WaitPolicy,
+    /// Protocol version to announce (tests set a wrong one on purpose).
+    pub protocol_version: u32,
+}
+
+impl PolicyConfig {
+    /// A configuration with the default wait policy and this build's protocol version.
+    pub fn new(
+        session: &str,
+        name: &str,
+        joint_names: Vec<String>,
+        reference_offsets_s: Vec<f64>,
+    ) -> Self {
+        Self {
+            session: session.into(),
+            name: name.into(),
+            joint_names,
+            reference_offsets_s,
+            wait: WaitPolicy::default(),
+            protocol_version: PROTOCOL_VERSION,
+        }
+    }
+}
+
+/// The session as the simulator described it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SessionInfo {
+    /// Batch layout (environment slots, joints, reference frames).
+    pub layout: Layout,
+    /// Control period, s.
+    pub control_dt_s: f64,
+    /// Latency budget per step (`None`: lock-step).
+    pub budget: Option<Duration>,
+    /// The simulator's process id.
+    pub simulator_pid: u32,
+    /// How an action becomes a PD target: target = offset + scale · action, rad.
+    pub action_offset_rad: Vec<f64>,
+    /// See `action_offset_rad`.
+    pub action_scale: Vec<f64>,
+}
+
+/// What waiting for the next step gave.
+pub enum Next {
+    /// A batch to answer.
+    Step(Box<PolicyStep>),
+    /// The run is over.
+    End,
+    /// Nothing arrived within the timeout.
+    Timeout,
+}
+
+/// A connected policy.
+pub struct PolicyClient {
+    info: SessionInfo,
+    server: StepServer,
+    obs_ready: Listener<ipc::Service>,
+    action_ready: Notifier<ipc::Service>,
+    wait: WaitPolicy,
+    // Declared last: ports above drop before their node.
+    _node: Node<ipc::Service>,
+}
+
+impl PolicyClient {
+    /// Joins `config.session`, waiting up to `timeout` for the simulator to serve it.
+    pub fn connect(config: &PolicyConfig, timeout: Duration) -> Result<Self, IpcError> {
+        let names = service_names(&config.session)?;
+        if config.reference_offsets_s.len() > MAX_REFERENCE_OFFSETS {
+            return Err(IpcError::Refused {
+                status: Status::ReferenceOffsets,
+                message: format!("at most {MAX_REFERENCE_OFFSETS} reference offsets"),
+            });
+        }
+        let node = create_node(&format!("thorarena-policy-{}", config.session))?;
+        let start = Instant::now();
+        let hello_service = loop {
+            match node
+                .service_builder(&names.hello)
+                .request_response::<Hello, Welcome>()
+                .open()
+            {
+                Ok(s) => break s,
+                Err(_) if start.elapsed() < timeout => std::thread::sleep(Duration::from_millis(5)),
+                Err(_) => return Err(IpcError::NoSession(config.session.clone())),
+            }
+        };
+        let step = node
+            .service_builder(&names.step)
+            .request_response::<[u64], [u64]>()
+            .open()
+            .map_err(|_| IpcError::NoSession(config.session.clone()))?;
+        let obs_ready = node
+            .service_builder(&names.obs_ready)
+            .event()
+            .open()
+            .map_err(|_| IpcError::NoSession(config.session.clone()))?
+            .listener_builder()
+            .create()
+            .map_err(transport("obs_ready listener"))?;
+        let action_ready = node
+            .service_builder(&names.action_ready)
+            .event()
+            .open()
+            .map_err(|_| IpcError::NoSession(config.session.clone()))?
+            .notifier_builder()
+            .create()
+            .map_err(transport("action_ready notifier"))?;
+
+        let mut offsets = [0.0; MAX_REFERENCE_OFFSETS];
+        offsets[..config.reference_offsets_s.len()].copy_from_slice(&config.reference_offsets_s);
+        let hello = Hello {
+            protocol_version: config.protocol_version,
+            n_joints: config.joint_names.len() as u32,
+            joint_names_hash: joint_names_hash(&config.joint_names),
+            pid: std::process::id(),
+            n_refs: config.reference_offsets_s.len() as u32,
+            reference_offsets_s: offsets,
+            name: to_fixed(&config.name),
+        };
+        let hello_client = hello_service
+            .client_builder()
+            .create()
+            .map_err(transport("hello client"))?;
+        let pending = hello_client
+            .send_copy(hello)
+            .map_err(transport("sending hello"))?;
+        let welcome = loop {
+            if let Some(r) = pending.receive().map_err(transport("receiving welcome"))? {
+                break *r.payload();
+            }
+            if start.elapsed() > timeout {
+                return Err(IpcError::Timeout(timeout, "the simulator's welcome"));
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        };
+        let status = Status::from_u32(welcome.status).unwrap_or(Status::ProtocolVersion);
+        if status != Status::Ok {
+            return Err(IpcError::Refused {
+                status,
+                message: from_fixed(&welcome.message),
+            });
+        }
+        let layout = Layout {
+            n_envs: welcome.n_envs as usize,
+            n_joints: welcome.n_joints as usize,
+            n_refs: welcome.n_refs as usize,
+        };
+        let server = step
+            .server_builder()
+            .initial_max_slice_len(layout.action_words())
+            .allocation_strategy(AllocationStrategy::Static)
+            .create()
+            .map_err(transport("step server"))?;
+        Ok(Self {
+            info: SessionInfo {
+                layout,
+                control_dt_s: welcome.control_dt_s,
+                budget: (welcome.budget_s > 0.0).then(|| Duration::from_secs_f64(welcome.budget_s)),
+                simulator_pid: welcome.pid,
+                action_offset_rad: welcome.action_offset_rad[..layout.n_joints.min(MAX_JOINTS)]
+                    .to_vec(),
+                action_scale: welcome.action_scale[..layout.n_joints.min(MAX_JOINTS)].to_vec(),
+            },
+            server,
+            obs_ready,
+            action_ready,
+            wait: config.wait,
+            _node: node,
+        })
+    }
+
+    /// The session's shape.
+    pub fn info(&self) -> &SessionInfo {
+        &self.info
+    }
+
+    /// Waits for the next observation batch. Only the newest batch is answered: a batch
+    /// that was overtaken (the policy fell behind its deadline) is dropped unanswered.
+    pub fn next_step(&mut self, timeout: Option<Duration>) -> Result<Next, IpcError> {
+        let deadline = timeout.map(|t| Instant::now() + t);
+        let waited = wait_for(
+            &self.obs_ready,
+            self.wait,
+            deadline,
+            self.info.simulator_pid,
+            || self.server.has_requests().unwrap_or(true),
+        )?;
+        match waited {
+            Waited::Deadline => return Ok(Next::Timeout),
+            Waited::PeerGone => return Err(IpcError::PeerGone("simulator")),
+            Waited::Ready => {}
+        }
+        let mut newest = None;
+        while let Some(r) = self
+            .server
+            .receive()
+            .map_err(transport("receiving observations"))?
+        {
+            newest = Some(r);
+        }
+        let Some(request) = newest else {
+            return Ok(Next::Timeout);
+        };
+        let layout = self.info.layout;
+        let header = ObsBatch::new(layout, bytemuck::cast_slice(request.payload()))?.header();
+        if header.command == COMMAND_END {
+            return Ok(Next::End);
+        }
+        Ok(Next::Step(Box::new(PolicyStep {
+            request,
+            response: None,
+            layout,
+            seq: header.seq,
+        })))
+    }
+
+    /// The common loop: answer every step with `act(observations, actions)` until the run
+    /// ends. Returns the number of steps answered.
+    pub fn run(
+        &mut self,
+        mut act: impl FnMut(&ObsBatch, &mut ActionBatchMut),
+    ) -> Result<u64, IpcError> {
+        let mut steps = 0;
+        loop {
+            match self.next_step(None)? {
+                Next::Step(mut step) => {
+                    step.answer(&mut act)?;
+                    step.send(self)?;
+                    steps += 1;
+                }
+                Next::End => return Ok(steps),
+                Next::Timeout => {
+                    if !process_alive(self.info.simulator_pid) {
+                        return Err(IpcError::PeerGone("simulator"));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// One observation batch being answered.
+pub struct PolicyStep {
+    request: StepRequest,
+    response: Option<StepResponse>,
+    layout: Layout,
+    seq: u64,
+}
+
+impl PolicyStep {
+    /// The observations, in shared memory.
+    pub fn observations(&self) -> ObsBatch<'_> {
+        ObsBatch::new(self.layout, bytemuck::cast_slice(self.request.payload()))
+            .expect("checked when received")
+    }
+
+    /// The action slots, in shared memory (loaned on first use, zeroed).
+    pub fn actions(&mut self) -> Result<ActionBatchMut<'_>, IpcError> {
+        if self.response.is_none() {
+            let response = self
+                .request
+                .loan_slice(self.layout.action_words())
+                .map_err(transport("loaning the action batch"))?;
+            self.response = Some(response);
+        }
+        let response = self.response.as_mut().expect("loaned above");
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(response.payload_mut());
+        Ok(ActionBatchMut::new(self.layout, bytes, self.seq))
+    }
+
+    /// Calls `act` with the observations and the action slots.
+    pub fn answer(
+        &mut self,
+        act: &mut impl FnMut(&ObsBatch, &mut ActionBatchMut),
+    ) -> Result<(), IpcError> {
+        if self.response.is_none() {
+            self.actions()?;
+        }
+        let obs = ObsBatch::new(self.layout, bytemuck::cast_slice(self.request.payload()))?;
+        let response = self.response.as_mut().expect("loaned above");
+        let bytes: &mut [u8] = bytemuck::cast_slice_mut(response.payload_mut());
+        let mut actions = ActionBatchMut::new(self.layout, bytes, self.seq);
+        act(&obs, &mut actions);
+        Ok(())
+    }
+
+    /// Sends the actions and wakes the simulator.
+    pub fn send(mut self, client: &PolicyClient) -> Result<(), IpcError> {
+        if self.response.is_none() {
+            self.actions()?;
+        }
+        let response = self.response.take().expect("loaned above");
+        // A simulator that gave up on this step has dropped it: nothing to deliver.
+        let _ = response.send();
+        client
+            .action_ready
+            .notify()
+            .map_err(transport("notifying action_ready"))?;
+        Ok(())
+    }
+}

@@ -1,0 +1,431 @@
+//! The simulator's side of a session: create the services, accept a policy, then each
+//! control step publish the observation batch and wait (spin, then block) for the actions
+//! under an optional deadline.
+//!
+//! In iceoryx2 terms the simulator is the *client* of the step service (it sends the
+//! request, the observation) and the *server* of the hello service.
+
+use crate::handshake::{from_fixed, joint_names_hash, to_fixed, Hello, Status, Welcome};
+use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
+use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
+use crate::session::{
+    create_node, process_alive, service_names, transport, wait_for, IpcError, WaitPolicy, Waited,
+};
+use crate::PROTOCOL_VERSION;
+use iceoryx2::pending_response::PendingResponse;
+use iceoryx2::port::client::Client;
+use iceoryx2::port::listener::Listener;
+use iceoryx2::port::notifier::Notifier;
+use iceoryx2::port::server::Server;
+use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::request_response::PortFactory as RrFactory;
+use std::time::{Duration, Instant};
+
+type StepFactory = RrFactory<ipc::Service, [u64], (), [u64], ()>;
+type StepClient = Client<ipc::Service, [u64], (), [u64], ()>;
+type StepPending = PendingResponse<ipc::Service, [u64], (), [u64], ()>;
+
+/// What the simulator offers.
+#[derive(Debug, Clone)]
+pub struct SimConfig {
+    /// Session name (services are `thorarena/<session>/…`).
+    pub session: String,
+    /// Environment slots per batch.
+    pub n_envs: usize,
+    /// Canonical joint order.
+    pub joint_names: Vec<String>,
+    /// Control period, s.
+    pub control_dt_s: f64,
+    /// Action mapping of the dynamics profile: target = offset + scale · action, rad.
+    pub action_offset_rad: Vec<f64>,
+    /// See `action_offset_rad`.
+    pub action_scale: Vec<f64>,
+    /// Latency budget per step (`None`: lock-step, wait as long as the policy lives).
+    pub budget: Option<Duration>,
+    /// How to wait for actions.
+    pub wait: WaitPolicy,
+}
+
+/// The connected policy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PolicyInfo {
+    /// Its name.
+    pub name: String,
+    /// Its process id.
+    pub pid: u32,
+    /// The reference offsets it asked for, s.
+    pub reference_offsets_s: Vec<f64>,
+}
+
+/// How one step's wait ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepOutcome {
+    /// The actions arrived in time; the closure read them.
+    Answered,
+    /// The deadline passed first; the request stays in flight so a late reply is counted.
+    Missed,
+    /// The policy process died or left the session.
+    PolicyGone,
+}
+
+struct Connection {
+    info: PolicyInfo,
+    layout: Layout,
+    client: StepClient,
+    seq: u64,
+    /// A request whose deadline passed; checked once for a late reply, then dropped.
+    overdue: Option<StepPending>,
+}
+
+/// The simulator's end of a session.
+pub struct SimSession {
+    config: SimConfig,
+    joint_hash: u64,
+    node: Node<ipc::Service>,
+    hello: Server<ipc::Service, Hello, (), Welcome, ()>,
+    step: StepFactory,
+    obs_ready: Notifier<ipc::Service>,
+    action_ready: Listener<ipc::Service>,
+    connection: Option<Connection>,
+    late_replies: u64,
+}
+
+impl SimSession {
+    /// Creates the session's services (after removing stale ones of crashed runs).
+    pub fn create(config: SimConfig) -> Result<Self, IpcError> {
+        let names = service_names(&config.session)?;
+        let n = config.joint_names.len();
+        if n == 0 || n > MAX_JOINTS {
+            return Err(IpcError::Config(format!(
+                "{n} joints: the protocol carries 1 to {MAX_JOINTS}"
+            )));
+        }
+        if config.action_offset_rad.len() != n || config.action_scale.len() != n {
+            return Err(IpcError::Config(format!(
+                "action mapping has {} offsets and {} scales for {n} joints",
+                config.action_offset_rad.len(),
+                config.action_scale.len()
+            )));
+        }
+        if config.n_envs == 0 {
+            return Err(IpcError::Config(
+                "a session needs at least one environment slot".into(),
+            ));
+        }
+        let node = create_node(&format!("thorarena-sim-{}", config.session))?;
+        let in_use = |e: &dyn std::fmt::Debug| {
+            if format!("{e:?}").contains("AlreadyExists") {
+                IpcError::SessionInUse(config.session.clone())
+            } else {
+                IpcError::Transport(format!("creating the session services: {e:?}"))
+            }
+        };
+        let hello = node
+            .service_builder(&names.hello)
+            .request_response::<Hello, Welcome>()
+            .max_servers(1)
+            .max_clients(8)
+            .max_active_requests_per_client(1)
+            .create()
+            .map_err(|e| in_use(&e))?
+            .server_builder()
+            .create()
+            .map_err(transport("hello server"))?;
+        let step = node
+            .service_builder(&names.step)
+            .request_response::<[u64], [u64]>()
+            .max_servers(1)
+            .max_clients(1)
+            .max_active_requests_per_client(2)
+            .max_response_buffer_size(2)
+            .max_loaned_requests(1)
+            .max_borrowed_responses_per_pending_response(1)
+            .enable_fire_and_forget_requests(true)
+            .create()
+            .map_err(|e| in_use(&e))?;
+        let obs_ready = node
+            .service_builder(&names.obs_ready)
+            .event()
+            .max_notifiers(2)
+            .max_listeners(4)
+            .create()
+            .map_err(|e| in_use(&e))?
+            .notifier_builder()
+            .create()
+            .map_err(transport("obs_ready notifier"))?;
+        let action_ready = node
+            .service_builder(&names.action_ready)
+            .event()
+            .max_notifiers(4)
+            .max_listeners(2)
+            .create()
+            .map_err(|e| in_use(&e))?
+            .listener_builder()
+            .create()
+            .map_err(transport("action_ready listener"))?;
+        Ok(Self {
+            joint_hash: joint_names_hash(&config.joint_names),
+            config,
+            node,
+            hello,
+            step,
+            obs_ready,
+            action_ready,
+            connection: None,
+            late_replies: 0,
+        })
+    }
+
+    /// The session's configuration.
+    pub fn config(&self) -> &SimConfig {
+        &self.config
+    }
+
+    /// The connected policy, if any.
+    pub fn policy(&self) -> Option<&PolicyInfo> {
+        self.connection.as_ref().map(|c| &c.info)
+    }
+
+    /// The batch layout of the connected policy.
+    pub fn layout(&self) -> Option<Layout> {
+        self.connection.as_ref().map(|c| c.layout)
+    }
+
+    /// Replies that arrived after their deadline, so far.
+    pub fn late_replies(&self) -> u64 {
+        self.late_replies
+    }
+
+    /// Waits for a policy to say hello; refuses mismatched ones (each refusal is passed to
+    /// `on_refused` and sent back to that policy) and keeps waiting for a good one.
+    pub fn accept(
+        &mut self,
+        timeout: Option<Duration>,
+        mut on_refused: impl FnMut(&str),
+    ) -> Result<PolicyInfo, IpcError> {
+        self.connection = None;
+        self.node.try_cleanup_dead_nodes();
+        let start = Instant::now();
+        loop {
+            while let Some(request) = self.hello.receive().map_err(transport("hello receive"))? {
+                let hello = *request.payload();
+                let (status, message) = self.check(&hello);
+                let mut welcome = Welcome {
+                    protocol_version: PROTOCOL_VERSION,
+                    status: status as u32,
+                    n_joints: self.config.joint_names.len() as u32,
+                    n_envs: self.config.n_envs as u32,
+                    joint_names_hash: self.joint_hash,
+                    control_dt_s: self.config.control_dt_s,
+                    budget_s: self.config.budget.map_or(0.0, |b| b.as_secs_f64()),
+                    n_refs: hello.n_refs.min(MAX_REFERENCE_OFFSETS as u32),
+                    pid: std::process::id(),
+                    action_offset_rad: fixed_joints(&self.config.action_offset_rad),
+                    action_scale: fixed_joints(&self.config.action_scale),
+                    message: to_fixed(&message),
+                };
+                if status != Status::Ok {
+                    on_refused(&message);
+                    let _ = request.send_copy(welcome);
+                    continue;
+                }
+                let n_refs = hello.n_refs as usize;
+                let info = PolicyInfo {
+                    name: from_fixed(&hello.name),
+                    pid: hello.pid,
+                    reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
+                };
+                let layout = Layout {
+                    n_envs: self.config.n_envs,
+                    n_joints: self.config.joint_names.len(),
+                    n_refs,
+                };
+                let client = self
+                    .step
+                    .client_builder()
+                    .initial_max_slice_len(layout.obs_words())
+                    .allocation_strategy(AllocationStrategy::Static)
+                    .create()
+                    .map_err(transport("step client"))?;
+                welcome.status = Status::Ok as u32;
+                request
+                    .send_copy(welcome)
+                    .map_err(transport("sending welcome"))?;
+                self.connection = Some(Connection {
+                    info: info.clone(),
+                    layout,
+                    client,
+                    seq: 0,
+                    overdue: None,
+                });
+                // The policy creates its step server after the welcome; wait for it.
+                while self.step.dynamic_config().number_of_servers() == 0 {
+                    if !process_alive(info.pid) {
+                        self.connection = None;
+                        return Err(IpcError::PeerGone("policy"));
+                    }
+                    if timeout.is_some_and(|t| start.elapsed() > t) {
+                        return Err(IpcError::Timeout(
+                            start.elapsed(),
+                            "the policy's step server",
+                        ));
+                    }
+                    std::thread::sleep(Duration::from_micros(200));
+                }
+                return Ok(info);
+            }
+            if let Some(t) = timeout {
+                if start.elapsed() > t {
+                    return Err(IpcError::Timeout(t, "a policy to connect"));
+                }
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    fn check(&self, hello: &Hello) -> (Status, String) {
+        let n = self.config.joint_names.len() as u32;
+        let offsets =
+            &hello.reference_offsets_s[..(hello.n_refs as usize).min(MAX_REFERENCE_OFFSETS)];
+        if self.connection.is_some() {
+            (Status::Busy, "another policy is connected".into())
+        } else if hello.protocol_version != PROTOCOL_VERSION {
+            let msg = format!(
+                "protocol version {} but the simulator speaks {PROTOCOL_VERSION}",
+                hello.protocol_version
+            );
+            (Status::ProtocolVersion, msg)
+        } else if hello.n_joints != n {
+            let msg = format!("{} joints but the robot has {n}", hello.n_joints);
+            (Status::JointCount, msg)
+        } else if hello.joint_names_hash != self.joint_hash {
+            let msg = format!(
+                "joint names hash {:#x} but the robot's canonical order hashes to {:#x}",
+                hello.joint_names_hash, self.joint_hash
+            );
+            (Status::JointNames, msg)
+        } else if hello.n_refs as usize > MAX_REFERENCE_OFFSETS
+            || hello.n_refs == 0
+            || offsets.iter().any(|o| !o.is_finite() || *o < 0.0)
+        {
+            let msg = format!(
+                "reference offsets must be 1 to {MAX_REFERENCE_OFFSETS} finite values >= 0 s"
+            );
+            (Status::ReferenceOffsets, msg)
+        } else {
+            (Status::Ok, String::new())
+        }
+    }
+
+    /// One control step: `fill` writes the observation batch into shared memory, then the
+    /// actions are awaited until `deadline` (or forever in lock-step, while the policy
+    /// lives) and handed to `read`.
+    pub fn step(
+        &mut self,
+        fill: impl FnOnce(&mut ObsBatchMut),
+        deadline: Option<Instant>,
+        read: impl FnOnce(&ActionBatch),
+    ) -> Result<StepOutcome, IpcError> {
+        let conn = self
+            .connection
+            .as_mut()
+            .ok_or(IpcError::PeerGone("policy"))?;
+        if let Some(old) = conn.overdue.take() {
+            if old.has_response() {
+                self.late_replies += 1;
+            }
+        }
+        conn.seq += 1;
+        let mut request = conn
+            .client
+            .loan_slice(conn.layout.obs_words())
+            .map_err(transport("loaning the observation batch"))?;
+        {
+            let bytes: &mut [u8] = bytemuck::cast_slice_mut(request.payload_mut());
+            let mut batch = ObsBatchMut::new(conn.layout, bytes, COMMAND_STEP, conn.seq);
+            fill(&mut batch);
+        }
+        let pending = request.send().map_err(transport("sending observations"))?;
+        self.obs_ready
+            .notify()
+            .map_err(transport("notifying obs_ready"))?;
+        let waited = wait_for(
+            &self.action_ready,
+            self.config.wait,
+            deadline,
+            conn.info.pid,
+            || pending.has_response(),
+        )?;
+        match waited {
+            Waited::Ready => {
+                let response = pending
+                    .receive()
+                    .map_err(transport("receiving actions"))?
+                    .ok_or_else(|| IpcError::Transport("response vanished".into()))?;
+                let bytes: &[u8] = bytemuck::cast_slice(response.payload());
+                let batch = ActionBatch::new(conn.layout, bytes)?;
+                if batch.header().seq != conn.seq {
+                    return Err(IpcError::Transport(format!(
+                        "action batch answers step {} but step {} was sent",
+                        batch.header().seq,
+                        conn.seq
+                    )));
+                }
+                read(&batch);
+                Ok(StepOutcome::Answered)
+            }
+            Waited::Deadline => {
+                if process_alive(conn.info.pid) {
+                    conn.overdue = Some(pending);
+                    Ok(StepOutcome::Missed)
+                } else {
+                    self.drop_policy();
+                    Ok(StepOutcome::PolicyGone)
+                }
+            }
+            Waited::PeerGone => {
+                self.drop_policy();
+                Ok(StepOutcome::PolicyGone)
+            }
+        }
+    }
+
+    /// Forgets the connected policy and removes what a crashed one left behind.
+    pub fn drop_policy(&mut self) {
+        self.connection = None;
+        self.node.try_cleanup_dead_nodes();
+    }
+
+    /// Tells the policy the run is over (it returns from its loop) and disconnects.
+    pub fn end(&mut self) {
+        if let Some(conn) = self.connection.as_mut() {
+            if let Some(old) = conn.overdue.take() {
+                if old.has_response() {
+                    self.late_replies += 1;
+                }
+            }
+            if let Ok(mut request) = conn.client.loan_slice(conn.layout.obs_words()) {
+                let bytes: &mut [u8] = bytemuck::cast_slice_mut(request.payload_mut());
+                ObsBatchMut::new(conn.layout, bytes, COMMAND_END, conn.seq + 1);
+                if let Ok(pending) = request.send() {
+                    let _ = self.obs_ready.notify();
+                    // Give the policy a moment to see it before the services go away.
+                    let until = Instant::now() + Duration::from_millis(200);
+                    while pending.is_connected()
+                        && Instant::now() < until
+                        && process_alive(conn.info.pid)
+                    {
+                        std::thread::sleep(Duration::from_micros(200));
+                    }
+                }
+            }
+        }
+        self.connection = None;
+    }
+}
+
+fn fixed_joints(v: &[f64]) -> [f64; MAX_JOINTS] {
+    let mut out = [0.0; MAX_JOINTS];
+    out[..v.len()].copy_from_slice(v);
+    out
+}

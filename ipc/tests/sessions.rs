@@ -1,0 +1,260 @@
+//! Both ends of a session in one process (each on its own thread, as each would be in its
+//! own process): the handshake accepts a matching policy and refuses mismatched ones with a
+//! typed status, observations arrive intact, actions come back for the step that asked,
+//! a deadline miss is reported and the late reply counted, and two sessions run side by
+//! side without crossing.
+
+use std::time::{Duration, Instant};
+use thorarena_ipc::{
+    EnvHeader, IpcError, Next, PolicyClient, PolicyConfig, SimConfig, SimSession, Status,
+    StepOutcome, FLAG_ACTIVE, FLAG_RESET,
+};
+
+fn joints(n: usize) -> Vec<String> {
+    (0..n).map(|i| format!("joint_{i}")).collect()
+}
+
+fn unique(name: &str) -> String {
+    format!("test-{name}-{}", std::process::id())
+}
+
+fn sim_config(session: &str, n_envs: usize, n_joints: usize) -> SimConfig {
+    SimConfig {
+        session: session.into(),
+        n_envs,
+        joint_names: joints(n_joints),
+        control_dt_s: 0.02,
+        action_offset_rad: vec![0.1; n_joints],
+        action_scale: vec![0.5; n_joints],
+        budget: None,
+        wait: Default::default(),
+    }
+}
+
+/// A policy answering `action = q + step` for each active slot, for `steps` steps.
+fn spawn_policy(
+    session: String,
+    n_joints: usize,
+) -> std::thread::JoinHandle<Result<u64, IpcError>> {
+    std::thread::spawn(move || {
+        let config = PolicyConfig::new(&session, "echo", joints(n_joints), vec![0.0, 0.1]);
+        let mut client = PolicyClient::connect(&config, Duration::from_secs(10))?;
+        assert_eq!(client.info().action_scale, vec![0.5; n_joints]);
+        client.run(|obs, actions| {
+            for i in 0..obs.n_envs() {
+                let env = obs.env(i);
+                let step = env.header().step as f64;
+                for (a, q) in actions.env(i).iter_mut().zip(env.array("q")) {
+                    *a = q + step;
+                }
+            }
+        })
+    })
+}
+
+#[test]
+fn observations_go_out_and_matching_actions_come_back() {
+    let session = unique("echo");
+    let mut sim = SimSession::create(sim_config(&session, 3, 5)).unwrap();
+    let policy = spawn_policy(session, 5);
+    let info = sim.accept(Some(Duration::from_secs(10)), |_| {}).unwrap();
+    assert_eq!(info.name, "echo");
+    assert_eq!(info.reference_offsets_s, vec![0.0, 0.1]);
+    for step in 0..50u64 {
+        let mut got = Vec::new();
+        let outcome = sim
+            .step(
+                |batch| {
+                    for i in 0..3 {
+                        let mut env = batch.env(i);
+                        if i == 1 {
+                            env.clear(0); // an inactive padding slot
+                            continue;
+                        }
+                        env.set_header(&EnvHeader {
+                            episode_id: i as u64,
+                            step,
+                            flags: FLAG_ACTIVE | if step == 0 { FLAG_RESET } else { 0 },
+                            reserved: 0,
+                            time_s: step as f64 * 0.02,
+                        });
+                        for (j, q) in env.array("q").iter_mut().enumerate() {
+                            *q = (i * 10 + j) as f64;
+                        }
+                    }
+                },
+                None,
+                |actions| got = (0..3).map(|i| actions.env(i).to_vec()).collect(),
+            )
+            .unwrap();
+        assert_eq!(outcome, StepOutcome::Answered);
+        for i in [0usize, 2] {
+            let want: Vec<f64> = (0..5).map(|j| (i * 10 + j) as f64 + step as f64).collect();
+            assert_eq!(got[i], want, "step {step} slot {i}");
+        }
+        assert_eq!(got[1], vec![0.0; 5], "inactive slot's q is zero");
+    }
+    sim.end();
+    assert_eq!(policy.join().unwrap().unwrap(), 50);
+}
+
+#[test]
+fn mismatched_policies_are_refused_with_a_typed_status() {
+    let session = unique("mismatch");
+    let mut sim = SimSession::create(sim_config(&session, 1, 4)).unwrap();
+    let s = session.clone();
+    let (accepted_tx, accepted_rx) = std::sync::mpsc::channel::<()>();
+    let policy = std::thread::spawn(move || {
+        let mut wrong_version = PolicyConfig::new(&s, "old", joints(4), vec![0.0]);
+        wrong_version.protocol_version = 999;
+        let e1 = PolicyClient::connect(&wrong_version, Duration::from_secs(10)).err();
+        let e2 = PolicyClient::connect(
+            &PolicyConfig::new(&s, "23dof", joints(3), vec![0.0]),
+            Duration::from_secs(10),
+        )
+        .err();
+        let mut reordered = joints(4);
+        reordered.swap(0, 1);
+        let e3 = PolicyClient::connect(
+            &PolicyConfig::new(&s, "order", reordered, vec![0.0]),
+            Duration::from_secs(10),
+        )
+        .err();
+        let e4 = PolicyClient::connect(
+            &PolicyConfig::new(&s, "nan", joints(4), vec![f64::NAN]),
+            Duration::from_secs(10),
+        )
+        .err();
+        let ok = PolicyClient::connect(
+            &PolicyConfig::new(&s, "good", joints(4), vec![0.0]),
+            Duration::from_secs(10),
+        );
+        // Stay connected until the simulator has seen the step server.
+        let _ = accepted_rx.recv();
+        (e1, e2, e3, e4, ok.map(|_| ()))
+    });
+    let mut refusals = Vec::new();
+    let info = sim
+        .accept(Some(Duration::from_secs(20)), |m| {
+            refusals.push(m.to_string())
+        })
+        .unwrap();
+    assert_eq!(info.name, "good");
+    accepted_tx.send(()).unwrap();
+    let (e1, e2, e3, e4, ok) = policy.join().unwrap();
+    let status = |e: Option<IpcError>| match e {
+        Some(IpcError::Refused { status, message }) => {
+            assert!(!message.is_empty());
+            status
+        }
+        other => panic!("expected a refusal, got {other:?}"),
+    };
+    assert_eq!(status(e1), Status::ProtocolVersion);
+    assert_eq!(status(e2), Status::JointCount);
+    assert_eq!(status(e3), Status::JointNames);
+    assert_eq!(status(e4), Status::ReferenceOffsets);
+    ok.unwrap();
+    assert_eq!(refusals.len(), 4, "{refusals:?}");
+    assert!(
+        refusals[0].contains("protocol version 999"),
+        "{}",
+        refusals[0]
+    );
+}
+
+#[test]
+fn a_slow_reply_is_a_miss_and_is_counted_late() {
+    let session = unique("late");
+    let mut config = sim_config(&session, 1, 2);
+    config.budget = Some(Duration::from_millis(2));
+    let mut sim = SimSession::create(config).unwrap();
+    let s = session.clone();
+    let policy = std::thread::spawn(move || {
+        let config = PolicyConfig::new(&s, "slow", joints(2), vec![0.0]);
+        let mut client = PolicyClient::connect(&config, Duration::from_secs(10)).unwrap();
+        let mut n = 0u64;
+        client
+            .run(|_, actions| {
+                n += 1;
+                if n == 2 {
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+                actions.env(0).fill(1.0);
+            })
+            .unwrap()
+    });
+    sim.accept(Some(Duration::from_secs(10)), |_| {}).unwrap();
+    let mut outcomes = Vec::new();
+    for _ in 0..4 {
+        let deadline = Instant::now() + Duration::from_millis(5);
+        let o = sim.step(|_| {}, Some(deadline), |_| {}).unwrap();
+        outcomes.push(o);
+        if o == StepOutcome::Missed {
+            std::thread::sleep(Duration::from_millis(30)); // let the late reply land
+        }
+    }
+    assert_eq!(
+        outcomes,
+        vec![
+            StepOutcome::Answered,
+            StepOutcome::Missed,
+            StepOutcome::Answered,
+            StepOutcome::Answered
+        ]
+    );
+    assert_eq!(sim.late_replies(), 1);
+    sim.end();
+    policy.join().unwrap();
+}
+
+#[test]
+fn two_sessions_side_by_side_never_cross() {
+    let (a, b) = (unique("side-a"), unique("side-b"));
+    let mut sim_a = SimSession::create(sim_config(&a, 1, 3)).unwrap();
+    let mut sim_b = SimSession::create(sim_config(&b, 1, 3)).unwrap();
+    // A second simulator cannot take a live session.
+    assert!(matches!(
+        SimSession::create(sim_config(&a, 1, 3)),
+        Err(IpcError::SessionInUse(_))
+    ));
+    let pa = spawn_policy(a, 3);
+    let pb = spawn_policy(b, 3);
+    sim_a.accept(Some(Duration::from_secs(10)), |_| {}).unwrap();
+    sim_b.accept(Some(Duration::from_secs(10)), |_| {}).unwrap();
+    for step in 0..20 {
+        for (sim, q) in [(&mut sim_a, 1.0), (&mut sim_b, 100.0)] {
+            let mut got = Vec::new();
+            sim.step(
+                |batch| {
+                    let mut env = batch.env(0);
+                    env.set_header(&EnvHeader {
+                        episode_id: 0,
+                        step,
+                        flags: FLAG_ACTIVE,
+                        reserved: 0,
+                        time_s: 0.0,
+                    });
+                    env.array("q").fill(q);
+                },
+                None,
+                |actions| got = actions.env(0).to_vec(),
+            )
+            .unwrap();
+            assert_eq!(got, vec![q + step as f64; 3]);
+        }
+    }
+    sim_a.end();
+    sim_b.end();
+    assert_eq!(pa.join().unwrap().unwrap(), 20);
+    assert_eq!(pb.join().unwrap().unwrap(), 20);
+}
+
+#[test]
+fn connecting_to_a_missing_session_says_so() {
+    let config = PolicyConfig::new(&unique("nobody"), "p", joints(2), vec![0.0]);
+    match PolicyClient::connect(&config, Duration::from_millis(50)) {
+        Err(IpcError::NoSession(s)) => assert!(s.contains("nobody")),
+        other => panic!("expected NoSession, got {:?}", other.err()),
+    }
+    let _ = Next::Timeout; // keep the enum in the public surface
+}
