@@ -12,6 +12,7 @@
 #![warn(missing_docs)]
 
 pub mod client;
+pub mod describe;
 pub mod handshake;
 pub mod layout;
 pub mod session;
