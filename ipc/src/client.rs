@@ -112,35 +112,39 @@ impl PolicyClient {
         }
         let node = create_node(&format!("thorarena-policy-{}", config.session))?;
         let start = Instant::now();
-        let hello_service = loop {
-            match node
+        // The simulator creates `hello` last, but a policy may also catch a session that is
+        // being torn down: open all four or retry until the timeout.
+        let open_all = || -> Option<_> {
+            let hello = node
                 .service_builder(&names.hello)
                 .request_response::<Hello, Welcome>()
                 .open()
-            {
-                Ok(s) => break s,
-                Err(_) if start.elapsed() < timeout => std::thread::sleep(Duration::from_millis(5)),
-                Err(_) => return Err(IpcError::NoSession(config.session.clone())),
+                .ok()?;
+            let step = node
+                .service_builder(&names.step)
+                .request_response::<[u64], [u64]>()
+                .open()
+                .ok()?;
+            let obs_ready = node.service_builder(&names.obs_ready).event().open().ok()?;
+            let action_ready = node
+                .service_builder(&names.action_ready)
+                .event()
+                .open()
+                .ok()?;
+            Some((hello, step, obs_ready, action_ready))
+        };
+        let (hello_service, step, obs_ready, action_ready) = loop {
+            match open_all() {
+                Some(services) => break services,
+                None if start.elapsed() < timeout => std::thread::sleep(Duration::from_millis(5)),
+                None => return Err(IpcError::NoSession(config.session.clone())),
             }
         };
-        let step = node
-            .service_builder(&names.step)
-            .request_response::<[u64], [u64]>()
-            .open()
-            .map_err(|_| IpcError::NoSession(config.session.clone()))?;
-        let obs_ready = node
-            .service_builder(&names.obs_ready)
-            .event()
-            .open()
-            .map_err(|_| IpcError::NoSession(config.session.clone()))?
+        let obs_ready = obs_ready
             .listener_builder()
             .create()
             .map_err(transport("obs_ready listener"))?;
-        let action_ready = node
-            .service_builder(&names.action_ready)
-            .event()
-            .open()
-            .map_err(|_| IpcError::NoSession(config.session.clone()))?
+        let action_ready = action_ready
             .notifier_builder()
             .create()
             .map_err(transport("action_ready notifier"))?;
@@ -222,6 +226,7 @@ impl PolicyClient {
             self.wait,
             deadline,
             self.info.simulator_pid,
+            || true,
             || self.server.has_requests().unwrap_or(true),
         )?;
         match waited {

@@ -309,6 +309,11 @@ impl<'a> ObsBatch<'a> {
             return Err(LayoutError::Magic(h.magic));
         }
         let checks = [
+            (
+                "protocol_version",
+                h.protocol_version as u64,
+                crate::PROTOCOL_VERSION as u64,
+            ),
             ("n_envs", h.n_envs as u64, layout.n_envs as u64),
             ("n_joints", h.n_joints as u64, layout.n_joints as u64),
             ("n_refs", h.n_refs as u64, layout.n_refs as u64),
@@ -478,6 +483,11 @@ impl<'a> ActionBatch<'a> {
             return Err(LayoutError::Magic(h.magic));
         }
         for (what, got, want) in [
+            (
+                "protocol_version",
+                h.protocol_version as u64,
+                crate::PROTOCOL_VERSION as u64,
+            ),
             ("n_envs", h.n_envs as u64, layout.n_envs as u64),
             ("n_joints", h.n_joints as u64, layout.n_joints as u64),
         ] {

@@ -13,6 +13,7 @@
 
 pub mod client;
 pub mod describe;
+pub mod ffi;
 pub mod handshake;
 pub mod layout;
 pub mod session;

@@ -131,13 +131,15 @@ pub(crate) enum Waited {
     PeerGone,
 }
 
-/// Waits until `ready()` holds, the deadline passes, or the peer dies. Drains the
+/// Waits until `ready()` holds, the deadline passes, or the peer is gone: its process died
+/// (`peer_pid`), or it left the session while alive (`peer_present()` false). Drains the
 /// listener after each wake-up (a WaitSet-free loop cannot spin on stale events).
 pub(crate) fn wait_for(
     listener: &Listener<ipc::Service>,
     policy: WaitPolicy,
     deadline: Option<Instant>,
     peer_pid: u32,
+    peer_present: impl Fn() -> bool,
     mut ready: impl FnMut() -> bool,
 ) -> Result<Waited, IpcError> {
     let start = Instant::now();
@@ -162,7 +164,7 @@ pub(crate) fn wait_for(
         let n = listener
             .timed_wait(|_| {}, slice)
             .map_err(transport("waiting on the event listener"))?;
-        if n == 0 && !ready() && !process_alive(peer_pid) {
+        if n == 0 && !ready() && (!process_alive(peer_pid) || !peer_present()) {
             return Ok(Waited::PeerGone);
         }
     }

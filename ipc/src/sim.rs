@@ -73,7 +73,13 @@ struct Connection {
     layout: Layout,
     client: StepClient,
     seq: u64,
-    /// A request whose deadline passed; checked once for a late reply, then dropped.
+    /// The newest request whose deadline passed, watched for a late reply until the next
+    /// step.
+    ///
+    /// All responses of a client share one channel in iceoryx2 0.10: `has_response` on any
+    /// pending request sees them all, and `receive` discards those of other requests. So
+    /// a late reply is counted either here (its own pending receives it) or when the
+    /// current step's `receive` discards it — a lower bound when several arrive at once.
     overdue: Option<StepPending>,
 }
 
@@ -88,6 +94,7 @@ pub struct SimSession {
     action_ready: Listener<ipc::Service>,
     connection: Option<Connection>,
     late_replies: u64,
+    last_round_trip: Duration,
 }
 
 impl SimSession {
@@ -120,23 +127,13 @@ impl SimSession {
                 IpcError::Transport(format!("creating the session services: {e:?}"))
             }
         };
-        let hello = node
-            .service_builder(&names.hello)
-            .request_response::<Hello, Welcome>()
-            .max_servers(1)
-            .max_clients(8)
-            .max_active_requests_per_client(1)
-            .create()
-            .map_err(|e| in_use(&e))?
-            .server_builder()
-            .create()
-            .map_err(transport("hello server"))?;
         let step = node
             .service_builder(&names.step)
             .request_response::<[u64], [u64]>()
             .max_servers(1)
             .max_clients(1)
-            .max_active_requests_per_client(2)
+            // The current request, the overdue one, and the end-of-run notice.
+            .max_active_requests_per_client(3)
             .max_response_buffer_size(2)
             .max_loaned_requests(1)
             .max_borrowed_responses_per_pending_response(1)
@@ -163,6 +160,18 @@ impl SimSession {
             .listener_builder()
             .create()
             .map_err(transport("action_ready listener"))?;
+        // Last: a policy that finds `hello` finds the other three.
+        let hello = node
+            .service_builder(&names.hello)
+            .request_response::<Hello, Welcome>()
+            .max_servers(1)
+            .max_clients(8)
+            .max_active_requests_per_client(1)
+            .create()
+            .map_err(|e| in_use(&e))?
+            .server_builder()
+            .create()
+            .map_err(transport("hello server"))?;
         Ok(Self {
             joint_hash: joint_names_hash(&config.joint_names),
             config,
@@ -173,6 +182,7 @@ impl SimSession {
             action_ready,
             connection: None,
             late_replies: 0,
+            last_round_trip: Duration::ZERO,
         })
     }
 
@@ -189,6 +199,11 @@ impl SimSession {
     /// The batch layout of the connected policy.
     pub fn layout(&self) -> Option<Layout> {
         self.connection.as_ref().map(|c| c.layout)
+    }
+
+    /// Observation published to actions received (or to giving up) in the last `step`.
+    pub fn last_round_trip(&self) -> Duration {
+        self.last_round_trip
     }
 
     /// Replies that arrived after their deadline, so far.
@@ -317,13 +332,13 @@ impl SimSession {
         }
     }
 
-    /// One control step: `fill` writes the observation batch into shared memory, then the
-    /// actions are awaited until `deadline` (or forever in lock-step, while the policy
-    /// lives) and handed to `read`.
+    /// One control step: `fill` writes the observation batch into shared memory, the batch
+    /// is published, and the actions are awaited for `budget` from the moment of
+    /// publishing (`None`: lock-step, as long as the policy lives) and handed to `read`.
     pub fn step(
         &mut self,
         fill: impl FnOnce(&mut ObsBatchMut),
-        deadline: Option<Instant>,
+        budget: Option<Duration>,
         read: impl FnOnce(&ActionBatch),
     ) -> Result<StepOutcome, IpcError> {
         let conn = self
@@ -331,7 +346,7 @@ impl SimSession {
             .as_mut()
             .ok_or(IpcError::PeerGone("policy"))?;
         if let Some(old) = conn.overdue.take() {
-            if old.has_response() {
+            if matches!(old.receive(), Ok(Some(_))) {
                 self.late_replies += 1;
             }
         }
@@ -345,23 +360,43 @@ impl SimSession {
             let mut batch = ObsBatchMut::new(conn.layout, bytes, COMMAND_STEP, conn.seq);
             fill(&mut batch);
         }
+        let sent = Instant::now();
         let pending = request.send().map_err(transport("sending observations"))?;
         self.obs_ready
             .notify()
             .map_err(transport("notifying obs_ready"))?;
+        let deadline = budget.map(|b| sent + b);
+        let step_service = &self.step;
+        let mut response = None;
+        let mut receive_error = None;
+        let mut discarded = 0;
         let waited = wait_for(
             &self.action_ready,
             self.config.wait,
             deadline,
             conn.info.pid,
-            || pending.has_response(),
+            // A policy that closed its session but lives on has no step server any more.
+            || step_service.dynamic_config().number_of_servers() > 0,
+            || {
+                if response.is_none() && receive_error.is_none() && pending.has_response() {
+                    match pending.receive() {
+                        Ok(Some(r)) => response = Some(r),
+                        // What was queued answered an earlier step: a late reply.
+                        Ok(None) => discarded += 1,
+                        Err(e) => receive_error = Some(e),
+                    }
+                }
+                response.is_some() || receive_error.is_some()
+            },
         )?;
+        self.last_round_trip = sent.elapsed();
+        self.late_replies += discarded;
+        if let Some(e) = receive_error {
+            return Err(transport("receiving actions")(e));
+        }
         match waited {
             Waited::Ready => {
-                let response = pending
-                    .receive()
-                    .map_err(transport("receiving actions"))?
-                    .ok_or_else(|| IpcError::Transport("response vanished".into()))?;
+                let response = response.expect("ready means received");
                 let bytes: &[u8] = bytemuck::cast_slice(response.payload());
                 let batch = ActionBatch::new(conn.layout, bytes)?;
                 if batch.header().seq != conn.seq {
@@ -400,7 +435,7 @@ impl SimSession {
     pub fn end(&mut self) {
         if let Some(conn) = self.connection.as_mut() {
             if let Some(old) = conn.overdue.take() {
-                if old.has_response() {
+                if matches!(old.receive(), Ok(Some(_))) {
                     self.late_replies += 1;
                 }
             }
