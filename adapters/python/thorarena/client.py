@@ -1,0 +1,513 @@
+"""The policy's end of a ThorArena session over iceoryx2 (`ipc/src/client.rs` in Python).
+
+`connect` says hello and returns a `Session`; `Session.steps()` yields, per control step,
+the observation batch as a read-only numpy structured array straight over the shared-memory
+request and a writable float64 array straight over the loaned response. When the loop body
+returns, the actions are sent and the simulator woken.
+
+In iceoryx2 terms the policy is a *client* of the `hello` service and the *server* of the
+`step` service (it answers the simulator's requests); it listens on `obs_ready` and
+notifies `action_ready`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import iceoryx2 as iox2
+import numpy as np
+
+from .protocol import (
+    ACTION_HEADER_BYTES,
+    COMMAND_END,
+    MAGIC,
+    MAX_REFERENCE_OFFSETS,
+    NAME_BYTES,
+    PROTOCOL_VERSION,
+    WORD_BYTES,
+    ActionHeader,
+    BatchHeader,
+    Hello,
+    Layout,
+    Status,
+    Welcome,
+    from_fixed,
+    joint_names_hash,
+    to_fixed,
+)
+
+LIVENESS_EVERY_S = 0.002
+"""While blocked on `obs_ready`, how often the simulator's process is checked."""
+
+
+class ThorArenaError(Exception):
+    """Base of every error of this package."""
+
+
+class NoSession(ThorArenaError):
+    """No ThorArena run serves the session."""
+
+    def __init__(self, session: str) -> None:
+        super().__init__(
+            f"no ThorArena run serves session {session!r} (start `thorarena eval --policy "
+            f"ipc:{session}` or `thorarena serve --session {session}` first)"
+        )
+        self.session = session
+
+
+class SessionRefused(ThorArenaError):
+    """The simulator refused the handshake; `status` says why as a code, `message` in words."""
+
+    def __init__(self, status: Status | int, message: str) -> None:
+        with contextlib.suppress(ValueError):
+            status = Status(status)
+        name = status.name if isinstance(status, Status) else str(status)
+        super().__init__(f"session refused ({name}): {message}")
+        self.status = status
+        self.message = message
+
+
+class SimulatorGone(ThorArenaError):
+    """The simulator's process died or left the session."""
+
+
+class Timeout(ThorArenaError):
+    """Nothing arrived within the timeout."""
+
+
+class LayoutMismatch(ThorArenaError):
+    """A received batch does not match the session's layout."""
+
+
+class TransportError(ThorArenaError):
+    """iceoryx2 failed; the message names the operation and carries its error."""
+
+
+def process_alive(pid: int) -> bool:
+    """True while process `pid` exists and is not a zombie; `0` means unknown (alive)."""
+    if pid == 0:
+        return True
+    try:
+        fd = os.open(f"/proc/{pid}/stat", os.O_RDONLY)
+    except FileNotFoundError:
+        return False
+    except OSError:
+        # No procfs: existence only.
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return False
+        except PermissionError:
+            return True
+        return True
+    try:
+        stat = os.read(fd, 512)
+    finally:
+        os.close(fd)
+    # The state is the first field after the parenthesised command name.
+    fields = stat.rpartition(b")")[2].split()
+    return not fields or fields[0] not in (b"Z", b"X")
+
+
+def _service_name(session: str, leaf: str) -> Any:
+    ok = 0 < len(session) <= 64 and all(
+        c.isascii() and (c.isalnum() or c in "_.-") for c in session
+    )
+    if not ok:
+        raise ValueError(
+            f"bad session name {session!r}: use 1 to 64 characters from [A-Za-z0-9_.-]"
+        )
+    return iox2.ServiceName.new(f"thorarena/{session}/{leaf}")
+
+
+def _transport(what: str, error: BaseException) -> TransportError:
+    return TransportError(f"{what}: {type(error).__name__}: {error}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SessionInfo:
+    """The session as the simulator described it in its `Welcome`."""
+
+    layout: Layout
+    """Batch layout (environment slots, joints, reference frames)."""
+    control_dt_s: float
+    """Control period, s."""
+    budget_s: float
+    """Latency budget per step, s (0: none, lock-step)."""
+    simulator_pid: int
+    """The simulator's process id."""
+    action_offset_rad: np.ndarray
+    """target = action_offset_rad + action_scale * action, rad (read-only, n_joints)."""
+    action_scale: np.ndarray
+    """See `action_offset_rad`."""
+    reference_offsets_s: tuple[float, ...]
+    """Times ahead of each step of the reference frames, s (as asked)."""
+
+
+class Session:
+    """A connected policy: the session's shape, and `steps()`, the control loop."""
+
+    def __init__(
+        self,
+        *,
+        info: SessionInfo,
+        node: Any,
+        server: Any,
+        obs_ready: Any,
+        action_ready: Any,
+        spin_s: float,
+    ) -> None:
+        self.info = info
+        self._node = node
+        self._server = server
+        self._obs_ready = obs_ready
+        self._action_ready = action_ready
+        self._spin_s = spin_s
+        self._slice = iox2.Duration.from_secs_f64(LIVENESS_EVERY_S)
+        self.steps_answered = 0
+        """Control steps answered so far."""
+        self.seq = 0
+        """`seq` of the newest observation batch received."""
+        self.ended = False
+        """True once the simulator ended the run."""
+
+    # The session's shape, as flat attributes.
+    @property
+    def layout(self) -> Layout:
+        """Batch layout."""
+        return self.info.layout
+
+    @property
+    def n_envs(self) -> int:
+        """Environment slots per batch."""
+        return self.info.layout.n_envs
+
+    @property
+    def n_joints(self) -> int:
+        """Joints per environment."""
+        return self.info.layout.n_joints
+
+    @property
+    def n_refs(self) -> int:
+        """Reference frames per environment."""
+        return self.info.layout.n_refs
+
+    @property
+    def control_dt_s(self) -> float:
+        """Control period, s."""
+        return self.info.control_dt_s
+
+    @property
+    def budget_s(self) -> float:
+        """Latency budget per step, s (0: lock-step)."""
+        return self.info.budget_s
+
+    @property
+    def action_offset_rad(self) -> np.ndarray:
+        """target = action_offset_rad + action_scale * action, rad."""
+        return self.info.action_offset_rad
+
+    @property
+    def action_scale(self) -> np.ndarray:
+        """See `action_offset_rad`."""
+        return self.info.action_scale
+
+    @property
+    def closed(self) -> bool:
+        """True once the session's ports are released."""
+        return self._server is None
+
+    def steps(self, *, timeout_s: float | None = None) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """Yields `(obs, actions)` for each control step until the run ends.
+
+        `obs` is a read-only structured array of `n_envs` records (`Layout.env_dtype`) over
+        the request in shared memory; `actions` a writable `(n_envs, n_joints)` float64 array
+        over the loaned response, zeroed. Their contents belong to the current step only
+        (the memory is reused for later steps): copy what you keep. The views keep the
+        session's shared memory mapped; `close()` unmaps it, after which they must not be
+        touched. Leaving the body sends the actions and wakes the simulator; leaving the
+        loop early (`break`, an exception) sends nothing for that step.
+
+        Ends when the simulator ends the run. Raises `SimulatorGone` when the simulator dies,
+        `Timeout` when no step arrives within `timeout_s` (default: wait as long as the
+        simulator lives).
+        """
+        if self._server is None:
+            raise ThorArenaError("the session is closed")
+        if self.ended:
+            return
+        layout = self.info.layout
+        words = layout.action_words
+        obs_block = ctypes.c_uint8 * layout.obs_bytes
+        action_block = ctypes.c_uint8 * layout.action_bytes
+        header = ActionHeader(MAGIC, PROTOCOL_VERSION, layout.n_envs, layout.n_joints, 0, 0)
+        # Views by shared-memory address: the few chunks of each side's static pool recur,
+        # and a view is only a pointer, a shape and a dtype.
+        obs_views: dict[int, np.ndarray] = {}
+        action_views: dict[int, np.ndarray] = {}
+        while True:
+            request = self._next_request(timeout_s)
+            if request is None:
+                self.ended = True
+                return
+            response = None
+            try:
+                try:
+                    response = request.loan_slice_uninit(words)
+                except Exception as e:  # iceoryx2 raises its own error types
+                    raise _transport("loaning the action batch", e) from e
+                address = response.payload_ptr
+                ctypes.memset(address, 0, words * WORD_BYTES)
+                header.seq = self.seq
+                ctypes.memmove(address, ctypes.addressof(header), ACTION_HEADER_BYTES)
+                actions = action_views.get(address)
+                if actions is None:
+                    block = action_block.from_address(address)
+                    block.session = self  # type: ignore[attr-defined]  # keeps the mapping alive
+                    actions = action_views[address] = layout.action_view(block)
+                obs = obs_views.get(request.payload_ptr)
+                if obs is None:
+                    block = obs_block.from_address(request.payload_ptr)
+                    block.session = self  # type: ignore[attr-defined]
+                    obs = obs_views[request.payload_ptr] = layout.obs_view(block)
+                yield obs, actions
+                del obs, actions
+                ready = response.assume_init()
+                response = None
+                try:
+                    ready.send()
+                except Exception:
+                    # A simulator that gave up on this step dropped it: nothing to deliver.
+                    ready.delete()
+                try:
+                    self._action_ready.notify()
+                except Exception as e:
+                    raise _transport("notifying action_ready", e) from e
+                self.steps_answered += 1
+            finally:
+                if response is not None:
+                    response.delete()
+                request.delete()
+            if len(obs_views) + len(action_views) > 64:  # not a static pool after all
+                obs_views.clear()
+                action_views.clear()
+
+    def _next_request(self, timeout_s: float | None) -> Any:
+        """The newest observation batch (older ones are dropped unanswered), or None at the
+        end of the run."""
+        server = self._server
+        pid = self.info.simulator_pid
+        now = time.perf_counter()
+        deadline = None if timeout_s is None else now + timeout_s
+        spin_until = now + self._spin_s
+        newest = None
+        try:
+            while not server.has_requests and time.perf_counter() < spin_until:
+                pass
+            while newest is None:
+                while not server.has_requests:
+                    if deadline is not None:
+                        left = deadline - time.perf_counter()
+                        if left <= 0:
+                            raise Timeout(f"timed out after {timeout_s} s waiting for observations")
+                        wait = iox2.Duration.from_secs_f64(min(left, LIVENESS_EVERY_S))
+                    else:
+                        wait = self._slice
+                    woken = self._obs_ready.timed_wait(wait)
+                    if not woken and not server.has_requests and not process_alive(pid):
+                        raise SimulatorGone(f"the simulator (pid {pid}) is gone")
+                while (request := server.receive()) is not None:
+                    if newest is not None:
+                        newest.delete()
+                    newest = request
+        except ThorArenaError:
+            raise
+        except Exception as e:
+            raise _transport("receiving observations", e) from e
+        layout = self.info.layout
+        # `header.number_of_elements`, not `Slice.len()` (bytes, iceoryx2 issue #1533).
+        n_words = newest.header.number_of_elements
+        if n_words * WORD_BYTES < layout.obs_bytes:
+            newest.delete()
+            got = n_words * WORD_BYTES
+            raise LayoutMismatch(
+                f"batch of {got} bytes, the session's layout needs {layout.obs_bytes}"
+            )
+        header = BatchHeader.from_address(newest.payload_ptr)
+        problem = layout.check_batch_header(header)
+        if problem is not None:
+            newest.delete()
+            raise LayoutMismatch(problem)
+        self.seq = header.seq
+        if header.command == COMMAND_END:
+            newest.delete()
+            return None
+        return newest
+
+    def close(self) -> None:
+        """Releases the session's ports (ports before their node), unmapping its shared
+        memory: views from `steps()` must not be used afterwards. Idempotent; without it the
+        ports go when the session and every view of it are garbage."""
+        for port in (self._server, self._obs_ready, self._action_ready):
+            if port is not None:
+                port.delete()
+        self._server = self._obs_ready = self._action_ready = None
+        self._node = None
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _create_node(session: str) -> Any:
+    iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
+    try:
+        node = (
+            iox2.NodeBuilder.new()
+            .name(iox2.NodeName.new(f"thorarena-policy-{session}"))
+            # Python keeps its own signal handling (Ctrl-C raises KeyboardInterrupt).
+            .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
+            .create(iox2.ServiceType.Ipc)
+        )
+    except Exception as e:
+        raise _transport("creating the node", e) from e
+    node.try_cleanup_dead_nodes()
+    return node
+
+
+def connect(
+    session: str,
+    *,
+    name: str,
+    joint_names: Sequence[str],
+    reference_offsets_s: Sequence[float] = (0.0,),
+    timeout_s: float = 10.0,
+    spin_us: float = 50.0,
+    protocol_version: int = PROTOCOL_VERSION,
+) -> Session:
+    """Joins `session`, waiting up to `timeout_s` for a simulator to serve it.
+
+    `joint_names` is the joint order the policy assumes (checked against the robot's by
+    hash); `reference_offsets_s` the times ahead of each step at which it wants reference
+    frames; `spin_us` how long to busy-poll for each observation before blocking.
+    `protocol_version` is for tests that announce a wrong one on purpose.
+
+    Raises `NoSession`, `SessionRefused(status, message)`, `Timeout` or `TransportError`.
+    """
+    offsets = [float(o) for o in reference_offsets_s]
+    if len(offsets) > MAX_REFERENCE_OFFSETS:
+        raise SessionRefused(
+            Status.REFERENCE_OFFSETS, f"at most {MAX_REFERENCE_OFFSETS} reference offsets"
+        )
+    names = {
+        leaf: _service_name(session, leaf)
+        for leaf in ("hello", "step", "obs_ready", "action_ready")
+    }
+    node = _create_node(session)
+    start = time.monotonic()
+    while True:
+        try:
+            hello_service = (
+                node.service_builder(names["hello"]).request_response(Hello, Welcome).open()
+            )
+            break
+        except Exception:
+            if time.monotonic() - start >= timeout_s:
+                raise NoSession(session) from None
+            time.sleep(0.005)
+    try:
+        step = (
+            node.service_builder(names["step"])
+            .request_response(iox2.Slice[ctypes.c_uint64], iox2.Slice[ctypes.c_uint64])
+            .open()
+        )
+        obs_ready = (
+            node.service_builder(names["obs_ready"]).event().open().listener_builder().create()
+        )
+        action_ready = (
+            node.service_builder(names["action_ready"]).event().open().notifier_builder().create()
+        )
+    except Exception as e:
+        raise NoSession(session) from e
+
+    hello = Hello(
+        protocol_version=protocol_version,
+        n_joints=len(joint_names),
+        joint_names_hash=joint_names_hash(joint_names),
+        pid=os.getpid(),
+        n_refs=len(offsets),
+    )
+    hello.reference_offsets_s[: len(offsets)] = offsets
+    ctypes.memmove(hello.name, to_fixed(name, NAME_BYTES), NAME_BYTES)
+    welcome = _say_hello(hello_service, hello, start, timeout_s)
+    if welcome.status != Status.OK:
+        obs_ready.delete()
+        action_ready.delete()
+        raise SessionRefused(welcome.status, from_fixed(welcome.message))
+
+    layout = Layout(n_envs=welcome.n_envs, n_joints=welcome.n_joints, n_refs=welcome.n_refs)
+    try:
+        server = (
+            step.server_builder()
+            .initial_max_slice_len(layout.action_words)
+            .allocation_strategy(iox2.AllocationStrategy.Static)
+            .create()
+        )
+    except Exception as e:
+        raise _transport("creating the step server", e) from e
+    n = layout.n_joints
+
+    def frozen(values: Any) -> np.ndarray:
+        array = np.array(values[:n], dtype=np.float64)
+        array.flags.writeable = False
+        return array
+
+    info = SessionInfo(
+        layout=layout,
+        control_dt_s=welcome.control_dt_s,
+        budget_s=welcome.budget_s,
+        simulator_pid=welcome.pid,
+        action_offset_rad=frozen(welcome.action_offset_rad),
+        action_scale=frozen(welcome.action_scale),
+        reference_offsets_s=tuple(offsets),
+    )
+    return Session(
+        info=info,
+        node=node,
+        server=server,
+        obs_ready=obs_ready,
+        action_ready=action_ready,
+        spin_s=spin_us * 1e-6,
+    )
+
+
+def _say_hello(hello_service: Any, hello: Hello, start: float, timeout_s: float) -> Welcome:
+    """Sends `hello` and waits for the simulator's `Welcome` (a copy)."""
+    try:
+        client = hello_service.client_builder().create()
+        pending = client.send_copy(hello)
+    except Exception as e:
+        raise _transport("sending hello", e) from e
+    try:
+        while True:
+            response = pending.receive()
+            if response is not None:
+                welcome = Welcome.from_buffer_copy(
+                    (ctypes.c_uint8 * ctypes.sizeof(Welcome)).from_address(response.payload_ptr)
+                )
+                response.delete()
+                return welcome
+            if time.monotonic() - start > timeout_s:
+                raise Timeout(f"timed out after {timeout_s} s waiting for the simulator's welcome")
+            time.sleep(0.0002)
+    finally:
+        pending.delete()
+        client.delete()
