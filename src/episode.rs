@@ -40,6 +40,49 @@ pub enum Termination {
     TorsoHeight,
     /// Torso tilt error above the rule's limit.
     TorsoTilt,
+    /// The policy missed its latency budget under the `fail` miss rule.
+    DeadlineMiss,
+    /// The policy sent a non-finite or out-of-range action under the `fail` miss rule.
+    InvalidAction,
+    /// The policy process died or left mid-episode (not the policy's tracking: a run
+    /// resumed with `--resume` runs such episodes again).
+    PolicyFailed,
+}
+
+/// One way a policy's answer can fail an environment for one control step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PolicyFault {
+    /// No action within the latency budget.
+    DeadlineMiss,
+    /// A non-finite action, or one beyond the profile's `max_abs_action`.
+    InvalidAction,
+}
+
+impl PolicyFault {
+    /// The termination it causes under the `fail` miss rule.
+    pub fn termination(self) -> Termination {
+        match self {
+            Self::DeadlineMiss => Termination::DeadlineMiss,
+            Self::InvalidAction => Termination::InvalidAction,
+        }
+    }
+}
+
+/// Ways a policy's answer failed an environment, counted per episode.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PolicyFaults {
+    /// Control steps whose action missed the latency budget.
+    pub deadline_misses: u64,
+    /// Control steps whose action was non-finite or beyond the profile's `max_abs_action`.
+    pub invalid_actions: u64,
+}
+
+impl PolicyFaults {
+    /// True when nothing went wrong (kept out of the results then).
+    pub fn is_empty(&self) -> bool {
+        *self == Self::default()
+    }
 }
 
 /// One control step of a rollout trace (`thorarena eval --trace`), for plots and replays.
@@ -103,6 +146,10 @@ pub struct Episode<'a> {
     last_hand_force_w: [Vector3<f64>; 2],
     /// Body poses of the reference at the current step (set by `record`).
     reference_poses: Vec<Isometry3<f64>>,
+    /// Deadline misses and invalid actions so far.
+    faults: PolicyFaults,
+    /// Scratch buffer for the next step's targets (kept to avoid an allocation per step).
+    next_targets: Vec<f64>,
 }
 
 impl<'a> Episode<'a> {
@@ -155,6 +202,8 @@ impl<'a> Episode<'a> {
             physics_wall: std::time::Duration::ZERO,
             trace: None,
             last_hand_force_w: [Vector3::zeros(); 2],
+            faults: PolicyFaults::default(),
+            next_targets: Vec::new(),
         }
     }
 
@@ -163,10 +212,19 @@ impl<'a> Episode<'a> {
         self.termination.is_some() || self.step >= self.steps_ref
     }
 
-    /// The observation for the current control step.
+    /// The observation for the current control step (environment slot 0, episode 0: the
+    /// runner sets both with [`Episode::observation_in`]).
     pub fn observation(&self) -> Observation {
+        self.observation_in(0, 0)
+    }
+
+    /// The observation for the current control step, as environment slot `env` running
+    /// episode `episode_id` of the run.
+    pub fn observation_in(&self, env: usize, episode_id: u64) -> Observation {
         let t = self.step as f64 * self.setup.profile.control_dt_s;
         Observation {
+            env,
+            episode_id,
             step: self.step,
             time_s: t,
             root: self.state.root.clone().expect("root state"),
@@ -184,6 +242,19 @@ impl<'a> Episode<'a> {
 
     /// Applies one raw action (after the profile's delay) for one control step.
     pub fn advance(&mut self, physics: &mut dyn Physics, action: &[f64]) {
+        self.advance_delayed(physics, action, 0);
+    }
+
+    /// Like [`Episode::advance`], but the new targets take effect only after
+    /// `effect_delay_substeps` physics steps (the previous targets act until then); a delay
+    /// of a whole control step or more applies them from the next step's start. This is how
+    /// a measured policy latency costs tracking as it would on a robot.
+    pub fn advance_delayed(
+        &mut self,
+        physics: &mut dyn Physics,
+        action: &[f64],
+        effect_delay_substeps: usize,
+    ) {
         let profile = self.setup.profile;
         let bad = action.iter().any(|a| !a.is_finite());
         // A non-finite action never reaches the physics: the previous targets are held.
@@ -196,13 +267,18 @@ impl<'a> Episode<'a> {
             .pending
             .pop_front()
             .expect("queue holds delay + 1 actions");
-        profile.targets_from_action(&applied, &mut self.targets);
-        physics.set_targets(&self.targets);
+        let mut new_targets = std::mem::take(&mut self.next_targets);
+        new_targets.resize(self.targets.len(), 0.0);
+        profile.targets_from_action(&applied, &mut new_targets);
         if !bad {
             self.last_action.copy_from_slice(action);
         }
         let mut power = 0.0;
-        for _ in 0..profile.substeps {
+        for substep in 0..profile.substeps {
+            if substep == effect_delay_substeps {
+                std::mem::swap(&mut self.targets, &mut new_targets);
+                physics.set_targets(&self.targets);
+            }
             self.last_hand_force_w =
                 self.replay
                     .apply(physics, &self.reference, &self.state.world_from_body);
@@ -218,6 +294,12 @@ impl<'a> Episode<'a> {
                 .map(|(t, v)| (t * v).abs())
                 .sum::<f64>();
         }
+        if effect_delay_substeps >= profile.substeps {
+            // Too late for this step: the targets act from the next one's start.
+            std::mem::swap(&mut self.targets, &mut new_targets);
+            physics.set_targets(&self.targets);
+        }
+        self.next_targets = new_targets;
         self.step += 1;
         let t = self.step as f64 * profile.control_dt_s;
         let frame = self.reference.sample(t);
@@ -317,6 +399,24 @@ impl<'a> Episode<'a> {
         } else if tilt > rule.max_torso_tilt_error_rad {
             self.termination = Some(Termination::TorsoTilt);
         }
+    }
+
+    /// Ends the episode now (the policy's fault, judged by the runner).
+    pub fn terminate(&mut self, why: Termination) {
+        self.termination.get_or_insert(why);
+    }
+
+    /// Counts a deadline miss or an invalid action against this episode.
+    pub fn count_fault(&mut self, fault: PolicyFault) {
+        match fault {
+            PolicyFault::DeadlineMiss => self.faults.deadline_misses += 1,
+            PolicyFault::InvalidAction => self.faults.invalid_actions += 1,
+        }
+    }
+
+    /// Deadline misses and invalid actions so far.
+    pub fn faults(&self) -> PolicyFaults {
+        self.faults
     }
 
     /// The recorded series and why the episode ended early, if it did.

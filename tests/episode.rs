@@ -132,8 +132,13 @@ impl Policy for NanPolicy {
     fn name(&self) -> &str {
         "nan"
     }
-    fn act(&mut self, _o: &[thorarena::policy::Observation], actions: &mut [Vec<f64>]) {
+    fn act(
+        &mut self,
+        _o: &[thorarena::policy::Observation],
+        actions: &mut [Vec<f64>],
+    ) -> thorarena::policy::ActOutcome {
         actions.iter_mut().for_each(|a| a.fill(f64::NAN));
+        thorarena::policy::ActOutcome::Acted
     }
 }
 

@@ -2,12 +2,13 @@
 //! any number of workers, the force and no-force settings differ only through the replay,
 //! and every record streams out.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
 use thorarena::episode::TerminationRule;
 use thorarena::motion::Sequence;
-use thorarena::policy::{HoldPolicy, Policy};
+use thorarena::policy::HoldPolicy;
 use thorarena::profile::{bundled_profile_path, load_profile};
-use thorarena::runner::{run_eval, schedule, summarize, task_thresholds, EvalPlan, Setting};
+use thorarena::runner::{
+    run_eval, schedule, summarize, task_thresholds, EvalPlan, PolicyIoRules, Setting,
+};
 
 mod common;
 use common::{g1, sample_sequence};
@@ -34,9 +35,8 @@ fn results_are_identical_for_any_number_of_workers() {
     let robot = g1();
     let profile = load_profile(&bundled_profile_path("default"), &robot).unwrap();
     let seqs = sequences();
-    let make = || Box::new(HoldPolicy) as Box<dyn Policy>;
     let mut outputs = Vec::new();
-    for workers in [1, 2, 3] {
+    for (workers, envs) in [(1, 1), (2, 2), (3, 5), (2, 8)] {
         let plan = EvalPlan {
             robot: &robot,
             profile: &profile,
@@ -47,14 +47,17 @@ fn results_are_identical_for_any_number_of_workers() {
                 Setting::parse("no-force").unwrap(),
             ],
             workers,
+            envs,
+            io: PolicyIoRules::default(),
             trace: Vec::new(),
         };
-        let streamed = AtomicUsize::new(0);
+        let mut streamed = 0;
         let jobs = schedule(seqs.len(), plan.settings.len(), None);
-        let records = run_eval(&plan, &seqs, &jobs, &make, &|_, _| {
-            streamed.fetch_add(1, Ordering::Relaxed);
-        });
-        assert_eq!(streamed.load(Ordering::Relaxed), 8);
+        let records = run_eval(&plan, &seqs, &jobs, &mut HoldPolicy, &mut |_, _| {
+            streamed += 1;
+        })
+        .records;
+        assert_eq!(streamed, 8);
         assert_eq!(records.len(), 8);
         let summary = summarize(&records, &task_thresholds(&seqs, profile.control_dt_s));
         outputs.push(format!("{records:?}{summary:?}"));
@@ -79,16 +82,12 @@ fn force_and_no_force_differ_only_by_the_replay() {
             Setting::parse("0").unwrap(),
         ],
         workers: 2,
+        envs: 2,
+        io: PolicyIoRules::default(),
         trace: Vec::new(),
     };
     let jobs = schedule(seqs.len(), plan.settings.len(), None);
-    let records = run_eval(
-        &plan,
-        &seqs,
-        &jobs,
-        &|| Box::new(HoldPolicy) as Box<dyn Policy>,
-        &|_, _| {},
-    );
+    let records = run_eval(&plan, &seqs, &jobs, &mut HoldPolicy, &mut |_, _| {}).records;
     let by = |setting: &str, id: &str| {
         records
             .iter()
@@ -147,22 +146,20 @@ fn the_balance_baseline_keeps_the_standing_sample_tasks_upright_without_force() 
         termination: TerminationRule::default(),
         settings: vec![Setting::parse("no-force").unwrap()],
         workers: 2,
+        envs: 3,
+        io: PolicyIoRules::default(),
         trace: Vec::new(),
     };
     let pose = profile.action_offset_rad.clone();
-    let make = || {
-        Box::new(BalancePolicy::new(&robot, pose.clone(), BalanceGains::default()).unwrap())
-            as Box<dyn Policy>
-    };
+    let mut balance = BalancePolicy::new(&robot, pose.clone(), BalanceGains::default()).unwrap();
     let jobs = schedule(standing.len(), 1, None);
-    let records = run_eval(&plan, &standing, &jobs, &make, &|_, _| {});
+    let records = run_eval(&plan, &standing, &jobs, &mut balance, &mut |_, _| {}).records;
     for r in &records {
         assert_eq!(r.termination, None, "{} fell", r.sequence_id);
         assert_eq!(r.series.kp_err_m.len(), r.series.steps_ref);
     }
     // And plain open-loop replay does not: the feedback is what keeps it up.
-    let make_replay =
-        || Box::new(thorarena::policy::ReplayPolicy::new(pose.clone())) as Box<dyn Policy>;
-    let replayed = run_eval(&plan, &standing, &jobs, &make_replay, &|_, _| {});
+    let mut replay = thorarena::policy::ReplayPolicy::new(pose.clone());
+    let replayed = run_eval(&plan, &standing, &jobs, &mut replay, &mut |_, _| {}).records;
     assert!(replayed.iter().any(|r| r.termination.is_some()));
 }

@@ -2,28 +2,41 @@
 //! scored with FATS and the diagnostics; results streamed to a run directory that can be
 //! resumed after a crash, or sharded across machines and merged.
 
-use super::run_output::{read_header, sort_records, write_header, write_results};
-use crate::episode::TerminationRule;
-use crate::motion::Dataset;
-use crate::policy::{BalanceGains, BalancePolicy, HoldPolicy, Policy, ReplayPolicy};
-use crate::profile::{bundled_profile_path, load_profile};
+use super::policy_arg::{make_policy, PolicyIoArgs};
+use super::run_output::{read_header, sort_records, write_header, write_results, PolicyIoReport};
+use crate::episode::{Termination, TerminationRule};
+use crate::motion::{Dataset, Sequence};
+use crate::policy::Policy;
+use crate::profile::{bundled_profile_path, load_profile, Profile};
+use crate::robot::RobotModel;
 use crate::runner::{read_records, run_eval, schedule, write_record, EvalPlan, RunHeader, Setting};
 use anyhow::{bail, Context};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::Mutex;
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
+    /// Built-in policy: `balance` (reference PD + tilt feedback), `replay` (reference
+    /// joints, open loop) or `hold` (default pose); or `ipc:<session>` to serve a session
+    /// and evaluate whichever policy process connects to it (Python, C++, Rust clients).
+    #[arg(long, default_value = "balance")]
+    pub policy: String,
+    /// Run directory (default: results/<policy>-<dataset name>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Everything else of the run.
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+/// What an evaluation needs besides the policy and where results go (shared with `serve`).
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
     /// Dataset directory (canonical format) [default: the bundled data/sample].
     #[arg(long)]
     pub dataset: Option<PathBuf>,
-    /// Built-in policy: `balance` (reference PD + tilt feedback), `replay` (reference
-    /// joints, open loop) or `hold` (default pose).
-    #[arg(long, default_value = "balance")]
-    pub policy: String,
     /// Dynamics profile (a name under data/profiles or a .toml path).
     #[arg(long, default_value = "default")]
     pub profile: String,
@@ -36,9 +49,6 @@ pub struct Args {
     /// Keypoint set of the tracking error.
     #[arg(long, default_value = "default")]
     pub keypoints: String,
-    /// Run directory (default: results/<policy>-<dataset name>).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
     /// Continue the run in `--out`: keep its finished episodes, run the rest.
     #[arg(long)]
     pub resume: bool,
@@ -59,6 +69,9 @@ pub struct Args {
     /// Robot.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
+    /// Policy I/O: slots, latency budget, miss rule, latency mode, session options.
+    #[command(flatten)]
+    pub io: PolicyIoArgs,
 }
 
 fn parse_shard(s: &str) -> Result<(usize, usize), String> {
@@ -73,102 +86,160 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
-pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let dataset = args
-        .dataset
-        .clone()
-        .unwrap_or_else(|| crate::data_dir().join("sample"));
-    let robot = super::load_robot(&args.robot)?;
-    let profile_path = if args.profile.ends_with(".toml") {
-        PathBuf::from(&args.profile)
-    } else {
-        bundled_profile_path(&args.profile)
-    };
-    let profile = load_profile(&profile_path, &robot)?;
-    if robot.keypoint_set(&args.keypoints).is_none() {
-        bail!(
-            "unknown keypoint set `{}` for robot {}",
-            args.keypoints,
-            robot.name
-        );
-    }
-    let settings: Vec<Setting> = args
-        .settings
-        .iter()
-        .map(|s| {
-            Setting::parse(s)
-                .with_context(|| format!("--settings: `{s}` is not force, no-force or a number"))
-        })
-        .collect::<anyhow::Result<_>>()?;
-    let default_pose = profile.action_offset_rad.clone();
-    let make_policy: Box<dyn Fn() -> Box<dyn Policy> + Sync> = match args.policy.as_str() {
-        "hold" => Box::new(|| Box::new(HoldPolicy) as Box<dyn Policy>),
-        "replay" => {
-            Box::new(move || Box::new(ReplayPolicy::new(default_pose.clone())) as Box<dyn Policy>)
+/// What an evaluation needs before a policy is chosen: robot, profile, data, settings.
+pub(super) struct EvalContext {
+    pub robot: RobotModel,
+    pub profile: Profile,
+    pub dataset: PathBuf,
+    pub dataset_sha256: String,
+    pub sequences: Vec<Sequence>,
+    pub settings: Vec<Setting>,
+    pub workers: usize,
+    pub envs: usize,
+}
+
+impl EvalContext {
+    /// Loads and checks everything the arguments name (before any policy connects, so a
+    /// typo fails at once).
+    pub fn load(args: &RunArgs) -> anyhow::Result<Self> {
+        let dataset = args
+            .dataset
+            .clone()
+            .unwrap_or_else(|| crate::data_dir().join("sample"));
+        let robot = super::load_robot(&args.robot)?;
+        let profile_path = if args.profile.ends_with(".toml") {
+            PathBuf::from(&args.profile)
+        } else {
+            bundled_profile_path(&args.profile)
+        };
+        let profile = load_profile(&profile_path, &robot)?;
+        if robot.keypoint_set(&args.keypoints).is_none() {
+            bail!(
+                "unknown keypoint set `{}` for robot {}",
+                args.keypoints,
+                robot.name
+            );
         }
-        "balance" => {
-            let gains = BalanceGains::default();
-            let robot = robot.clone();
-            BalancePolicy::new(&robot, default_pose.clone(), gains)
-                .context("the robot lacks the leg joints `balance` needs")?;
-            Box::new(move || {
-                Box::new(
-                    BalancePolicy::new(&robot, default_pose.clone(), gains).expect("checked above"),
-                ) as Box<dyn Policy>
+        let settings: Vec<Setting> = args
+            .settings
+            .iter()
+            .map(|s| {
+                Setting::parse(s).with_context(|| {
+                    format!("--settings: `{s}` is not force, no-force or a number")
+                })
             })
+            .collect::<anyhow::Result<_>>()?;
+        for (flag, v) in [
+            ("--max-torso-height-error", args.max_torso_height_error),
+            ("--max-torso-tilt-error", args.max_torso_tilt_error),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                bail!("{flag} must be > 0, got {v}");
+            }
         }
-        other => bail!("unknown policy `{other}` (built-in: hold, replay, balance)"),
-    };
-    for (flag, v) in [
-        ("--max-torso-height-error", args.max_torso_height_error),
-        ("--max-torso-tilt-error", args.max_torso_tilt_error),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            bail!("{flag} must be > 0, got {v}");
+        args.io.rules()?;
+        let ds = Dataset::open(&dataset, &robot)?;
+        let sequences = ds.load_all()?;
+        for name in &args.trace {
+            if !sequences
+                .iter()
+                .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
+            {
+                bail!(
+                    "--trace: no sequence `{name}` in {} (use TASK/SEQUENCE_ID)",
+                    ds.dir.display()
+                );
+            }
         }
+        let workers = match args.workers {
+            Some(0) => bail!("--workers must be at least 1"),
+            Some(n) => n,
+            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        };
+        let envs = args.io.envs(workers)?;
+        Ok(Self {
+            dataset_sha256: ds.content_hash(),
+            robot,
+            profile,
+            dataset,
+            sequences,
+            settings,
+            workers,
+            envs,
+        })
     }
-    let ds = Dataset::open(&dataset, &robot)?;
-    let sequences = ds.load_all()?;
+
+    /// The dataset directory's name, for default output directories.
+    pub fn dataset_name(&self) -> &str {
+        self.dataset
+            .file_name()
+            .and_then(|s| s.to_str())
+            .unwrap_or("dataset")
+    }
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let ctx = EvalContext::load(&args.run)?;
+    let mut policy = make_policy(
+        &args.policy,
+        &ctx.robot,
+        &ctx.profile,
+        &args.run.io,
+        ctx.envs,
+    )?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("results").join(format!("{}-{}", policy.name(), ctx.dataset_name()))
+    });
+    evaluate(&args.run, &ctx, policy.as_mut(), &out)
+}
+
+/// Runs the benchmark for one connected policy into `out`.
+pub(super) fn evaluate(
+    args: &RunArgs,
+    ctx: &EvalContext,
+    policy: &mut dyn Policy,
+    out: &std::path::Path,
+) -> anyhow::Result<()> {
+    let sequences = &ctx.sequences;
     let header = RunHeader {
         version: env!("CARGO_PKG_VERSION").into(),
-        policy: args.policy.clone(),
-        profile: profile.name.clone(),
-        control_dt_s: profile.control_dt_s,
-        dataset: dataset.display().to_string(),
-        dataset_sha256: ds.content_hash(),
+        policy: policy.name().to_string(),
+        profile: ctx.profile.name.clone(),
+        control_dt_s: ctx.profile.control_dt_s,
+        dataset: ctx.dataset.display().to_string(),
+        dataset_sha256: ctx.dataset_sha256.clone(),
         keypoints: args.keypoints.clone(),
         termination: TerminationRule {
             max_torso_height_error_m: args.max_torso_height_error,
             max_torso_tilt_error_rad: args.max_torso_tilt_error,
         },
-        settings,
+        settings: ctx.settings.clone(),
         shard: args.shard,
+        io: args.io.rules()?,
     };
-    let name = dataset
-        .file_name()
-        .and_then(|s| s.to_str())
-        .unwrap_or("dataset");
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("results").join(format!("{}-{name}", args.policy)));
-    std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let episodes_path = out.join("episodes.jsonl");
 
-    // Resume: keep what a previous run of the same configuration finished.
+    // Resume: keep what a previous run of the same configuration finished. Episodes cut
+    // short by a dead policy process run again.
     let mut done = Vec::new();
     if args.resume && out.join("run.json").exists() {
-        let previous = read_header(&out)?;
+        let previous = read_header(out)?;
         if previous != header {
             bail!("--resume: {} was started with another configuration ({previous:?}); use another --out", out.display());
         }
-        let (records, good_end) = read_records(&episodes_path)
+        let (records, _) = read_records(&episodes_path)
             .with_context(|| format!("reading {}", episodes_path.display()))?;
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&episodes_path)?;
-        file.set_len(good_end)?; // drop a torn last line
-        done = records;
+        done = records
+            .into_iter()
+            .filter(|r| r.termination != Some(Termination::PolicyFailed))
+            .collect();
+        // Rewrite without a torn last line or episodes to run again.
+        let mut file = std::io::BufWriter::new(std::fs::File::create(&episodes_path)?);
+        for r in &done {
+            write_record(&mut file, r)?;
+        }
+        file.flush()?;
     } else if args.resume {
         eprintln!(
             "--resume: nothing to resume in {}, starting afresh",
@@ -179,7 +250,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         std::fs::File::create(&episodes_path)
             .with_context(|| format!("creating {}", episodes_path.display()))?;
     }
-    write_header(&out, &header)?;
+    write_header(out, &header)?;
     let finished: HashSet<(String, String, String)> = done
         .iter()
         .map(|r| (r.task.clone(), r.sequence_id.clone(), r.setting.clone()))
@@ -196,44 +267,35 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         })
         .collect();
 
-    let workers = args
-        .workers
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let plan = EvalPlan {
-        robot: &robot,
-        profile: &profile,
+        robot: &ctx.robot,
+        profile: &ctx.profile,
         keypoints: &args.keypoints,
         termination: header.termination,
         settings: header.settings.clone(),
-        workers,
+        workers: ctx.workers,
+        envs: ctx.envs,
+        io: header.io,
         trace: args.trace.clone(),
     };
-    for name in &args.trace {
-        if !sequences
-            .iter()
-            .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
-        {
-            bail!(
-                "--trace: no sequence `{name}` in {} (use TASK/SEQUENCE_ID)",
-                ds.dir.display()
-            );
-        }
-    }
     let traces_dir = out.join("traces");
     if !args.trace.is_empty() {
         std::fs::create_dir_all(&traces_dir)?;
     }
     eprintln!(
-        "evaluating `{}` on {}: {} episodes to run ({} already done), {workers} workers",
-        args.policy,
-        ds.dir.display(),
+        "evaluating `{}` on {}: {} episodes to run ({} already done), {} environment slots on {} workers",
+        policy.name(),
+        ctx.dataset.display(),
         jobs.len(),
-        done.len()
+        done.len(),
+        ctx.envs,
+        ctx.workers
     );
     let file = std::fs::OpenOptions::new()
         .append(true)
         .open(&episodes_path)?;
-    let writer = Mutex::new((std::io::BufWriter::new(file), None::<std::io::Error>));
+    let mut writer = std::io::BufWriter::new(file);
+    let mut write_error: Option<std::io::Error> = None;
     let bar = indicatif::ProgressBar::new(jobs.len() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -241,44 +303,56 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         )
         .expect("valid template"),
     );
-    let new = run_eval(
-        &plan,
-        &sequences,
-        &jobs,
-        make_policy.as_ref(),
-        &|r, trace| {
-            let mut w = writer.lock().expect("writer");
-            if let Err(e) = write_record(&mut w.0, r) {
-                w.1.get_or_insert(e);
+    let outcome = run_eval(&plan, sequences, &jobs, policy, &mut |r, trace| {
+        if let Err(e) = write_record(&mut writer, r) {
+            write_error.get_or_insert(e);
+        }
+        if let Some(trace) = trace {
+            let path = traces_dir.join(format!("{}-{}-{}.json", r.task, r.sequence_id, r.setting));
+            let written = serde_json::to_vec(trace)
+                .map_err(std::io::Error::other)
+                .and_then(|b| std::fs::write(&path, b));
+            if let Err(e) = written {
+                write_error.get_or_insert(e);
             }
-            if let Some(trace) = trace {
-                let path =
-                    traces_dir.join(format!("{}-{}-{}.json", r.task, r.sequence_id, r.setting));
-                let written = serde_json::to_vec(trace)
-                    .map_err(std::io::Error::other)
-                    .and_then(|b| std::fs::write(&path, b));
-                if let Err(e) = written {
-                    w.1.get_or_insert(e);
-                }
-            }
-            bar.set_message(format!("{}/{} ({})", r.task, r.sequence_id, r.setting));
-            bar.inc(1);
-        },
-    );
+        }
+        bar.set_message(format!("{}/{} ({})", r.task, r.sequence_id, r.setting));
+        bar.inc(1);
+    });
     bar.finish_and_clear();
-    let (mut w, err) = writer.into_inner().expect("writer");
-    w.flush()?;
-    if let Some(e) = err {
+    writer.flush()?;
+    if let Some(e) = write_error {
         return Err(e).with_context(|| format!("writing {}", episodes_path.display()));
     }
+    let not_run = outcome.not_run;
+    let io_report = PolicyIoReport {
+        latency: outcome.latency,
+        transport: outcome.transport,
+        deadline_misses: outcome
+            .records
+            .iter()
+            .map(|r| r.faults.deadline_misses)
+            .sum(),
+        invalid_actions: outcome
+            .records
+            .iter()
+            .map(|r| r.faults.invalid_actions)
+            .sum(),
+    };
     let mut records = done;
-    records.extend(new);
-    sort_records(&mut records, &header, &sequences);
-    let tables = write_results(&out, &header, &records, &sequences)?;
+    records.extend(outcome.records);
+    sort_records(&mut records, &header, sequences);
+    let tables = write_results(out, &header, &records, sequences, Some(&io_report))?;
     println!("{tables}");
     eprintln!(
         "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md}}",
         out.display()
     );
+    if not_run > 0 {
+        bail!(
+            "the policy failed and did not come back: {not_run} episodes did not run (finished ones are in {}; `--resume` with a working policy runs the rest)",
+            out.display()
+        );
+    }
     Ok(())
 }

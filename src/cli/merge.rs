@@ -92,7 +92,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         write_record(&mut w, r)?;
     }
     write_header(&args.out, &header)?;
-    let tables = write_results(&args.out, &header, &records, &sequences)?;
+    let tables = write_results(&args.out, &header, &records, &sequences, None)?;
     println!("{tables}");
     eprintln!(
         "merged {} runs, {} episodes → {}",

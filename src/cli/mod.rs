@@ -2,12 +2,15 @@
 
 mod bench_eval;
 mod bench_physics;
+mod client;
 mod data;
 mod data_synth;
 mod eval;
 mod merge;
+mod policy_arg;
 mod robot_info;
 mod run_output;
+mod serve;
 mod sim_trace;
 
 use clap::{Parser, Subcommand};
@@ -30,6 +33,11 @@ pub struct Cli {
 pub enum Command {
     /// Evaluate a policy on a dataset, with and without force (FATS and diagnostics).
     Eval(eval::Args),
+    /// Serve a session and evaluate every policy process that connects, one after another.
+    Serve(serve::Args),
+    /// Run a built-in policy as a separate process connected to a session (the Rust
+    /// example client; `echo` for latency benchmarks).
+    Client(client::Args),
     /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
     Merge(merge::Args),
     /// Inspect a robot model.
@@ -80,6 +88,8 @@ pub fn run() -> anyhow::Result<()> {
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Serve(args) => serve::run(&args),
+        Command::Client(args) => client::run(&args),
     }
 }
 

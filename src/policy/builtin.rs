@@ -6,7 +6,7 @@
 //! - `balance`: `replay` plus ankle/hip feedback on the pelvis tilt. Keeps the standing
 //!   tasks upright with and without force; it cannot walk, so it falls on the walking tasks.
 
-use super::{Observation, Policy};
+use super::{ActOutcome, Observation, Policy};
 
 /// Holds the default pose (zero action).
 #[derive(Debug, Default)]
@@ -17,8 +17,9 @@ impl Policy for HoldPolicy {
         "hold"
     }
 
-    fn act(&mut self, _observations: &[Observation], actions: &mut [Vec<f64>]) {
+    fn act(&mut self, _observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
         actions.iter_mut().for_each(|a| a.fill(0.0));
+        ActOutcome::Acted
     }
 }
 
@@ -40,13 +41,14 @@ impl Policy for ReplayPolicy {
         "replay"
     }
 
-    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) {
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
         for (obs, action) in observations.iter().zip(actions.iter_mut()) {
             let reference = &obs.reference[0].joint_pos;
             for ((a, r), d) in action.iter_mut().zip(reference).zip(&self.default_pose) {
                 *a = r - d;
             }
         }
+        ActOutcome::Acted
     }
 }
 
@@ -123,7 +125,7 @@ impl Policy for BalancePolicy {
         "balance"
     }
 
-    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) {
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
         let g = self.gains;
         for (obs, action) in observations.iter().zip(actions.iter_mut()) {
             let reference = &obs.reference[0];
@@ -145,5 +147,6 @@ impl Policy for BalancePolicy {
                 action[leg[3]] += g.hip_per_rad * e_roll;
             }
         }
+        ActOutcome::Acted
     }
 }

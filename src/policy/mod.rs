@@ -1,18 +1,28 @@
 //! The in-process `Policy` trait — batched, so a Rust baseline, a batched Python policy
-//! and a C++ policy all see the same loop — and the built-in baselines.
+//! and a C++ policy all see the same loop — the built-in baselines, and the remote policy
+//! that speaks `thorarena-ipc` to a policy process.
 
 mod builtin;
+mod remote;
+pub mod wire;
 
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
+pub use remote::{RemoteConfig, RemoteError, RemotePolicy, TransportStats};
 
 use crate::motion::ReferenceFrame;
 use crate::physics::RootState;
+use serde::{Deserialize, Serialize};
+use std::time::Duration;
 
 /// What a policy sees of one environment at one control step: benchmark signals, not any
 /// policy's tensor (adapters build their own from these).
 #[derive(Debug, Clone)]
 pub struct Observation {
-    /// Control step within the episode.
+    /// Environment slot of the batch this observation belongs to.
+    pub env: usize,
+    /// The episode's index in the run's schedule (unique within a run).
+    pub episode_id: u64,
+    /// Control step within the episode (0 on the first observation of an episode).
     pub step: usize,
     /// Time since the episode started, s.
     pub time_s: f64,
@@ -22,10 +32,50 @@ pub struct Observation {
     pub q: Vec<f64>,
     /// Joint velocities, rad/s.
     pub qd: Vec<f64>,
-    /// The previous raw action.
+    /// The previous raw action that reached the robot.
     pub last_action: Vec<f64>,
     /// Reference frames at the policy's requested offsets from now.
     pub reference: Vec<ReferenceFrame>,
+}
+
+/// How a batch's round trip ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ActOutcome {
+    /// Every observation got an action (each still checked for range by the runner).
+    Acted,
+    /// The latency budget ran out first: the runner applies the miss rule to every slot.
+    Missed,
+    /// The policy is gone (its process died or left): every running episode ends as
+    /// `policy_failed`.
+    Failed,
+}
+
+/// What happens to an environment whose action missed the deadline or was unusable
+/// (non-finite, or beyond the profile's `max_abs_action`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum MissRule {
+    /// Keep applying the last action that reached the robot.
+    #[default]
+    Hold,
+    /// Apply the zero action (the profile's default pose for offset-style profiles).
+    Zero,
+    /// End the episode (`deadline_miss` or `invalid_action`).
+    Fail,
+}
+
+/// When a policy's action takes effect in simulated time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum LatencyMode {
+    /// At the start of the control step, whatever the policy took (lock-step; results are
+    /// deterministic).
+    #[default]
+    Ignore,
+    /// Deployment-faithful: the measured policy latency delays the action's effect,
+    /// rounded to physics steps and capped at one control period; the previous targets
+    /// act until then. Results then depend on the machine.
+    Measured,
 }
 
 /// A controller driven one control step at a time for a batch of environments.
@@ -39,9 +89,31 @@ pub trait Policy {
         vec![0.0]
     }
 
-    /// Environment `env` starts a new episode.
+    /// Environment slot `env` starts a new episode.
     fn reset(&mut self, _env: usize) {}
 
-    /// One raw action per observation (interpreted by the dynamics profile).
-    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]);
+    /// The episode in slot `env` ended, early (`terminated`) or at the end of its reference.
+    fn episode_ended(&mut self, _env: usize, _terminated: bool) {}
+
+    /// One raw action per observation (interpreted by the dynamics profile). In-process
+    /// policies always act; a remote one may miss its deadline or fail.
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome;
+
+    /// The round trip of the last `act`, when the policy measures it more precisely than
+    /// the caller's wall clock around `act` (a remote policy: observation published to
+    /// actions received).
+    fn last_round_trip(&self) -> Option<Duration> {
+        None
+    }
+
+    /// After [`ActOutcome::Failed`]: wait for the policy to come back (a new process
+    /// connecting). `false`: it will not, end the run.
+    fn recover(&mut self) -> bool {
+        false
+    }
+
+    /// Transport counters of a remote policy (late replies, reconnections).
+    fn transport_stats(&self) -> Option<TransportStats> {
+        None
+    }
 }

@@ -7,22 +7,26 @@
 //! episode), and aggregates sum in (task, id) order, so results are identical for any
 //! number of workers.
 //!
-//! Interim design (issue 4 increment): each worker steps one environment with its own
-//! policy instance. The brief's batched lock-step loop over environment slots arrives with
-//! the policy server (issue 5), where a batch per request is what pays.
+//! One loop for every policy (`lockstep`): the runner owns N environment slots, hands
+//! the whole batch of observations to the policy each control step — in process or over
+//! shared memory — and applies the returned actions, the slots' physics spread over worker
+//! threads.
 
-use crate::episode::{Episode, EpisodeSetup, Termination, TerminationRule, TraceStep};
+mod latency;
+mod lockstep;
+
+pub use latency::{LatencyRecorder, LatencySummary};
+pub use lockstep::{run_eval, RunOutcome};
+
+use crate::episode::{PolicyFaults, Termination, TerminationRule};
 use crate::metrics::{aggregate, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary};
 use crate::motion::{Reference, Sequence};
-use crate::physics::{PhysicsSettings, RapierPhysics};
-use crate::policy::Policy;
+use crate::policy::{LatencyMode, MissRule};
 use crate::profile::Profile;
 use crate::robot::RobotModel;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Write;
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
 
 /// A force setting: a name and the replay coefficient.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -72,6 +76,9 @@ pub struct EpisodeRecord {
     pub policy: String,
     /// Why it ended early, if it did.
     pub termination: Option<Termination>,
+    /// Deadline misses and invalid actions (absent when there were none).
+    #[serde(default, skip_serializing_if = "PolicyFaults::is_empty")]
+    pub faults: PolicyFaults,
     /// The per-step series the scores are computed from.
     pub series: EpisodeSeries,
 }
@@ -88,10 +95,41 @@ pub struct EvalPlan<'a> {
     pub termination: TerminationRule,
     /// Settings to run.
     pub settings: Vec<Setting>,
-    /// Worker threads.
+    /// Worker threads stepping the physics of the environment slots.
     pub workers: usize,
+    /// Environment slots stepped in lock-step (one batch per control step to the policy).
+    pub envs: usize,
+    /// What a missed deadline or an unusable action does, and when actions take effect.
+    pub io: PolicyIoRules,
     /// Record rollout traces of the sequences with these `task/sequence_id` names.
     pub trace: Vec<String>,
+}
+
+/// The rules of the policy's answers: the same for every policy of a comparison, so they
+/// are part of the run's identity (`run.json`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PolicyIoRules {
+    /// Deadline-miss (and invalid-action) rule.
+    pub miss_rule: MissRule,
+    /// When actions take effect in simulated time.
+    pub latency_mode: LatencyMode,
+    /// Largest usable |raw action| (units of the profile's action); beyond it, or
+    /// non-finite, an action is invalid and the miss rule applies.
+    pub max_abs_action: f64,
+    /// Latency budget per step, s (`None`: lock-step). Enforced by remote policies.
+    pub budget_s: Option<f64>,
+}
+
+impl Default for PolicyIoRules {
+    fn default() -> Self {
+        Self {
+            miss_rule: MissRule::Hold,
+            latency_mode: LatencyMode::Ignore,
+            max_abs_action: 100.0,
+            budget_s: None,
+        }
+    }
 }
 
 /// The regime thresholds of each task: percentiles of `|F_L| + |F_R|` over every control
@@ -154,6 +192,9 @@ pub struct RunHeader {
     pub settings: Vec<Setting>,
     /// `(i, n)` when this run is shard i of n.
     pub shard: Option<(usize, usize)>,
+    /// Rules of the policy's answers (miss rule, latency mode, budget).
+    #[serde(default)]
+    pub io: PolicyIoRules,
 }
 
 /// Reads `episodes.jsonl`. A torn last line (a run killed mid-write) is ignored; the
@@ -184,80 +225,6 @@ pub fn read_records(path: &std::path::Path) -> std::io::Result<(Vec<EpisodeRecor
         }
     }
     Ok((records, good_end))
-}
-
-/// Runs the given jobs (from [`schedule`]); `on_record` sees each finished episode (in
-/// completion order) — stream it, count it; the returned records are in job order.
-pub fn run_eval(
-    plan: &EvalPlan,
-    sequences: &[Sequence],
-    jobs: &[(usize, usize)],
-    make_policy: &(dyn Fn() -> Box<dyn Policy> + Sync),
-    on_record: &(dyn Fn(&EpisodeRecord, Option<&[TraceStep]>) + Sync),
-) -> Vec<EpisodeRecord> {
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<EpisodeRecord>>> = Mutex::new(vec![None; jobs.len()]);
-    let robot = Arc::new(plan.robot.clone());
-    let keypoints = plan
-        .robot
-        .keypoint_set(plan.keypoints)
-        .expect("keypoint set checked by the caller");
-    std::thread::scope(|scope| {
-        for _ in 0..plan.workers.max(1) {
-            scope.spawn(|| {
-                let mut policy = make_policy();
-                let settings = PhysicsSettings {
-                    dt_s: plan.profile.physics_dt_s,
-                    ..Default::default()
-                };
-                let mut physics =
-                    RapierPhysics::new(robot.clone(), settings, plan.profile.gains.clone());
-                loop {
-                    let j = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&(q, s)) = jobs.get(j) else { break };
-                    let setting = &plan.settings[s];
-                    let setup = EpisodeSetup {
-                        robot: plan.robot,
-                        profile: plan.profile,
-                        keypoints,
-                        termination: plan.termination,
-                        force_coefficient: setting.coefficient,
-                        reference_offsets_s: policy.reference_offsets_s(),
-                    };
-                    policy.reset(0);
-                    let mut ep = Episode::start(&setup, &sequences[q], &mut physics);
-                    let name = format!("{}/{}", sequences[q].task, sequences[q].sequence_id);
-                    if plan.trace.contains(&name) {
-                        ep.record_trace();
-                    }
-                    let mut actions = vec![vec![0.0; plan.robot.n_joints()]];
-                    while !ep.is_done() {
-                        policy.act(&[ep.observation()], &mut actions);
-                        ep.advance(&mut physics, &actions[0]);
-                    }
-                    let trace = ep.take_trace();
-                    let (series, termination) = ep.finish();
-                    let record = EpisodeRecord {
-                        task: sequences[q].task.clone(),
-                        sequence_id: sequences[q].sequence_id.clone(),
-                        setting: setting.name.clone(),
-                        coefficient: setting.coefficient,
-                        policy: policy.name().to_string(),
-                        termination,
-                        series,
-                    };
-                    on_record(&record, trace.as_deref());
-                    results.lock().expect("no worker panicked")[j] = Some(record);
-                }
-            });
-        }
-    });
-    results
-        .into_inner()
-        .expect("no worker panicked")
-        .into_iter()
-        .map(|r| r.expect("every job ran"))
-        .collect()
 }
 
 /// Per setting: per-task summaries and the average over tasks.

@@ -1,0 +1,130 @@
+//! `thorarena client`: a built-in policy as a separate process speaking the protocol —
+//! the Rust example client, the reference the Python and C++ clients are tested against
+//! (same policy in process and out of process gives the same episodes, bit for bit), and
+//! the echo policy of the latency benchmark.
+
+use crate::policy::wire::read_observation;
+use crate::policy::{BalanceGains, BalancePolicy, HoldPolicy, Observation, Policy, ReplayPolicy};
+use anyhow::{bail, Context};
+use std::io::Write;
+use std::time::Duration;
+use thorarena_ipc::{Next, PolicyClient, PolicyConfig, WaitPolicy};
+
+/// Arguments of `client`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Session to join (the simulator serves it: `thorarena eval --policy ipc:<session>` or
+    /// `thorarena serve --session <session>`).
+    #[arg(long)]
+    pub session: String,
+    /// `balance`, `replay`, `hold` (the built-in baselines; their action offset is the
+    /// session's), or `echo` (action = q: the latency benchmark's policy).
+    #[arg(long, default_value = "balance")]
+    pub policy: String,
+    /// Name in the results [default: the policy's].
+    #[arg(long)]
+    pub name: Option<String>,
+    /// Robot (its joint order is checked against the simulator's).
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+    /// Seconds to wait for the simulator to serve the session.
+    #[arg(long, default_value_t = 30.0)]
+    pub connect_timeout: f64,
+    /// Busy-poll this many µs for the next observations before blocking.
+    #[arg(long, default_value_t = 50)]
+    pub spin_us: u64,
+    /// Testing aid: kill this process with SIGKILL after answering N steps.
+    #[arg(long)]
+    pub die_after_steps: Option<u64>,
+    /// Testing aid: sleep this many ms before answering step `--delay-at-step`.
+    #[arg(long, default_value_t = 0.0)]
+    pub delay_ms: f64,
+    /// Testing aid: the step (counted from 1) that `--delay-ms` delays; 0 delays every step.
+    #[arg(long, default_value_t = 0)]
+    pub delay_at_step: u64,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let robot = super::load_robot(&args.robot)?;
+    let joint_names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    let mut config = PolicyConfig::new(
+        &args.session,
+        args.name.as_deref().unwrap_or(&args.policy),
+        joint_names,
+        vec![0.0],
+    );
+    config.wait = WaitPolicy {
+        spin: Duration::from_micros(args.spin_us),
+        ..WaitPolicy::default()
+    };
+    if !(args.connect_timeout.is_finite() && args.connect_timeout > 0.0) {
+        bail!("--connect-timeout must be > 0 s");
+    }
+    let mut client = PolicyClient::connect(&config, Duration::from_secs_f64(args.connect_timeout))
+        .with_context(|| format!("joining session `{}`", args.session))?;
+    let info = client.info().clone();
+    let offset = info.action_offset_rad.clone();
+    let mut policy: Option<Box<dyn Policy>> = match args.policy.as_str() {
+        "hold" => Some(Box::new(HoldPolicy)),
+        "replay" => Some(Box::new(ReplayPolicy::new(offset))),
+        "balance" => Some(Box::new(
+            BalancePolicy::new(&robot, offset, BalanceGains::default())
+                .context("the robot lacks the leg joints `balance` needs")?,
+        )),
+        "echo" => None,
+        other => bail!("unknown policy `{other}` (balance, replay, hold, echo)"),
+    };
+    println!("connected");
+    std::io::stdout().flush()?;
+    let n_refs = info.layout.n_refs;
+    let mut observations: Vec<Observation> = Vec::new();
+    let mut actions: Vec<Vec<f64>> = Vec::new();
+    let mut steps = 0u64;
+    loop {
+        let mut step = match client.next_step(Some(Duration::from_secs(1)))? {
+            Next::Step(step) => step,
+            Next::End => break,
+            Next::Timeout => continue,
+        };
+        steps += 1;
+        if args.delay_ms > 0.0 && (args.delay_at_step == 0 || args.delay_at_step == steps) {
+            std::thread::sleep(Duration::from_secs_f64(args.delay_ms / 1e3));
+        }
+        step.answer(&mut |obs, out| {
+            let active = (0..obs.n_envs()).filter(|&i| obs.env(i).is_active());
+            match policy.as_mut() {
+                None => {
+                    for i in active {
+                        out.env(i).copy_from_slice(obs.env(i).array("q"));
+                    }
+                }
+                Some(policy) => {
+                    observations.clear();
+                    observations.extend(active.map(|i| read_observation(i, &obs.env(i), n_refs)));
+                    for o in observations.iter().filter(|o| o.step == 0) {
+                        policy.reset(o.env);
+                    }
+                    actions.resize_with(observations.len(), || vec![0.0; obs_joints(obs)]);
+                    policy.act(&observations, &mut actions[..observations.len()]);
+                    for (o, a) in observations.iter().zip(&actions) {
+                        out.env(o.env).copy_from_slice(a);
+                    }
+                }
+            }
+        })?;
+        step.send(&client)?;
+        if args.die_after_steps == Some(steps) {
+            eprintln!("--die-after-steps {steps}: killing myself");
+            // SAFETY: raising a signal on our own process has no memory-safety effect.
+            unsafe {
+                libc::raise(libc::SIGKILL);
+            }
+        }
+    }
+    eprintln!("the run is over after {steps} steps");
+    Ok(())
+}
+
+fn obs_joints(obs: &thorarena_ipc::ObsBatch) -> usize {
+    obs.env(0).array("q").len()
+}

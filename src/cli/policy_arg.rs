@@ -1,0 +1,182 @@
+//! `--policy` and the policy-I/O options shared by `eval`, `serve` and `bench`: a built-in
+//! baseline, or `ipc:<session>` for a policy process connecting over shared memory.
+
+use crate::policy::{
+    BalanceGains, BalancePolicy, HoldPolicy, LatencyMode, MissRule, Policy, RemoteConfig,
+    RemotePolicy, ReplayPolicy,
+};
+use crate::profile::Profile;
+use crate::robot::RobotModel;
+use crate::runner::PolicyIoRules;
+use anyhow::{bail, Context};
+use std::time::Duration;
+
+/// Options of a policy's answers (all policies) and of the session (remote ones).
+#[derive(Debug, Clone, clap::Args)]
+pub struct PolicyIoArgs {
+    /// Environment slots stepped in lock-step; one batch of this many observations goes to
+    /// the policy each control step [default: the number of workers].
+    #[arg(long)]
+    pub envs: Option<usize>,
+    /// Latency budget per control step for a remote policy, from publishing the
+    /// observations to receiving the actions: `2ms`, `500us`, `0.004s`, or `none` for pure
+    /// lock-step (wait as long as the policy process lives).
+    #[arg(long, default_value = "none", value_parser = parse_budget)]
+    pub budget: Budget,
+    /// What a missed deadline or an unusable action (non-finite, or beyond
+    /// --max-abs-action) does: hold the last action, apply zero, or fail the episode.
+    #[arg(long, value_enum, default_value_t = MissRule::Hold)]
+    pub miss_rule: MissRule,
+    /// `measured`: the policy's measured latency delays its action's effect in simulated
+    /// time (rounded to physics steps), so slow inference costs tracking as on a robot.
+    /// `ignore`: actions act at once (deterministic results).
+    #[arg(long, value_enum, default_value_t = LatencyMode::Ignore)]
+    pub latency_mode: LatencyMode,
+    /// Largest usable |raw action| (the profile's action units).
+    #[arg(long, default_value_t = PolicyIoRules::default().max_abs_action)]
+    pub max_abs_action: f64,
+    /// Remote policy: seconds to wait for it to connect (also after a failure); 0 waits
+    /// forever.
+    #[arg(long, default_value_t = 0.0)]
+    pub connect_timeout: f64,
+    /// Remote policy: when its process dies mid-run, `end` the run (finished episodes are
+    /// kept; `--resume` runs the rest) or `wait` for a policy to reconnect.
+    #[arg(long, value_enum, default_value_t = OnPolicyFailure::End)]
+    pub on_policy_failure: OnPolicyFailure,
+    /// Remote policy: busy-poll this many µs for the actions before blocking (the low-
+    /// latency path; 0 blocks at once and leaves the core to the policy).
+    #[arg(long, default_value_t = 50)]
+    pub spin_us: u64,
+}
+
+/// What a run does when its policy process dies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum OnPolicyFailure {
+    /// End the run cleanly.
+    End,
+    /// Wait for a policy to reconnect, then go on.
+    Wait,
+}
+
+/// A latency budget per step; `None` is pure lock-step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Budget(pub Option<Duration>);
+
+fn parse_budget(s: &str) -> Result<Budget, String> {
+    if s == "none" {
+        return Ok(Budget(None));
+    }
+    let (num, unit) = s
+        .find(|c: char| c.is_ascii_alphabetic())
+        .map(|i| s.split_at(i))
+        .ok_or_else(|| format!("`{s}`: give a unit (us, ms, s) or `none`"))?;
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("`{s}`: `{num}` is not a number"))?;
+    let secs = match unit {
+        "us" | "µs" => v * 1e-6,
+        "ms" => v * 1e-3,
+        "s" => v,
+        _ => return Err(format!("`{s}`: unknown unit `{unit}` (us, ms, s)")),
+    };
+    if !(secs.is_finite() && secs > 0.0) {
+        return Err(format!("`{s}`: the budget must be > 0 (or `none`)"));
+    }
+    Ok(Budget(Some(Duration::from_secs_f64(secs))))
+}
+
+impl PolicyIoArgs {
+    /// The rules recorded in `run.json`.
+    pub fn rules(&self) -> anyhow::Result<PolicyIoRules> {
+        if !(self.max_abs_action.is_finite() && self.max_abs_action > 0.0) {
+            bail!("--max-abs-action must be > 0, got {}", self.max_abs_action);
+        }
+        Ok(PolicyIoRules {
+            miss_rule: self.miss_rule,
+            latency_mode: self.latency_mode,
+            max_abs_action: self.max_abs_action,
+            budget_s: self.budget.0.map(|b| b.as_secs_f64()),
+        })
+    }
+
+    /// Environment slots for `workers` worker threads.
+    pub fn envs(&self, workers: usize) -> anyhow::Result<usize> {
+        match self.envs {
+            Some(0) => bail!("--envs must be at least 1"),
+            Some(n) => Ok(n),
+            None => Ok(workers.max(1)),
+        }
+    }
+}
+
+/// The session name of `ipc:<session>`, if the policy argument is one.
+pub fn ipc_session(policy: &str) -> Option<&str> {
+    policy.strip_prefix("ipc:")
+}
+
+/// Builds the policy named by `--policy`; for `ipc:<session>` creates the session and
+/// waits for a policy process to connect.
+pub fn make_policy(
+    spec: &str,
+    robot: &RobotModel,
+    profile: &Profile,
+    io: &PolicyIoArgs,
+    envs: usize,
+) -> anyhow::Result<Box<dyn Policy>> {
+    let default_pose = profile.action_offset_rad.clone();
+    Ok(match spec {
+        "hold" => Box::new(HoldPolicy),
+        "replay" => Box::new(ReplayPolicy::new(default_pose)),
+        "balance" => Box::new(
+            BalancePolicy::new(robot, default_pose, BalanceGains::default())
+                .context("the robot lacks the leg joints `balance` needs")?,
+        ),
+        other => {
+            let Some(session) = ipc_session(other) else {
+                bail!("unknown policy `{other}` (built-in: hold, replay, balance; or ipc:<session> for a policy process)");
+            };
+            Box::new(connect_remote(session, robot, profile, io, envs)?)
+        }
+    })
+}
+
+/// Serves `session` and waits for a policy process.
+pub fn connect_remote(
+    session: &str,
+    robot: &RobotModel,
+    profile: &Profile,
+    io: &PolicyIoArgs,
+    envs: usize,
+) -> anyhow::Result<RemotePolicy> {
+    if !(io.connect_timeout.is_finite() && io.connect_timeout >= 0.0) {
+        bail!("--connect-timeout must be >= 0 s");
+    }
+    let config = RemoteConfig {
+        session: session.to_string(),
+        n_envs: envs,
+        joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
+        control_dt_s: profile.control_dt_s,
+        action_offset_rad: profile.action_offset_rad.clone(),
+        action_scale: profile.action_scale.clone(),
+        budget: io.budget.0,
+        connect_timeout: (io.connect_timeout > 0.0)
+            .then(|| Duration::from_secs_f64(io.connect_timeout)),
+        reconnect: io.on_policy_failure == OnPolicyFailure::Wait,
+        spin: Duration::from_micros(io.spin_us),
+    };
+    eprintln!(
+        "serving session `{session}` ({envs} environment slots, budget {}): waiting for a policy to connect…",
+        io.budget
+            .0
+            .map_or("none (lock-step)".to_string(), |b| format!("{b:?}"))
+    );
+    let remote = RemotePolicy::connect(config, &mut |m| eprintln!("refused a policy: {m}"))
+        .with_context(|| format!("serving session `{session}`"))?;
+    eprintln!(
+        "policy `{}` (pid {}) connected, reference offsets {:?} s",
+        remote.name(),
+        remote.policy_pid().unwrap_or(0),
+        remote.reference_offsets_s()
+    );
+    Ok(remote)
+}

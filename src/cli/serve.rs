@@ -1,0 +1,50 @@
+//! `thorarena serve`: the benchmark as a service for interactive work — serve a session,
+//! evaluate whichever policy process connects, write its results, wait for the next one.
+
+use super::eval::{evaluate, EvalContext, RunArgs};
+use super::policy_arg::connect_remote;
+use crate::policy::Policy;
+use std::path::PathBuf;
+
+/// Arguments of `serve`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Session name: policies connect to `thorarena/<session>/…` (Python:
+    /// `thorarena.connect("<session>", …)`; C: `thorarena_connect`).
+    #[arg(long)]
+    pub session: String,
+    /// Evaluate one policy, then exit.
+    #[arg(long)]
+    pub once: bool,
+    /// Directory of the runs: each connection writes `<dir>/<policy name>-<dataset>-<n>/`.
+    #[arg(long, default_value = "results")]
+    pub out_root: PathBuf,
+    /// Everything else of the run.
+    #[command(flatten)]
+    pub run: RunArgs,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let ctx = EvalContext::load(&args.run)?;
+    for n in 1.. {
+        let mut policy = connect_remote(
+            &args.session,
+            &ctx.robot,
+            &ctx.profile,
+            &args.run.io,
+            ctx.envs,
+        )?;
+        let name = format!("{}-{}-{n}", policy.name(), ctx.dataset_name());
+        let out = args.out_root.join(name);
+        let result = evaluate(&args.run, &ctx, &mut policy as &mut dyn Policy, &out);
+        drop(policy); // tells the client the run is over
+        if let Err(e) = &result {
+            eprintln!("run {n} ended with an error: {e:#}");
+        }
+        if args.once {
+            return result;
+        }
+        eprintln!("ready for the next policy on session `{}`", args.session);
+    }
+    Ok(())
+}

@@ -1,0 +1,239 @@
+//! A policy in another process, reached over shared memory (`thorarena-ipc`): each
+//! control step the batch of observations is written straight into the request, and the
+//! actions are read straight from the response, under the session's latency budget.
+
+use super::wire::write_observation;
+use super::{ActOutcome, Observation, Policy};
+use std::time::Duration;
+use thorarena_ipc::{
+    IpcError, SimConfig, SimSession, StepOutcome, WaitPolicy, FLAG_PREVIOUS_TERMINATED,
+};
+
+/// How to serve a session.
+#[derive(Debug, Clone)]
+pub struct RemoteConfig {
+    /// Session name: services are `thorarena/<session>/…`.
+    pub session: String,
+    /// Environment slots per batch.
+    pub n_envs: usize,
+    /// The robot's canonical joint order.
+    pub joint_names: Vec<String>,
+    /// The profile's control period, s.
+    pub control_dt_s: f64,
+    /// The profile's action mapping: target = offset + scale · action, rad.
+    pub action_offset_rad: Vec<f64>,
+    /// See `action_offset_rad`.
+    pub action_scale: Vec<f64>,
+    /// Latency budget per step (`None`: lock-step).
+    pub budget: Option<Duration>,
+    /// How long to wait for a policy to connect, first and after a failure (`None`: forever).
+    pub connect_timeout: Option<Duration>,
+    /// After a policy failure, wait for a new policy process instead of ending the run.
+    pub reconnect: bool,
+    /// Busy-poll this long before blocking while waiting for actions.
+    pub spin: Duration,
+}
+
+/// Why serving a session failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RemoteError {
+    /// The transport failed or no policy connected in time.
+    #[error(transparent)]
+    Ipc(#[from] IpcError),
+}
+
+/// Counters of the transport, for the results.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct TransportStats {
+    /// Round trips started.
+    pub round_trips: u64,
+    /// Steps whose actions missed the budget.
+    pub deadline_misses: u64,
+    /// Replies that arrived after their step's deadline (and were discarded).
+    pub late_replies: u64,
+    /// Times the policy process died or left mid-run.
+    pub policy_failures: u64,
+    /// Policies that connected after a failure.
+    pub reconnections: u64,
+}
+
+/// The simulator's end of a session, as a [`Policy`].
+pub struct RemotePolicy {
+    session: SimSession,
+    config: RemoteConfig,
+    name: String,
+    offsets_s: Vec<f64>,
+    previous_terminated: Vec<bool>,
+    last_round_trip: Option<Duration>,
+    stats: TransportStats,
+}
+
+impl RemotePolicy {
+    /// Creates the session and waits for a policy to connect; refused handshakes (wrong
+    /// protocol version, joint count or order) are passed to `on_refused` and the wait goes on.
+    pub fn connect(
+        config: RemoteConfig,
+        on_refused: &mut dyn FnMut(&str),
+    ) -> Result<Self, RemoteError> {
+        let mut session = SimSession::create(SimConfig {
+            session: config.session.clone(),
+            n_envs: config.n_envs,
+            joint_names: config.joint_names.clone(),
+            control_dt_s: config.control_dt_s,
+            action_offset_rad: config.action_offset_rad.clone(),
+            action_scale: config.action_scale.clone(),
+            budget: config.budget,
+            wait: WaitPolicy {
+                spin: config.spin,
+                ..WaitPolicy::default()
+            },
+        })?;
+        let info = session.accept(config.connect_timeout, |m| on_refused(m))?;
+        Ok(Self {
+            session,
+            name: info.name,
+            offsets_s: info.reference_offsets_s,
+            previous_terminated: vec![false; config.n_envs],
+            config,
+            last_round_trip: None,
+            stats: TransportStats::default(),
+        })
+    }
+
+    /// The connected policy's process id.
+    pub fn policy_pid(&self) -> Option<u32> {
+        self.session.policy().map(|p| p.pid)
+    }
+}
+
+impl Policy for RemotePolicy {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn reference_offsets_s(&self) -> Vec<f64> {
+        self.offsets_s.clone()
+    }
+
+    fn episode_ended(&mut self, env: usize, terminated: bool) {
+        if let Some(t) = self.previous_terminated.get_mut(env) {
+            *t = terminated;
+        }
+    }
+
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
+        let n_envs = self.config.n_envs;
+        let offsets = &self.offsets_s;
+        let previous_terminated = &mut self.previous_terminated;
+        self.stats.round_trips += 1;
+        let outcome = self.session.step(
+            |batch| {
+                let mut filled = vec![false; n_envs];
+                for obs in observations {
+                    let mut env = batch.env(obs.env);
+                    let flags = if obs.step == 0 && previous_terminated[obs.env] {
+                        FLAG_PREVIOUS_TERMINATED
+                    } else {
+                        0
+                    };
+                    write_observation(obs, offsets, &mut env, flags);
+                    filled[obs.env] = true;
+                }
+                for (slot, _) in filled.iter().enumerate().filter(|(_, f)| !**f) {
+                    let flags = if previous_terminated[slot] {
+                        FLAG_PREVIOUS_TERMINATED
+                    } else {
+                        0
+                    };
+                    batch.env(slot).clear(flags);
+                }
+                for obs in observations {
+                    if obs.step == 0 {
+                        previous_terminated[obs.env] = false;
+                    }
+                }
+            },
+            self.config.budget,
+            |batch| {
+                for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+                    action.copy_from_slice(batch.env(obs.env));
+                }
+            },
+        );
+        self.last_round_trip = Some(self.session.last_round_trip());
+        match outcome {
+            Ok(StepOutcome::Answered) => ActOutcome::Acted,
+            Ok(StepOutcome::Missed) => {
+                self.stats.deadline_misses += 1;
+                ActOutcome::Missed
+            }
+            Ok(StepOutcome::PolicyGone) => {
+                self.stats.policy_failures += 1;
+                eprintln!(
+                    "policy `{}` is gone (its process died or left the session)",
+                    self.name
+                );
+                ActOutcome::Failed
+            }
+            Err(e) => {
+                // A malformed answer or a transport failure: the policy cannot be trusted
+                // with this session any more.
+                self.stats.policy_failures += 1;
+                eprintln!("policy `{}` failed: {e}", self.name);
+                self.session.drop_policy();
+                ActOutcome::Failed
+            }
+        }
+    }
+
+    fn last_round_trip(&self) -> Option<Duration> {
+        self.last_round_trip
+    }
+
+    fn recover(&mut self) -> bool {
+        if !self.config.reconnect {
+            return false;
+        }
+        self.session.drop_policy();
+        eprintln!(
+            "waiting for a policy to reconnect to session `{}` (it must ask for the same reference offsets {:?})",
+            self.config.session, self.offsets_s
+        );
+        loop {
+            let info = match self.session.accept(self.config.connect_timeout, |m| {
+                eprintln!("refused a policy: {m}")
+            }) {
+                Ok(info) => info,
+                Err(e) => {
+                    eprintln!("no policy reconnected: {e}");
+                    return false;
+                }
+            };
+            if info.reference_offsets_s == self.offsets_s {
+                eprintln!("policy `{}` (pid {}) connected", info.name, info.pid);
+                self.stats.reconnections += 1;
+                self.name = info.name;
+                return true;
+            }
+            eprintln!(
+                "refused policy `{}`: it asks for reference offsets {:?}, the run uses {:?}",
+                info.name, info.reference_offsets_s, self.offsets_s
+            );
+            self.session.end();
+        }
+    }
+
+    fn transport_stats(&self) -> Option<TransportStats> {
+        Some(TransportStats {
+            late_replies: self.session.late_replies(),
+            ..self.stats
+        })
+    }
+}
+
+impl Drop for RemotePolicy {
+    /// Tells the policy the run is over, so its loop returns.
+    fn drop(&mut self) {
+        self.session.end();
+    }
+}

@@ -1,0 +1,339 @@
+//! The batched lock-step loop, the same for every policy: N environment slots, one batch
+//! of observations per control step handed to the policy (in process or over shared
+//! memory), the actions checked and applied, the slots' physics stepped on worker threads.
+//!
+//! Slot `s` belongs to worker `s mod W`; a worker owns its slots' physics and episodes
+//! and, when a slot's episode ends, starts the next job of the schedule in it. An
+//! episode's result depends only on its sequence, setting and policy — never on which
+//! slot or worker ran it, nor on N or W — because a reset rebuilds the physics world and
+//! every slot's episode sees only its own observations.
+
+use super::latency::LatencyRecorder;
+use super::{EpisodeRecord, EvalPlan, LatencySummary};
+use crate::episode::{Episode, EpisodeSetup, PolicyFault, Termination, TraceStep};
+use crate::motion::Sequence;
+use crate::physics::{PhysicsSettings, RapierPhysics};
+use crate::policy::{ActOutcome, LatencyMode, MissRule, Observation, Policy, TransportStats};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What an evaluation produced.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// Finished episodes, in job order.
+    pub records: Vec<EpisodeRecord>,
+    /// The policy's per-step latency (remote: observation published to actions received;
+    /// in process: the `act` call).
+    pub latency: LatencySummary,
+    /// Transport counters of a remote policy.
+    pub transport: Option<TransportStats>,
+    /// Jobs that never ran because the policy failed and did not come back.
+    pub not_run: usize,
+}
+
+/// What the coordinator tells a slot before the next observation.
+enum SlotCommand {
+    /// No episode ran in the slot: just report.
+    Idle,
+    /// Apply this action for one control step.
+    Act {
+        action: Vec<f64>,
+        effect_delay_substeps: usize,
+        fault: Option<PolicyFault>,
+    },
+    /// End the episode now.
+    Terminate {
+        why: Termination,
+        fault: Option<PolicyFault>,
+    },
+}
+
+struct Finished {
+    job: usize,
+    record: EpisodeRecord,
+    trace: Option<Vec<TraceStep>>,
+}
+
+/// A slot's state after its command: the finished episode(s) and the next observation.
+struct SlotReport {
+    slot: usize,
+    observation: Option<Observation>,
+    finished: Vec<Finished>,
+}
+
+/// What every worker shares (read-only, or atomics).
+struct Shared<'a> {
+    plan: &'a EvalPlan<'a>,
+    setups: &'a [EpisodeSetup<'a>],
+    sequences: &'a [Sequence],
+    jobs: &'a [(usize, usize)],
+    policy_name: String,
+    next_job: AtomicUsize,
+    stop: AtomicBool,
+}
+
+/// Runs the given jobs (from [`super::schedule`]) with one policy over `plan.envs` slots;
+/// `on_record` sees each finished episode as it ends (stream it, count it).
+pub fn run_eval(
+    plan: &EvalPlan,
+    sequences: &[Sequence],
+    jobs: &[(usize, usize)],
+    policy: &mut dyn Policy,
+    on_record: &mut dyn FnMut(&EpisodeRecord, Option<&[TraceStep]>),
+) -> RunOutcome {
+    let n_slots = plan.envs.max(1);
+    let n_workers = plan.workers.clamp(1, n_slots);
+    let n_joints = plan.robot.n_joints();
+    let keypoints = plan
+        .robot
+        .keypoint_set(plan.keypoints)
+        .expect("keypoint set checked by the caller");
+    let offsets = policy.reference_offsets_s();
+    let setups: Vec<EpisodeSetup> = plan
+        .settings
+        .iter()
+        .map(|setting| EpisodeSetup {
+            robot: plan.robot,
+            profile: plan.profile,
+            keypoints,
+            termination: plan.termination,
+            force_coefficient: setting.coefficient,
+            reference_offsets_s: offsets.clone(),
+        })
+        .collect();
+    let shared = Shared {
+        plan,
+        setups: &setups,
+        sequences,
+        jobs,
+        policy_name: policy.name().to_string(),
+        next_job: AtomicUsize::new(0),
+        stop: AtomicBool::new(false),
+    };
+    let mut results: Vec<Option<EpisodeRecord>> = vec![None; jobs.len()];
+    let mut latency = LatencyRecorder::default();
+    let slots_of = |w: usize| (w..n_slots).step_by(n_workers);
+
+    std::thread::scope(|scope| {
+        let (report_tx, report_rx) = mpsc::channel::<Vec<SlotReport>>();
+        let mut command_txs = Vec::with_capacity(n_workers);
+        for w in 0..n_workers {
+            let (command_tx, command_rx) = mpsc::channel::<Vec<SlotCommand>>();
+            command_txs.push(command_tx);
+            let report_tx = report_tx.clone();
+            let slots: Vec<usize> = slots_of(w).collect();
+            let shared = &shared;
+            scope.spawn(move || worker(shared, slots, command_rx, report_tx));
+        }
+        drop(report_tx);
+
+        let mut commands: Vec<SlotCommand> = (0..n_slots).map(|_| SlotCommand::Idle).collect();
+        let mut actions: Vec<Vec<f64>> = Vec::new();
+        loop {
+            for (w, tx) in command_txs.iter().enumerate() {
+                let mine = slots_of(w)
+                    .map(|s| std::mem::replace(&mut commands[s], SlotCommand::Idle))
+                    .collect();
+                tx.send(mine).expect("worker alive");
+            }
+            let mut reports: Vec<SlotReport> = Vec::with_capacity(n_slots);
+            for _ in 0..n_workers {
+                reports.extend(report_rx.recv().expect("worker alive"));
+            }
+            reports.sort_by_key(|r| r.slot);
+            let mut observations = Vec::with_capacity(n_slots);
+            for report in reports {
+                for f in report.finished {
+                    policy.episode_ended(report.slot, f.record.termination.is_some());
+                    on_record(&f.record, f.trace.as_deref());
+                    results[f.job] = Some(f.record);
+                }
+                observations.extend(report.observation);
+            }
+            if observations.is_empty() {
+                break; // every job ran (or the policy failed for good)
+            }
+            for o in observations.iter().filter(|o| o.step == 0) {
+                policy.reset(o.env);
+            }
+            actions.resize_with(observations.len(), || vec![0.0; n_joints]);
+            let started = Instant::now();
+            let outcome = policy.act(&observations, &mut actions[..observations.len()]);
+            let round_trip = policy
+                .last_round_trip()
+                .unwrap_or_else(|| started.elapsed());
+            latency.record(round_trip);
+            let effect_delay_substeps = match plan.io.latency_mode {
+                LatencyMode::Ignore => 0,
+                LatencyMode::Measured => {
+                    (round_trip.as_secs_f64() / plan.profile.physics_dt_s).round() as usize
+                }
+            };
+            for (obs, action) in observations.iter().zip(&actions) {
+                commands[obs.env] = match outcome {
+                    ActOutcome::Acted if action_is_usable(action, plan.io.max_abs_action) => {
+                        SlotCommand::Act {
+                            action: action.clone(),
+                            effect_delay_substeps,
+                            fault: None,
+                        }
+                    }
+                    ActOutcome::Acted => {
+                        miss_rule(plan.io.miss_rule, PolicyFault::InvalidAction, obs)
+                    }
+                    ActOutcome::Missed => {
+                        miss_rule(plan.io.miss_rule, PolicyFault::DeadlineMiss, obs)
+                    }
+                    ActOutcome::Failed => SlotCommand::Terminate {
+                        why: Termination::PolicyFailed,
+                        fault: None,
+                    },
+                };
+            }
+            if outcome == ActOutcome::Failed && !policy.recover() {
+                shared.stop.store(true, Ordering::SeqCst);
+            }
+        }
+        drop(command_txs); // the workers' loops end
+    });
+
+    let records: Vec<EpisodeRecord> = results.into_iter().flatten().collect();
+    RunOutcome {
+        not_run: jobs.len() - records.len(),
+        records,
+        latency: latency.summary(),
+        transport: policy.transport_stats(),
+    }
+}
+
+/// Finite and within the plan's bound: safe to hand to the physics.
+fn action_is_usable(action: &[f64], max_abs: f64) -> bool {
+    action.iter().all(|a| a.is_finite() && a.abs() <= max_abs)
+}
+
+/// The command for a slot whose action is missing or unusable.
+fn miss_rule(rule: MissRule, fault: PolicyFault, obs: &Observation) -> SlotCommand {
+    match rule {
+        MissRule::Hold => SlotCommand::Act {
+            action: obs.last_action.clone(),
+            effect_delay_substeps: 0,
+            fault: Some(fault),
+        },
+        MissRule::Zero => SlotCommand::Act {
+            action: vec![0.0; obs.last_action.len()],
+            effect_delay_substeps: 0,
+            fault: Some(fault),
+        },
+        MissRule::Fail => SlotCommand::Terminate {
+            why: fault.termination(),
+            fault: Some(fault),
+        },
+    }
+}
+
+/// A worker: applies its slots' commands, starts new jobs in free slots, reports.
+fn worker(
+    shared: &Shared,
+    slots: Vec<usize>,
+    commands: mpsc::Receiver<Vec<SlotCommand>>,
+    reports: mpsc::Sender<Vec<SlotReport>>,
+) {
+    let plan = shared.plan;
+    let robot = Arc::new(plan.robot.clone());
+    let settings = PhysicsSettings {
+        dt_s: plan.profile.physics_dt_s,
+        ..Default::default()
+    };
+    let mut physics: Vec<RapierPhysics> = slots
+        .iter()
+        .map(|_| RapierPhysics::new(robot.clone(), settings.clone(), plan.profile.gains.clone()))
+        .collect();
+    let mut running: Vec<Option<(usize, Episode)>> = slots.iter().map(|_| None).collect();
+    while let Ok(batch) = commands.recv() {
+        let mut out = Vec::with_capacity(slots.len());
+        for (k, command) in batch.into_iter().enumerate() {
+            let mut finished = Vec::new();
+            if let Some((job, ep)) = running[k].as_mut() {
+                match command {
+                    SlotCommand::Idle => {}
+                    SlotCommand::Act {
+                        action,
+                        effect_delay_substeps,
+                        fault,
+                    } => {
+                        if let Some(f) = fault {
+                            ep.count_fault(f);
+                        }
+                        ep.advance_delayed(&mut physics[k], &action, effect_delay_substeps);
+                    }
+                    SlotCommand::Terminate { why, fault } => {
+                        if let Some(f) = fault {
+                            ep.count_fault(f);
+                        }
+                        ep.terminate(why);
+                    }
+                }
+                if ep.is_done() {
+                    let job = *job;
+                    let (_, ep) = running[k].take().expect("checked above");
+                    finished.push(finish(shared, job, ep));
+                }
+            }
+            while running[k].is_none() && !shared.stop.load(Ordering::SeqCst) {
+                let j = shared.next_job.fetch_add(1, Ordering::SeqCst);
+                let Some(&(q, s)) = shared.jobs.get(j) else {
+                    break;
+                };
+                let seq = &shared.sequences[q];
+                let mut ep = Episode::start(&shared.setups[s], seq, &mut physics[k]);
+                if plan
+                    .trace
+                    .contains(&format!("{}/{}", seq.task, seq.sequence_id))
+                {
+                    ep.record_trace();
+                }
+                if ep.is_done() {
+                    finished.push(finish(shared, j, ep)); // a reference shorter than one step
+                } else {
+                    running[k] = Some((j, ep));
+                }
+            }
+            let observation = running[k]
+                .as_ref()
+                .map(|(job, ep)| ep.observation_in(slots[k], *job as u64));
+            out.push(SlotReport {
+                slot: slots[k],
+                observation,
+                finished,
+            });
+        }
+        if reports.send(out).is_err() {
+            return;
+        }
+    }
+}
+
+fn finish(shared: &Shared, job: usize, mut ep: Episode) -> Finished {
+    let (q, s) = shared.jobs[job];
+    let seq = &shared.sequences[q];
+    let setting = &shared.plan.settings[s];
+    let trace = ep.take_trace();
+    let faults = ep.faults();
+    let (series, termination) = ep.finish();
+    Finished {
+        job,
+        record: EpisodeRecord {
+            task: seq.task.clone(),
+            sequence_id: seq.sequence_id.clone(),
+            setting: setting.name.clone(),
+            coefficient: setting.coefficient,
+            policy: shared.policy_name.clone(),
+            termination,
+            faults,
+            series,
+        },
+        trace,
+    }
+}
