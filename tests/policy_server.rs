@@ -3,7 +3,8 @@
 //! results as the same policy in process, bit for bit (lock-step mode); a policy killed
 //! with SIGKILL mid-episode ends its episodes as `policy_failed` and `--resume` with a new
 //! process completes the run exactly; a late policy misses its deadline and the late
-//! reply is counted; two sessions run side by side without crossing.
+//! reply is counted; two sessions run side by side without crossing; a simulator killed
+//! with SIGKILL leaves no shared memory that blocks the next run of its session.
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -192,6 +193,27 @@ fn a_policy_killed_mid_episode_fails_its_episodes_and_resume_completes_the_run()
     let all = episodes(&out);
     assert!(!all.contains("policy_failed"), "failed episodes ran again");
     assert_eq!(sorted_lines(&all), sorted_lines(&want));
+}
+
+#[test]
+fn a_crashed_simulator_leaves_nothing_that_blocks_the_next_run() {
+    use std::io::{BufRead, BufReader};
+    let dir = tempfile::tempdir().unwrap();
+    let want = in_process("hold", dir.path());
+    let s = session("crashed-sim");
+    let mut crashed = eval_cmd(&format!("ipc:{s}"), &dir.path().join("crashed"), &[])
+        .spawn()
+        .unwrap();
+    let stderr = BufReader::new(crashed.stderr.take().unwrap());
+    for line in stderr.lines() {
+        if line.unwrap().contains("waiting for a policy") {
+            break; // the session's shared memory exists now
+        }
+    }
+    crashed.kill().unwrap(); // SIGKILL: no cleanup at all
+    crashed.wait().unwrap();
+    let run = over_ipc(&s, dir.path(), || rust_client(&s, "hold", &[]));
+    assert_eq!(episodes(&run), want);
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The `thorarena` command line: the argument tree and one module per subcommand.
 
 mod bench_eval;
+mod bench_ipc;
 mod bench_physics;
 mod client;
 mod data;
@@ -75,6 +76,12 @@ pub enum BenchCommand {
     Physics(bench_physics::Args),
     /// Cost of the whole episode loop and the share spent outside physics.
     Eval(bench_eval::Args),
+    /// Policy round trip over shared memory (Rust, C++, Python echo policies) against a
+    /// Unix-socket baseline moving the same bytes.
+    Ipc(bench_ipc::Args),
+    /// The socket baseline's echo peer (started by `bench ipc`).
+    #[command(hide = true)]
+    SocketPeer(bench_ipc::PeerArgs),
 }
 
 /// Parses the command line and runs it.
@@ -85,6 +92,8 @@ pub fn run() -> anyhow::Result<()> {
         Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),
+        Command::Bench(BenchCommand::Ipc(args)) => bench_ipc::run(&args),
+        Command::Bench(BenchCommand::SocketPeer(args)) => bench_ipc::run_peer(&args),
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
