@@ -269,3 +269,107 @@ fn two_sessions_side_by_side_never_cross() {
     assert_eq!(sorted_lines(&episodes(&out_a)), sorted_lines(&want_replay));
     assert_eq!(sorted_lines(&episodes(&out_b)), sorted_lines(&want_hold));
 }
+
+#[test]
+fn invalid_actions_never_reach_the_physics_and_follow_the_miss_rule() {
+    let dir = tempfile::tempdir().unwrap();
+    let want = in_process("hold", dir.path());
+    let records = |run: &Path| -> Vec<serde_json::Value> {
+        episodes(run)
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    };
+    // `hold`: the NaN step applies the last action instead — for the hold policy that is
+    // its own zero action, so the episodes are the in-process ones plus a counted fault.
+    let s = session("nan-hold");
+    let run = over_ipc(&s, dir.path(), || {
+        rust_client(&s, "hold", &["--nan-at-step", "30"])
+    });
+    let held = records(&run);
+    let faults: u64 = held
+        .iter()
+        .map(|r| r["faults"]["invalid_actions"].as_u64().unwrap_or(0))
+        .sum();
+    assert!(faults >= 1, "the NaN step is counted");
+    let strip = |mut r: serde_json::Value| {
+        r.as_object_mut().unwrap().remove("faults");
+        r.to_string()
+    };
+    let want_records: Vec<String> = want
+        .lines()
+        .map(|l| strip(serde_json::from_str(l).unwrap()))
+        .collect();
+    assert_eq!(
+        held.into_iter().map(strip).collect::<Vec<_>>(),
+        want_records
+    );
+
+    // `fail`: the episodes that got NaN end there, as `invalid_action`.
+    let s = session("nan-fail");
+    let out = dir.path().join(&s);
+    let run = eval_cmd(&format!("ipc:{s}"), &out, &["--miss-rule", "fail"])
+        .spawn()
+        .unwrap();
+    let client = rust_client(&s, "hold", &["--nan-at-step", "30"]);
+    finished(run, "eval with --miss-rule fail");
+    finished(client, "NaN policy");
+    let failed = records(&out);
+    let ended: Vec<_> = failed
+        .iter()
+        .filter(|r| r["termination"] == "invalid_action")
+        .collect();
+    assert!(!ended.is_empty(), "{failed:?}");
+    for r in ended {
+        assert_eq!(r["faults"]["invalid_actions"], 1);
+        assert!(r["series"]["kp_err_m"].as_array().unwrap().len() < 30);
+    }
+    assert_eq!(failed.len(), 12, "the other episodes still ran");
+}
+
+#[test]
+fn measured_latency_delays_actions_in_simulated_time_and_ignored_latency_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let want = in_process("replay", dir.path());
+    let slow = ["--delay-ms", "6", "--delay-at-step", "0"];
+    let s = session("slow-ignored");
+    let run = over_ipc(&s, dir.path(), || rust_client(&s, "replay", &slow));
+    assert_eq!(episodes(&run), want, "lock-step: latency costs nothing");
+
+    let s = session("slow-measured");
+    let out = dir.path().join(&s);
+    let run = eval_cmd(&format!("ipc:{s}"), &out, &["--latency-mode", "measured"])
+        .spawn()
+        .unwrap();
+    let client = rust_client(&s, "replay", &slow);
+    finished(run, "eval with measured latency");
+    finished(client, "slow policy");
+    let measured = episodes(&out);
+    assert_eq!(measured.lines().count(), 12);
+    assert_ne!(measured, want, "a 6 ms policy acts a physics step late");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["header"]["io"]["latency_mode"], "measured");
+    assert!(summary["policy_io"]["latency"]["p50_us"].as_f64().unwrap() >= 6000.0);
+}
+
+#[test]
+fn serve_evaluates_the_policy_that_connects() {
+    let dir = tempfile::tempdir().unwrap();
+    let want = in_process("hold", dir.path());
+    let s = session("serve");
+    let root = dir.path().join("runs");
+    let serve = Command::new(BIN)
+        .args(["serve", "--session", &s, "--once", "--out-root"])
+        .arg(&root)
+        .args(["--dataset", &format!("{ROOT}/data/sample")])
+        .args(["--settings", "force", "--connect-timeout", "120"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let client = rust_client(&s, "hold", &[]);
+    finished(serve, "serve --once");
+    finished(client, "policy");
+    assert_eq!(episodes(&root.join("hold-sample-1")), want);
+}

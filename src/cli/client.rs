@@ -42,6 +42,10 @@ pub struct Args {
     /// Testing aid: the step (counted from 1) that `--delay-ms` delays; 0 delays every step.
     #[arg(long, default_value_t = 0)]
     pub delay_at_step: u64,
+    /// Testing aid: answer NaN for every joint of every environment at this step (counted
+    /// from 1).
+    #[arg(long)]
+    pub nan_at_step: Option<u64>,
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -110,6 +114,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
                         out.env(o.env).copy_from_slice(a);
                     }
                 }
+            }
+            if args.nan_at_step == Some(steps) {
+                out.all().fill(f64::NAN);
             }
         })?;
         step.send(&client)?;
