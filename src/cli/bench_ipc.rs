@@ -4,20 +4,21 @@
 //!
 //! Each echo policy is a separate process answering action = q for every environment, so
 //! the figures include the policy reading the observation and writing the actions. The
-//! socket baseline is a `thorarena` process that receives the whole batch over a stream
-//! socket into a buffer, answers the same way, and sends the actions back.
+//! socket baselines (`bench_socket`) are a `thorarena` process that receives the whole
+//! batch over a Unix stream socket into a buffer, answers the same way and sends the
+//! actions back: once with blocking reads, once with the shared-memory path's own wait
+//! (spin, then block), so the comparison separates what waiting costs from what copying
+//! costs.
 
+use super::bench_socket::socket_baseline;
 use crate::robot::RobotModel;
 use crate::runner::LatencyRecorder;
 use anyhow::{bail, Context};
-use std::io::{BufRead, BufReader, Read, Write};
-use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use thorarena_ipc::{
-    ActionBatchMut, EnvHeader, Layout, ObsBatch, ObsBatchMut, SimConfig, SimSession, StepOutcome,
-    WaitPolicy, FLAG_ACTIVE,
+    EnvHeader, Layout, ObsBatchMut, SimConfig, SimSession, StepOutcome, WaitPolicy, FLAG_ACTIVE,
 };
 
 /// Arguments of `bench ipc`.
@@ -47,25 +48,8 @@ pub struct Args {
     pub python: String,
 }
 
-/// Hidden: the socket baseline's echo peer.
-#[derive(Debug, clap::Args)]
-pub struct PeerArgs {
-    /// Socket path to connect to.
-    #[arg(long)]
-    pub socket: PathBuf,
-    /// Environments per batch.
-    #[arg(long)]
-    pub envs: usize,
-    /// Joints per environment.
-    #[arg(long)]
-    pub joints: usize,
-    /// Reference frames per environment.
-    #[arg(long)]
-    pub refs: usize,
-}
-
 /// Percentiles of one series, µs.
-struct Row {
+pub(super) struct Row {
     p50: f64,
     p90: f64,
     p99: f64,
@@ -74,7 +58,7 @@ struct Row {
 }
 
 impl Row {
-    fn of(rec: &LatencyRecorder) -> Self {
+    pub(super) fn of(rec: &LatencyRecorder) -> Self {
         let s = rec.summary();
         Self {
             p50: s.p50_us,
@@ -97,7 +81,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         args.steps, args.warmup, args.spin_us
     );
     println!(
-        "| client | envs | batch KB | p50 | p90 | p99 | p99.9 | max | socket p50 | socket p99.9 | socket/shm p50 |"
+        "| client | envs | batch KB | p50 | p90 | p99 | p99.9 | max | socket p50 (blocking / spin) | socket p99.9 (blocking / spin) | socket/shm p50 (blocking / spin) |"
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for &envs in &args.envs {
@@ -107,22 +91,29 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             n_joints,
             n_refs: 1,
         };
-        let socket = socket_baseline(args, layout).context("the Unix-socket baseline")?;
+        let spin = Duration::from_micros(args.spin_us);
+        let blocking = socket_baseline(args.warmup, args.steps, layout, Duration::ZERO)
+            .context("the Unix-socket baseline")?;
+        let spinning = socket_baseline(args.warmup, args.steps, layout, spin)
+            .context("the spinning Unix-socket baseline")?;
         for client in &args.clients {
             let Some(row) = shm_round_trips(args, &robot, client, layout)? else {
                 continue;
             };
             println!(
-                "| {client} | {envs} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1}× |",
+                "| {client} | {envs} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} / {:.1} | {:.1} / {:.1} | {:.1}× / {:.1}× |",
                 (layout.obs_bytes() + layout.action_bytes()) as f64 / 1024.0,
                 row.p50,
                 row.p90,
                 row.p99,
                 row.p999,
                 row.max,
-                socket.p50,
-                socket.p999,
-                socket.p50 / row.p50
+                blocking.p50,
+                spinning.p50,
+                blocking.p999,
+                spinning.p999,
+                blocking.p50 / row.p50,
+                spinning.p50 / row.p50
             );
         }
     }
@@ -133,7 +124,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
 }
 
 /// Fills every slot as active with a recognisable q.
-fn fill(batch: &mut ObsBatchMut, layout: Layout, step: u64) {
+pub(super) fn fill(batch: &mut ObsBatchMut, layout: Layout, step: u64) {
     for i in 0..layout.n_envs {
         let mut env = batch.env(i);
         env.set_header(&EnvHeader {
@@ -269,82 +260,4 @@ fn shm_round_trips(
     let _ = child.wait();
     anyhow::ensure!(checked, "no step ran");
     Ok(Some(Row::of(&rec)))
-}
-
-/// The socket baseline: a peer process echoes the same batch over a Unix stream socket.
-fn socket_baseline(args: &Args, layout: Layout) -> anyhow::Result<Row> {
-    let path = std::env::temp_dir().join(format!(
-        "thorarena-bench-{}-{}.sock",
-        std::process::id(),
-        layout.n_envs
-    ));
-    let _ = std::fs::remove_file(&path);
-    let listener = UnixListener::bind(&path)?;
-    let mut peer = Command::new(std::env::current_exe()?)
-        .args(["bench", "socket-peer", "--socket"])
-        .arg(&path)
-        .args(["--envs", &layout.n_envs.to_string()])
-        .args(["--joints", &layout.n_joints.to_string()])
-        .args(["--refs", &layout.n_refs.to_string()])
-        .stdout(Stdio::piped())
-        .spawn()?;
-    let (mut stream, _) = listener.accept()?;
-    let mut ready = String::new();
-    BufReader::new(peer.stdout.take().expect("piped")).read_line(&mut ready)?;
-    let mut obs = vec![0u64; layout.obs_words()];
-    let mut actions = vec![0u64; layout.action_words()];
-    let mut rec = LatencyRecorder::default();
-    for step in 0..(args.warmup + args.steps) as u64 {
-        {
-            let mut b = ObsBatchMut::new(layout, bytemuck::cast_slice_mut(&mut obs), 0, step);
-            fill(&mut b, layout, step);
-        }
-        let started = Instant::now();
-        stream.write_all(bytemuck::cast_slice(&obs))?;
-        stream.read_exact(bytemuck::cast_slice_mut(&mut actions))?;
-        let took = started.elapsed();
-        if step >= args.warmup as u64 {
-            rec.record(took);
-        }
-    }
-    drop(stream);
-    let _ = peer.wait();
-    let _ = std::fs::remove_file(&path);
-    Ok(Row::of(&rec))
-}
-
-/// `bench socket-peer`: answers each batch read from the socket with action = q.
-pub(super) fn run_peer(args: &PeerArgs) -> anyhow::Result<()> {
-    let layout = Layout {
-        n_envs: args.envs,
-        n_joints: args.joints,
-        n_refs: args.refs,
-    };
-    let mut stream = UnixStream::connect(&args.socket)
-        .with_context(|| format!("connecting to {}", args.socket.display()))?;
-    println!("ready");
-    std::io::stdout().flush()?;
-    let mut obs = vec![0u64; layout.obs_words()];
-    let mut actions = vec![0u64; layout.action_words()];
-    loop {
-        if stream
-            .read_exact(bytemuck::cast_slice_mut(&mut obs))
-            .is_err()
-        {
-            return Ok(()); // the benchmark closed the socket
-        }
-        let batch = ObsBatch::new(layout, bytemuck::cast_slice(&obs))?;
-        let mut out = ActionBatchMut::new(
-            layout,
-            bytemuck::cast_slice_mut(&mut actions),
-            batch.header().seq,
-        );
-        for i in 0..layout.n_envs {
-            let env = batch.env(i);
-            if env.is_active() {
-                out.env(i).copy_from_slice(env.array("q"));
-            }
-        }
-        stream.write_all(bytemuck::cast_slice(&actions))?;
-    }
 }

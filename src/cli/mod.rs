@@ -3,6 +3,7 @@
 mod bench_eval;
 mod bench_ipc;
 mod bench_physics;
+mod bench_socket;
 mod client;
 mod data;
 mod data_synth;
@@ -81,7 +82,7 @@ pub enum BenchCommand {
     Ipc(bench_ipc::Args),
     /// The socket baseline's echo peer (started by `bench ipc`).
     #[command(hide = true)]
-    SocketPeer(bench_ipc::PeerArgs),
+    SocketPeer(bench_socket::PeerArgs),
 }
 
 /// Parses the command line and runs it.
@@ -93,7 +94,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),
         Command::Bench(BenchCommand::Ipc(args)) => bench_ipc::run(&args),
-        Command::Bench(BenchCommand::SocketPeer(args)) => bench_ipc::run_peer(&args),
+        Command::Bench(BenchCommand::SocketPeer(args)) => bench_socket::run_peer(&args),
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
