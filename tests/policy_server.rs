@@ -373,3 +373,25 @@ fn serve_evaluates_the_policy_that_connects() {
     finished(client, "policy");
     assert_eq!(episodes(&root.join("hold-sample-1")), want);
 }
+
+#[test]
+fn a_run_told_to_wait_goes_on_with_a_policy_that_reconnects() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = session("reconnect");
+    let out = dir.path().join(&s);
+    let run = eval_cmd(&format!("ipc:{s}"), &out, &["--on-policy-failure", "wait"])
+        .spawn()
+        .unwrap();
+    let dying = rust_client(&s, "replay", &["--die-after-steps", "40"]);
+    let _ = dying.wait_with_output();
+    let second = rust_client(&s, "replay", &[]);
+    finished(run, "eval waiting for a reconnect");
+    finished(second, "the policy that reconnected");
+    let all = episodes(&out);
+    assert_eq!(all.lines().count(), 12, "every episode has a record");
+    assert!(all.contains("\"termination\":\"policy_failed\""), "{all}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["policy_io"]["transport"]["policy_failures"], 1);
+    assert_eq!(summary["policy_io"]["transport"]["reconnections"], 1);
+}

@@ -10,6 +10,7 @@ use crate::robot::RobotModel;
 use crate::runner::PolicyIoRules;
 use anyhow::{bail, Context};
 use std::time::Duration;
+use thorarena_ipc::{SimConfig, WaitPolicy};
 
 /// Options of a policy's answers (all policies) and of the session (remote ones).
 #[derive(Debug, Clone, clap::Args)]
@@ -152,17 +153,22 @@ pub fn connect_remote(
         bail!("--connect-timeout must be >= 0 s");
     }
     let config = RemoteConfig {
-        session: session.to_string(),
-        n_envs: envs,
-        joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
-        control_dt_s: profile.control_dt_s,
-        action_offset_rad: profile.action_offset_rad.clone(),
-        action_scale: profile.action_scale.clone(),
-        budget: io.budget.0,
+        session: SimConfig {
+            session: session.to_string(),
+            n_envs: envs,
+            joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
+            control_dt_s: profile.control_dt_s,
+            action_offset_rad: profile.action_offset_rad.clone(),
+            action_scale: profile.action_scale.clone(),
+            budget: io.budget.0,
+            wait: WaitPolicy {
+                spin: Duration::from_micros(io.spin_us),
+                ..WaitPolicy::default()
+            },
+        },
         connect_timeout: (io.connect_timeout > 0.0)
             .then(|| Duration::from_secs_f64(io.connect_timeout)),
         reconnect: io.on_policy_failure == OnPolicyFailure::Wait,
-        spin: Duration::from_micros(io.spin_us),
     };
     eprintln!(
         "serving session `{session}` ({envs} environment slots, budget {}): waiting for a policy to connect…",

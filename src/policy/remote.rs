@@ -5,33 +5,17 @@
 use super::wire::write_observation;
 use super::{ActOutcome, Observation, Policy};
 use std::time::Duration;
-use thorarena_ipc::{
-    IpcError, SimConfig, SimSession, StepOutcome, WaitPolicy, FLAG_PREVIOUS_TERMINATED,
-};
+use thorarena_ipc::{IpcError, SimConfig, SimSession, StepOutcome, FLAG_PREVIOUS_TERMINATED};
 
-/// How to serve a session.
+/// How to serve a session: the session itself, and what to do about connections.
 #[derive(Debug, Clone)]
 pub struct RemoteConfig {
-    /// Session name: services are `thorarena/<session>/…`.
-    pub session: String,
-    /// Environment slots per batch.
-    pub n_envs: usize,
-    /// The robot's canonical joint order.
-    pub joint_names: Vec<String>,
-    /// The profile's control period, s.
-    pub control_dt_s: f64,
-    /// The profile's action mapping: target = offset + scale · action, rad.
-    pub action_offset_rad: Vec<f64>,
-    /// See `action_offset_rad`.
-    pub action_scale: Vec<f64>,
-    /// Latency budget per step (`None`: lock-step).
-    pub budget: Option<Duration>,
+    /// Name, batch shape, action mapping, budget and wait of the session.
+    pub session: SimConfig,
     /// How long to wait for a policy to connect, first and after a failure (`None`: forever).
     pub connect_timeout: Option<Duration>,
     /// After a policy failure, wait for a new policy process instead of ending the run.
     pub reconnect: bool,
-    /// Busy-poll this long before blocking while waiting for actions.
-    pub spin: Duration,
 }
 
 /// Why serving a session failed.
@@ -75,25 +59,13 @@ impl RemotePolicy {
         config: RemoteConfig,
         on_refused: &mut dyn FnMut(&str),
     ) -> Result<Self, RemoteError> {
-        let mut session = SimSession::create(SimConfig {
-            session: config.session.clone(),
-            n_envs: config.n_envs,
-            joint_names: config.joint_names.clone(),
-            control_dt_s: config.control_dt_s,
-            action_offset_rad: config.action_offset_rad.clone(),
-            action_scale: config.action_scale.clone(),
-            budget: config.budget,
-            wait: WaitPolicy {
-                spin: config.spin,
-                ..WaitPolicy::default()
-            },
-        })?;
+        let mut session = SimSession::create(config.session.clone())?;
         let info = session.accept(config.connect_timeout, |m| on_refused(m))?;
         Ok(Self {
             session,
             name: info.name,
             offsets_s: info.reference_offsets_s,
-            previous_terminated: vec![false; config.n_envs],
+            previous_terminated: vec![false; config.session.n_envs],
             config,
             last_round_trip: None,
             stats: TransportStats::default(),
@@ -122,7 +94,7 @@ impl Policy for RemotePolicy {
     }
 
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
-        let n_envs = self.config.n_envs;
+        let n_envs = self.config.session.n_envs;
         let offsets = &self.offsets_s;
         let previous_terminated = &mut self.previous_terminated;
         self.stats.round_trips += 1;
@@ -153,7 +125,7 @@ impl Policy for RemotePolicy {
                     }
                 }
             },
-            self.config.budget,
+            self.config.session.budget,
             |batch| {
                 for (obs, action) in observations.iter().zip(actions.iter_mut()) {
                     action.copy_from_slice(batch.env(obs.env));
@@ -197,7 +169,7 @@ impl Policy for RemotePolicy {
         self.session.drop_policy();
         eprintln!(
             "waiting for a policy to reconnect to session `{}` (it must ask for the same reference offsets {:?})",
-            self.config.session, self.offsets_s
+            self.config.session.session, self.offsets_s
         );
         loop {
             let info = match self.session.accept(self.config.connect_timeout, |m| {
