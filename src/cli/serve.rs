@@ -16,7 +16,8 @@ pub struct Args {
     /// Evaluate one policy, then exit.
     #[arg(long)]
     pub once: bool,
-    /// Directory of the runs: each connection writes `<dir>/<policy name>-<dataset>-<n>/`.
+    /// Directory of the runs: each connection writes `<dir>/<policy name>-<dataset>-<n>/`,
+    /// with the first `n` not taken yet.
     #[arg(long, default_value = "results")]
     pub out_root: PathBuf,
     /// Everything else of the run.
@@ -34,8 +35,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             &args.run.io,
             ctx.envs,
         )?;
-        let name = format!("{}-{}-{n}", policy.name(), ctx.dataset_name());
-        let out = args.out_root.join(name);
+        // Never overwrite an earlier run: take the first free number for this policy.
+        let out = (n..)
+            .map(|k| {
+                args.out_root
+                    .join(format!("{}-{}-{k}", policy.name(), ctx.dataset_name()))
+            })
+            .find(|dir| !dir.exists())
+            .expect("some number is free");
         let result = evaluate(&args.run, &ctx, &mut policy as &mut dyn Policy, &out);
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {
