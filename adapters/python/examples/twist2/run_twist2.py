@@ -1,0 +1,43 @@
+"""Run a TWIST2 checkpoint (ONNX, input `input` [batch, 1432], output `output` [batch, 29])
+as the policy of a ThorArena run serving session NAME:
+
+    cargo run --release -- eval --policy ipc:NAME --profile twist2 --dataset DIR   # one shell
+    python run_twist2.py --session NAME --onnx twist2.onnx                         # another
+
+It joins with the adapter's reference offsets (0 and 0.02 s) under the name "twist2", builds
+TWIST2's observation for every active slot and answers each step with the network's raw
+output. Needs onnxruntime (`pip install './adapters/python[policies]'`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from thorarena.adapters import OnnxPolicy, Twist2Adapter
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--session", required=True, help="session to join")
+    parser.add_argument("--onnx", required=True, help="TWIST2 policy exported to ONNX")
+    parser.add_argument("--threads", type=int, default=1, help="ONNX Runtime intra-op threads")
+    parser.add_argument("--name", default=Twist2Adapter.name, help="policy name in the results")
+    parser.add_argument(
+        "--timeout", type=float, default=10.0, help="seconds to wait for the simulator"
+    )
+    args = parser.parse_args()
+
+    adapter = Twist2Adapter(OnnxPolicy(args.onnx, intra_op_threads=args.threads))
+    session = adapter.connect(args.session, name=args.name, timeout_s=args.timeout)
+    print(
+        f"connected: {session.n_envs} environments, control dt {session.control_dt_s} s",
+        flush=True,
+    )
+    steps = adapter.run(session)
+    print(f"run over after {steps} steps", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

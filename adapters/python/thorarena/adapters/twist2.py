@@ -1,0 +1,126 @@
+"""TWIST2 (Ze et al. 2025): the released whole-body tracking policy's 1432-dim observation.
+
+Source: github.com/amazon-far/TWIST2 (MIT), files
+`deploy_real/server_low_level_g1_sim.py` (proprioception, history, action mapping, ONNX
+input `input` [batch, 1432] → output `output` [batch, 29]), `deploy_real/server_motion_lib.py`
+(mimic observation), `legged_gym/legged_gym/envs/g1/g1_mimic_future.py` and its configs
+`g1_mimic_distill_config.py` / `g1_mimic_future_config.py` (training). The upstream commit
+could not be verified here: the upstream repository is not in the searchable index. The terms
+and their order were read in forks carrying the same files: meetsitaram/TWIST2 at
+10267c3a2f46 (`server_low_level_g1_sim.py`: proprio, ankle zeroing, history of 10 x 127)
+and beac122c8d32 (`g1_mimic_future.py`: the student's mimic terms and proprio). The training
+timing (future frame at t, history refilled on the first two steps after a reset) was not
+re-read there; it comes from the prototype harness that walked the policy in MuJoCo
+(`../shared/design/prototype/twist2_mujoco_reference.py`, FACTS.md §8), which this module
+matches number for number.
+
+Per environment, with R a frame's root rotation (quaternions (w, x, y, z)):
+
+    mimic(frame)  (35) = v_x, v_y, root_pos_w.z, roll, pitch, w_z, joint_pos (29)
+                         where v = R^T root_lin_vel_w, w = R^T root_ang_vel_w
+    proprio       (92) = root_ang_vel_b * 0.25, roll, pitch (robot), q - action_offset_rad,
+                         qd * 0.05 (ankles 4, 5, 10, 11 zeroed), last_action
+    single       (127) = mimic(reference[1]) ++ proprio
+    obs         (1432) = single ++ history (10 x 127, oldest first) ++ mimic(reference[0]),
+                         clipped to ±100, float32
+
+`reference[0]` is the reference at t (the "future" frame as training builds it),
+`reference[1]` at t + 0.02 s (the mimic frame, one
+50 Hz step ahead). History is updated after the observation is built: on an episode's steps 0
+and 1 all 10 rows become `single` (training refills it after a reset), later it shifts by
+one and appends `single`; before step 0 it is zeros. The action written is the raw network
+output; the `twist2` profile clips it to ±10 and maps target = default + 0.5 · action.
+
+`src/policy/twist2.rs` builds the same observation in Rust; `examples/twist2/
+check_against_dump.py` compares the two (observation ≤ 1e-5, action ≤ 1e-4).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from .base import Adapter
+from .rotations import roll_pitch, rotate_inverse
+
+N_JOINTS = 29
+N_MIMIC = 6 + N_JOINTS
+"""35: v_x, v_y, height, roll, pitch, yaw rate, joint positions."""
+N_PROPRIO = 3 + 2 + 3 * N_JOINTS
+"""92."""
+N_SINGLE = N_MIMIC + N_PROPRIO
+"""127."""
+N_HISTORY = 10
+N_OBS = N_SINGLE * (N_HISTORY + 1) + N_MIMIC
+"""1432."""
+ANG_VEL_SCALE = 0.25
+DOF_VEL_SCALE = 0.05
+ANKLE_JOINTS = (4, 5, 10, 11)
+"""Ankle pitch/roll of both legs: their velocities are zeroed in the observation."""
+OBS_CLIP = 100.0
+MIMIC_LOOKAHEAD_S = 0.02
+"""The mimic frame is one 50 Hz step ahead of the future frame."""
+
+
+def mimic_observation(frames: np.ndarray) -> np.ndarray:
+    """mimic (35) of reference frames (records of `Layout.ref_dtype`, any shape): (..., 35)."""
+    quat = frames["root_quat_wxyz"]
+    velocities = np.stack([frames["root_lin_vel_w"], frames["root_ang_vel_w"]], axis=-2)
+    body = rotate_inverse(quat[..., None, :], velocities)  # (..., 2, 3): v, w
+    roll, pitch = roll_pitch(quat)
+    return np.concatenate(
+        [
+            body[..., 0, :2],
+            frames["root_pos_w"][..., 2:3],
+            roll[..., None],
+            pitch[..., None],
+            body[..., 1, 2:3],
+            frames["joint_pos"],
+        ],
+        axis=-1,
+    )
+
+
+def proprio_observation(records: np.ndarray, default_pos: np.ndarray) -> np.ndarray:
+    """proprio (92) of environment records, shape (n, 92)."""
+    roll, pitch = roll_pitch(records["root_quat_wxyz"])
+    qd = records["qd"] * DOF_VEL_SCALE
+    qd[:, list(ANKLE_JOINTS)] = 0.0
+    return np.concatenate(
+        [
+            records["root_ang_vel_b"] * ANG_VEL_SCALE,
+            roll[:, None],
+            pitch[:, None],
+            records["q"] - default_pos,
+            qd,
+            records["last_action"],
+        ],
+        axis=1,
+    )
+
+
+class Twist2Adapter(Adapter):
+    """TWIST2's observation (1432) and network (29 raw actions in canonical order)."""
+
+    name: ClassVar[str] = "twist2"
+    reference_offsets_s: ClassVar[tuple[float, ...]] = (0.0, MIMIC_LOOKAHEAD_S)
+    obs_dim = N_OBS
+
+    def slot_state(self) -> dict[str, tuple[int, ...]]:
+        return {"history": (N_HISTORY, N_SINGLE)}
+
+    def observe(self, records: np.ndarray, slots: np.ndarray) -> np.ndarray:
+        mimic = mimic_observation(records["reference"])  # (n, 2, 35): frames at t, t + 0.02 s
+        single = np.concatenate(
+            [mimic[:, 1], proprio_observation(records, self.action_offset_rad)], axis=1
+        )
+        history = self.state["history"]
+        obs = np.concatenate([single, history[slots].reshape(len(slots), -1), mimic[:, 0]], axis=1)
+        refill = records["step"] <= 1
+        history[slots[refill]] = single[refill, None, :]
+        shift = slots[~refill]
+        history[shift, :-1] = history[shift, 1:]
+        history[shift, -1] = single[~refill]
+        clipped: np.ndarray = np.minimum(np.maximum(obs, -OBS_CLIP), OBS_CLIP)
+        return clipped.astype(np.float32)
