@@ -120,6 +120,8 @@ pub struct EpisodeSetup<'a> {
     pub termination: TerminationRule,
     /// Force replay coefficient (1 = force setting, 0 = no force).
     pub force_coefficient: f64,
+    /// Constant world-frame push on each hand (+x), N (see `ForceReplay::push_w`).
+    pub push_n: f64,
     /// Reference offsets the policy asked for, s.
     pub reference_offsets_s: Vec<f64>,
 }
@@ -182,7 +184,11 @@ impl<'a> Episode<'a> {
         physics.read_state(&mut state);
         Self {
             setup,
-            replay: ForceReplay::new(robot, seq, setup.force_coefficient),
+            replay: ForceReplay::new(robot, seq, setup.force_coefficient).with_push(Vector3::new(
+                setup.push_n,
+                0.0,
+                0.0,
+            )),
             torso_frame: robot.frame_index("torso_link").unwrap_or(0),
             reference,
             step: 0,

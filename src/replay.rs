@@ -17,11 +17,16 @@ pub fn world_force(
     world_from_hand.rotation * (hand_from_sensor * force_sensor) * coefficient
 }
 
+/// A constant push ramps in linearly over this long from the episode's start, s.
+pub const PUSH_RAMP_S: f64 = 1.0;
+
 /// Replays one sequence's hand forces onto a physics backend.
 #[derive(Debug, Clone)]
 pub struct ForceReplay {
     /// Scale of the replayed force (1 = as recorded, 0 = none).
     pub coefficient: f64,
+    /// A constant world-frame force added on each hand, N, ramped over [`PUSH_RAMP_S`].
+    pub push_w: Vector3<f64>,
     hand_from_sensor: [UnitQuaternion<f64>; 2],
     /// Per side: body index and application point in the body frame.
     application: [(usize, Point3<f64>); 2],
@@ -49,10 +54,17 @@ impl ForceReplay {
         let (l, r) = (side(LEFT), side(RIGHT));
         Self {
             coefficient,
+            push_w: Vector3::zeros(),
             hand_from_sensor: [l.0, r.0],
             application: [l.1, r.1],
             body_from_hand: [l.2, r.2],
         }
+    }
+
+    /// Adds a constant world-frame push on each hand (ramped in over [`PUSH_RAMP_S`]).
+    pub fn with_push(mut self, push_w: Vector3<f64>) -> Self {
+        self.push_w = push_w;
+        self
     }
 
     /// The world-frame forces for the reference at `t_s` and the hands' current world poses
@@ -64,6 +76,7 @@ impl ForceReplay {
         world_from_body: &[Isometry3<f64>],
     ) -> [Vector3<f64>; 2] {
         let f = reference.sample(t_s).force_sensor;
+        let push = self.push_w * (t_s / PUSH_RAMP_S).clamp(0.0, 1.0);
         [LEFT, RIGHT].map(|s| {
             let world_from_hand = world_from_body[self.application[s].0] * self.body_from_hand[s];
             world_force(
@@ -71,7 +84,7 @@ impl ForceReplay {
                 &self.hand_from_sensor[s],
                 &f[s],
                 self.coefficient,
-            )
+            ) + push
         })
     }
 

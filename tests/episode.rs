@@ -46,6 +46,7 @@ fn run(
         keypoints: robot.keypoint_set("default").unwrap(),
         termination: TerminationRule::default(),
         force_coefficient: 1.0,
+        push_n: 0.0,
         reference_offsets_s: policy.reference_offsets_s(),
     };
     let settings = PhysicsSettings {

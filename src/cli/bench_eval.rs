@@ -44,6 +44,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         keypoints: robot.keypoint_set("default").expect("default keypoints"),
         termination: TerminationRule::default(),
         force_coefficient: args.coefficient,
+        push_n: 0.0,
         reference_offsets_s: policy.reference_offsets_s(),
     };
     let settings = PhysicsSettings {

@@ -19,7 +19,8 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Built-in policy: `balance` (reference PD + tilt feedback), `replay` (reference
-    /// joints, open loop) or `hold` (default pose); or `ipc:<session>` to serve a session
+    /// joints, open loop) or `hold` (default pose); `twist2:<file.onnx>` for the TWIST2
+    /// network in process (with `--profile twist2`); or `ipc:<session>` to serve a session
     /// and evaluate whichever policy process connects to it (Python, C++, Rust clients).
     #[arg(long, default_value = "balance")]
     pub policy: String,
@@ -40,7 +41,9 @@ pub struct RunArgs {
     /// Dynamics profile (a name under data/profiles or a .toml path).
     #[arg(long, default_value = "default")]
     pub profile: String,
-    /// Settings, comma separated: `force`, `no-force`, or a replay coefficient.
+    /// Settings, comma separated: `force`, `no-force`, a replay coefficient, or
+    /// `push:<N>` (no replay; a constant world +x push of N newtons on each hand, ramped
+    /// in over 1 s — the sensitivity probe of FACTS.md §8).
     #[arg(long, value_delimiter = ',', default_value = "force,no-force")]
     pub settings: Vec<String>,
     /// Worker threads (default: all cores).
@@ -125,7 +128,7 @@ impl EvalContext {
             .iter()
             .map(|s| {
                 Setting::parse(s).with_context(|| {
-                    format!("--settings: `{s}` is not force, no-force or a number")
+                    format!("--settings: `{s}` is not force, no-force, a number or push:<N>")
                 })
             })
             .collect::<anyhow::Result<_>>()?;

@@ -3,7 +3,7 @@
 
 use crate::policy::{
     BalanceGains, BalancePolicy, HoldPolicy, LatencyMode, MissRule, Policy, RemoteConfig,
-    RemotePolicy, ReplayPolicy,
+    RemotePolicy, ReplayPolicy, Twist2Policy,
 };
 use crate::profile::Profile;
 use crate::robot::RobotModel;
@@ -133,8 +133,20 @@ pub fn make_policy(
                 .context("the robot lacks the leg joints `balance` needs")?,
         ),
         other => {
+            if let Some(path) = other.strip_prefix("twist2:") {
+                if profile.name != "twist2" {
+                    eprintln!(
+                        "note: TWIST2 was trained for the `twist2` profile; this run uses `{}`",
+                        profile.name
+                    );
+                }
+                return Ok(Box::new(Twist2Policy::load(
+                    std::path::Path::new(path),
+                    profile.action_offset_rad.clone(),
+                )?));
+            }
             let Some(session) = ipc_session(other) else {
-                bail!("unknown policy `{other}` (built-in: hold, replay, balance; or ipc:<session> for a policy process)");
+                bail!("unknown policy `{other}` (built-in: hold, replay, balance; twist2:<file.onnx>; or ipc:<session> for a policy process)");
             };
             Box::new(connect_remote(session, robot, profile, io, envs)?)
         }

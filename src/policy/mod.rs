@@ -4,10 +4,12 @@
 
 mod builtin;
 mod remote;
+pub mod twist2;
 pub mod wire;
 
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use remote::{RemoteConfig, RemoteError, RemotePolicy, TransportStats};
+pub use twist2::Twist2Policy;
 
 use crate::motion::ReferenceFrame;
 use crate::physics::RootState;

@@ -100,6 +100,7 @@ pub fn run_eval(
             keypoints,
             termination: plan.termination,
             force_coefficient: setting.coefficient,
+            push_n: setting.push_n,
             reference_offsets_s: offsets.clone(),
         })
         .collect();

@@ -28,35 +28,50 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::Write;
 
-/// A force setting: a name and the replay coefficient.
+/// A force setting: a name, the replay coefficient, and an optional constant push.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
-    /// `force`, `no-force`, or `coef-<x>`.
+    /// `force`, `no-force`, `coef-<x>` or `push-<N>`.
     pub name: String,
     /// Replay coefficient.
     pub coefficient: f64,
+    /// A constant world-frame +x push on each hand, N, ramped in over
+    /// [`crate::replay::PUSH_RAMP_S`] (a sensitivity probe, as in FACTS.md §8; recorded
+    /// forces are not replayed with it).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub push_n: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 impl Setting {
-    /// Parses `force`, `no-force` or a number.
+    /// Parses `force`, `no-force`, a replay coefficient, or `push:<N>`.
     pub fn parse(s: &str) -> Option<Self> {
+        let plain = |name: String, coefficient: f64| Self {
+            name,
+            coefficient,
+            push_n: 0.0,
+        };
         match s {
-            "force" => Some(Self {
-                name: "force".into(),
-                coefficient: 1.0,
-            }),
-            "no-force" => Some(Self {
-                name: "no-force".into(),
-                coefficient: 0.0,
-            }),
-            other => other
-                .parse::<f64>()
-                .ok()
-                .filter(|c| c.is_finite())
-                .map(|c| Self {
-                    name: format!("coef-{c}"),
-                    coefficient: c,
-                }),
+            "force" => Some(plain("force".into(), 1.0)),
+            "no-force" => Some(plain("no-force".into(), 0.0)),
+            other => {
+                if let Some(n) = other.strip_prefix("push:") {
+                    let n: f64 = n.parse().ok().filter(|n: &f64| n.is_finite())?;
+                    return Some(Self {
+                        name: format!("push-{n}"),
+                        coefficient: 0.0,
+                        push_n: n,
+                    });
+                }
+                other
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|c| c.is_finite())
+                    .map(|c| plain(format!("coef-{c}"), c))
+            }
         }
     }
 }

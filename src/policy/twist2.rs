@@ -1,0 +1,242 @@
+//! TWIST2 (Ze et al. 2025, github.com/amazon-far/TWIST2, MIT), the released whole-body
+//! tracking policy, in process: its 1432-dim observation built from the benchmark signals
+//! and the ONNX network run with tract.
+//!
+//! The observation is the one TWIST2's student policy was trained with (FACTS.md §3, read
+//! from `deploy_real/server_low_level_g1_sim.py`, `deploy_real/server_motion_lib.py` and
+//! `g1_mimic_distill_config.py` of that repository):
+//!
+//! ```text
+//! mimic(frame)  = [v_x, v_y (root linear velocity in the root frame), root height,
+//!                  roll, pitch, yaw rate (root frame), joint_pos (29)]                 35
+//! proprio       = [ω_base·0.25 (3), roll, pitch, q − q_default (29),
+//!                  q̇·0.05 with the 4 ankle entries zeroed (29), last action (29)]      92
+//! single        = mimic(reference at t + 0.02 s) ++ proprio                            127
+//! observation   = single ++ 10 past singles (oldest first) ++ mimic(reference at t)   1432
+//! ```
+//!
+//! clipped to ±100, float32. The history is zero before an episode's first step, filled
+//! with the current `single` after steps 0 and 1 (as TWIST2's training environment refills
+//! it after a reset), then shifted. The action is the raw network output; the `twist2`
+//! profile clips it to ±10 and scales it by 0.5 around the default pose. The Python adapter
+//! (`adapters/python/thorarena/adapters/twist2.py`) builds the same vector and is tested
+//! against this one.
+
+use super::{ActOutcome, Observation, Policy};
+use crate::motion::ReferenceFrame;
+use nalgebra::UnitQuaternion;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use tract_onnx::prelude::*;
+
+/// Length of `mimic(frame)`.
+pub const MIMIC_LEN: usize = 35;
+/// Length of one observation frame (`mimic ++ proprio`).
+pub const SINGLE_LEN: usize = 127;
+/// Past frames in the observation.
+pub const HISTORY_LEN: usize = 10;
+/// Length of the whole observation.
+pub const OBS_LEN: usize = SINGLE_LEN * (HISTORY_LEN + 1) + MIMIC_LEN;
+/// Joints of the G1 the network was trained on.
+pub const N_JOINTS: usize = 29;
+/// The mimic frame is the reference one 50 Hz step ahead.
+pub const MIMIC_LOOKAHEAD_S: f64 = 0.02;
+/// Ankle joints (canonical indices) whose velocities the observation hides.
+const ANKLES: [usize; 4] = [4, 5, 10, 11];
+
+/// Why the policy could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum Twist2Error {
+    /// tract could not load or prepare the network.
+    #[error("loading the TWIST2 network {path}: {message}")]
+    Load {
+        /// The ONNX file.
+        path: PathBuf,
+        /// tract's message.
+        message: String,
+    },
+    /// The robot or profile is not the one the network was trained for.
+    #[error("TWIST2 needs the 29-joint G1 (got {0} joints)")]
+    Joints(usize),
+}
+
+/// Roll and pitch of a rotation (x-y-z convention, as TWIST2 computes them).
+fn roll_pitch(q: &UnitQuaternion<f64>) -> (f64, f64) {
+    let (w, x, y, z) = (q.w, q.i, q.j, q.k);
+    let roll = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let pitch = (2.0 * (w * y - z * x)).clamp(-1.0, 1.0).asin();
+    (roll, pitch)
+}
+
+/// `mimic(frame)`: what TWIST2 sees of one reference frame.
+pub fn mimic(frame: &ReferenceFrame, out: &mut Vec<f64>) {
+    let r = &frame.world_from_root.rotation;
+    let v = r.inverse_transform_vector(&frame.root_lin_vel_w);
+    let w = r.inverse_transform_vector(&frame.root_ang_vel_w);
+    let (roll, pitch) = roll_pitch(r);
+    out.extend([
+        v.x,
+        v.y,
+        frame.world_from_root.translation.z,
+        roll,
+        pitch,
+        w.z,
+    ]);
+    out.extend_from_slice(&frame.joint_pos);
+}
+
+/// The current frame `mimic(reference at t + 0.02 s) ++ proprio` of one environment.
+/// `reference[1]` must be the frame at t + 0.02 s ([`Twist2Policy::reference_offsets_s`]).
+pub fn single_frame(obs: &Observation, default_pose: &[f64]) -> Vec<f64> {
+    let mut s = Vec::with_capacity(SINGLE_LEN);
+    mimic(&obs.reference[1], &mut s);
+    let w = obs.root.ang_vel_b();
+    s.extend([0.25 * w.x, 0.25 * w.y, 0.25 * w.z]);
+    let (roll, pitch) = roll_pitch(&obs.root.world_from_root.rotation);
+    s.extend([roll, pitch]);
+    s.extend(obs.q.iter().zip(default_pose).map(|(q, d)| q - d));
+    s.extend(obs.qd.iter().enumerate().map(
+        |(j, qd)| {
+            if ANKLES.contains(&j) {
+                0.0
+            } else {
+                0.05 * qd
+            }
+        },
+    ));
+    s.extend_from_slice(&obs.last_action);
+    debug_assert_eq!(s.len(), SINGLE_LEN);
+    s
+}
+
+/// One environment's past frames.
+#[derive(Debug, Clone)]
+pub struct History {
+    frames: Vec<Vec<f64>>,
+}
+
+impl Default for History {
+    fn default() -> Self {
+        Self {
+            frames: vec![vec![0.0; SINGLE_LEN]; HISTORY_LEN],
+        }
+    }
+}
+
+impl History {
+    /// After building step `step`'s observation: refill on steps 0 and 1, else shift.
+    pub fn push(&mut self, single: &[f64], step: usize) {
+        if step <= 1 {
+            self.frames
+                .iter_mut()
+                .for_each(|f| f.copy_from_slice(single));
+        } else {
+            self.frames.rotate_left(1);
+            self.frames[HISTORY_LEN - 1].copy_from_slice(single);
+        }
+    }
+}
+
+/// The whole observation of one environment; updates its history.
+pub fn observation(obs: &Observation, default_pose: &[f64], history: &mut History) -> Vec<f32> {
+    if obs.step == 0 {
+        *history = History::default();
+    }
+    let single = single_frame(obs, default_pose);
+    let mut all = Vec::with_capacity(OBS_LEN);
+    all.extend_from_slice(&single);
+    for f in &history.frames {
+        all.extend_from_slice(f);
+    }
+    mimic(&obs.reference[0], &mut all);
+    history.push(&single, obs.step);
+    all.into_iter()
+        .map(|v| v.clamp(-100.0, 100.0) as f32)
+        .collect()
+}
+
+/// TWIST2 in process: `--policy twist2:PATH.onnx` with `--profile twist2`.
+pub struct Twist2Policy {
+    plan: Arc<TypedRunnableModel>,
+    default_pose: Vec<f64>,
+    histories: Vec<History>,
+    last_inputs: Vec<Vec<f32>>,
+}
+
+impl Twist2Policy {
+    /// Loads the network (input `[1, 1432]` float32, output `[1, 29]`); `default_pose` is
+    /// the profile's action offset (TWIST2's default joint angles).
+    pub fn load(path: &Path, default_pose: Vec<f64>) -> Result<Self, Twist2Error> {
+        if default_pose.len() != N_JOINTS {
+            return Err(Twist2Error::Joints(default_pose.len()));
+        }
+        let load = || -> TractResult<Arc<TypedRunnableModel>> {
+            onnx()
+                .model_for_path(path)?
+                .with_input_fact(0, f32::fact([1, OBS_LEN]).into())?
+                .into_optimized()?
+                .into_runnable()
+        };
+        let plan = load().map_err(|e| Twist2Error::Load {
+            path: path.to_path_buf(),
+            message: format!("{e:#}"),
+        })?;
+        Ok(Self {
+            plan,
+            default_pose,
+            histories: Vec::new(),
+            last_inputs: Vec::new(),
+        })
+    }
+
+    /// The network's inputs of the last `act`, one per observation (for cross-checks).
+    pub fn last_inputs(&self) -> &[Vec<f32>] {
+        &self.last_inputs
+    }
+
+    /// Runs the network on one observation vector.
+    pub fn infer(&self, input: &[f32]) -> TractResult<Vec<f32>> {
+        let tensor = Tensor::from_shape(&[1, OBS_LEN], input)?;
+        let out = self.plan.run(tvec!(tensor.into()))?;
+        Ok(out[0]
+            .to_plain_array_view::<f32>()?
+            .iter()
+            .copied()
+            .collect())
+    }
+}
+
+impl Policy for Twist2Policy {
+    fn name(&self) -> &str {
+        "twist2"
+    }
+
+    fn reference_offsets_s(&self) -> Vec<f64> {
+        vec![0.0, MIMIC_LOOKAHEAD_S]
+    }
+
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
+        self.last_inputs.clear();
+        for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+            if self.histories.len() <= obs.env {
+                self.histories.resize_with(obs.env + 1, History::default);
+            }
+            let input = observation(obs, &self.default_pose, &mut self.histories[obs.env]);
+            match self.infer(&input) {
+                Ok(out) => {
+                    for (a, o) in action.iter_mut().zip(out) {
+                        *a = f64::from(o);
+                    }
+                }
+                // A network that fails at run time answers NaN: the runner's miss rule
+                // keeps it away from the physics and counts it.
+                Err(e) => {
+                    eprintln!("twist2: inference failed: {e:#}");
+                    action.fill(f64::NAN);
+                }
+            }
+            self.last_inputs.push(input);
+        }
+        ActOutcome::Acted
+    }
+}
