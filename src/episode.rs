@@ -106,6 +106,16 @@ pub struct TraceStep {
     pub reference_keypoints_w: Vec<[f64; 3]>,
     /// Keypoint error, m.
     pub kp_err_m: f64,
+    /// Reference root position at this step (not re-anchored), m; lets a viewer pose the
+    /// reference's bodies (absent in traces written before it existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_root_pos: Option<[f64; 3]>,
+    /// Reference root orientation (w, x, y, z) at this step (not re-anchored).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_root_quat_wxyz: Option<[f64; 4]>,
+    /// Reference joint angles at this step, rad.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_q: Option<Vec<f64>>,
 }
 
 /// Everything fixed across the episodes of a run.
@@ -370,6 +380,12 @@ impl<'a> Episode<'a> {
                 keypoints_w: robot_w.iter().map(xyz).collect(),
                 reference_keypoints_w: anchored.iter().map(xyz).collect(),
                 kp_err_m: *self.series.kp_err_m.last().expect("pushed above"),
+                reference_root_pos: Some(frame.world_from_root.translation.vector.into()),
+                reference_root_quat_wxyz: Some({
+                    let r = frame.world_from_root.rotation;
+                    [r.w, r.i, r.j, r.k]
+                }),
+                reference_q: Some(frame.joint_pos.clone()),
             });
         }
     }

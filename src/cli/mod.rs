@@ -10,10 +10,12 @@ mod data_synth;
 mod eval;
 mod merge;
 mod policy_arg;
+mod report_html;
 mod robot_info;
 mod run_output;
 mod serve;
 mod sim_trace;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -42,6 +44,10 @@ pub enum Command {
     Client(client::Args),
     /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
     Merge(merge::Args),
+    /// Compare runs in one self-contained HTML report with plots (+ Markdown and CSV tables).
+    Report(report_html::Args),
+    /// Replay one episode's trace (`eval --trace`) in 3D in a self-contained HTML page.
+    View(view::Args),
     /// Inspect a robot model.
     #[command(subcommand)]
     Robot(RobotCommand),
@@ -98,6 +104,8 @@ pub fn run() -> anyhow::Result<()> {
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Report(args) => report_html::run(&args),
+        Command::View(args) => view::run(&args),
         Command::Serve(args) => serve::run(&args),
         Command::Client(args) => client::run(&args),
     }

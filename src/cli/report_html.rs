@@ -1,0 +1,102 @@
+//! `thorarena report`: one self-contained HTML page comparing runs (tables side by side,
+//! FATS radar, tracking vs survival, low- vs high-force error, policy round trips), with
+//! the tables also as Markdown and CSV next to it for papers.
+
+use crate::report::{
+    comparison_warnings, diagnostics_multi_table, fats_table, load_runs, report_html, Page,
+    WebBundle,
+};
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `report`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Run directories written by `eval`, `serve` or `merge` (one per policy).
+    #[arg(required = true)]
+    pub runs: Vec<PathBuf>,
+    /// The HTML file; `<stem>.md`, `<stem>-fats.csv` and `<stem>-diagnostics.csv` are
+    /// written next to it.
+    #[arg(long, default_value = "report.html")]
+    pub out: PathBuf,
+}
+
+/// `dir/stem.html` → `dir/stem<suffix>`.
+fn sibling(html: &Path, suffix: &str) -> PathBuf {
+    let stem = html
+        .file_stem()
+        .map_or_else(|| "report".into(), |s| s.to_string_lossy().to_string());
+    html.with_file_name(format!("{stem}{suffix}"))
+}
+
+fn write(path: &Path, text: &str) -> anyhow::Result<()> {
+    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    // The bundle first: a missing `npm run build` should fail before any file is written.
+    let bundle = WebBundle::locate()?;
+    for stale in bundle.stale_sources() {
+        eprintln!(
+            "warning: {} is newer than the bundle in {}; run `npm run build --prefix web`",
+            stale.display(),
+            bundle.dir().display()
+        );
+    }
+    let runs = load_runs(&args.runs)?;
+    if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("creating {}", parent.display()))?;
+    }
+    let warnings = comparison_warnings(&runs);
+    for w in &warnings {
+        eprintln!("warning: {}", w.message);
+    }
+    let fats = fats_table(&runs);
+    let diagnostics = diagnostics_multi_table(&runs);
+    let mut md = String::from("# ThorArena report\n\n");
+    for r in &runs {
+        md += &format!(
+            "- **{}**: `{}` — policy `{}`, profile `{}`, dataset {} (sha256 {}), keypoints `{}`\n",
+            r.label,
+            r.dir.display(),
+            r.header.policy,
+            r.header.profile,
+            r.header.dataset,
+            &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(16)],
+            r.header.keypoints
+        );
+    }
+    if !warnings.is_empty() {
+        md += "\n> **Warning: these runs are not comparable as they stand.**\n";
+        for w in &warnings {
+            md += &format!(">\n> - {}\n", w.message);
+        }
+    }
+    md += &format!(
+        "\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
+        fats.markdown(),
+        diagnostics.markdown()
+    );
+    let outputs = [
+        (sibling(&args.out, ".md"), md),
+        (sibling(&args.out, "-fats.csv"), fats.csv()),
+        (sibling(&args.out, "-diagnostics.csv"), diagnostics.csv()),
+        (
+            args.out.clone(),
+            report_html(&runs, &bundle.script(Page::Report)?),
+        ),
+    ];
+    for (path, text) in &outputs {
+        write(path, text)?;
+    }
+    eprintln!(
+        "wrote {}",
+        outputs
+            .iter()
+            .map(|(p, _)| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    Ok(())
+}

@@ -1,0 +1,52 @@
+//! `thorarena view`: one episode's rollout trace (`eval --trace`) as a 3D replay in a
+//! self-contained HTML page — the robot's collision shapes, the reference as a ghost,
+//! the replayed hand forces as arrows, a timeline, and the keypoint error under it.
+
+use crate::report::{load_trace, trace_context, view_html, view_scene, Page, WebBundle};
+use anyhow::Context;
+use std::path::PathBuf;
+
+/// Arguments of `view`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// A trace file, `<run>/traces/<task>-<id>-<setting>.json`.
+    pub trace: PathBuf,
+    /// The HTML file to write.
+    #[arg(long, default_value = "view.html")]
+    pub out: PathBuf,
+    /// Robot the trace was recorded on (a bundled name or a robot directory).
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let bundle = WebBundle::locate()?;
+    for stale in bundle.stale_sources() {
+        eprintln!(
+            "warning: {} is newer than the bundle in {}; run `npm run build --prefix web`",
+            stale.display(),
+            bundle.dir().display()
+        );
+    }
+    let robot = super::load_robot(&args.robot)?;
+    let trace = load_trace(&args.trace)?;
+    let context = trace_context(&args.trace);
+    let scene = view_scene(&robot, &trace, &args.trace, &context)?;
+    let html = view_html(&scene, &bundle.script(Page::View)?);
+    if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("creating {}", parent.display()))?;
+    }
+    std::fs::write(&args.out, html).with_context(|| format!("writing {}", args.out.display()))?;
+    eprintln!(
+        "wrote {} ({} steps{})",
+        args.out.display(),
+        trace.len(),
+        if scene.reference_poses.is_some() {
+            ", reference ghost"
+        } else {
+            "; the trace has no reference joints: the reference shows as keypoints"
+        }
+    );
+    Ok(())
+}

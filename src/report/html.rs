@@ -1,0 +1,557 @@
+//! Assembling the self-contained pages: templates and styles from `web/src/` (compiled in,
+//! they are ours and small), the data as inline JSON, and the page script from the
+//! front-end bundle found at run time.
+
+use super::runs::{comparison_warnings, EpisodePoint, Run};
+use super::scene::ViewScene;
+use super::tables::{all_tasks, diagnostics_multi_table, fats_table};
+use super::ReportError;
+use serde::Serialize;
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+/// Environment variable naming the bundle directory (default: `web/dist` of the checkout
+/// the binary was built from).
+pub const WEB_DIST_ENV: &str = "THORARENA_WEB_DIST";
+
+const REPORT_TEMPLATE: &str = include_str!("../../web/src/report.html");
+const REPORT_STYLE: &str = include_str!("../../web/src/report.css");
+const VIEW_TEMPLATE: &str = include_str!("../../web/src/view.html");
+const VIEW_STYLE: &str = include_str!("../../web/src/view.css");
+
+/// A page of the front end, one bundled script each.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Page {
+    /// `thorarena report`.
+    Report,
+    /// `thorarena view`.
+    View,
+}
+
+impl Page {
+    fn script_name(self) -> &'static str {
+        match self {
+            Page::Report => "report.js",
+            Page::View => "view.js",
+        }
+    }
+}
+
+/// The built front-end bundle (`web/dist/`): our page scripts with three.js and Chart.js.
+///
+/// Found at run time, not compiled in, so that `cargo build` never needs node; the
+/// directory comes from [`WEB_DIST_ENV`] or is the checkout's `web/dist`.
+#[derive(Debug, Clone)]
+pub struct WebBundle {
+    dir: PathBuf,
+}
+
+impl WebBundle {
+    /// The directory a bundle is looked for in.
+    pub fn default_dir() -> PathBuf {
+        std::env::var_os(WEB_DIST_ENV)
+            .map(PathBuf::from)
+            .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/web/dist")))
+    }
+
+    /// The bundle in [`WebBundle::default_dir`].
+    pub fn locate() -> Result<Self, ReportError> {
+        Self::at(&Self::default_dir())
+    }
+
+    /// The bundle in `dir`; an error naming the build command when a script is missing.
+    pub fn at(dir: &Path) -> Result<Self, ReportError> {
+        for page in [Page::Report, Page::View] {
+            let path = dir.join(page.script_name());
+            if !path.is_file() {
+                return Err(ReportError::BundleMissing { path });
+            }
+        }
+        Ok(Self {
+            dir: dir.to_path_buf(),
+        })
+    }
+
+    /// The bundle directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// A page's script, safe to inline in a `<script>` element.
+    pub fn script(&self, page: Page) -> Result<String, ReportError> {
+        let path = self.dir.join(page.script_name());
+        let text = std::fs::read_to_string(&path).map_err(|source| ReportError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        Ok(inline_script(&text))
+    }
+
+    /// Front-end sources newer than the bundle (`web/src/*.js` next to `web/dist`): the
+    /// page would run old code, so the CLI warns.
+    pub fn stale_sources(&self) -> Vec<PathBuf> {
+        let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+        let built = [Page::Report, Page::View]
+            .iter()
+            .filter_map(|p| modified(&self.dir.join(p.script_name())))
+            .min();
+        let (Some(built), Some(web)) = (built, self.dir.parent()) else {
+            return Vec::new();
+        };
+        let Ok(entries) = std::fs::read_dir(web.join("src")) else {
+            return Vec::new();
+        };
+        let mut stale: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "js"))
+            .filter(|p| modified(p).is_some_and(|m| m > built))
+            .collect();
+        stale.sort();
+        stale
+    }
+}
+
+/// HTML-escapes text for element content and quoted attributes.
+pub fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// A script's text made safe inside `<script>…</script>`: the only sequence that ends the
+/// element early is `</script`, and `<\/script` means the same in JS strings, regular
+/// expressions and comments (esbuild already writes it so; this guards hand-built
+/// bundles).
+fn inline_script(js: &str) -> String {
+    let mut out = String::with_capacity(js.len());
+    let lower = js.to_ascii_lowercase();
+    let mut last = 0;
+    for (i, _) in lower.match_indices("</script") {
+        out.push_str(&js[last..i]);
+        out.push_str("<\\/");
+        last = i + 2;
+    }
+    out.push_str(&js[last..]);
+    out
+}
+
+/// JSON for a `<script type="application/json">` element: `<` is written as `\u003c`,
+/// which JSON.parse reads back unchanged, so no string in the data can close the element.
+fn inline_json<T: Serialize>(value: &T) -> String {
+    serde_json::to_string(value)
+        .expect("report data serializes")
+        .replace('<', "\\u003c")
+}
+
+/// Fills `{{name}}` placeholders in one pass, so text inserted for one placeholder is
+/// never searched for another.
+fn fill(template: &str, values: &[(&str, &str)]) -> String {
+    let mut out =
+        String::with_capacity(template.len() + values.iter().map(|v| v.1.len()).sum::<usize>());
+    let mut rest = template;
+    while let Some(start) = rest.find("{{") {
+        let Some(len) = rest[start + 2..].find("}}") else {
+            break;
+        };
+        let name = &rest[start + 2..start + 2 + len];
+        match values.iter().find(|(n, _)| *n == name) {
+            Some((_, v)) => {
+                out.push_str(&rest[..start]);
+                out.push_str(v);
+            }
+            None => out.push_str(&rest[..start + 4 + len]),
+        }
+        rest = &rest[start + 4 + len..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// An id fragment from a setting name (`push-30.5` → `push-30-5`).
+fn slug(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}
+
+#[derive(Serialize)]
+struct RunInfo<'a> {
+    label: &'a str,
+    policy: &'a str,
+    dir: String,
+}
+
+#[derive(Serialize)]
+struct Series {
+    run: usize,
+    values: Vec<Option<f64>>,
+}
+
+#[derive(Serialize)]
+struct RegimeSeries {
+    run: usize,
+    low: Vec<Option<f64>>,
+    high: Vec<Option<f64>>,
+}
+
+#[derive(Serialize)]
+struct SettingPlot<S> {
+    id: String,
+    setting: String,
+    series: Vec<S>,
+}
+
+#[derive(Serialize)]
+struct LatencySeries {
+    run: usize,
+    /// p50, p90, p99, p99.9, max, µs.
+    percentiles_us: [f64; 5],
+    mean_us: f64,
+    count: u64,
+    deadline_misses: u64,
+    late_replies: u64,
+    invalid_actions: u64,
+    policy_failures: u64,
+}
+
+#[derive(Serialize)]
+struct LatencyPlots {
+    percentiles_id: &'static str,
+    faults_id: &'static str,
+    series: Vec<LatencySeries>,
+}
+
+/// Everything the report script plots; `plots` lists every canvas id it must fill.
+#[derive(Serialize)]
+struct ReportData<'a> {
+    runs: Vec<RunInfo<'a>>,
+    tasks: Vec<String>,
+    radars: Vec<SettingPlot<Series>>,
+    scatter_id: &'static str,
+    episodes: Vec<EpisodePoint>,
+    regimes: Vec<SettingPlot<RegimeSeries>>,
+    latency: Option<LatencyPlots>,
+    plots: Vec<String>,
+}
+
+fn fmt_opt(v: Option<f64>, decimals: usize) -> String {
+    v.filter(|v| v.is_finite())
+        .map_or("–".into(), |v| format!("{v:.decimals$}"))
+}
+
+/// The report page for `runs` (one or several) with the bundled `script` inlined.
+pub fn report_html(runs: &[Run], script: &str) -> String {
+    let tasks = all_tasks(runs);
+    let mut settings: Vec<String> = Vec::new();
+    for r in runs {
+        for s in r.settings() {
+            if !settings.contains(&s) {
+                settings.push(s);
+            }
+        }
+    }
+    fn per_setting<'a>(runs: &'a [Run], s: &'a str) -> impl Iterator<Item = (usize, &'a Run)> {
+        runs.iter()
+            .enumerate()
+            .filter(move |(_, r)| r.results.contains_key(s))
+    }
+    let radars: Vec<SettingPlot<Series>> = settings
+        .iter()
+        .map(|s| SettingPlot {
+            id: format!("radar-{}", slug(s)),
+            setting: s.clone(),
+            series: per_setting(runs, s)
+                .map(|(i, r)| Series {
+                    run: i,
+                    values: tasks
+                        .iter()
+                        .map(|t| {
+                            r.task(s, t)
+                                .map(|t| t.diagnostics.fats)
+                                .filter(|v| v.is_finite())
+                        })
+                        .collect(),
+                })
+                .collect(),
+        })
+        .collect();
+    let regimes: Vec<SettingPlot<RegimeSeries>> = settings
+        .iter()
+        .map(|s| SettingPlot {
+            id: format!("kp-regimes-{}", slug(s)),
+            setting: s.clone(),
+            series: per_setting(runs, s)
+                .map(|(i, r)| {
+                    let get = |f: fn(&crate::metrics::Diagnostics) -> f64| {
+                        tasks
+                            .iter()
+                            .map(|t| {
+                                r.task(s, t)
+                                    .map(|t| f(&t.diagnostics))
+                                    .filter(|v| v.is_finite())
+                            })
+                            .collect()
+                    };
+                    RegimeSeries {
+                        run: i,
+                        low: get(|d| d.low_kp_mm),
+                        high: get(|d| d.high_kp_mm),
+                    }
+                })
+                .collect(),
+        })
+        .collect();
+    let latency_series: Vec<LatencySeries> = runs
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| {
+            let io = r.policy_io.as_ref()?;
+            let t = io.transport?;
+            let l = &io.latency;
+            Some(LatencySeries {
+                run: i,
+                percentiles_us: [l.p50_us, l.p90_us, l.p99_us, l.p999_us, l.max_us],
+                mean_us: l.mean_us,
+                count: l.count,
+                deadline_misses: io.deadline_misses,
+                late_replies: t.late_replies,
+                invalid_actions: io.invalid_actions,
+                policy_failures: t.policy_failures,
+            })
+        })
+        .collect();
+    let latency = (!latency_series.is_empty()).then_some(LatencyPlots {
+        percentiles_id: "latency-percentiles",
+        faults_id: "latency-faults",
+        series: latency_series,
+    });
+    let mut plots: Vec<String> = radars.iter().map(|p| p.id.clone()).collect();
+    plots.push("scatter-tracking-survival".into());
+    plots.extend(regimes.iter().map(|p| p.id.clone()));
+    if let Some(l) = &latency {
+        plots.push(l.percentiles_id.into());
+        plots.push(l.faults_id.into());
+    }
+    let data = ReportData {
+        runs: runs
+            .iter()
+            .map(|r| RunInfo {
+                label: &r.label,
+                policy: &r.header.policy,
+                dir: r.dir.display().to_string(),
+            })
+            .collect(),
+        tasks,
+        episodes: runs
+            .iter()
+            .enumerate()
+            .flat_map(|(i, r)| r.episode_points(i))
+            .collect(),
+        scatter_id: "scatter-tracking-survival",
+        radars,
+        regimes,
+        latency,
+        plots,
+    };
+    let body = report_body(runs, &data);
+    let title = format!(
+        "ThorArena report — {}",
+        runs.iter()
+            .map(|r| r.label.as_str())
+            .collect::<Vec<_>>()
+            .join(" vs ")
+    );
+    fill(
+        REPORT_TEMPLATE,
+        &[
+            ("title", &escape(&title)),
+            ("style", REPORT_STYLE),
+            ("body", &body),
+            ("data", &inline_json(&data)),
+            ("script", script),
+        ],
+    )
+}
+
+fn figure(id: &str, caption: &str) -> String {
+    format!(
+        "<figure><figcaption>{}</figcaption><div class=\"chart\"><canvas id=\"{}\"></canvas></div></figure>",
+        escape(caption),
+        escape(id)
+    )
+}
+
+/// The page body: runs, the comparability warnings, the tables, and one canvas per plot
+/// (the script fills them).
+fn report_body(runs: &[Run], data: &ReportData) -> String {
+    let mut s = String::new();
+    s += "<section id=\"runs\"><h2>Runs</h2><table id=\"runs-table\"><thead><tr><th>run</th><th>policy</th><th>profile</th><th>dataset</th><th>keypoints</th><th>termination</th><th>settings</th><th>episodes</th><th>directory</th></tr></thead><tbody>";
+    for r in runs {
+        let h = &r.header;
+        let _ = write!(
+            s,
+            "<tr><th>{}</th><td>{}</td><td>{}</td><td>{} <code>{}</code></td><td>{}</td><td>height &gt; {} m or tilt &gt; {} rad</td><td>{}</td><td>{}</td><td><code>{}</code></td></tr>",
+            escape(&r.label),
+            escape(&h.policy),
+            escape(&h.profile),
+            escape(&h.dataset),
+            escape(&h.dataset_sha256[..h.dataset_sha256.len().min(12)]),
+            escape(&h.keypoints),
+            h.termination.max_torso_height_error_m,
+            h.termination.max_torso_tilt_error_rad,
+            escape(&r.settings().join(", ")),
+            r.records.len(),
+            escape(&r.dir.display().to_string())
+        );
+    }
+    s += "</tbody></table></section>";
+    let warnings = comparison_warnings(runs);
+    if !warnings.is_empty() {
+        s += "<section id=\"comparability-warnings\" class=\"warning\" role=\"alert\"><h2>⚠ These runs are not comparable as they stand</h2><ul>";
+        for w in &warnings {
+            let _ = write!(
+                s,
+                "<li data-kind=\"{}\">{}</li>",
+                escape(
+                    serde_json::to_value(w.kind)
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_string))
+                        .unwrap_or_default()
+                        .as_str()
+                ),
+                escape(&w.message)
+            );
+        }
+        s += "</ul><p>Numbers below are shown per run; differences between runs may come from these, not from the policies.</p></section>";
+    }
+    let _ = write!(
+        s,
+        "<section id=\"tables\"><h2>Task-level FATS</h2>{}<h2>Diagnostics (averaged over tasks)</h2>{}</section>",
+        fats_table(runs).html("fats-table"),
+        diagnostics_multi_table(runs).html("diagnostics-table")
+    );
+    s += "<section id=\"plots\"><h2>FATS per task</h2><div class=\"grid\">";
+    for p in &data.radars {
+        s += &figure(&p.id, &format!("FATS per task — {}", p.setting));
+    }
+    s += "</div><h2>Tracking vs survival</h2><div class=\"grid wide\">";
+    s += &figure(
+        data.scatter_id,
+        "One point per episode: tracking score 100·exp(−E/σ) against survival; colour: run, marker: setting",
+    );
+    s += "</div><h2>Keypoint error under low and high force</h2><div class=\"grid\">";
+    for p in &data.regimes {
+        s += &figure(
+            &p.id,
+            &format!(
+                "Low- vs high-force keypoint RMSE per task (mm) — {}",
+                p.setting
+            ),
+        );
+    }
+    s += "</div></section>";
+    let io_runs: Vec<&Run> = runs.iter().filter(|r| r.policy_io.is_some()).collect();
+    if !io_runs.is_empty() {
+        s += "<section id=\"policy-io\"><h2>Policy I/O</h2><table id=\"policy-io-table\" class=\"numbers\"><thead><tr><th>run</th><th>transport</th><th>steps</th><th>p50 µs</th><th>p90 µs</th><th>p99 µs</th><th>p99.9 µs</th><th>max µs</th><th>budget</th><th>deadline misses</th><th>late replies</th><th>invalid actions</th><th>policy failures</th></tr></thead><tbody>";
+        for r in io_runs {
+            let io = r.policy_io.as_ref().expect("filtered");
+            let l = &io.latency;
+            let t = io.transport;
+            let _ = write!(
+                s,
+                "<tr><th>{}</th><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                escape(&r.label),
+                if t.is_some() { "policy server" } else { "in process" },
+                l.count,
+                fmt_opt(Some(l.p50_us), 1),
+                fmt_opt(Some(l.p90_us), 1),
+                fmt_opt(Some(l.p99_us), 1),
+                fmt_opt(Some(l.p999_us), 1),
+                fmt_opt(Some(l.max_us), 1),
+                r.header.io.budget_s.map_or("none".into(), |b| format!("{:.3} ms", b * 1e3)),
+                io.deadline_misses,
+                t.map_or("–".into(), |t| t.late_replies.to_string()),
+                io.invalid_actions,
+                t.map_or("–".into(), |t| t.policy_failures.to_string()),
+            );
+        }
+        s += "</tbody></table>";
+        if let Some(l) = &data.latency {
+            s += "<div class=\"grid\">";
+            s += &figure(
+                l.percentiles_id,
+                "Round-trip latency percentiles through the policy server (µs, log scale; the run stores percentiles, not samples)",
+            );
+            s += &figure(
+                l.faults_id,
+                "Deadline misses, late replies and invalid actions",
+            );
+            s += "</div>";
+        }
+        s += "</section>";
+    }
+    s
+}
+
+/// The viewer page for one episode's scene with the bundled `script` inlined.
+pub fn view_html(scene: &ViewScene, script: &str) -> String {
+    let mut info = String::new();
+    for (k, v) in &scene.info {
+        let _ = write!(info, "<dt>{}</dt><dd>{}</dd>", escape(k), escape(v));
+    }
+    fill(
+        VIEW_TEMPLATE,
+        &[
+            ("title", &escape(&scene.title)),
+            ("style", VIEW_STYLE),
+            ("info", &info),
+            (
+                "steps_max",
+                &(scene.time_s.len().saturating_sub(1)).to_string(),
+            ),
+            ("data", &inline_json(scene)),
+            ("script", script),
+        ],
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fill_replaces_each_placeholder_once_and_never_inside_inserted_text() {
+        let out = fill("a{{x}}b{{y}}c{{z}}", &[("x", "{{y}}"), ("y", "Y")]);
+        assert_eq!(out, "a{{y}}bYc{{z}}");
+    }
+
+    #[test]
+    fn inlined_scripts_and_json_cannot_close_their_element() {
+        assert_eq!(inline_script("s='</SCRIPT>';"), "s='<\\/SCRIPT>';");
+        let json = inline_json(&serde_json::json!({"a": "</script><b>"}));
+        assert!(!json.contains('<'));
+        let back: serde_json::Value = serde_json::from_str(&json).unwrap();
+        assert_eq!(back["a"], "</script><b>");
+    }
+
+    #[test]
+    fn slugs_are_safe_ids() {
+        assert_eq!(slug("push-30.5"), "push-30-5");
+        assert_eq!(slug("no-force"), "no-force");
+    }
+}

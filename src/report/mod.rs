@@ -1,0 +1,75 @@
+//! Results for people: the paper's tables (Markdown for `tables.md`; Markdown, CSV and
+//! HTML side by side for several runs), the self-contained HTML report of
+//! `thorarena report`, and the 3D episode replay of `thorarena view`.
+//!
+//! The HTML pages are one file each: our templates and styles (`web/src/`, compiled in),
+//! the page data as JSON, and the page script — our code bundled with three.js and
+//! Chart.js by `npm run build --prefix web` into `web/dist/` — all inlined, so a report
+//! opens from disk or an e-mail attachment with no network. The bundle is read at run
+//! time ([`WebBundle`]) because cargo must build without node.
+
+mod html;
+mod runs;
+mod scene;
+mod tables;
+
+pub use html::{escape, report_html, view_html, Page, WebBundle, WEB_DIST_ENV};
+pub use runs::{
+    comparison_warnings, label_runs, load_run, load_runs, ComparisonWarning, EpisodePoint,
+    PolicyIoSummary, Run, WarningKind,
+};
+pub use scene::{
+    load_trace, trace_context, view_scene, BodyShapes, ShapeView, TraceContext, ViewScene,
+};
+pub use tables::{
+    all_tasks, columns, diagnostics_multi_table, diagnostics_table, fats_table, task_fats_table,
+    DiagnosticRow, NumberRow, NumberTable, DIAGNOSTIC_ROWS,
+};
+
+use std::path::PathBuf;
+
+/// Why a report or a view could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// A file could not be read.
+    #[error("reading {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A results file is not the JSON it should be.
+    #[error("parsing {path}: {source}")]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: serde_json::Error,
+    },
+    /// A run directory that cannot be reported.
+    #[error("run {path}: {reason}")]
+    BadRun {
+        /// The run directory.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A trace that does not fit the robot, or holds no step.
+    #[error("trace {path}: {reason}")]
+    BadTrace {
+        /// The trace file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The front-end bundle has not been built.
+    #[error(
+        "the front-end bundle is missing ({path}): run `npm ci --prefix web && npm run build --prefix web` \
+         in the ThorArena checkout, or set {WEB_DIST_ENV} to a directory holding report.js and view.js"
+    )]
+    BundleMissing {
+        /// The file looked for.
+        path: PathBuf,
+    },
+}

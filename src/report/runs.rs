@@ -1,0 +1,359 @@
+//! Reading run directories back for reports, and checking that runs may be compared.
+//!
+//! Scores are recomputed from `episodes.jsonl` with the run's own regime thresholds
+//! (`summary.json`), through the same [`summarize`] the run used: the result is the run's
+//! own numbers, and undefined diagnostics stay NaN (JSON wrote them as `null`).
+
+use super::ReportError;
+use crate::metrics::{score_episode, Diagnostics, RegimeThresholds, TaskSummary, SIGMA_M};
+use crate::policy::TransportStats;
+use crate::runner::{
+    read_records, summarize, EpisodeRecord, LatencySummary, RunHeader, SettingResults,
+};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The policy's answers during a run, as `summary.json` (`policy_io`) stores them.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+pub struct PolicyIoSummary {
+    /// Per-step latency percentiles (the run keeps percentiles, not samples).
+    pub latency: LatencySummary,
+    /// Transport counters; present only when the policy ran behind the policy server.
+    #[serde(default)]
+    pub transport: Option<TransportStats>,
+    /// Control steps whose actions missed the budget.
+    #[serde(default)]
+    pub deadline_misses: u64,
+    /// Control steps with unusable actions.
+    #[serde(default)]
+    pub invalid_actions: u64,
+}
+
+/// The parts of `summary.json` a report needs (its per-setting scores are recomputed).
+#[derive(Debug, Deserialize)]
+struct SummaryFile {
+    thresholds: BTreeMap<String, RegimeThresholds>,
+    #[serde(default)]
+    policy_io: Option<PolicyIoSummary>,
+}
+
+/// One run directory, read back and scored.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// The directory as given.
+    pub dir: PathBuf,
+    /// Name in tables and legends: the policy, made unique among the compared runs.
+    pub label: String,
+    /// `run.json`.
+    pub header: RunHeader,
+    /// `episodes.jsonl`.
+    pub records: Vec<EpisodeRecord>,
+    /// Regime thresholds per task (`summary.json`).
+    pub thresholds: BTreeMap<String, RegimeThresholds>,
+    /// Per setting: task summaries and the average over tasks.
+    pub results: SettingResults,
+    /// Latency and faults of the policy, when the run measured them.
+    pub policy_io: Option<PolicyIoSummary>,
+}
+
+/// One episode's place on the tracking-vs-survival plane.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct EpisodePoint {
+    /// Index of the run in the compared list.
+    pub run: usize,
+    /// Setting name.
+    pub setting: String,
+    /// Task.
+    pub task: String,
+    /// Sequence id.
+    pub sequence_id: String,
+    /// Tracking score `100·exp(−E_i/σ)` (the episode score before survival scales it;
+    /// 0 when the episode ended before its first step).
+    pub tracking: f64,
+    /// Survival `s_i`.
+    pub survival: f64,
+    /// Episode score `S_i`.
+    pub score: f64,
+    /// Why it ended early (`torso_tilt`, …), if it did.
+    pub termination: Option<String>,
+}
+
+impl Run {
+    /// Setting names in the run's schedule order (those with results).
+    pub fn settings(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .header
+            .settings
+            .iter()
+            .map(|s| s.name.clone())
+            .filter(|s| self.results.contains_key(s))
+            .collect();
+        // Settings present in the records but not in the header (never written by
+        // `eval`, but a hand-edited run should still show them).
+        let extra: Vec<String> = self
+            .results
+            .keys()
+            .filter(|k| !names.contains(k))
+            .cloned()
+            .collect();
+        names.extend(extra);
+        names
+    }
+
+    /// A task's summary under a setting.
+    pub fn task(&self, setting: &str, task: &str) -> Option<&TaskSummary> {
+        self.results.get(setting)?.0.iter().find(|t| t.task == task)
+    }
+
+    /// The average over tasks under a setting.
+    pub fn average(&self, setting: &str) -> Option<&Diagnostics> {
+        self.results.get(setting).map(|(_, d)| d)
+    }
+
+    /// Every episode scored (tracking score, survival, score), in record order.
+    pub fn episode_points(&self, run_index: usize) -> Vec<EpisodePoint> {
+        self.records
+            .iter()
+            .map(|r| {
+                let th = self
+                    .thresholds
+                    .get(&r.task)
+                    .copied()
+                    .unwrap_or(RegimeThresholds {
+                        p33_n: 0.0,
+                        p66_n: 0.0,
+                    });
+                let s = score_episode(&r.series, &th);
+                EpisodePoint {
+                    run: run_index,
+                    setting: r.setting.clone(),
+                    task: r.task.clone(),
+                    sequence_id: r.sequence_id.clone(),
+                    tracking: s.error_m.map_or(0.0, |e| 100.0 * (-e / SIGMA_M).exp()),
+                    survival: s.survival,
+                    score: s.score,
+                    termination: r.termination.map(|t| {
+                        serde_json::to_value(t)
+                            .ok()
+                            .and_then(|v| v.as_str().map(str::to_string))
+                            .unwrap_or_default()
+                    }),
+                }
+            })
+            .collect()
+    }
+}
+
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ReportError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ReportError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    serde_json::from_str(&text).map_err(|source| ReportError::Json {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Reads one run directory (`run.json`, `episodes.jsonl`, `summary.json`) and scores it.
+/// The label is the policy name; [`load_runs`] makes labels unique.
+pub fn load_run(dir: &Path) -> Result<Run, ReportError> {
+    let header: RunHeader = read_json(&dir.join("run.json"))?;
+    let summary: SummaryFile = read_json(&dir.join("summary.json"))?;
+    let episodes = dir.join("episodes.jsonl");
+    let (records, _) = read_records(&episodes).map_err(|source| ReportError::Io {
+        path: episodes.clone(),
+        source,
+    })?;
+    if records.is_empty() {
+        return Err(ReportError::BadRun {
+            path: dir.to_path_buf(),
+            reason: "episodes.jsonl holds no finished episode".into(),
+        });
+    }
+    let results = summarize(&records, &summary.thresholds);
+    Ok(Run {
+        dir: dir.to_path_buf(),
+        label: header.policy.clone(),
+        header,
+        records,
+        thresholds: summary.thresholds,
+        results,
+        policy_io: summary.policy_io,
+    })
+}
+
+/// Reads several runs, labelling each by its policy — or, when two runs share a policy
+/// name, by policy and directory name (then by position, if even those agree).
+pub fn load_runs(dirs: &[PathBuf]) -> Result<Vec<Run>, ReportError> {
+    let mut runs = dirs
+        .iter()
+        .map(|d| load_run(d))
+        .collect::<Result<Vec<_>, _>>()?;
+    label_runs(&mut runs);
+    Ok(runs)
+}
+
+/// Makes every run's label unique (see [`load_runs`]).
+pub fn label_runs(runs: &mut [Run]) {
+    let count = |labels: &[String], l: &str| labels.iter().filter(|x| *x == l).count();
+    let policies: Vec<String> = runs.iter().map(|r| r.header.policy.clone()).collect();
+    let mut labels: Vec<String> = runs
+        .iter()
+        .map(|r| {
+            if count(&policies, &r.header.policy) > 1 {
+                let dir = r.dir.file_name().map_or_else(
+                    || r.dir.display().to_string(),
+                    |n| n.to_string_lossy().into(),
+                );
+                format!("{} ({dir})", r.header.policy)
+            } else {
+                r.header.policy.clone()
+            }
+        })
+        .collect();
+    let snapshot = labels.clone();
+    for (i, l) in labels.iter_mut().enumerate() {
+        if count(&snapshot, l) > 1 {
+            *l = format!("{l} #{}", i + 1);
+        }
+    }
+    for (r, l) in runs.iter_mut().zip(labels) {
+        r.label = l;
+    }
+}
+
+/// What makes two runs' numbers incomparable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WarningKind {
+    /// Different dataset content (sha256): different motions or forces.
+    Dataset,
+    /// Different dynamics profile (gains, control rate, delay).
+    Profile,
+    /// Different termination rule: survival means something else.
+    Termination,
+    /// Different keypoint set: the tracking error measures other points.
+    Keypoints,
+    /// Different policy I/O rules (budget, miss rule, latency mode).
+    PolicyIo,
+    /// A setting of the same name with another coefficient or push.
+    Settings,
+    /// Different ThorArena versions (the simulator may have changed).
+    Version,
+    /// A shard of a run, not the whole run.
+    Partial,
+}
+
+/// A reason the runs of a report must not be compared as they stand.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct ComparisonWarning {
+    /// What differs.
+    pub kind: WarningKind,
+    /// A sentence naming the runs and their values.
+    pub message: String,
+}
+
+/// Groups labelled values: `a, b: x; c: y`; `None` when all values agree.
+fn grouped<'a>(items: impl IntoIterator<Item = (&'a str, String)>) -> Option<String> {
+    let mut groups: Vec<(String, Vec<&str>)> = Vec::new();
+    for (label, v) in items {
+        match groups.iter_mut().find(|(g, _)| *g == v) {
+            Some((_, labels)) => labels.push(label),
+            None => groups.push((v, vec![label])),
+        }
+    }
+    (groups.len() > 1).then(|| {
+        groups
+            .iter()
+            .map(|(v, labels)| format!("{}: {v}", labels.join(", ")))
+            .collect::<Vec<_>>()
+            .join("; ")
+    })
+}
+
+/// Every way the runs differ in what they measured (dataset, profile, termination rule,
+/// keypoints, policy I/O rules, settings, version) and every partial run. Empty when the
+/// runs are comparable.
+pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
+    let mut out = Vec::new();
+    let mut flag = |kind, what: &str, value: &dyn Fn(&Run) -> String| {
+        if let Some(groups) = grouped(runs.iter().map(|r| (r.label.as_str(), value(r)))) {
+            out.push(ComparisonWarning {
+                kind,
+                message: format!("{what} differ — {groups}"),
+            });
+        }
+    };
+    flag(WarningKind::Dataset, "Datasets", &|r| {
+        format!(
+            "{} (sha256 {})",
+            r.header.dataset,
+            &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(12)]
+        )
+    });
+    flag(WarningKind::Profile, "Dynamics profiles", &|r| {
+        format!(
+            "`{}` (control step {} s)",
+            r.header.profile, r.header.control_dt_s
+        )
+    });
+    flag(WarningKind::Termination, "Termination rules", &|r| {
+        let t = r.header.termination;
+        format!(
+            "torso height error > {} m or tilt error > {} rad",
+            t.max_torso_height_error_m, t.max_torso_tilt_error_rad
+        )
+    });
+    flag(WarningKind::Keypoints, "Keypoint sets", &|r| {
+        format!("`{}`", r.header.keypoints)
+    });
+    flag(WarningKind::PolicyIo, "Policy I/O rules", &|r| {
+        let io = r.header.io;
+        format!(
+            "budget {}, miss rule {:?}, latency mode {:?}, max |action| {}",
+            io.budget_s
+                .map_or("none".into(), |b| format!("{:.3} ms", b * 1e3)),
+            io.miss_rule,
+            io.latency_mode,
+            io.max_abs_action
+        )
+    });
+    flag(WarningKind::Version, "ThorArena versions", &|r| {
+        r.header.version.clone()
+    });
+    // A setting name must mean the same coefficient and push in every run that has it.
+    let mut names: Vec<&str> = runs
+        .iter()
+        .flat_map(|r| r.header.settings.iter().map(|s| s.name.as_str()))
+        .collect();
+    names.sort();
+    names.dedup();
+    for name in names {
+        let having = runs.iter().filter_map(|r| {
+            let s = r.header.settings.iter().find(|s| s.name == name)?;
+            let value = format!("coefficient {}, push {} N", s.coefficient, s.push_n);
+            Some((r.label.as_str(), value))
+        });
+        if let Some(groups) = grouped(having) {
+            out.push(ComparisonWarning {
+                kind: WarningKind::Settings,
+                message: format!("Setting `{name}` differs — {groups}"),
+            });
+        }
+    }
+    for r in runs {
+        if let Some((i, n)) = r.header.shard {
+            out.push(ComparisonWarning {
+                kind: WarningKind::Partial,
+                message: format!(
+                    "{} is shard {i}/{n} of a run ({}): partial results; `thorarena merge` the shards first",
+                    r.label,
+                    r.dir.display()
+                ),
+            });
+        }
+    }
+    out
+}

@@ -1,0 +1,305 @@
+//! The paper's two tables — task-level FATS and the diagnostics averaged over tasks — for
+//! one run in Markdown (`tables.md`), and for several runs side by side as a
+//! [`NumberTable`] that renders to Markdown, CSV and HTML from the same numbers, so a
+//! paper's CSV can never disagree with the report it came with.
+
+use super::runs::Run;
+use crate::metrics::Diagnostics;
+use crate::runner::SettingResults;
+use std::fmt::Write;
+
+/// One row of the diagnostics table: how to read it from [`Diagnostics`] and print it.
+#[derive(Debug, Clone, Copy)]
+pub struct DiagnosticRow {
+    /// Row name as the paper prints it.
+    pub name: &'static str,
+    /// The value.
+    pub value: fn(&Diagnostics) -> f64,
+    /// Decimals printed.
+    pub decimals: usize,
+    /// Printed after the number (`×` for the power overhead).
+    pub suffix: &'static str,
+}
+
+/// The diagnostics table's rows, in the paper's order (one definition for every table).
+pub const DIAGNOSTIC_ROWS: [DiagnosticRow; 10] = [
+    row("FATS", |d| d.fats, 2, ""),
+    row("Survival", |d| d.survival, 3, ""),
+    row("KP error (mm)", |d| d.kp_mm, 1, ""),
+    row("Low KP (mm)", |d| d.low_kp_mm, 1, ""),
+    row("High KP (mm)", |d| d.high_kp_mm, 1, ""),
+    row("Robustness ρ", |d| d.robustness, 3, ""),
+    row("Power η", |d| d.power_overhead, 2, "×"),
+    row("Upper KP (mm)", |d| d.upper_kp_mm, 1, ""),
+    row("Lower KP (mm)", |d| d.lower_kp_mm, 1, ""),
+    row("FATS Std", |d| d.fats_std, 2, ""),
+];
+
+const fn row(
+    name: &'static str,
+    value: fn(&Diagnostics) -> f64,
+    decimals: usize,
+    suffix: &'static str,
+) -> DiagnosticRow {
+    DiagnosticRow {
+        name,
+        value,
+        decimals,
+        suffix,
+    }
+}
+
+/// A number as the tables print it; undefined values (NaN: no high-force step anywhere,
+/// say) print as a dash rather than as `NaN`.
+fn format_number(v: f64, decimals: usize, suffix: &str) -> String {
+    if v.is_nan() {
+        "–".into()
+    } else {
+        format!("{v:.decimals$}{suffix}")
+    }
+}
+
+/// Task-level FATS, one column per setting.
+pub fn task_fats_table(results: &SettingResults) -> String {
+    let settings: Vec<&String> = results.keys().collect();
+    let mut tasks: Vec<&str> = results
+        .values()
+        .flat_map(|(t, _)| t.iter().map(|s| s.task.as_str()))
+        .collect();
+    tasks.sort();
+    tasks.dedup();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| Task | {} |",
+        settings
+            .iter()
+            .map(|x| format!("FATS ({x})"))
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    let _ = writeln!(s, "|---|{}", "---:|".repeat(settings.len()));
+    for task in &tasks {
+        let cells: Vec<String> = settings
+            .iter()
+            .map(|k| {
+                results[*k]
+                    .0
+                    .iter()
+                    .find(|t| t.task == *task)
+                    .map_or("–".into(), |t| format!("{:.2}", t.diagnostics.fats))
+            })
+            .collect();
+        let _ = writeln!(s, "| {task} | {} |", cells.join(" | "));
+    }
+    let avg: Vec<String> = settings
+        .iter()
+        .map(|k| format!("**{:.2}**", results[*k].1.fats))
+        .collect();
+    let _ = writeln!(s, "| **average** | {} |", avg.join(" | "));
+    s
+}
+
+/// The diagnostics averaged over tasks, one column per setting.
+pub fn diagnostics_table(results: &SettingResults) -> String {
+    let settings: Vec<&String> = results.keys().collect();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| Metric | {} |",
+        settings
+            .iter()
+            .map(|x| x.as_str())
+            .collect::<Vec<_>>()
+            .join(" | ")
+    );
+    let _ = writeln!(s, "|---|{}", "---:|".repeat(settings.len()));
+    for r in DIAGNOSTIC_ROWS {
+        let cells: Vec<String> = settings
+            .iter()
+            .map(|k| format_number((r.value)(&results[*k].1), r.decimals, r.suffix))
+            .collect();
+        let _ = writeln!(s, "| {} | {} |", r.name, cells.join(" | "));
+    }
+    s
+}
+
+/// One row of a [`NumberTable`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct NumberRow {
+    /// First cell (task or metric).
+    pub name: String,
+    /// One value per column; `None` where the run has no such task or setting.
+    pub values: Vec<Option<f64>>,
+    /// Decimals printed in Markdown and HTML (CSV keeps full precision).
+    pub decimals: usize,
+    /// Printed after each number in Markdown and HTML.
+    pub suffix: &'static str,
+    /// Printed in bold (the average row).
+    pub bold: bool,
+}
+
+/// A table of numbers with one column per (run, setting): the multi-run form of the
+/// paper's tables.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NumberTable {
+    /// Header of the first column (`Task`, `Metric`).
+    pub corner: String,
+    /// Column headers, `<run label> (<setting>)`.
+    pub columns: Vec<String>,
+    /// Rows.
+    pub rows: Vec<NumberRow>,
+}
+
+/// The (run, setting) pairs that become columns, runs in the order given, settings in
+/// each run's schedule order.
+pub fn columns(runs: &[Run]) -> Vec<(usize, String)> {
+    runs.iter()
+        .enumerate()
+        .flat_map(|(i, r)| r.settings().into_iter().map(move |s| (i, s)))
+        .collect()
+}
+
+fn column_names(runs: &[Run], prefix: &str) -> Vec<String> {
+    columns(runs)
+        .iter()
+        .map(|(i, s)| format!("{}{} ({s})", prefix, runs[*i].label))
+        .collect()
+}
+
+/// Task-level FATS of several runs side by side (rows: the union of their tasks, then the
+/// average over tasks).
+pub fn fats_table(runs: &[Run]) -> NumberTable {
+    let cols = columns(runs);
+    let mut rows: Vec<NumberRow> = all_tasks(runs)
+        .into_iter()
+        .map(|task| NumberRow {
+            values: cols
+                .iter()
+                .map(|(i, s)| {
+                    runs[*i]
+                        .task(s, &task)
+                        .map(|t| t.diagnostics.fats)
+                        .filter(|v| !v.is_nan())
+                })
+                .collect(),
+            name: task,
+            decimals: 2,
+            suffix: "",
+            bold: false,
+        })
+        .collect();
+    rows.push(NumberRow {
+        name: "average".into(),
+        values: cols
+            .iter()
+            .map(|(i, s)| runs[*i].average(s).map(|d| d.fats))
+            .collect(),
+        decimals: 2,
+        suffix: "",
+        bold: true,
+    });
+    NumberTable {
+        corner: "Task".into(),
+        columns: column_names(runs, "FATS: "),
+        rows,
+    }
+}
+
+/// The diagnostics of several runs side by side, averaged over each run's tasks.
+pub fn diagnostics_multi_table(runs: &[Run]) -> NumberTable {
+    let cols = columns(runs);
+    NumberTable {
+        corner: "Metric".into(),
+        columns: column_names(runs, ""),
+        rows: DIAGNOSTIC_ROWS
+            .iter()
+            .map(|r| NumberRow {
+                name: r.name.into(),
+                values: cols
+                    .iter()
+                    .map(|(i, s)| runs[*i].average(s).map(|d| (r.value)(d)))
+                    .map(|v| v.filter(|v| !v.is_nan()))
+                    .collect(),
+                decimals: r.decimals,
+                suffix: r.suffix,
+                bold: false,
+            })
+            .collect(),
+    }
+}
+
+/// Every task of any run, sorted.
+pub fn all_tasks(runs: &[Run]) -> Vec<String> {
+    let mut tasks: Vec<String> = runs
+        .iter()
+        .flat_map(|r| r.results.values())
+        .flat_map(|(t, _)| t.iter().map(|s| s.task.clone()))
+        .collect();
+    tasks.sort();
+    tasks.dedup();
+    tasks
+}
+
+impl NumberRow {
+    fn cell(&self, v: Option<f64>) -> String {
+        v.map_or("–".into(), |v| {
+            format_number(v, self.decimals, self.suffix)
+        })
+    }
+}
+
+impl NumberTable {
+    /// GitHub Markdown, numbers rounded as in `tables.md`.
+    pub fn markdown(&self) -> String {
+        let mut s = format!("| {} | {} |\n", self.corner, self.columns.join(" | "));
+        let _ = writeln!(s, "|---|{}", "---:|".repeat(self.columns.len()));
+        for r in &self.rows {
+            let bold = |c: String| if r.bold { format!("**{c}**") } else { c };
+            let cells: Vec<String> = r.values.iter().map(|v| bold(r.cell(*v))).collect();
+            let _ = writeln!(s, "| {} | {} |", bold(r.name.clone()), cells.join(" | "));
+        }
+        s
+    }
+
+    /// CSV with full precision (shortest round-trip form of each f64); empty cells where a
+    /// value is missing or undefined.
+    pub fn csv(&self) -> String {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        let header =
+            std::iter::once(self.corner.as_str()).chain(self.columns.iter().map(|c| c.as_str()));
+        w.write_record(header).expect("writing to memory");
+        for r in &self.rows {
+            let cells = std::iter::once(r.name.clone()).chain(
+                r.values
+                    .iter()
+                    .map(|v| v.map_or(String::new(), |v| v.to_string())),
+            );
+            w.write_record(cells).expect("writing to memory");
+        }
+        String::from_utf8(w.into_inner().expect("flushing to memory")).expect("CSV of UTF-8 text")
+    }
+
+    /// An HTML `<table>` with the given id, numbers rounded as in Markdown.
+    pub fn html(&self, id: &str) -> String {
+        use super::html::escape;
+        let mut s = format!(
+            "<table id=\"{}\" class=\"numbers\"><thead><tr><th>{}</th>",
+            escape(id),
+            escape(&self.corner)
+        );
+        for c in &self.columns {
+            let _ = write!(s, "<th>{}</th>", escape(c));
+        }
+        s += "</tr></thead><tbody>";
+        for r in &self.rows {
+            let class = if r.bold { " class=\"total\"" } else { "" };
+            let _ = write!(s, "<tr{class}><th>{}</th>", escape(&r.name));
+            for v in &r.values {
+                let _ = write!(s, "<td>{}</td>", escape(&r.cell(*v)));
+            }
+            s += "</tr>";
+        }
+        s + "</tbody></table>"
+    }
+}

@@ -1,0 +1,258 @@
+//! `thorarena report` and `thorarena view` in a real browser: headless Chromium opens a
+//! report comparing two runs of the sample dataset (`balance` in process, `hold` through
+//! the policy server) and the 3D replay of one traced episode, from disk with the network
+//! cut off. Checked: no console error or exception, no request leaves the file, every
+//! plot's canvas exists and holds paint and data, the tables have their rows, the viewer
+//! draws the robot (its pixels differ from the empty scene), and moving the timeline —
+//! or pressing Play — moves it. Screenshots of the last run stay in
+//! `<target>/browser-tests/` for CI artifacts.
+//!
+//! Needs `chromium` (Debian's package), node, and the front-end bundle with its test
+//! driver (`npm ci --prefix web && npm run build --prefix web`); without them the test
+//! prints why and passes without checking anything.
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+
+/// The browser, or why the test cannot run.
+fn prerequisites() -> Result<PathBuf, String> {
+    let chromium = std::env::var_os("THORARENA_CHROMIUM")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("/usr/bin/chromium"));
+    if !chromium.is_file() {
+        return Err(format!(
+            "no browser at {} (apt-get install chromium, or set THORARENA_CHROMIUM)",
+            chromium.display()
+        ));
+    }
+    let node = Command::new("node").arg("--version").output();
+    if !node.is_ok_and(|o| o.status.success()) {
+        return Err("node is not on PATH".into());
+    }
+    if let Err(e) = thorarena::report::WebBundle::locate() {
+        return Err(e.to_string());
+    }
+    if !Path::new(ROOT)
+        .join("web/node_modules/playwright-core")
+        .is_dir()
+    {
+        return Err("web/node_modules/playwright-core is missing (npm ci --prefix web)".into());
+    }
+    Ok(chromium)
+}
+
+fn run(cmd: &mut Command, what: &str) -> std::process::Output {
+    let out = cmd.output().unwrap_or_else(|e| panic!("{what}: {e}"));
+    assert!(
+        out.status.success(),
+        "{what} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn eval_args(policy: &str, out: &Path) -> Vec<String> {
+    [
+        "eval",
+        "--dataset",
+        &format!("{ROOT}/data/sample"),
+        "--policy",
+        policy,
+        "--settings",
+        "force,no-force",
+        "--out",
+        out.to_str().unwrap(),
+    ]
+    .map(String::from)
+    .to_vec()
+}
+
+/// `balance` in process with a trace of one clean_table episode, and `hold` as a separate
+/// process behind the policy server (so the report has latency to plot).
+fn make_runs(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
+    let balance = dir.join("balance");
+    run(
+        Command::new(BIN)
+            .args(eval_args("balance", &balance))
+            .args(["--trace", "clean_table/clean_table_000"]),
+        "eval balance",
+    );
+    let hold = dir.join("hold");
+    let session = format!("browser-{}", std::process::id());
+    let server = Command::new(BIN)
+        .args(eval_args(&format!("ipc:{session}"), &hold))
+        .args(["--connect-timeout", "120"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let client = Command::new(BIN)
+        .args(["client", "--session", &session, "--policy", "hold"])
+        .args(["--connect-timeout", "120"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    for (child, what) in [(server, "eval over ipc"), (client, "client hold")] {
+        let out = child.wait_with_output().unwrap();
+        assert!(
+            out.status.success(),
+            "{what}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let trace = balance.join("traces/clean_table-clean_table_000-force.json");
+    (balance, hold, trace)
+}
+
+fn differing(v: &Value) -> (u64, u64) {
+    (
+        v["differing"].as_u64().unwrap_or(0),
+        v["total"].as_u64().unwrap_or(0),
+    )
+}
+
+#[test]
+fn report_and_viewer_render_in_headless_chromium() {
+    let chromium = match prerequisites() {
+        Ok(c) => c,
+        Err(reason) => {
+            eprintln!("skipping the browser test: {reason}");
+            return;
+        }
+    };
+    let shots = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .parent()
+        .expect("target dir")
+        .join("browser-tests");
+    let _ = std::fs::remove_dir_all(&shots);
+    std::fs::create_dir_all(&shots).unwrap();
+    let runs = tempfile::tempdir().unwrap();
+    let (balance, hold, trace) = make_runs(runs.path());
+    let report = shots.join("report.html");
+    let view = shots.join("view.html");
+    run(
+        Command::new(BIN)
+            .arg("report")
+            .args([&balance, &hold])
+            .arg("--out")
+            .arg(&report),
+        "report",
+    );
+    run(
+        Command::new(BIN)
+            .arg("view")
+            .arg(&trace)
+            .arg("--out")
+            .arg(&view),
+        "view",
+    );
+    let out = run(
+        Command::new("node")
+            .arg(Path::new(ROOT).join("web/tests/browser.mjs"))
+            .arg("--report")
+            .arg(&report)
+            .arg("--view")
+            .arg(&view)
+            .arg("--shots")
+            .arg(&shots)
+            .arg("--chromium")
+            .arg(&chromium),
+        "the browser driver",
+    );
+    let facts: Value = serde_json::from_slice(&out.stdout).expect("driver prints JSON");
+    std::fs::write(
+        shots.join("facts.json"),
+        serde_json::to_string_pretty(&facts).unwrap(),
+    )
+    .unwrap();
+    let context = format!("browser facts (also in {}):\n{facts:#}", shots.display());
+
+    let r = &facts["report"];
+    for key in ["console_errors", "page_errors", "blocked_requests"] {
+        assert_eq!(r[key], serde_json::json!([]), "report {key}; {context}");
+    }
+    assert_eq!(r["ready"], true, "{context}");
+    let declared: Vec<&str> = r["declared_plots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    for id in [
+        "radar-force",
+        "radar-no-force",
+        "scatter-tracking-survival",
+        "kp-regimes-force",
+        "kp-regimes-no-force",
+        "latency-percentiles",
+        "latency-faults",
+    ] {
+        assert!(declared.contains(&id), "plot {id} missing; {context}");
+    }
+    for plot in r["plots"].as_array().unwrap() {
+        let id = plot["id"].as_str().unwrap();
+        assert_eq!(plot["exists"], true, "#{id}; {context}");
+        assert_eq!(plot["tag"], "canvas", "#{id}; {context}");
+        assert!(
+            plot["painted_pixels"].as_u64().unwrap_or(0) > 2000,
+            "#{id} is blank; {context}"
+        );
+        assert!(
+            r["points"][id].as_u64().unwrap_or(0) > 0,
+            "#{id} plots no data; {context}"
+        );
+    }
+    // 12 episodes × 2 settings × 2 runs in the scatter plot.
+    assert_eq!(r["points"]["scatter-tracking-survival"], 48, "{context}");
+    assert_eq!(r["tables"]["fats-table"], 7, "six tasks and the average");
+    assert_eq!(r["tables"]["diagnostics-table"], 10);
+    assert_eq!(r["tables"]["policy-io-table"], 2);
+    assert_eq!(
+        r["warning_box"], 0,
+        "same dataset, profile and rules; {context}"
+    );
+
+    let v = &facts["view"];
+    for key in ["console_errors", "page_errors", "blocked_requests"] {
+        assert_eq!(v[key], serde_json::json!([]), "view {key}; {context}");
+    }
+    assert_eq!(v["ready"], true, "{context}");
+    assert_eq!(v["bodies"], 30, "{context}");
+    assert_eq!(v["ghost"], true, "the trace carries the reference joints");
+    let (robot, total) = differing(&v["robot_vs_empty"]);
+    assert!(
+        total > 0 && robot * 200 > total,
+        "the robot covers under 0.5 % of the scene; {context}"
+    );
+    let (moved, total) = differing(&v["robot_start_vs_later"]);
+    assert!(
+        total > 0 && moved * 1000 > total,
+        "the timeline did not move the robot; {context}"
+    );
+    assert_eq!(v["step_after_fill"], v["later_step"], "{context}");
+    assert!(
+        v["step_after_play"].as_u64().unwrap_or(0) > 0,
+        "Play did not advance; {context}"
+    );
+    assert!(
+        v["plot"]["painted_pixels"].as_u64().unwrap_or(0) > 2000,
+        "{context}"
+    );
+    for png in [
+        "report.png",
+        "view-start.png",
+        "view-later.png",
+        "view-empty.png",
+        "view-robot-start.png",
+        "view-robot-later.png",
+    ] {
+        assert!(shots.join(png).is_file(), "{png} not written");
+    }
+    eprintln!("screenshots in {}", shots.display());
+}
