@@ -183,6 +183,7 @@ fn a_gmt_motion_without_wrists_gets_zero_wrist_angles_recorded_in_provenance() {
         task: "walk".into(),
         sequence_id: "gmt".into(),
         renormalize_quaternions: false,
+        trim_glitches: false,
         forces: None::<[ForceLog; 2]>,
         force_offset_s: 0.0,
         force_sign: 1.0,

@@ -3,7 +3,10 @@
 use crate::metrics::percentile;
 use crate::motion::import::canonical::{to_sequence, ImportOptions};
 use crate::motion::import::{force_csv, lafan_csv, npz, twist_pkl, RawMotion};
-use crate::motion::{ground_check, shift_root_height, Dataset, DatasetWriter, Sequence};
+use crate::motion::{
+    ground_check, scan_root_glitches, shift_root_height, Dataset, DatasetWriter, GlitchScan,
+    Sequence, MAX_HUMAN_ROOT_SPEED_M_PER_S,
+};
 use crate::robot::RobotModel;
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
@@ -91,6 +94,11 @@ pub struct ImportArgs {
     /// Renormalise root quaternions that are off unit norm instead of rejecting the file.
     #[arg(long)]
     pub renormalize_quaternions: bool,
+    /// Drop teleoperation-glitch frames at the start and end of a motion (root jumps faster
+    /// than 10 m/s between consecutive frames) instead of rejecting the file. Jumps inside
+    /// the motion are rejected even with it.
+    #[arg(long)]
+    pub trim_glitches: bool,
     /// Shift each motion vertically so that its feet touch the ground in stance (the
     /// median lowest sole point over the motion goes to z = 0). Without it the offset is
     /// only reported.
@@ -161,21 +169,49 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
         None => None,
     };
     let mut writer = DatasetWriter::append(&args.out, &robot)?;
+    // All or nothing: every input is read, checked and converted before the first file is
+    // written, so one rejected motion (a glitch, a bad field) leaves the dataset as it was.
+    let mut seqs = Vec::with_capacity(args.inputs.len());
     for input in &args.inputs {
         let stem = input
             .file_stem()
             .and_then(|s| s.to_str())
             .with_context(|| format!("{}: no file name", input.display()))?;
+        eprintln!("{}:", input.display());
         let raw = read_raw(args.format, input, args)?;
         let opts = ImportOptions {
             task: args.task.clone(),
             sequence_id: stem.to_string(),
             renormalize_quaternions: args.renormalize_quaternions,
+            trim_glitches: args.trim_glitches,
             forces: forces.clone(),
             force_offset_s: args.force_offset,
             force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
         };
         let mut seq = to_sequence(raw, &robot, &opts, input)?;
+        if let Some(trim) = seq.provenance.get("trimmed_glitch_frames") {
+            let jumps: Vec<String> = trim["root_jumps"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .map(|j| {
+                    let k = j["frame"].as_u64().unwrap_or(0);
+                    format!(
+                        "{}→{} {:.2} m",
+                        k.saturating_sub(1),
+                        k,
+                        j["distance_m"].as_f64().unwrap_or(f64::NAN)
+                    )
+                })
+                .collect();
+            eprintln!(
+                "  trimmed glitch frames: {} leading, {} trailing of {} (root jumps {})",
+                trim["leading"],
+                trim["trailing"],
+                trim["source_frames"],
+                jumps.join(", ")
+            );
+        }
         if let Some(g) = ground_check(&robot, &seq) {
             eprintln!(
                 "  ground check: median lowest sole point {:+.1} mm, lowest {:+.1} mm",
@@ -189,6 +225,10 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
                 }
             }
         }
+        seqs.push((input, seq));
+    }
+    for (input, seq) in &seqs {
+        writer.add(seq)?;
         eprintln!(
             "imported {} → {}/{} ({} frames at {} fps, {:.1} s)",
             input.display(),
@@ -198,7 +238,6 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
             seq.fps,
             seq.duration_s()
         );
-        writer.add(&seq)?;
     }
     let ds = writer.finish()?;
     eprintln!("{}: {} sequences", ds.dir.display(), ds.len());
@@ -275,6 +314,24 @@ pub fn describe(ds: &Dataset, seqs: &[Sequence], robot: &RobotModel) -> String {
             margin,
             1e3 * ground
         );
+    }
+    // Datasets written before import checked for glitches (or by other tools) may hold
+    // them, so they are looked for here rather than assumed absent.
+    let glitched: Vec<(&Sequence, GlitchScan)> = seqs
+        .iter()
+        .map(|q| (q, scan_root_glitches(&q.root_pos, q.fps)))
+        .filter(|(_, g)| !g.is_clean())
+        .collect();
+    let heading = format!(
+        "root glitches (root speed above {MAX_HUMAN_ROOT_SPEED_M_PER_S} m/s between consecutive frames):"
+    );
+    if glitched.is_empty() {
+        let _ = writeln!(s, "{heading} none");
+    } else {
+        let _ = writeln!(s, "{heading} {} sequence(s)", glitched.len());
+        for (q, g) in glitched {
+            let _ = writeln!(s, "  {}/{}: {}", q.task, q.sequence_id, g.summary());
+        }
     }
     s
 }

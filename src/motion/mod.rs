@@ -5,6 +5,7 @@ mod dataset;
 mod error;
 mod export;
 mod format;
+mod glitch;
 pub mod import;
 mod reference;
 mod sequence;
@@ -14,6 +15,9 @@ pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use error::DataError;
 pub use export::export_npz;
 pub use format::{decode_sequence, encode_sequence, sha256_hex, write_sequence, SCHEMA_VERSION};
+pub use glitch::{
+    scan_root_glitches, GlitchScan, RootJump, EDGE_GLITCH_WINDOW_S, MAX_HUMAN_ROOT_SPEED_M_PER_S,
+};
 pub use reference::{
     ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference, ReferenceFrame,
 };

@@ -1,5 +1,9 @@
 //! Turning an importer's [`RawMotion`] into a canonical [`Sequence`]: joints mapped by name
 //! into the robot's order, forces resampled onto the motion clock, explicit repairs only.
+//!
+//! The repairs are renormalising root quaternions and trimming teleoperation glitches
+//! (see [`crate::motion::scan_root_glitches`] for the rule); each is applied only when its
+//! option is set and recorded in the provenance when it changed anything.
 
 use super::force_csv::ForceLog;
 use super::{ImportError, RawMotion};
@@ -18,6 +22,10 @@ pub struct ImportOptions {
     /// Renormalise root quaternions that are off unit norm (otherwise such a file is
     /// rejected). Recorded in the provenance when it changes anything.
     pub renormalize_quaternions: bool,
+    /// Drop leading and trailing teleoperation-glitch frames (root jumps faster than a
+    /// human moves; otherwise such a file is rejected). Interior jumps are always rejected.
+    /// Recorded in the provenance when it changes anything.
+    pub trim_glitches: bool,
     /// Left and right force logs (sensor frame), if recorded.
     pub forces: Option<[ForceLog; 2]>,
     /// Force log time = motion time + this offset, s.
@@ -39,6 +47,7 @@ pub fn to_sequence(
         field: field.into(),
         reason,
     };
+    let mut raw = raw;
     let t = raw.root_pos.len();
     if raw.root_quat_wxyz.len() != t || raw.joint_pos.len() != t {
         return Err(bad(
@@ -53,6 +62,34 @@ pub fn to_sequence(
     if !(raw.fps.is_finite() && raw.fps > 0.0) {
         return Err(bad("fps", format!("must be > 0, got {}", raw.fps)));
     }
+    if let Some(v) = &raw.joint_vel {
+        if v.len() != t {
+            return Err(bad(
+                "joint_vel",
+                format!("{} frames, but root_pos has {t}", v.len()),
+            ));
+        }
+    }
+    let glitches = crate::motion::scan_root_glitches(&raw.root_pos, raw.fps);
+    let repairable = opts.trim_glitches && glitches.is_trimmable();
+    if !(glitches.is_clean() || repairable) {
+        return Err(ImportError::RootGlitch {
+            path: source.to_path_buf(),
+            sequence_id: opts.sequence_id.clone(),
+            scan: glitches,
+            trim_requested: opts.trim_glitches,
+        });
+    }
+    // Source frame of the sequence's frame 0: forces are resampled on the source clock.
+    let first_frame = glitches.leading_frames;
+    if !glitches.is_clean() {
+        let keep = first_frame..t - glitches.trailing_frames;
+        raw.root_pos = raw.root_pos[keep.clone()].to_vec();
+        raw.root_quat_wxyz = raw.root_quat_wxyz[keep.clone()].to_vec();
+        raw.joint_pos = raw.joint_pos[keep.clone()].to_vec();
+        raw.joint_vel = raw.joint_vel.map(|v| v[keep].to_vec());
+    }
+    let t = raw.root_pos.len();
     // Joint columns by name: unknown names are an error; robot joints the file lacks are 0.
     let mut column_of = vec![None; robot.n_joints()];
     for (c, name) in raw.joint_names.iter().enumerate() {
@@ -96,6 +133,23 @@ pub fn to_sequence(
         }
     }
     let mut provenance = raw.provenance.clone();
+    if !glitches.is_clean() {
+        let jumps: Vec<Value> = glitches
+            .jumps
+            .iter()
+            .map(|j| json!({"frame": j.frame, "distance_m": j.distance_m, "speed_m_per_s": j.speed_m_per_s}))
+            .collect();
+        provenance.insert(
+            "trimmed_glitch_frames".into(),
+            json!({
+                "leading": glitches.leading_frames,
+                "trailing": glitches.trailing_frames,
+                "source_frames": glitches.frames,
+                "root_jumps": jumps,
+                "note": "frame 0 of this sequence is source frame `leading`; forces are resampled on the source clock",
+            }),
+        );
+    }
     if !missing.is_empty() {
         provenance.insert("missing_joints_set_to_zero".into(), json!(missing));
     }
@@ -127,7 +181,7 @@ pub fn to_sequence(
         provenance.insert("renormalized_quaternion_frames".into(), json!(renormalized));
     }
 
-    let times: Vec<f64> = (0..t).map(|k| k as f64 / raw.fps).collect();
+    let times: Vec<f64> = (0..t).map(|k| (first_frame + k) as f64 / raw.fps).collect();
     let (force_sensor, forces_recorded) = match &opts.forces {
         Some(logs) => {
             let mut out = [Vec::new(), Vec::new()];
@@ -182,4 +236,146 @@ pub fn to_sequence(
     seq.validate(source)
         .map_err(|e| bad("(sequence)", e.to_string()))?;
     Ok(seq)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::import::G1_CANONICAL_JOINTS;
+
+    /// 45 frames at 30 fps walking +x at 1.2 m/s; joint j of frame k is `k + j / 100` rad
+    /// and its velocity `-k`, so every frame's rows identify it.
+    fn raw_walk() -> RawMotion {
+        let t = 45;
+        RawMotion {
+            fps: 30.0,
+            root_pos: (0..t).map(|k| [0.04 * k as f64, 0.0, 0.78]).collect(),
+            root_quat_wxyz: vec![[1.0, 0.0, 0.0, 0.0]; t],
+            joint_names: G1_CANONICAL_JOINTS.iter().map(|n| n.to_string()).collect(),
+            joint_pos: (0..t)
+                .map(|k| (0..29).map(|j| k as f64 + j as f64 / 100.0).collect())
+                .collect(),
+            joint_vel: Some((0..t).map(|k| vec![-(k as f64); 29]).collect()),
+            provenance: Default::default(),
+        }
+    }
+
+    fn opts(trim_glitches: bool) -> ImportOptions {
+        ImportOptions {
+            task: "walk".into(),
+            sequence_id: "w".into(),
+            renormalize_quaternions: false,
+            trim_glitches,
+            forces: None,
+            force_offset_s: 0.0,
+            force_sign: 1.0,
+        }
+    }
+
+    fn robot() -> RobotModel {
+        crate::robot::load_bundled("g1_29dof").unwrap()
+    }
+
+    fn import(raw: RawMotion, trim: bool) -> Result<Sequence, ImportError> {
+        to_sequence(raw, &robot(), &opts(trim), Path::new("w.pkl"))
+    }
+
+    /// Source frame of a sequence frame, read back from its joint angles.
+    fn source_frame(seq: &Sequence, k: usize) -> f64 {
+        let j = robot().joint_index(G1_CANONICAL_JOINTS[0]).unwrap();
+        seq.joint_pos[k][j]
+    }
+
+    #[test]
+    fn a_clean_motion_is_untouched() {
+        let raw = raw_walk();
+        let seq = import(raw.clone(), true).unwrap();
+        assert_eq!(seq.root_pos, raw.root_pos);
+        assert_eq!(seq.n_frames(), 45);
+        assert!(seq.provenance.get("trimmed_glitch_frames").is_none());
+    }
+
+    #[test]
+    fn two_leading_glitch_frames_are_refused_then_trimmed_exactly() {
+        let mut raw = raw_walk();
+        raw.root_pos[0] = [2.5, 1.5, 0.8];
+        raw.root_pos[1] = [-1.0, -2.0, 0.8];
+        let err = import(raw.clone(), false).unwrap_err().to_string();
+        for needle in [
+            "w.pkl",
+            "`w`",
+            "frame 0→1",
+            "frame 1→2",
+            "m/s",
+            "--trim-glitches",
+            "2 leading",
+        ] {
+            assert!(err.contains(needle), "`{needle}` missing from: {err}");
+        }
+        let seq = import(raw.clone(), true).unwrap();
+        assert_eq!(seq.n_frames(), 43);
+        assert_eq!(seq.root_pos, raw.root_pos[2..]);
+        assert_eq!(source_frame(&seq, 0), 2.0);
+        assert_eq!(seq.joint_vel.as_ref().unwrap()[0][0], -2.0);
+        let forces = &seq.force_sensor;
+        assert!(forces[LEFT].len() == 43 && forces[RIGHT].len() == 43);
+        let p = &seq.provenance["trimmed_glitch_frames"];
+        assert_eq!(
+            (p["leading"].clone(), p["trailing"].clone()),
+            (json!(2), json!(0))
+        );
+        assert_eq!(p["root_jumps"].as_array().unwrap().len(), 2);
+    }
+
+    #[test]
+    fn a_trailing_glitch_frame_is_trimmed() {
+        let mut raw = raw_walk();
+        raw.root_pos[44] = [0.0, 3.0, 0.8];
+        let err = import(raw.clone(), false).unwrap_err().to_string();
+        assert!(
+            err.contains("frame 43→44") && err.contains("--trim-glitches"),
+            "{err}"
+        );
+        let seq = import(raw.clone(), true).unwrap();
+        assert_eq!(seq.root_pos, raw.root_pos[..44]);
+        assert_eq!(source_frame(&seq, 43), 43.0);
+        assert_eq!(seq.provenance["trimmed_glitch_frames"]["trailing"], 1);
+    }
+
+    #[test]
+    fn an_interior_glitch_stays_an_error_with_the_flag() {
+        let mut raw = raw_walk();
+        raw.root_pos[22] = [9.0, 0.0, 0.8];
+        let err = import(raw, true).unwrap_err();
+        assert!(matches!(err, ImportError::RootGlitch { .. }));
+        let msg = err.to_string();
+        for needle in [
+            "frame 21→22",
+            "frame 22→23",
+            "inside the motion",
+            "--trim-glitches does not repair",
+            "not imported even with it",
+        ] {
+            assert!(msg.contains(needle), "`{needle}` missing from: {msg}");
+        }
+    }
+
+    #[test]
+    fn forces_are_resampled_on_the_source_clock_after_trimming() {
+        // fx = 100 · t on the source clock: trimmed frame 0 is source frame 2 (t = 2/30 s).
+        let log = |scale: f64| ForceLog {
+            time_s: (0..=200).map(|i| i as f64 * 0.01).collect(),
+            force_n: (0..=200)
+                .map(|i| [scale * i as f64 * 0.01, 0.0, 0.0])
+                .collect(),
+        };
+        let mut raw = raw_walk();
+        raw.root_pos[0] = [3.0, 0.0, 0.8];
+        raw.root_pos[1] = [3.0, 0.0, 0.8];
+        let mut o = opts(true);
+        o.forces = Some([log(100.0), log(0.0)]);
+        let seq = to_sequence(raw, &robot(), &o, Path::new("w.pkl")).unwrap();
+        let fx0 = seq.force_sensor[LEFT][0][0];
+        assert!((fx0 - 100.0 * 2.0 / 30.0).abs() < 1e-9, "{fx0}");
+    }
 }

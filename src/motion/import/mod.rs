@@ -94,6 +94,68 @@ pub enum ImportError {
         /// The decoder's explanation.
         reason: String,
     },
+    /// The root jumps between consecutive frames farther than a human can move: a
+    /// teleoperation glitch. Leading and trailing ones are repaired only on request
+    /// (`--trim-glitches`); interior ones never.
+    #[error(
+        "{path}: sequence `{sequence_id}`: implausible root jump(s) (root speed above {} m/s \
+         between consecutive frames): {}; {}",
+        crate::motion::MAX_HUMAN_ROOT_SPEED_M_PER_S,
+        list_jumps(&.scan.jumps),
+        glitch_advice(.scan, *.trim_requested)
+    )]
+    RootGlitch {
+        /// The file.
+        path: PathBuf,
+        /// The sequence the file would have become.
+        sequence_id: String,
+        /// The jumps and how they classify.
+        scan: crate::motion::GlitchScan,
+        /// Whether `--trim-glitches` was given (the glitch is then not trimmable).
+        trim_requested: bool,
+    },
+}
+
+fn list_jumps(jumps: &[crate::motion::RootJump]) -> String {
+    let items: Vec<String> = jumps.iter().map(|j| j.to_string()).collect();
+    items.join(", ")
+}
+
+/// What the user can do about a glitch, given what the scan found.
+fn glitch_advice(scan: &crate::motion::GlitchScan, trim_requested: bool) -> String {
+    if !scan.interior.is_empty() {
+        let at: Vec<String> = scan.interior.iter().map(|j| j.frame.to_string()).collect();
+        return format!(
+            "the jump(s) at frame {} lie inside the motion (more than {} s from either end), \
+             which --trim-glitches does not repair: it only drops leading and trailing \
+             glitch frames{}",
+            at.join(", "),
+            crate::motion::EDGE_GLITCH_WINDOW_S,
+            if trim_requested {
+                ", so the file is not imported even with it"
+            } else {
+                ""
+            }
+        );
+    }
+    if scan.kept_frames() < 2 {
+        return format!(
+            "trimming the glitch frames would leave {} of {} frames, too few for a motion",
+            scan.kept_frames(),
+            scan.frames
+        );
+    }
+    format!(
+        "these are teleoperation glitches at the {}; pass --trim-glitches to drop {} leading \
+         and {} trailing frame(s)",
+        match (scan.leading_frames > 0, scan.trailing_frames > 0) {
+            (true, true) => "start and the end",
+            (true, false) => "start",
+            _ => "end",
+        },
+        scan.leading_frames,
+        scan.trailing_frames
+    )
 }
 
 /// Reads the next CSV record; returns the 1-based file line it came from (rows are named by
