@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod embedded_data;
 pub mod episode;
 pub mod metrics;
 pub mod motion;
@@ -24,12 +25,36 @@ pub mod scenario;
 
 use std::path::PathBuf;
 
+/// Environment variable naming a data directory (robots, profiles, sample) to use instead
+/// of the bundled one.
+pub const DATA_DIR_ENV: &str = "THORARENA_DATA";
+
 /// The directory holding robots, profiles and the sample dataset.
 ///
-/// `THORARENA_DATA` overrides it; by default it is the `data/` folder of this source tree,
-/// so the binary works from any working directory of a checkout.
+/// [`DATA_DIR_ENV`] overrides it. By default it is the copy of `data/` compiled into this
+/// binary, written once to a cache directory ([`embedded_data`]), so an installed binary
+/// needs no checkout and always reads the data it was built with. If no cache directory
+/// is writable it falls back to `data/` of the checkout the binary was built from, and a
+/// missing file there is reported by whoever reads it, naming the path.
 pub fn data_dir() -> PathBuf {
-    std::env::var_os("THORARENA_DATA")
+    if let Some(dir) = std::env::var_os(DATA_DIR_ENV) {
+        return PathBuf::from(dir);
+    }
+    embedded_data::extracted()
+        .unwrap_or_else(|_| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/data")))
+}
+
+/// Environment variable naming the published reference artifacts (README, "Reference
+/// artifacts"): the G1 model and TWIST2's MJCF, TWIST2's policy and walks, holosoma's
+/// policy. Only checks against real artifacts use them; the benchmark itself does not.
+pub const REFERENCE_DIR_ENV: &str = "THORARENA_REFERENCE";
+
+/// The reference artifacts' directory: [`REFERENCE_DIR_ENV`], else `../shared/reference`
+/// beside the checkout the binary was built from.
+pub fn reference_dir() -> PathBuf {
+    std::env::var_os(REFERENCE_DIR_ENV)
         .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/data")))
+        .unwrap_or_else(|| {
+            PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/reference"))
+        })
 }

@@ -12,6 +12,8 @@ use thorarena::motion::Dataset;
 mod common;
 use common::g1;
 
+mod prereq;
+
 fn thorarena(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_thorarena"))
         .args(args)
@@ -207,11 +209,9 @@ fn a_gmt_motion_without_wrists_gets_zero_wrist_angles_recorded_in_provenance() {
 
 #[test]
 fn imported_twist2_walks_equal_the_pickles_arrays() {
-    let motions = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/reference/twist2/motions");
-    if !motions.is_dir() {
-        eprintln!("SKIPPED: {} not found", motions.display());
+    let Some(motions) = prereq::reference("data_import::twist2_walks", "twist2/motions") else {
         return;
-    }
+    };
     let dir = tempfile::tempdir().unwrap();
     let mut files: Vec<_> = std::fs::read_dir(&motions)
         .unwrap()

@@ -18,6 +18,8 @@ use thorarena::motion::import::npz::{read_beyondmimic_npz, ISAACLAB_G1_JOINT_ORD
 use thorarena::motion::import::ImportError;
 use thorarena::motion::import::G1_CANONICAL_JOINTS;
 
+mod prereq;
+
 const T: usize = 3;
 const B: usize = 2;
 const J: usize = 29;
@@ -306,12 +308,12 @@ np.savez_compressed(sys.argv[1], fps=np.array([50]), joint_pos=np.asfortranarray
         Ok(out) if out.status.success() => {}
         Ok(out) => {
             let why = String::from_utf8_lossy(&out.stderr);
-            println!("SKIPPED: python3 with numpy unavailable: {}", why.trim());
-            return;
+            let reason = format!("python3 with numpy unavailable: {}", why.trim());
+            return prereq::skip("import_formats::numpy_written_npz", &reason);
         }
         Err(e) => {
-            println!("SKIPPED: python3 not runnable: {e}");
-            return;
+            let reason = format!("python3 not runnable: {e}");
+            return prereq::skip("import_formats::numpy_written_npz", &reason);
         }
     }
     let m = read_beyondmimic_npz(&path, None).expect("reads numpy output");

@@ -9,6 +9,7 @@ use thorarena::motion::import::twist_pkl::read_twist_pkl;
 use thorarena::motion::{scan_root_glitches, Dataset, DatasetWriter, Sequence, MANIFEST};
 
 mod common;
+mod prereq;
 use common::{g1, sample_sequence};
 
 fn thorarena(args: &[&str]) -> Output {
@@ -22,24 +23,19 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// Reports a missing prerequisite: a failure in CI, a skip elsewhere.
-fn skip(reason: &str) {
-    if std::env::var("CI").as_deref() == Ok("true") {
-        panic!("prerequisite missing in CI: {reason}");
-    }
-    eprintln!("SKIPPED: {reason}");
-}
-
-/// The TWIST2 walks in `../shared/reference`, or `None` (after [`skip`]) without them.
-fn twist2_walks() -> Option<Vec<PathBuf>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/reference/twist2/motions");
+/// The TWIST2 walks of the reference artifacts, or `None` after a recorded skip.
+fn twist2_walks(test: &str) -> Option<Vec<PathBuf>> {
+    let dir = prereq::reference(test, "twist2/motions")?;
     let files: Vec<PathBuf> = (1..=3)
         .map(|i| dir.join(format!("0807_yanjie_walk_00{i}.pkl")))
         .collect();
     if files.iter().all(|f| f.is_file()) {
         Some(files)
     } else {
-        skip(&format!("TWIST2 walks not found in {}", dir.display()));
+        prereq::skip(
+            test,
+            &format!("TWIST2 walks not found in {}", dir.display()),
+        );
         None
     }
 }
@@ -72,7 +68,11 @@ fn max_root_speed_m_per_s(root_pos: &[[f64; 3]], fps: f64) -> f64 {
 
 #[test]
 fn the_released_twist2_walks_have_no_glitch_and_import_without_the_flag() {
-    let Some(files) = twist2_walks() else { return };
+    let Some(files) = twist2_walks(
+        "import_glitches::the_released_twist2_walks_have_no_glitch_and_import_without_the_flag",
+    ) else {
+        return;
+    };
     for f in &files {
         let raw = read_twist_pkl(f).unwrap();
         let speed = max_root_speed_m_per_s(&raw.root_pos, raw.fps);
@@ -141,7 +141,7 @@ fn teleported_copy(walk: &Path, dir: &Path) -> PathBuf {
 
 #[test]
 fn a_walk_with_two_teleported_leading_frames_is_refused_then_trimmed_to_the_clean_walk() {
-    let Some(files) = twist2_walks() else { return };
+    let Some(files) = twist2_walks("import_glitches::a_walk_with_two_teleported_leading_frames_is_refused_then_trimmed_to_the_clean_walk") else { return };
     let walk = &files[0];
     let dir = tempfile::tempdir().unwrap();
     let fixture_dir = dir.path().join("fixture");
@@ -298,4 +298,98 @@ fn data_info_reports_a_glitch_in_a_dataset_written_without_import() {
         "{info}"
     );
     assert!(!info.contains("walk/smooth:"), "{info}");
+}
+
+/// Writes a copy of the walk pickle `walk` to `dir` (same file name) with two frames
+/// prepended: copies of frame 0 whose roots are teleported metres away (numpy, our own
+/// trusted file).
+fn prepended_copy(walk: &Path, dir: &Path) -> PathBuf {
+    const SCRIPT: &str = r#"
+import pickle, sys
+import numpy as np
+src, dst = sys.argv[1], sys.argv[2]
+with open(src, "rb") as f:
+    d = pickle.load(f)
+T = len(d["root_pos"])
+for k, v in list(d.items()):
+    if isinstance(v, np.ndarray) and v.ndim >= 1 and v.shape[0] == T:
+        head = np.repeat(v[:1], 2, axis=0)
+        if k == "root_pos":
+            head = head + np.array([[2.5, 1.0, 0.0], [-1.5, 2.0, 0.3]])
+        d[k] = np.concatenate([head.astype(v.dtype), v], axis=0)
+with open(dst, "wb") as f:
+    pickle.dump(d, f)
+"#;
+    let out = dir.join(walk.file_name().unwrap());
+    let o = Command::new("python3")
+        .args(["-c", SCRIPT])
+        .arg(walk)
+        .arg(&out)
+        .output()
+        .expect("python3 runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    out
+}
+
+#[test]
+fn two_teleported_frames_before_a_walk_are_trimmed_to_the_same_episode() {
+    const TEST: &str =
+        "import_glitches::two_teleported_frames_before_a_walk_are_trimmed_to_the_same_episode";
+    let Some(files) = twist2_walks(TEST) else {
+        return;
+    };
+    if !prereq::python_modules(TEST, &["numpy"], "pip install numpy") {
+        return;
+    }
+    let walk = &files[1];
+    let dir = tempfile::tempdir().unwrap();
+    let fixture_dir = dir.path().join("fixture");
+    std::fs::create_dir(&fixture_dir).unwrap();
+    let fixture = prepended_copy(walk, &fixture_dir);
+
+    let refused = import_pkl(&[&fixture], &dir.path().join("refused"), &[]);
+    assert!(!refused.status.success());
+    assert!(
+        stderr(&refused).contains("--trim-glitches"),
+        "{}",
+        stderr(&refused)
+    );
+
+    let (clean, trimmed) = (dir.path().join("clean"), dir.path().join("trimmed"));
+    let o = import_pkl(&[walk], &clean, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = import_pkl(&[&fixture], &trimmed, &["--trim-glitches"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let a = Dataset::open(&clean, &g1()).unwrap().load(0).unwrap();
+    let b = Dataset::open(&trimmed, &g1()).unwrap().load(0).unwrap();
+    assert_eq!(
+        a.root_pos, b.root_pos,
+        "the ground correction sees the same frames"
+    );
+    assert_eq!(a.joint_pos, b.joint_pos);
+    assert_eq!(a.root_quat_wxyz, b.root_quat_wxyz);
+
+    // The same episode, record for record.
+    let episodes = |dataset: &Path, out: &str| -> String {
+        let out = dir.path().join(out);
+        let o = thorarena(&[
+            "eval",
+            "--dataset",
+            dataset.to_str().unwrap(),
+            "--policy",
+            "balance",
+            "--settings",
+            "no-force,push:20",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        std::fs::read_to_string(out.join("episodes.jsonl")).unwrap()
+    };
+    let (ea, eb) = (
+        episodes(&clean, "run-clean"),
+        episodes(&trimmed, "run-trimmed"),
+    );
+    assert_eq!(ea.lines().count(), 2);
+    assert_eq!(ea, eb);
 }

@@ -13,6 +13,8 @@ use std::process::Command;
 use thorarena::motion::import::twist_pkl::read_twist_pkl;
 use thorarena::motion::import::{ImportError, RawMotion};
 
+mod prereq;
+
 /// Loads a pickle in Python and prints fps and the three arrays as f64 bit patterns.
 const ORACLE: &str = r#"
 import json, pickle, sys
@@ -104,7 +106,7 @@ fn fixtures() -> Result<(tempfile::TempDir, PathBuf), String> {
 }
 
 fn reference_motions() -> Result<Vec<PathBuf>, String> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/reference/twist2/motions");
+    let dir = prereq::reference_dir().join("twist2/motions");
     let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -166,10 +168,18 @@ fn assert_matches_oracle(path: &Path, m: &RawMotion) {
 fn real_twist2_motions_import_exactly_as_python_reads_them() {
     let files = match reference_motions() {
         Ok(f) => f,
-        Err(reason) => return println!("SKIPPED: {reason}"),
+        Err(reason) => {
+            return prereq::skip(
+                "import_twist_pkl::real_twist2_motions_import_exactly_as_python_reads_them",
+                &reason,
+            )
+        }
     };
     if let Err(reason) = python("", &[]) {
-        return println!("SKIPPED: {reason}");
+        return prereq::skip(
+            "import_twist_pkl::real_twist2_motions_import_exactly_as_python_reads_them",
+            &reason,
+        );
     }
     for path in files {
         let m = read_twist_pkl(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -190,7 +200,12 @@ fn real_twist2_motions_import_exactly_as_python_reads_them() {
 fn handmade_pickles_of_every_layout_import_exactly() {
     let (_keep, dir) = match fixtures() {
         Ok(f) => f,
-        Err(reason) => return println!("SKIPPED: {reason}"),
+        Err(reason) => {
+            return prereq::skip(
+                "import_twist_pkl::handmade_pickles_of_every_layout_import_exactly",
+                &reason,
+            )
+        }
     };
     for (file, fps_from) in [
         ("g1_29.pkl", "numpy_scalar"),
@@ -212,7 +227,10 @@ fn handmade_pickles_of_every_layout_import_exactly() {
 fn quaternions_become_wxyz_and_layouts_agree_with_the_c_ordered_file() {
     let (_keep, dir) = match fixtures() {
         Ok(f) => f,
-        Err(reason) => return println!("SKIPPED: {reason}"),
+        Err(reason) => return prereq::skip(
+            "import_twist_pkl::quaternions_become_wxyz_and_layouts_agree_with_the_c_ordered_file",
+            &reason,
+        ),
     };
     let read = |f: &str| read_twist_pkl(&dir.join(f)).unwrap_or_else(|e| panic!("{e}"));
     let c = read("g1_29.pkl");
@@ -241,10 +259,14 @@ fn quaternions_become_wxyz_and_layouts_agree_with_the_c_ordered_file() {
 
 #[test]
 fn gmt_files_get_23_names_without_wrists_and_say_so_in_provenance() {
-    let (_keep, dir) = match fixtures() {
-        Ok(f) => f,
-        Err(reason) => return println!("SKIPPED: {reason}"),
-    };
+    let (_keep, dir) =
+        match fixtures() {
+            Ok(f) => f,
+            Err(reason) => return prereq::skip(
+                "import_twist_pkl::gmt_files_get_23_names_without_wrists_and_say_so_in_provenance",
+                &reason,
+            ),
+        };
     let m = read_twist_pkl(&dir.join("gmt_23.pkl")).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(m.fps, 30.0);
     assert_eq!(m.joint_names.len(), 23);
@@ -281,10 +303,14 @@ fn assert_bad_field(dir: &Path, file: &str, field: &str) {
 
 #[test]
 fn malformed_motion_dicts_are_rejected_naming_the_file_and_field() {
-    let (_keep, dir) = match fixtures() {
-        Ok(f) => f,
-        Err(reason) => return println!("SKIPPED: {reason}"),
-    };
+    let (_keep, dir) =
+        match fixtures() {
+            Ok(f) => f,
+            Err(reason) => return prereq::skip(
+                "import_twist_pkl::malformed_motion_dicts_are_rejected_naming_the_file_and_field",
+                &reason,
+            ),
+        };
     assert_bad_field(&dir, "no_dof_pos.pkl", "dof_pos");
     assert_bad_field(&dir, "t_mismatch.pkl", "dof_pos");
     assert_bad_field(&dir, "cols_25.pkl", "dof_pos");
@@ -343,7 +369,12 @@ fn empty_random_and_missing_files_are_errors_not_panics() {
 fn truncated_and_corrupted_real_files_never_panic() {
     let files = match reference_motions() {
         Ok(f) => f,
-        Err(reason) => return println!("SKIPPED: {reason}"),
+        Err(reason) => {
+            return prereq::skip(
+                "import_twist_pkl::truncated_and_corrupted_real_files_never_panic",
+                &reason,
+            )
+        }
     };
     let bytes = std::fs::read(&files[0]).expect("read reference motion");
     let dir = tempfile::tempdir().expect("temp dir");

@@ -1,32 +1,28 @@
 //! Fidelity against MuJoCo: runs `tools/mujoco_crosscheck.py` on our binary and requires
 //! the fixed-base open-loop joint trajectories to stay within 0.005 rad RMS of MuJoCo on
-//! the reference MJCF. Skips, saying why, when Python's `mujoco` package or
-//! `../shared/reference` is missing (CI installs the former and has the latter).
+//! the reference MJCF. Skips, saying why (and fails in CI), when Python's `mujoco` package
+//! or the reference artifacts are missing.
 
 use std::path::Path;
 use std::process::Command;
 
+mod prereq;
+
 #[test]
 fn rapier_tracks_mujoco_on_the_open_loop_scenarios() {
+    const TEST: &str = "mujoco_fidelity";
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mjcf = root.join("../shared/reference/g1/g1_sim2sim_29dof.xml");
-    if !mjcf.is_file() {
-        eprintln!(
-            "SKIPPED: {} not found (the reference artifacts are not beside this checkout)",
-            mjcf.display()
-        );
+    let Some(mjcf) = prereq::reference(TEST, "g1/g1_sim2sim_29dof.xml") else {
+        return;
+    };
+    if !prereq::python_modules(
+        TEST,
+        &["mujoco", "numpy"],
+        "pip install -r tools/requirements.txt",
+    ) {
         return;
     }
-    let python = std::env::var("PYTHON").unwrap_or_else(|_| "python3".into());
-    let has_mujoco = Command::new(&python)
-        .args(["-c", "import mujoco, numpy"])
-        .status()
-        .is_ok_and(|s| s.success());
-    if !has_mujoco {
-        eprintln!("SKIPPED: `{python} -c 'import mujoco, numpy'` failed (pip install -r tools/requirements.txt)");
-        return;
-    }
-    let out = Command::new(&python)
+    let out = Command::new("python3")
         .arg(root.join("tools/mujoco_crosscheck.py"))
         .args([
             "--enforce",

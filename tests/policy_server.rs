@@ -94,16 +94,14 @@ fn over_ipc(session: &str, dir: &Path, client: impl FnOnce() -> Child) -> PathBu
 
 #[path = "../ipc/tests/support/cpp_examples.rs"]
 mod cpp_examples;
+mod prereq;
 
-fn python_ready() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import iceoryx2, numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        eprintln!("skipped: python3 with iceoryx2 and numpy is not installed (pip install ./adapters/python)");
-    }
-    ok
+fn python_ready(test: &str) -> bool {
+    prereq::python_modules(
+        test,
+        &["iceoryx2", "numpy"],
+        "pip install ./adapters/python",
+    )
 }
 
 #[test]
@@ -123,7 +121,9 @@ fn balance_rust_policy_against_rust_server_matches_in_process_bit_for_bit() {
 
 #[test]
 fn replay_python_policy_against_rust_server_matches_in_process_bit_for_bit() {
-    if !python_ready() {
+    if !python_ready(
+        "policy_server::replay_python_policy_against_rust_server_matches_in_process_bit_for_bit",
+    ) {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -146,7 +146,9 @@ fn replay_python_policy_against_rust_server_matches_in_process_bit_for_bit() {
 
 #[test]
 fn replay_cpp_policy_against_rust_server_matches_in_process_bit_for_bit() {
-    let Some(bin) = cpp_examples::examples() else {
+    let Some(bin) = cpp_examples::examples(
+        "policy_server::replay_cpp_policy_against_rust_server_matches_in_process_bit_for_bit",
+    ) else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();

@@ -429,3 +429,54 @@ fn page_scripts_edited_after_the_bundle_was_built_are_reported_stale() {
     let bundle = WebBundle::at(&dist).unwrap();
     assert_eq!(bundle.stale_sources(), [src.join("view.js")]);
 }
+
+#[test]
+fn report_and_view_use_the_bundle_compiled_into_the_binary() {
+    // No bundle directory anywhere: the pages must come from the binary alone.
+    let (dir, dirs) = two_runs();
+    let html = dir.path().join("embedded.html");
+    let out = Command::new(BIN)
+        .env_remove("THORARENA_WEB_DIST")
+        .current_dir(dir.path())
+        .arg("report")
+        .args(&dirs)
+        .args(["--out", html.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("Chart.js v4"), "Chart.js is inlined");
+    assert!(
+        page.contains("window.thorarenaReport"),
+        "our page script is inlined"
+    );
+
+    let traces = dirs[0].join("traces");
+    std::fs::create_dir_all(&traces).unwrap();
+    let trace_path = traces.join("clean_table-clean_table_000-force.json");
+    std::fs::write(&trace_path, serde_json::to_string(&trace(true)).unwrap()).unwrap();
+    let view = dir.path().join("embedded-view.html");
+    let out = Command::new(BIN)
+        .env_remove("THORARENA_WEB_DIST")
+        .current_dir(dir.path())
+        .arg("view")
+        .arg(&trace_path)
+        .args(["--out", view.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let page = std::fs::read_to_string(&view).unwrap();
+    assert!(
+        page.contains("window.thorarenaView"),
+        "our viewer script is inlined"
+    );
+    assert!(page.contains("Three.js Authors"), "three.js is inlined");
+}

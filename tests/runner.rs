@@ -62,8 +62,13 @@ fn results_are_identical_for_any_number_of_workers() {
         let summary = summarize(&records, &task_thresholds(&seqs, profile.control_dt_s));
         outputs.push(format!("{records:?}{summary:?}"));
     }
-    assert_eq!(outputs[0], outputs[1]);
-    assert_eq!(outputs[0], outputs[2]);
+    assert_eq!(outputs.len(), 4);
+    for (i, out) in outputs.iter().enumerate().skip(1) {
+        assert_eq!(
+            &outputs[0], out,
+            "configuration {i} differs from one worker, one slot"
+        );
+    }
 }
 
 #[test]

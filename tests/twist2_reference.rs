@@ -10,6 +10,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod prereq;
+mod readme;
+
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
 /// MuJoCo's mean TWIST9 keypoint error per walk, mm (FACTS.md §8).
@@ -19,17 +22,10 @@ const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
     ("0807_yanjie_walk_003", 33.5),
 ];
 
-fn reference_dir() -> Option<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/reference/twist2");
-    if dir.join("twist2_1017_25k.onnx").is_file() {
-        Some(dir)
-    } else {
-        eprintln!(
-            "skipped: {} is absent (the published TWIST2 artifacts)",
-            dir.display()
-        );
-        None
-    }
+/// The published TWIST2 artifacts, or `None` after a recorded skip.
+fn reference_dir(test: &str) -> Option<PathBuf> {
+    prereq::reference(test, "twist2/twist2_1017_25k.onnx")
+        .and_then(|onnx| onnx.parent().map(PathBuf::from))
 }
 
 fn run(args: &[&str]) -> String {
@@ -116,7 +112,7 @@ fn evaluate(
 
 #[test]
 fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
-    let Some(reference) = reference_dir() else {
+    let Some(reference) = reference_dir("twist2_reference::walks") else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
@@ -146,6 +142,26 @@ fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
         mean_survival < 0.9,
         "survival {mean_survival:.2} under a 30 N push"
     );
+
+    // README's table is these measurements, to the digits it prints.
+    let table = readme::readme_table("twist2-walks");
+    assert_eq!(table.len(), 3);
+    for row in &table {
+        let walk = &row[0];
+        let (_, survival, mm) = results.iter().find(|r| &r.0 == walk).unwrap();
+        let mujoco = MUJOCO_TWIST9_MM.iter().find(|(w, _)| w == walk).unwrap().1;
+        let pushed = pushed.iter().find(|r| &r.0 == walk).unwrap().1;
+        let measured = [
+            format!("{survival:.2}"),
+            format!("{mm:.1} / {mujoco:.1}"),
+            format!("{pushed:.2}"),
+        ];
+        assert_eq!(
+            row[1..],
+            measured,
+            "README's TWIST2 row for {walk} differs from what was measured"
+        );
+    }
 }
 
 /// One environment's wire block as JSON, field by field (what the Python adapter reads).
@@ -200,15 +216,15 @@ fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
     use thorarena::episode::{Episode, EpisodeSetup, TerminationRule};
     use thorarena::physics::{PhysicsSettings, RapierPhysics};
     use thorarena::policy::{Policy, Twist2Policy};
-    let Some(reference) = reference_dir() else {
+    const TEST: &str = "twist2_reference::python_adapter";
+    let Some(reference) = reference_dir(TEST) else {
         return;
     };
-    let python_ok = Command::new("python3")
-        .args(["-c", "import onnxruntime, iceoryx2, numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !python_ok {
-        eprintln!("skipped: python3 lacks onnxruntime (pip install './adapters/python[policies]')");
+    if !prereq::python_modules(
+        TEST,
+        &["onnxruntime", "iceoryx2", "numpy"],
+        "pip install './adapters/python[policies]'",
+    ) {
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -55,16 +55,20 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import struct
 import sys
 import xml.etree.ElementTree as ET
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_REFERENCE = REPO_ROOT.parent / "shared" / "reference" / "g1"
+DEFAULT_REFERENCE = (
+    Path(os.environ.get("THORARENA_REFERENCE") or REPO_ROOT.parent / "shared" / "reference") / "g1"
+)
 DEFAULT_OUT = REPO_ROOT / "data" / "robots" / "g1_29dof" / "g1_29dof.urdf"
 REFERENCE_URDF = "g1_29dof_rev_1_0.urdf"
 
@@ -130,6 +134,27 @@ class InputError(Exception):
     """The reference description is missing or not what this script expects."""
 
 
+def required_child(elem: ET.Element, path: str, context: str) -> ET.Element:
+    """``elem.find(path)``, which the reference must have (`context` names `elem`)."""
+    found = elem.find(path)
+    if found is None:
+        raise InputError(f"{context}: <{elem.tag}> has no <{path}>")
+    return found
+
+
+def required_attr(elem: ET.Element, key: str, context: str) -> str:
+    """``elem.get(key)``, which the reference must have (`context` names `elem`)."""
+    value = elem.get(key)
+    if value is None:
+        raise InputError(f"{context}: <{elem.tag}> has no {key!r} attribute")
+    return value
+
+
+def element_name(elem: ET.Element) -> str:
+    """The ``name`` attribute of a <link> or <joint>, which the reference must have."""
+    return required_attr(elem, "name", "reference URDF")
+
+
 # ---------------------------------------------------------------------------
 # Reading
 # ---------------------------------------------------------------------------
@@ -160,7 +185,7 @@ def read_stl(path: Path) -> np.ndarray:
 def link_mesh(link: ET.Element) -> str | None:
     """The mesh file name of a link (from its visual), after checking that every
     mesh geometry of the link is that file, at the link origin, unscaled."""
-    names = set()
+    names: set[str] = set()
     for geom_parent in link.findall("visual") + link.findall("collision"):
         mesh = geom_parent.find("geometry/mesh")
         if mesh is None:
@@ -173,7 +198,7 @@ def link_mesh(link: ET.Element) -> str | None:
                 raise InputError(f"link {link.get('name')}: mesh origin is not zero")
         if mesh.get("scale") is not None:
             raise InputError(f"link {link.get('name')}: scaled meshes are not supported")
-        names.add(mesh.get("filename"))
+        names.add(required_attr(mesh, "filename", f"link {link.get('name')}"))
     if len(names) > 1:
         raise InputError(f"link {link.get('name')}: several different meshes {sorted(names)}")
     return names.pop() if names else None
@@ -271,11 +296,11 @@ def num(value: float) -> str:
     return "0" if text in ("-0", "") else text
 
 
-def nums(values) -> str:
+def nums(values: Iterable[float]) -> str:
     return " ".join(num(v) for v in values)
 
 
-def attrs(pairs) -> str:
+def attrs(pairs: Iterable[tuple[str, str | None]]) -> str:
     """XML attribute text from (name, value) pairs, skipping None values."""
     return "".join(
         f' {name}="{value.replace("&", "&amp;").replace(chr(34), "&quot;").replace("<", "&lt;")}"'
@@ -311,10 +336,16 @@ def primitive_xml(prim: Primitive, name: str, indent: str) -> list[str]:
     ]
 
 
+def sole_radius(sole: ET.Element, context: str) -> str:
+    """The radius attribute of a sole sphere <collision>, verbatim."""
+    return required_attr(required_child(sole, "geometry/sphere", context), "radius", context)
+
+
 def sole_spheres(link: ET.Element) -> list[ET.Element]:
     """The reference's sole spheres of a foot link, checked."""
+    context = f"link {link.get('name')}"
     soles = [c for c in link.findall("collision") if c.find("geometry/sphere") is not None]
-    radii = {float(c.find("geometry/sphere").get("radius")) for c in soles}
+    radii = {float(sole_radius(c, context)) for c in soles}
     if len(soles) != SOLE_COUNT or radii != {SOLE_RADIUS}:
         raise InputError(
             f"link {link.get('name')}: expected {SOLE_COUNT} sole spheres of radius "
@@ -325,22 +356,26 @@ def sole_spheres(link: ET.Element) -> list[ET.Element]:
 
 def sole_bottom(link: ET.Element) -> float:
     """Lowest z (link frame) of the foot's sole spheres."""
+    context = f"link {link.get('name')}"
     return min(
-        float(s.find("origin").get("xyz").split()[2]) - float(s.find("geometry/sphere").get("radius"))
+        float(required_attr(required_child(s, "origin", context), "xyz", context).split()[2])
+        - float(sole_radius(s, context))
         for s in sole_spheres(link)
     )
 
 
 def link_xml(link: ET.Element, reference: Path) -> tuple[list[str], str]:
     """The output lines of one link and its one-line summary."""
-    name = link.get("name")
+    name = element_name(link)
     out = [f'  <link name="{name}">']
     inertial = link.find("inertial")
     if inertial is not None:
         out.append("    <inertial>")
         out += copy_tag(inertial.find("origin"), ["xyz", "rpy"], "      ")
         out += copy_tag(inertial.find("mass"), ["value"], "      ")
-        out += copy_tag(inertial.find("inertia"), ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"], "      ")
+        out += copy_tag(
+            inertial.find("inertia"), ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"], "      "
+        )
         out.append("    </inertial>")
 
     mesh = link_mesh(link)
@@ -359,7 +394,8 @@ def link_xml(link: ET.Element, reference: Path) -> tuple[list[str], str]:
             for sole in sole_spheres(link):
                 out.append('    <collision name="sole">')
                 out += copy_tag(sole.find("origin"), ["xyz", "rpy"], "      ")
-                out.append(f'      <geometry><sphere radius="{sole.find("geometry/sphere").get("radius")}"/></geometry>')
+                radius = sole_radius(sole, f"link {name}")
+                out.append(f'      <geometry><sphere radius="{radius}"/></geometry>')
                 out.append("    </collision>")
             prim = fit_foot_box(tris, sole_bottom(link))
             out += primitive_xml(prim, "foot", "    ")
@@ -410,14 +446,14 @@ def generate(reference: Path) -> tuple[str, list[tuple[str, str]]]:
         HEADER.rstrip("\n"),
         f'<robot name="{root.get("name")}">',
     ]
-    summaries = []
+    summaries: list[tuple[str, str]] = []
     # Keep the reference's document order of links and joints; drop everything
     # else (the <mujoco> block; comments are not parsed).
     for elem in root:
         if elem.tag == "link":
             link_lines, summary = link_xml(elem, reference)
             lines += link_lines
-            summaries.append((elem.get("name"), summary))
+            summaries.append((element_name(elem), summary))
         elif elem.tag == "joint":
             lines += joint_xml(elem)
         elif elem.tag != "mujoco":
@@ -435,12 +471,12 @@ def verify(reference_urdf: Path, out_text: str) -> list[str]:
     """Compare the written URDF with the reference; return the problems found."""
     ref = ET.parse(reference_urdf).getroot()
     new = ET.fromstring(out_text)
-    problems = []
+    problems: list[str] = []
 
-    def by_name(root, tag):
+    def by_name(root: ET.Element, tag: str) -> dict[str | None, ET.Element]:
         return {e.get("name"): e for e in root.findall(tag)}
 
-    def attrib(e):
+    def attrib(e: ET.Element | None) -> dict[str, str] | None:
         return None if e is None else dict(e.attrib)
 
     ref_links, new_links = by_name(ref, "link"), by_name(new, "link")
@@ -468,7 +504,8 @@ def verify(reference_urdf: Path, out_text: str) -> list[str]:
         if nl.find("visual") is not None or nl.find(".//mesh") is not None:
             problems.append(f"link {name}: has a visual or a mesh")
         for c in nl.findall("collision"):
-            shapes = [g.tag for g in c.find("geometry")]
+            geometry = c.find("geometry")
+            shapes = [] if geometry is None else [g.tag for g in geometry]
             if len(shapes) != 1 or shapes[0] not in ("box", "sphere", "capsule", "cylinder"):
                 problems.append(f"link {name}: collision geometry {shapes}")
             elif c.get("name") not in ("sole", "foot", shapes[0]):
@@ -515,8 +552,9 @@ def main() -> int:
     args.out.write_bytes(text.encode("utf-8"))
     root = ET.fromstring(text)
     print(
-        f"wrote {args.out} ({len(root.findall('link'))} links, {len(root.findall('joint'))} joints, "
-        f"{len(root.findall('link/collision'))} collisions); numbers verified against the reference"
+        f"wrote {args.out} ({len(root.findall('link'))} links, "
+        f"{len(root.findall('joint'))} joints, {len(root.findall('link/collision'))} collisions); "
+        "numbers verified against the reference"
     )
     return 0
 

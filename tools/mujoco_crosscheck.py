@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import subprocess
 import sys
 from dataclasses import dataclass
@@ -43,7 +44,12 @@ import numpy as np
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_THORARENA = REPO_ROOT / "target" / "release" / "thorarena"
-DEFAULT_MJCF = REPO_ROOT.parent / "shared" / "reference" / "g1" / "g1_sim2sim_29dof.xml"
+# The published reference artifacts (README, "Reference artifacts"): $THORARENA_REFERENCE,
+# else ../shared/reference beside the repository.
+REFERENCE_DIR = Path(
+    os.environ.get("THORARENA_REFERENCE") or REPO_ROOT.parent / "shared" / "reference"
+)
+DEFAULT_MJCF = REFERENCE_DIR / "g1" / "g1_sim2sim_29dof.xml"
 
 SCENARIOS = ("fixed-base", "floating")
 GOAL_FIXED_BASE_RMS_RAD = 0.005
@@ -92,7 +98,7 @@ class Trace:
 
     def target_index(self, step: int) -> int:
         """Index of the control target held during physics step ``step`` (0-based)."""
-        return int(math.floor(step * self.physics_dt / self.control_dt + TARGET_INDEX_EPS))
+        return math.floor(step * self.physics_dt / self.control_dt + TARGET_INDEX_EPS)
 
 
 @dataclass(frozen=True)
@@ -113,8 +119,11 @@ def _array(doc: dict[str, Any], key: str, shape: tuple[int, ...]) -> np.ndarray:
         arr = np.asarray(doc[key], dtype=float)
     except (TypeError, ValueError) as exc:
         raise CrosscheckError(f"trace key {key!r} is not a numeric array: {exc}") from exc
-    if arr.ndim != len(shape) or any(want not in (-1, got) for want, got in zip(shape, arr.shape)):
-        raise CrosscheckError(f"trace key {key!r} has shape {arr.shape}, expected {shape} (-1 = any)")
+    if arr.ndim != len(shape) or any(
+        want not in (-1, got) for want, got in zip(shape, arr.shape, strict=True)
+    ):
+        raise CrosscheckError(
+            f"trace key {key!r} has shape {arr.shape}, expected {shape} (-1 = any)")
     if not np.all(np.isfinite(arr)):
         raise CrosscheckError(f"trace key {key!r} contains non-finite values")
     return arr
@@ -139,7 +148,8 @@ def parse_trace(doc: dict[str, Any]) -> Trace:
     physics_dt = float(doc["physics_dt_s"])
     control_dt = float(doc["control_dt_s"])
     if not (physics_dt > 0 and control_dt > 0):
-        raise CrosscheckError(f"physics_dt_s={physics_dt} and control_dt_s={control_dt} must be > 0")
+        raise CrosscheckError(
+            f"physics_dt_s={physics_dt} and control_dt_s={control_dt} must be > 0")
 
     names = doc["joint_names"]
     if not (isinstance(names, list) and names and all(isinstance(n, str) for n in names)):
@@ -211,7 +221,7 @@ def build_model(mjcf: Path, trace: Trace) -> mujoco.MjModel:
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.gravity = trace.gravity
 
-    for name, kd, armature in zip(trace.joint_names, trace.kd, trace.armature):
+    for name, kd, armature in zip(trace.joint_names, trace.kd, trace.armature, strict=True):
         joint = spec.joint(name)
         if joint is None:
             raise CrosscheckError(f"joint {name!r} from the trace does not exist in {mjcf}")
@@ -284,7 +294,9 @@ def replay(model: mujoco.MjModel, trace: Trace) -> MujocoRun:
     root_quat = np.tile(trace.root_quat0_wxyz, (n, 1))
     for k in range(n):
         target = trace.targets[trace.target_index(k)]
-        tau = np.clip(trace.kp * (target - data.qpos[qpos_adr]), -trace.effort_limit, trace.effort_limit)
+        tau = np.clip(
+            trace.kp * (target - data.qpos[qpos_adr]), -trace.effort_limit, trace.effort_limit
+        )
         data.qfrc_applied[dof_adr] = tau
         mujoco.mj_step(model, data)
         q[k] = data.qpos[qpos_adr]
@@ -396,7 +408,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument("--trace-json", type=Path, action="append", default=[], metavar="FILE",
                         help="read a trace from FILE instead of running the binary (repeatable)")
     parser.add_argument("--enforce", action="store_true",
-                        help=f"exit 1 if fixed_base_rms_rad > {GOAL_FIXED_BASE_RMS_RAD} (or was not measured)")
+                        help=f"exit 1 if fixed_base_rms_rad > {GOAL_FIXED_BASE_RMS_RAD} "
+                             "(or was not measured)")
     return parser.parse_args(argv)
 
 

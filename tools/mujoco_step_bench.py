@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import sys
 import time
@@ -31,7 +32,11 @@ import mujoco
 import numpy as np
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
-DEFAULT_MJCF = REPO_ROOT.parent / "shared" / "reference" / "g1" / "g1_sim2sim_29dof.xml"
+# $THORARENA_REFERENCE, else ../shared/reference beside the repository (README).
+REFERENCE_DIR = Path(
+    os.environ.get("THORARENA_REFERENCE") or REPO_ROOT.parent / "shared" / "reference"
+)
+DEFAULT_MJCF = REFERENCE_DIR / "g1" / "g1_sim2sim_29dof.xml"
 WARMUP_STEPS = 200
 # Below this pelvis height the robot counts as fallen (it stands at about 0.77 m).
 STANDING_MIN_PELVIS_Z_M = 0.5
@@ -73,9 +78,11 @@ class StandingPd:
         self.qpos_adr = model.jnt_qposadr[hinges]
         self.dof_adr = model.jnt_dofadr[hinges]
         self.q_default = np.array([default_angle(n) for n in names])
-        self.kp, self.kd = (np.array(g) for g in zip(*(gains(n) for n in names)))
+        self.kp, self.kd = (np.array(g) for g in zip(*(gains(n) for n in names), strict=True))
         if gains_override is not None:
-            by_name = dict(zip(gains_override["joint_names"], zip(gains_override["kp"], gains_override["kd"])))
+            # strict=False: a short kp/kd list leaves joints out, reported as missing below.
+            kp_kd = zip(gains_override["kp"], gains_override["kd"], strict=False)
+            by_name = dict(zip(gains_override["joint_names"], kp_kd, strict=False))
             missing = [n for n in names if n not in by_name]
             if missing:
                 raise ValueError(f"--gains-json lacks joints: {', '.join(missing)}")
@@ -105,7 +112,9 @@ class StandingPd:
         return spent
 
 
-def bench(mjcf: Path, steps: int, repeats: int, gains_override: dict[str, Any] | None = None) -> dict[str, Any]:
+def bench(
+    mjcf: Path, steps: int, repeats: int, gains_override: dict[str, Any] | None = None
+) -> dict[str, Any]:
     model = mujoco.MjModel.from_xml_path(str(mjcf))
     sim = StandingPd(model, gains_override)
     sim.run(WARMUP_STEPS)
@@ -141,11 +150,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=positive_int, default=2000,
                         help="timed steps per repeat (default: %(default)s)")
     parser.add_argument("--repeats", type=positive_int, default=5,
-                        help="number of timed repeats; the median is reported (default: %(default)s)")
+                        help="number of timed repeats; the median is reported "
+                             "(default: %(default)s)")
     parser.add_argument("--gains-json", type=str, default=None,
                         help='gains to use instead of the legged-gym ones, as JSON '
-                             '{"joint_names": [...], "kp": [...], "kd": [...]} (thorarena bench physics '
-                             'passes its standing gains so that both engines hold the same robot upright)')
+                             '{"joint_names": [...], "kp": [...], "kd": [...]} '
+                             '(thorarena bench physics passes its standing gains so that both '
+                             'engines hold the same robot upright)')
     args = parser.parse_args(argv)
     if not args.mjcf.is_file():
         reason = f"reference MJCF not found at {args.mjcf}"

@@ -12,6 +12,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use thorarena_ipc::ffi::{thorarena_layout_env_field, ThorarenaStatus};
 
+#[path = "../../tests/prereq/mod.rs"]
+mod prereq;
+
 fn crate_dir() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
@@ -139,8 +142,11 @@ fn tool_works(tool: &str) -> bool {
 fn header_agrees_with_layout_json_under_a_c_compiler() {
     let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
     if !tool_works(&cc) {
-        eprintln!("skipped: no C compiler ({cc}) on this machine");
-        return;
+        let reason = format!("no C compiler ({cc}) on this machine (apt-get install gcc)");
+        return prereq::skip(
+            "c_header::header_agrees_with_layout_json_under_a_c_compiler",
+            &reason,
+        );
     }
     let layout = layout_json();
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_header");

@@ -7,7 +7,7 @@
 //! handshake (wrong joint count) makes the C++ program exit non-zero naming the typed
 //! status. The simulator's joints are read from `data/robots/g1_29dof/robot.toml`, so the
 //! examples' built-in G1 joint order is checked against the robot's too. Skipped, with a
-//! message, when `make` or a C++ compiler is missing.
+//! message (a failure in CI), when `make` or a C++ compiler is missing.
 
 use std::io::Read;
 use std::os::unix::process::ExitStatusExt;
@@ -20,6 +20,8 @@ use thorarena_ipc::{
 
 #[path = "support/cpp_examples.rs"]
 mod cpp_examples;
+#[path = "../../tests/prereq/mod.rs"]
+mod prereq;
 use cpp_examples::examples;
 
 fn repo_root() -> &'static Path {
@@ -135,7 +137,9 @@ fn header(slot: usize, step: u64, active: bool) -> EnvHeader {
 
 #[test]
 fn replay_cpp_policy_against_rust_server() {
-    let Some(bin) = examples() else { return };
+    let Some(bin) = examples("cpp_client::replay_cpp_policy_against_rust_server") else {
+        return;
+    };
     let session = unique("replay");
     let config = sim_config(&session, 2, g1_joint_names());
     let (offset, scale) = (
@@ -198,7 +202,9 @@ fn replay_cpp_policy_against_rust_server() {
 
 #[test]
 fn a_killed_cpp_echo_policy_is_seen_as_gone() {
-    let Some(bin) = examples() else { return };
+    let Some(bin) = examples("cpp_client::a_killed_cpp_echo_policy_is_seen_as_gone") else {
+        return;
+    };
     let session = unique("killed");
     let mut sim = SimSession::create(sim_config(&session, 1, g1_joint_names())).unwrap();
     let policy = Policy::spawn(
@@ -241,7 +247,10 @@ fn a_killed_cpp_echo_policy_is_seen_as_gone() {
 
 #[test]
 fn a_delayed_cpp_reply_is_a_miss_and_is_counted_late() {
-    let Some(bin) = examples() else { return };
+    let Some(bin) = examples("cpp_client::a_delayed_cpp_reply_is_a_miss_and_is_counted_late")
+    else {
+        return;
+    };
     let session = unique("late");
     let mut sim = SimSession::create(sim_config(&session, 1, g1_joint_names())).unwrap();
     // Generous numbers: the budget must hold on a loaded 2-core machine, the delay
@@ -289,7 +298,10 @@ fn a_delayed_cpp_reply_is_a_miss_and_is_counted_late() {
 
 #[test]
 fn a_refused_cpp_policy_exits_non_zero_naming_the_status() {
-    let Some(bin) = examples() else { return };
+    let Some(bin) = examples("cpp_client::a_refused_cpp_policy_exits_non_zero_naming_the_status")
+    else {
+        return;
+    };
     let session = unique("refused");
     let mut joints = g1_joint_names();
     joints.truncate(23);
@@ -365,7 +377,9 @@ fn print_quantiles(what: &str, micros: &[f64]) {
 #[test]
 #[ignore = "a measurement, not a check"]
 fn cpp_echo_round_trip_cost() {
-    let Some(bin) = examples() else { return };
+    let Some(bin) = examples("cpp_client::cpp_echo_round_trip_cost") else {
+        return;
+    };
     let steps = 5000;
     for n_envs in [1usize, 16] {
         let session = unique(&format!("bench-cpp-{n_envs}"));

@@ -11,6 +11,9 @@ use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
+
+#[path = "../../tests/prereq/mod.rs"]
+mod prereq;
 use thorarena_ipc::{
     EnvHeader, IpcError, SimConfig, SimSession, StepOutcome, FLAG_ACTIVE, FLAG_RESET,
 };
@@ -22,22 +25,14 @@ fn repo_root() -> PathBuf {
         .to_path_buf()
 }
 
-/// True when `python3` can import what the package needs; otherwise prints why the calling
-/// test passes without running.
-fn python_ready() -> bool {
-    let ok = Command::new("python3")
-        .args(["-c", "import iceoryx2, numpy"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    if !ok {
-        eprintln!(
-            "skipped: `python3 -c \"import iceoryx2, numpy\"` fails \
-             (pip install ./adapters/python, or iceoryx2==0.10.0 numpy)"
-        );
-    }
-    ok
+/// True when `python3` can import what the package needs; otherwise records `test` as
+/// skipped (a failure in CI).
+fn python_ready(test: &str) -> bool {
+    prereq::python_modules(
+        test,
+        &["iceoryx2", "numpy"],
+        "pip install ./adapters/python",
+    )
 }
 
 /// The G1's canonical joint order, read from `data/robots/g1_29dof/robot.toml`.
@@ -149,7 +144,7 @@ fn active_header(step: u64) -> EnvHeader {
 
 #[test]
 fn replay_python_policy_against_rust_server() {
-    if !python_ready() {
+    if !python_ready("python_client::replay_python_policy_against_rust_server") {
         return;
     }
     let session = unique("replay");
@@ -226,7 +221,7 @@ fn replay_python_policy_against_rust_server() {
 
 #[test]
 fn a_python_policy_with_the_wrong_joint_count_is_refused_and_exits_with_the_message() {
-    if !python_ready() {
+    if !python_ready("python_client::a_python_policy_with_the_wrong_joint_count_is_refused_and_exits_with_the_message") {
         return;
     }
     let session = unique("refused");
@@ -260,7 +255,7 @@ fn a_python_policy_with_the_wrong_joint_count_is_refused_and_exits_with_the_mess
 
 #[test]
 fn a_killed_python_policy_is_gone_before_the_deadline() {
-    if !python_ready() {
+    if !python_ready("python_client::a_killed_python_policy_is_gone_before_the_deadline") {
         return;
     }
     let session = unique("killed");
@@ -308,7 +303,7 @@ fn a_killed_python_policy_is_gone_before_the_deadline() {
 
 #[test]
 fn a_late_python_reply_is_a_miss_and_is_counted_late() {
-    if !python_ready() {
+    if !python_ready("python_client::a_late_python_reply_is_a_miss_and_is_counted_late") {
         return;
     }
     let session = unique("late");
@@ -353,7 +348,7 @@ fn a_late_python_reply_is_a_miss_and_is_counted_late() {
 #[test]
 #[ignore = "a measurement: run with --ignored --nocapture"]
 fn python_echo_round_trip_latency_is_printed() {
-    if !python_ready() {
+    if !python_ready("python_client::python_echo_round_trip_latency_is_printed") {
         return;
     }
     for n_envs in [1usize, 64] {

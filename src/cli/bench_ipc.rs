@@ -140,9 +140,9 @@ pub(super) fn fill(batch: &mut ObsBatchMut, layout: Layout, step: u64) {
     }
 }
 
-/// The checkout this binary was built from (`data/` sits at its root).
+/// The checkout this binary was built from: the C++ and Python echo clients live there.
 fn repo_root() -> PathBuf {
-    crate::data_dir().join("..")
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 fn spawn_client(args: &Args, client: &str, session: &str) -> anyhow::Result<Option<Child>> {

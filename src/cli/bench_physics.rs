@@ -31,9 +31,11 @@ pub struct Args {
     /// Python interpreter for the MuJoCo baseline.
     #[arg(long, default_value = "python3")]
     pub python: String,
-    /// The reference MJCF for the MuJoCo baseline.
-    #[arg(long, default_value = "../shared/reference/g1/g1_sim2sim_29dof.xml")]
-    pub mjcf: String,
+    /// The reference MJCF for the MuJoCo baseline [default:
+    /// $THORARENA_REFERENCE/g1/g1_sim2sim_29dof.xml, THORARENA_REFERENCE defaulting to
+    /// ../shared/reference beside the checkout].
+    #[arg(long)]
+    pub mjcf: Option<String>,
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -133,14 +135,20 @@ fn mujoco_baseline(args: &Args, gains_json: &str) -> anyhow::Result<Option<(f64,
         .output()
         .map(|o| o.status.success())
         .unwrap_or(false);
-    if !has_mujoco || !std::path::Path::new(&args.mjcf).is_file() {
+    let mjcf = args.mjcf.clone().unwrap_or_else(|| {
+        crate::reference_dir()
+            .join("g1/g1_sim2sim_29dof.xml")
+            .display()
+            .to_string()
+    });
+    if !has_mujoco || !std::path::Path::new(&mjcf).is_file() {
         return Ok(None);
     }
     let out = std::process::Command::new(&args.python)
         .arg(&script)
         .args([
             "--mjcf",
-            &args.mjcf,
+            &mjcf,
             "--repeats",
             &args.repeats.to_string(),
             "--gains-json",

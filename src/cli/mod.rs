@@ -25,12 +25,24 @@ use clap::{Parser, Subcommand};
 /// recorded two-hand interaction forces are replayed on its hands; policies are scored with
 /// the Force-Aware Tracking Score (FATS) with and without force.
 #[derive(Debug, Parser)]
-#[command(name = "thorarena", version, about, long_about)]
+#[command(name = "thorarena", version, about, long_about, after_long_help = FILES_HELP)]
 pub struct Cli {
     /// What to do.
     #[command(subcommand)]
     pub command: Command,
 }
+
+/// Where the binary finds what it needs (`thorarena --help`).
+const FILES_HELP: &str = "\
+Files:
+  Robots (data/robots), dynamics profiles (data/profiles) and the sample dataset
+  (data/sample) are compiled into the binary and written once to
+  $XDG_CACHE_HOME/thorarena/data-<hash> (else ~/.cache/thorarena/…), so an installed
+  binary needs no checkout. THORARENA_DATA=DIR uses another data directory.
+  The report and viewer front end (three.js, Chart.js) is compiled in as well;
+  THORARENA_WEB_DIST=DIR uses another build of it.
+  Results go to results/<policy>-<dataset> under the working directory unless --out says
+  otherwise.";
 
 /// Subcommands.
 #[derive(Debug, Subcommand)]

@@ -34,13 +34,14 @@ fn write(path: &Path, text: &str) -> anyhow::Result<()> {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    // The bundle first: a missing `npm run build` should fail before any file is written.
+    // The bundle first: a missing bundle directory should fail before any file is written.
     let bundle = WebBundle::locate()?;
     for stale in bundle.stale_sources() {
         eprintln!(
-            "warning: {} is newer than the bundle in {}; run `npm run build --prefix web`",
+            "warning: {} is newer than the bundle in {}; rebuild it with `npm run build --prefix web -- --outdir={}`",
             stale.display(),
-            bundle.dir().display()
+            bundle.describe(),
+            bundle.describe()
         );
     }
     let runs = load_runs(&args.runs)?;

@@ -23,9 +23,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let bundle = WebBundle::locate()?;
     for stale in bundle.stale_sources() {
         eprintln!(
-            "warning: {} is newer than the bundle in {}; run `npm run build --prefix web`",
+            "warning: {} is newer than the bundle in {}; rebuild it with `npm run build --prefix web -- --outdir={}`",
             stale.display(),
-            bundle.dir().display()
+            bundle.describe(),
+            bundle.describe()
         );
     }
     let robot = super::load_robot(&args.robot)?;

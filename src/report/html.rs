@@ -1,6 +1,6 @@
 //! Assembling the self-contained pages: templates and styles from `web/src/` (compiled in,
 //! they are ours and small), the data as inline JSON, and the page script from the
-//! front-end bundle found at run time.
+//! front-end bundle (`web/bundle/`, compiled in as well).
 
 use super::runs::{comparison_warnings, EpisodePoint, Run};
 use super::scene::ViewScene;
@@ -10,14 +10,21 @@ use serde::Serialize;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
-/// Environment variable naming the bundle directory (default: `web/dist` of the checkout
-/// the binary was built from).
+/// Environment variable naming a bundle directory to use instead of the compiled-in one
+/// (for front-end work: `npm run build --prefix web -- --outdir=…` and no cargo rebuild).
 pub const WEB_DIST_ENV: &str = "THORARENA_WEB_DIST";
 
 const REPORT_TEMPLATE: &str = include_str!("../../web/src/report.html");
 const REPORT_STYLE: &str = include_str!("../../web/src/report.css");
 const VIEW_TEMPLATE: &str = include_str!("../../web/src/view.html");
 const VIEW_STYLE: &str = include_str!("../../web/src/view.css");
+
+/// The page scripts as built by `npm run build --prefix web` from `web/src/` and the
+/// lockfile's three.js and Chart.js. Committed, so that building and running the binary
+/// never needs node or the network; `tests/web_bundle.rs` rebuilds them from the lockfile
+/// and fails if the committed copy differs by a byte.
+const EMBEDDED_REPORT_JS: &str = include_str!("../../web/bundle/report.js");
+const EMBEDDED_VIEW_JS: &str = include_str!("../../web/bundle/view.js");
 
 /// A page of the front end, one bundled script each.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -35,28 +42,32 @@ impl Page {
             Page::View => "view.js",
         }
     }
+
+    fn embedded_script(self) -> &'static str {
+        match self {
+            Page::Report => EMBEDDED_REPORT_JS,
+            Page::View => EMBEDDED_VIEW_JS,
+        }
+    }
 }
 
-/// The built front-end bundle (`web/dist/`): our page scripts with three.js and Chart.js.
-///
-/// Found at run time, not compiled in, so that `cargo build` never needs node; the
-/// directory comes from [`WEB_DIST_ENV`] or is the checkout's `web/dist`.
+/// The front-end bundle: our page scripts with three.js and Chart.js.
 #[derive(Debug, Clone)]
-pub struct WebBundle {
-    dir: PathBuf,
+pub enum WebBundle {
+    /// The copy compiled into this binary (the default): works offline, from any
+    /// directory, with no checkout beside the binary.
+    Embedded,
+    /// A directory holding `report.js` and `view.js`, named by [`WEB_DIST_ENV`].
+    Dir(PathBuf),
 }
 
 impl WebBundle {
-    /// The directory a bundle is looked for in.
-    pub fn default_dir() -> PathBuf {
-        std::env::var_os(WEB_DIST_ENV)
-            .map(PathBuf::from)
-            .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/web/dist")))
-    }
-
-    /// The bundle in [`WebBundle::default_dir`].
+    /// The bundle of [`WEB_DIST_ENV`] when it is set, else the compiled-in one.
     pub fn locate() -> Result<Self, ReportError> {
-        Self::at(&Self::default_dir())
+        match std::env::var_os(WEB_DIST_ENV) {
+            Some(dir) => Self::at(Path::new(&dir)),
+            None => Ok(Self::Embedded),
+        }
     }
 
     /// The bundle in `dir`; an error naming the build command when a script is missing.
@@ -67,35 +78,46 @@ impl WebBundle {
                 return Err(ReportError::BundleMissing { path });
             }
         }
-        Ok(Self {
-            dir: dir.to_path_buf(),
-        })
+        Ok(Self::Dir(dir.to_path_buf()))
     }
 
-    /// The bundle directory.
-    pub fn dir(&self) -> &Path {
-        &self.dir
+    /// Where the scripts come from, for messages.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Embedded => "the bundle compiled into this binary".into(),
+            Self::Dir(dir) => dir.display().to_string(),
+        }
     }
 
     /// A page's script, safe to inline in a `<script>` element.
     pub fn script(&self, page: Page) -> Result<String, ReportError> {
-        let path = self.dir.join(page.script_name());
-        let text = std::fs::read_to_string(&path).map_err(|source| ReportError::Io {
-            path: path.clone(),
-            source,
-        })?;
-        Ok(inline_script(&text))
+        match self {
+            Self::Embedded => Ok(inline_script(page.embedded_script())),
+            Self::Dir(dir) => {
+                let path = dir.join(page.script_name());
+                let text = std::fs::read_to_string(&path).map_err(|source| ReportError::Io {
+                    path: path.clone(),
+                    source,
+                })?;
+                Ok(inline_script(&text))
+            }
+        }
     }
 
-    /// Front-end sources newer than the bundle (`web/src/*.js` next to `web/dist`): the
-    /// page would run old code, so the CLI warns.
+    /// Front-end sources newer than a bundle directory (`web/src/*.js` next to it): the
+    /// page would run old code, so the CLI warns. The compiled-in bundle is checked
+    /// against its sources by `tests/web_bundle.rs` instead (file times say nothing
+    /// after a fresh clone).
     pub fn stale_sources(&self) -> Vec<PathBuf> {
+        let Self::Dir(dir) = self else {
+            return Vec::new();
+        };
         let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
         let built = [Page::Report, Page::View]
             .iter()
-            .filter_map(|p| modified(&self.dir.join(p.script_name())))
+            .filter_map(|p| modified(&dir.join(p.script_name())))
             .min();
-        let (Some(built), Some(web)) = (built, self.dir.parent()) else {
+        let (Some(built), Some(web)) = (built, dir.parent()) else {
             return Vec::new();
         };
         let Ok(entries) = std::fs::read_dir(web.join("src")) else {

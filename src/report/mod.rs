@@ -4,9 +4,10 @@
 //!
 //! The HTML pages are one file each: our templates and styles (`web/src/`, compiled in),
 //! the page data as JSON, and the page script — our code bundled with three.js and
-//! Chart.js by `npm run build --prefix web` into `web/dist/` — all inlined, so a report
-//! opens from disk or an e-mail attachment with no network. The bundle is read at run
-//! time ([`WebBundle`]) because cargo must build without node.
+//! Chart.js by `npm run build --prefix web` into `web/bundle/` — all inlined, so a report
+//! opens from disk or an e-mail attachment with no network. The bundle is committed and
+//! compiled in ([`WebBundle`]), so building and running need no node; a test proves the
+//! committed copy is exactly what the lockfile builds.
 
 mod html;
 mod runs;
@@ -63,10 +64,11 @@ pub enum ReportError {
         /// What is wrong.
         reason: String,
     },
-    /// The front-end bundle has not been built.
+    /// The bundle directory named by [`WEB_DIST_ENV`] lacks a script.
     #[error(
-        "the front-end bundle is missing ({path}): run `npm ci --prefix web && npm run build --prefix web` \
-         in the ThorArena checkout, or set {WEB_DIST_ENV} to a directory holding report.js and view.js"
+        "the front-end bundle directory named by {WEB_DIST_ENV} has no {path} \
+         (build one with `npm ci --prefix web && npm run build --prefix web -- --outdir=DIR`, \
+         or unset {WEB_DIST_ENV} to use the bundle compiled into thorarena)"
     )]
     BundleMissing {
         /// The file looked for.

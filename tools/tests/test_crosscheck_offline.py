@@ -19,8 +19,8 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import mujoco_crosscheck as mc  # noqa: E402
-from mujoco_step_bench import default_angle, gains  # noqa: E402
+import mujoco_crosscheck as mc
+from mujoco_step_bench import default_angle, gains
 
 PHYSICS_DT_S = 0.005
 CONTROL_DT_S = 0.02
@@ -45,9 +45,9 @@ def synthetic_inputs(mjcf: Path, scenario: str, duration_s: float) -> dict[str, 
     model = mc.mujoco.MjModel.from_xml_path(str(mjcf))
     hinge = [j for j in range(model.njnt) if model.jnt_type[j] == mc.mujoco.mjtJoint.mjJNT_HINGE]
     names = [model.joint(j).name for j in hinge]
-    kp, kd = zip(*(gains(n) for n in names))
+    kp, kd = zip(*(gains(n) for n in names), strict=True)
     armature = [MISSING_ARMATURE.get(n, float(model.dof_armature[model.jnt_dofadr[j]]))
-                for n, j in zip(names, hinge)]
+                for n, j in zip(names, hinge, strict=True)]
     effort = [float(model.jnt_actfrcrange[j][1]) for j in hinge]
     q0 = np.array([default_angle(n) for n in names])
 
@@ -97,7 +97,9 @@ def fixed_base_doc() -> dict[str, Any]:
 def test_identical_fixed_base_trace_has_zero_error(
         tmp_path: Path, fixed_base_doc: dict[str, Any], capsys: pytest.CaptureFixture[str]) -> None:
     q = np.array(fixed_base_doc["q"])
-    assert np.all(np.isfinite(q)) and np.ptp(q, axis=0).max() > 0.05, "replay should move the joints"
+    assert np.all(np.isfinite(q)) and np.ptp(q, axis=0).max() > 0.05, (
+        "replay should move the joints"
+    )
     code, report = run_main(tmp_path, fixed_base_doc, capsys)
     assert code == 0
     assert report["mujoco_version"] == mc.mujoco.__version__

@@ -30,7 +30,10 @@ from thorarena.adapters.dump import compare_dump, env_record, load_dump
 
 HERE = Path(__file__).resolve().parent
 PACKAGE = HERE.parent
-ONNX = PACKAGE.parents[2] / "shared" / "reference" / "twist2" / "twist2_1017_25k.onnx"
+REFERENCE = Path(
+    os.environ.get("THORARENA_REFERENCE") or PACKAGE.parents[2] / "shared" / "reference"
+)
+ONNX = REFERENCE / "twist2" / "twist2_1017_25k.onnx"
 FIXTURE = HERE / "fixtures" / "twist2_dump.json"
 CHECK_TOOL = PACKAGE / "examples" / "twist2" / "check_against_dump.py"
 

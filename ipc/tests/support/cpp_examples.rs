@@ -23,19 +23,27 @@ fn tool_works(tool: &str) -> bool {
         .is_ok_and(|o| o.status.success())
 }
 
-/// Builds the C++ examples once per test process; `None` (with the reason printed) when
-/// the tools are missing.
-pub fn examples() -> Option<&'static Path> {
-    static BUILT: OnceLock<Option<PathBuf>> = OnceLock::new();
-    BUILT.get_or_init(build_examples).as_deref()
+/// Builds the C++ examples once per test process; `None` when the tools are missing, after
+/// recording `test` as skipped (a failure in CI).
+pub fn examples(test: &str) -> Option<&'static Path> {
+    static BUILT: OnceLock<Result<PathBuf, String>> = OnceLock::new();
+    match BUILT.get_or_init(build_examples) {
+        Ok(dir) => Some(dir.as_path()),
+        Err(reason) => {
+            crate::prereq::skip(test, reason);
+            None
+        }
+    }
 }
 
-fn build_examples() -> Option<PathBuf> {
+fn build_examples() -> Result<PathBuf, String> {
     let cxx = std::env::var("CXX").unwrap_or_else(|_| "g++".into());
     for tool in ["make", cxx.as_str()] {
         if !tool_works(tool) {
-            eprintln!("skipped: `{tool}` is not on this machine, the C++ examples cannot be built");
-            return None;
+            return Err(format!(
+                "`{tool}` is not on this machine, the C++ examples cannot be built \
+                 (apt-get install g++ make, or run ./test.sh as root)"
+            ));
         }
     }
     // This binary is <target>/<profile>/deps/cpp_client-<hash>; cargo built the library's
@@ -72,5 +80,5 @@ fn build_examples() -> Option<PathBuf> {
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
-    Some(build_dir)
+    Ok(build_dir)
 }

@@ -1,0 +1,69 @@
+//! README's figures are measured, not typed: every table between `<!-- figures: NAME -->`
+//! and `<!-- /figures -->` is re-derived here (or, for the TWIST2 walks, in
+//! `tests/twist2_reference.rs`) with the command README shows beside it, and must match to
+//! the digits README prints.
+
+use std::path::Path;
+use std::process::Command;
+
+mod readme;
+use readme::readme_table;
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+/// Runs the README command on the sample; returns `tables.md`.
+fn eval_sample(policy: &str, out: &Path) -> String {
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["eval", "--dataset"])
+        .arg(Path::new(ROOT).join("data/sample"))
+        .args(["--policy", policy, "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::read_to_string(out.join("tables.md")).unwrap()
+}
+
+/// The two numbers of `tables.md`'s row whose first cell is `label` (task table first).
+fn row(tables: &str, label: &str) -> [String; 2] {
+    let line = tables
+        .lines()
+        .find(|l| {
+            l.trim_start_matches('|')
+                .split('|')
+                .next()
+                .is_some_and(|c| c.trim().trim_matches('*') == label)
+        })
+        .unwrap_or_else(|| panic!("tables.md has no row {label}:\n{tables}"));
+    let cells: Vec<String> = line
+        .trim_matches('|')
+        .split('|')
+        .map(|c| c.trim().trim_matches('*').to_string())
+        .collect();
+    [cells[1].clone(), cells[2].clone()]
+}
+
+#[test]
+fn the_baseline_table_is_what_eval_prints() {
+    let dir = tempfile::tempdir().unwrap();
+    let balance = eval_sample("balance", &dir.path().join("balance"));
+    let hold = eval_sample("hold", &dir.path().join("hold"));
+    let table = readme_table("baselines-sample");
+    assert_eq!(table.len(), 8, "six tasks, the average and survival");
+    for readme_row in &table {
+        let label = readme_row[0].as_str();
+        let shown = readme_row[1..].to_vec();
+        let tables_label = if label == "survival" {
+            "Survival"
+        } else {
+            label
+        };
+        let [bf, bn] = row(&balance, tables_label);
+        let [hf, hn] = row(&hold, tables_label);
+        assert_eq!(
+            shown,
+            [bf, bn, hf, hn],
+            "README's `{label}` row differs from `thorarena eval` (balance force, no force, hold force, no force)"
+        );
+    }
+}
