@@ -22,6 +22,7 @@ pub mod report;
 pub mod robot;
 pub mod runner;
 pub mod scenario;
+pub mod sweep;
 
 use std::path::PathBuf;
 

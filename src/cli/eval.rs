@@ -249,7 +249,8 @@ pub(super) fn evaluate(
             out.display()
         );
     }
-    if !args.resume {
+    if !args.resume || !out.join("run.json").exists() {
+        // A fresh run (also `--resume` with nothing to resume: a first attempt).
         std::fs::File::create(&episodes_path)
             .with_context(|| format!("creating {}", episodes_path.display()))?;
     }

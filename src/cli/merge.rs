@@ -3,34 +3,26 @@
 
 use super::run_output::{read_header, sort_records, write_header, write_results};
 use crate::motion::Dataset;
-use crate::runner::{read_records, schedule, write_record, EpisodeRecord};
+use crate::runner::{read_records, schedule, write_record, EpisodeRecord, RunHeader};
 use anyhow::{bail, Context};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-/// Arguments of `merge`.
-#[derive(Debug, clap::Args)]
-pub struct Args {
-    /// Run directories (shards of the same evaluation).
-    #[arg(required = true)]
-    pub runs: Vec<PathBuf>,
-    /// Output run directory.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Robot.
-    #[arg(long, default_value = "g1_29dof")]
-    pub robot: String,
-}
+/// Episode records keyed by (task, sequence, setting).
+pub(super) type EpisodesByKey = BTreeMap<(String, String, String), EpisodeRecord>;
 
-pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let robot = super::load_robot(&args.robot)?;
-    let mut header = read_header(&args.runs[0])?;
-    let mut by_key: BTreeMap<(String, String, String), EpisodeRecord> = BTreeMap::new();
-    for run in &args.runs {
+/// The records of `runs`, shards of one evaluation: their common header (with the first
+/// shard's `shard`) and every episode once, keyed by (task, sequence, setting). Refuses
+/// runs of another configuration and an episode two shards disagree on.
+pub(super) fn read_shards(runs: &[PathBuf]) -> anyhow::Result<(RunHeader, EpisodesByKey)> {
+    let first = runs.first().context("no run to merge")?;
+    let header = read_header(first)?;
+    let mut by_key = EpisodesByKey::new();
+    for run in runs {
         let mut h = read_header(run)?;
         h.shard = header.shard;
         if h != header {
-            bail!("{} is not a shard of the same evaluation as {} (policy, profile, dataset, keypoints, termination and settings must agree)", run.display(), args.runs[0].display());
+            bail!("{} is not a shard of the same evaluation as {} (policy, profile, dataset, keypoints, termination and settings must agree)", run.display(), first.display());
         }
         let path = run.join("episodes.jsonl");
         let (records, _) =
@@ -51,6 +43,26 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             }
         }
     }
+    Ok((header, by_key))
+}
+
+/// Arguments of `merge`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Run directories (shards of the same evaluation).
+    #[arg(required = true)]
+    pub runs: Vec<PathBuf>,
+    /// Output run directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Robot.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let robot = super::load_robot(&args.robot)?;
+    let (mut header, by_key) = read_shards(&args.runs)?;
     header.shard = None;
     let ds = Dataset::open(std::path::Path::new(&header.dataset), &robot)?;
     if ds.content_hash() != header.dataset_sha256 {

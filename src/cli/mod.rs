@@ -4,6 +4,7 @@ mod bench_eval;
 mod bench_ipc;
 mod bench_physics;
 mod bench_socket;
+mod bench_sweep;
 mod client;
 mod data;
 mod data_synth;
@@ -15,6 +16,7 @@ mod robot_info;
 mod run_output;
 mod serve;
 mod sim_trace;
+mod sweep;
 mod view;
 
 use clap::{Parser, Subcommand};
@@ -72,6 +74,10 @@ pub enum Command {
     /// Measure performance.
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Headless sweeps: plan a spec of policies × datasets × settings × latency rules,
+    /// run its tasks locally, on a Slurm array or a Kubernetes Indexed Job, and collect.
+    #[command(subcommand)]
+    Sweep(sweep::SweepCommand),
 }
 
 /// `thorarena robot …`
@@ -98,6 +104,9 @@ pub enum BenchCommand {
     /// Policy round trip over shared memory (Rust, C++, Python echo policies) against a
     /// Unix-socket baseline moving the same bytes.
     Ipc(bench_ipc::Args),
+    /// Sweep overhead: `sweep run` against `eval` on the same episodes, and planning a
+    /// sweep of thousands of tasks.
+    Sweep(bench_sweep::Args),
     /// The socket baseline's echo peer (started by `bench ipc`).
     #[command(hide = true)]
     SocketPeer(bench_socket::PeerArgs),
@@ -112,6 +121,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),
         Command::Bench(BenchCommand::Ipc(args)) => bench_ipc::run(&args),
+        Command::Bench(BenchCommand::Sweep(args)) => bench_sweep::run(&args),
         Command::Bench(BenchCommand::SocketPeer(args)) => bench_socket::run_peer(&args),
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
@@ -120,6 +130,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::View(args) => view::run(&args),
         Command::Serve(args) => serve::run(&args),
         Command::Client(args) => client::run(&args),
+        Command::Sweep(cmd) => sweep::run(&cmd),
     }
 }
 

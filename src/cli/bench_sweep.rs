@@ -1,0 +1,204 @@
+//! `thorarena bench sweep`: what running a sweep as tasks costs next to running the same
+//! episodes directly — `sweep run --jobs N` against one `eval --workers N` per
+//! (policy, dataset, latency rule) with all the sweep's settings, timed in the same
+//! invocation — and how long planning and a status census take for a sweep of thousands
+//! of tasks.
+
+use crate::sweep::Plan;
+use anyhow::{bail, Context};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// Arguments of `bench sweep`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The sweep spec [default: sweeps/sample.toml of the checkout].
+    #[arg(long)]
+    pub spec: Option<PathBuf>,
+    /// Tasks at a time (and the baseline's workers).
+    #[arg(long, default_value_t = 2)]
+    pub jobs: usize,
+    /// Rounds; each times both, in alternating order.
+    #[arg(long, default_value_t = 1)]
+    pub repeats: usize,
+    /// Also plan a sweep of about this many tasks over the bundled sample and time
+    /// planning and `sweep status` (0: skip).
+    #[arg(long, default_value_t = 10_000)]
+    pub plan_tasks: usize,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    if args.jobs == 0 || args.repeats == 0 {
+        bail!("--jobs and --repeats must be at least 1");
+    }
+    let spec = args.spec.clone().unwrap_or_else(|| {
+        PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/sweeps/sample.toml"))
+    });
+    let exe = std::env::current_exe()?;
+    let scratch =
+        std::env::temp_dir().join(format!("thorarena-bench-sweep-{}", std::process::id()));
+    let _cleanup = RemoveOnDrop(scratch.clone());
+    let mut ratios = Vec::new();
+    for round in 0..args.repeats {
+        let dir = scratch.join(format!("sweep-{round}"));
+        run_ok(
+            Command::new(&exe)
+                .args(["sweep", "plan"])
+                .arg(&spec)
+                .arg("--out")
+                .arg(&dir),
+        )?;
+        let plan = Plan::load(&dir)?;
+        let baseline = baseline_commands(&plan, args.jobs, &scratch.join(format!("eval-{round}")))?;
+        let time_sweep = || -> anyhow::Result<f64> {
+            let t = Instant::now();
+            run_ok(
+                Command::new(&exe)
+                    .args(["sweep", "run"])
+                    .arg(&dir)
+                    .args(["--jobs", &args.jobs.to_string()]),
+            )?;
+            Ok(t.elapsed().as_secs_f64())
+        };
+        let time_evals = || -> anyhow::Result<f64> {
+            let t = Instant::now();
+            for argv in &baseline {
+                run_ok(Command::new(&exe).args(argv))?;
+            }
+            Ok(t.elapsed().as_secs_f64())
+        };
+        let (sweep_s, eval_s) = if round % 2 == 0 {
+            let s = time_sweep()?;
+            (s, time_evals()?)
+        } else {
+            let e = time_evals()?;
+            (time_sweep()?, e)
+        };
+        let ratio = sweep_s / eval_s;
+        println!(
+            "round {round}: sweep run --jobs {j}: {sweep_s:.2} s ({} tasks, {} episodes); {} × eval --workers {j} on the same episodes: {eval_s:.2} s; ratio {ratio:.3}",
+            plan.tasks.len(),
+            plan.episodes(),
+            baseline.len(),
+            j = args.jobs
+        );
+        ratios.push(ratio);
+    }
+    ratios.sort_by(f64::total_cmp);
+    println!(
+        "sweep / eval wall time: median {:.3} over {} round(s) (goal ≤ 1.05)",
+        ratios[ratios.len() / 2],
+        ratios.len()
+    );
+
+    if args.plan_tasks > 0 {
+        plan_at_scale(&exe, &scratch, args.plan_tasks)?;
+    }
+    Ok(())
+}
+
+/// One `eval` per (policy, dataset, latency rule) of the plan, with all its settings and
+/// `workers` workers, writing under `out`.
+fn baseline_commands(plan: &Plan, workers: usize, out: &Path) -> anyhow::Result<Vec<Vec<String>>> {
+    let mut groups: Vec<(String, Vec<String>, Vec<String>)> = Vec::new();
+    for task in plan.tasks.iter().filter(|t| t.shard.0 == 0) {
+        let cell = &plan.cells[task.cell];
+        if cell.policy.command.is_some() {
+            bail!(
+                "policy `{}` runs as a command: the baseline needs in-process policies",
+                cell.policy.name
+            );
+        }
+        let key = format!(
+            "{}|{}|{:?}",
+            cell.policy.name,
+            cell.dataset.display(),
+            cell.latency
+        );
+        match groups.iter_mut().find(|g| g.0 == key) {
+            Some(g) => g.2.push(cell.setting.clone()),
+            None => groups.push((key, task.eval_args.clone(), vec![cell.setting.clone()])),
+        }
+    }
+    Ok(groups
+        .into_iter()
+        .enumerate()
+        .map(|(i, (_, args, settings))| {
+            let mut argv = Vec::new();
+            let mut it = args.into_iter();
+            while let Some(a) = it.next() {
+                match a.as_str() {
+                    "--settings" => {
+                        it.next();
+                        argv.extend(["--settings".into(), settings.join(",")]);
+                    }
+                    "--shard" => {
+                        it.next();
+                    }
+                    _ => argv.push(a),
+                }
+            }
+            argv.extend([
+                "--workers".into(),
+                workers.to_string(),
+                "--out".into(),
+                out.join(i.to_string()).display().to_string(),
+            ]);
+            argv
+        })
+        .collect())
+}
+
+/// Plans ≈ `tasks` tasks (the sample × many force coefficients × shards) and times the
+/// plan and a status census.
+fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize) -> anyhow::Result<()> {
+    let shards = 10;
+    let settings = (tasks / (2 * shards)).max(1);
+    let coefficients: Vec<String> = (0..settings)
+        .map(|i| format!("\"{}\"", 0.001 * i as f64))
+        .collect();
+    let spec = scratch.join("large.toml");
+    std::fs::create_dir_all(scratch)?;
+    std::fs::write(
+        &spec,
+        format!(
+            "datasets = [{:?}]\nsettings = [{}]\nshards = {shards}\n[[policy]]\npolicy = \"balance\"\n[[policy]]\npolicy = \"hold\"\n",
+            crate::data_dir().join("sample").display().to_string(),
+            coefficients.join(", ")
+        ),
+    )?;
+    let dir = scratch.join("large");
+    let t = Instant::now();
+    run_ok(
+        Command::new(exe)
+            .args(["sweep", "plan"])
+            .arg(&spec)
+            .arg("--out")
+            .arg(&dir),
+    )?;
+    let plan_s = t.elapsed().as_secs_f64();
+    let n = Plan::load(&dir)?.tasks.len();
+    let t = Instant::now();
+    run_ok(Command::new(exe).args(["sweep", "status"]).arg(&dir))?;
+    let status_s = t.elapsed().as_secs_f64();
+    println!("a sweep of {n} tasks: plan {plan_s:.2} s, status {status_s:.2} s");
+    Ok(())
+}
+
+fn run_ok(cmd: &mut Command) -> anyhow::Result<()> {
+    let out = cmd.output().with_context(|| format!("running {cmd:?}"))?;
+    if !out.status.success() {
+        bail!("{cmd:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    }
+    Ok(())
+}
+
+/// Removes the scratch directory however the benchmark ends.
+struct RemoveOnDrop(PathBuf);
+
+impl Drop for RemoveOnDrop {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}

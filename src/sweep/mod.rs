@@ -1,0 +1,70 @@
+//! Headless parallel sweeps: a TOML spec of axes (policies, datasets, settings, latency
+//! rules, shards) expanded into a numbered plan of tasks, each exactly one `thorarena eval`
+//! invocation on one shard of one cell. Running, scheduling and merging reuse the run,
+//! shard and merge machinery of `eval`; this module only says *what* to run and records
+//! *what has run*, so any engine that can start `thorarena sweep task DIR --index I` —
+//! the local pool, a Slurm job array, a Kubernetes Indexed Job — can execute a sweep.
+//!
+//! Layout of a sweep directory:
+//!
+//! ```text
+//! DIR/plan.json            the expanded plan (format version, cells, tasks, eval args)
+//! DIR/tasks/<I>/run/       task I's eval run directory (run.json, episodes.jsonl, …)
+//! DIR/tasks/<I>/done.json  written last, atomically, once the run is complete and flushed
+//! DIR/tasks/<I>/failed.json  why the last attempt failed (removed when it is retried)
+//! DIR/tasks/<I>/eval.log, policy.log   output of the eval and of the policy command
+//! DIR/cells/<C>/           a cell's shards merged by `sweep collect`
+//! DIR/results.csv, DIR/report.html   `sweep collect`
+//! DIR/slurm/, DIR/k8s/     generated job scripts and manifests
+//! ```
+
+mod array;
+mod plan;
+mod spec;
+mod status;
+
+pub use array::compact_ranges;
+pub use plan::{
+    diff_plans, Cell, DatasetInfo, LatencyRule, Plan, PolicyAxis, Task, PLAN_FILE, PLAN_FORMAT,
+};
+pub use spec::{LatencySpec, PolicySpec, SweepSpec};
+pub use status::{task_state, DoneRecord, FailedRecord, TaskState};
+
+use std::path::PathBuf;
+
+/// Errors of sweep specs, plans and task records.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The spec is not valid TOML or has unknown keys or wrong types.
+    #[error("{path}: {message}")]
+    Toml {
+        /// The spec file.
+        path: PathBuf,
+        /// The parser's message (names the key).
+        message: String,
+    },
+    /// The spec parses but says something impossible.
+    #[error("{path}: {message}")]
+    Invalid {
+        /// The spec file.
+        path: PathBuf,
+        /// What is wrong, naming the key.
+        message: String,
+    },
+    /// A plan or task record is unreadable or from another format version.
+    #[error("{path}: {message}")]
+    BadRecord {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+}

@@ -1,0 +1,317 @@
+//! The expanded plan: cells (one combination of the axes) and tasks (one shard of one
+//! cell, i.e. one `thorarena eval` invocation with its exact arguments), numbered
+//! 0..N-1 in a fixed order so that a task index means the same work on every node.
+
+use super::spec::{resolve, SweepSpec};
+use super::SweepError;
+use crate::runner::schedule;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// File name of the plan in a sweep directory.
+pub const PLAN_FILE: &str = "plan.json";
+/// Version of the plan and task-record format; a sweep directory of another one is
+/// refused rather than misread.
+pub const PLAN_FORMAT: u32 = 1;
+
+/// A sweep's plan, written to `DIR/plan.json` by `sweep plan`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// [`PLAN_FORMAT`].
+    pub format: u32,
+    /// The ThorArena version that planned it.
+    pub thorarena_version: String,
+    /// The spec file (absolute).
+    pub spec: PathBuf,
+    /// Where policy commands run (the spec's directory).
+    pub workdir: PathBuf,
+    /// The cells, in index order.
+    pub cells: Vec<Cell>,
+    /// The tasks, in index order.
+    pub tasks: Vec<Task>,
+}
+
+/// One combination of the axes: one evaluation configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Cell {
+    /// Index in [`Plan::cells`].
+    pub index: usize,
+    /// The policy.
+    pub policy: PolicyAxis,
+    /// Dataset directory (absolute).
+    pub dataset: PathBuf,
+    /// Its content hash at planning time (a task refuses a changed dataset).
+    pub dataset_sha256: String,
+    /// Force setting as `eval --settings` takes it.
+    pub setting: String,
+    /// Latency rule.
+    pub latency: LatencyRule,
+    /// Shards (tasks) of this cell.
+    pub shards: usize,
+    /// Episodes of the cell (one per sequence).
+    pub episodes: usize,
+    /// Simulated seconds of the cell's references.
+    pub simulated_s: f64,
+}
+
+/// A policy as planned.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PolicyAxis {
+    /// Label in results.
+    pub name: String,
+    /// `eval --policy` argument (`twist2:` paths absolute); `ipc:{session}` for commands.
+    pub policy: String,
+    /// Command launching the policy process (`{session}`, `{thorarena}` placeholders).
+    pub command: Option<String>,
+    /// Dynamics profile (name, or absolute .toml path).
+    pub profile: String,
+    /// Keypoint set.
+    pub keypoints: String,
+    /// Seconds a launched policy has to connect.
+    pub connect_timeout_s: f64,
+}
+
+/// A latency rule as planned.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LatencyRule {
+    /// Label in results.
+    pub name: String,
+    /// `--budget`.
+    pub budget: String,
+    /// `--latency-mode`.
+    pub mode: String,
+    /// `--miss-rule`.
+    pub miss_rule: String,
+}
+
+/// One shard of one cell.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Task {
+    /// Index in [`Plan::tasks`] (the array index on a cluster).
+    pub index: usize,
+    /// Its cell.
+    pub cell: usize,
+    /// Shard `(i, n)`, 0-based.
+    pub shard: (usize, usize),
+    /// Episodes this task runs.
+    pub episodes: usize,
+    /// Arguments of `thorarena` (from `eval` on), without `--out`, `--resume` and
+    /// `--workers`; `{session}` stands for the session of a launched policy.
+    pub eval_args: Vec<String>,
+}
+
+/// What planning needs to know of a dataset.
+#[derive(Debug, Clone)]
+pub struct DatasetInfo {
+    /// Absolute directory.
+    pub dir: PathBuf,
+    /// Content hash.
+    pub sha256: String,
+    /// Each sequence's duration, s, in dataset order.
+    pub durations_s: Vec<f64>,
+}
+
+impl Plan {
+    /// Expands `spec` (read from `spec_path`, absolute) over `datasets` (the spec's
+    /// datasets, resolved and opened, in the spec's order).
+    pub fn expand(
+        spec: &SweepSpec,
+        spec_path: &Path,
+        datasets: &[DatasetInfo],
+    ) -> Result<Self, SweepError> {
+        let workdir = spec_path.parent().unwrap_or(Path::new("/")).to_path_buf();
+        let mut cells = Vec::new();
+        let mut tasks = Vec::new();
+        for p in &spec.policies {
+            let policy = PolicyAxis {
+                name: p.label(),
+                policy: match (&p.policy, &p.command) {
+                    (Some(pol), _) => match pol.strip_prefix("twist2:") {
+                        Some(file) => format!("twist2:{}", resolve(&workdir, file).display()),
+                        None => pol.clone(),
+                    },
+                    _ => "ipc:{session}".into(),
+                },
+                command: p.command.clone(),
+                profile: if p.profile.ends_with(".toml") {
+                    resolve(&workdir, &p.profile).display().to_string()
+                } else {
+                    p.profile.clone()
+                },
+                keypoints: p.keypoints.clone(),
+                connect_timeout_s: p.connect_timeout_s,
+            };
+            for ds in datasets {
+                for l in spec.latency_rules() {
+                    let latency = LatencyRule {
+                        name: l.label(),
+                        budget: l.budget.clone(),
+                        mode: l.mode.clone(),
+                        miss_rule: l.miss_rule.clone(),
+                    };
+                    for setting in &spec.settings {
+                        let cell = Cell {
+                            index: cells.len(),
+                            policy: policy.clone(),
+                            dataset: ds.dir.clone(),
+                            dataset_sha256: ds.sha256.clone(),
+                            setting: setting.clone(),
+                            latency: latency.clone(),
+                            shards: spec.shards,
+                            episodes: ds.durations_s.len(),
+                            simulated_s: ds.durations_s.iter().sum(),
+                        };
+                        for i in 0..spec.shards {
+                            let shard = (i, spec.shards);
+                            let episodes = if spec.shards == 1 {
+                                cell.episodes
+                            } else {
+                                schedule(cell.episodes, 1, Some(shard)).len()
+                            };
+                            tasks.push(Task {
+                                index: tasks.len(),
+                                cell: cell.index,
+                                shard,
+                                episodes,
+                                eval_args: eval_args(&spec.robot, &cell, shard),
+                            });
+                        }
+                        cells.push(cell);
+                    }
+                }
+            }
+        }
+        Ok(Self {
+            format: PLAN_FORMAT,
+            thorarena_version: env!("CARGO_PKG_VERSION").into(),
+            spec: spec_path.to_path_buf(),
+            workdir,
+            cells,
+            tasks,
+        })
+    }
+
+    /// Reads `DIR/plan.json`, refusing another format version.
+    pub fn load(dir: &Path) -> Result<Self, SweepError> {
+        let path = dir.join(PLAN_FILE);
+        let text = std::fs::read_to_string(&path).map_err(|source| SweepError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let format = serde_json::from_str::<serde_json::Value>(&text)
+            .ok()
+            .and_then(|v| v.get("format").and_then(|f| f.as_u64()));
+        if format != Some(u64::from(PLAN_FORMAT)) {
+            return Err(SweepError::BadRecord {
+                path,
+                message: format!(
+                    "sweep format {} (this ThorArena {} reads format {PLAN_FORMAT}): plan the sweep again in a new directory",
+                    format.map_or("unknown".into(), |f| f.to_string()),
+                    env!("CARGO_PKG_VERSION")
+                ),
+            });
+        }
+        serde_json::from_str(&text).map_err(|e| SweepError::BadRecord {
+            path,
+            message: e.to_string(),
+        })
+    }
+
+    /// Simulated seconds of all tasks.
+    pub fn simulated_s(&self) -> f64 {
+        self.cells.iter().map(|c| c.simulated_s).sum()
+    }
+
+    /// Episodes of all tasks.
+    pub fn episodes(&self) -> usize {
+        self.tasks.iter().map(|t| t.episodes).sum()
+    }
+
+    /// A task's directory.
+    pub fn task_dir(dir: &Path, index: usize) -> PathBuf {
+        dir.join("tasks").join(format!("{index:06}"))
+    }
+
+    /// A cell's directory (merged shards).
+    pub fn cell_dir(dir: &Path, index: usize) -> PathBuf {
+        dir.join("cells").join(format!("{index:06}"))
+    }
+}
+
+/// The `thorarena` arguments of one shard of `cell`.
+fn eval_args(robot: &str, cell: &Cell, shard: (usize, usize)) -> Vec<String> {
+    let mut a: Vec<String> = [
+        "eval",
+        "--robot",
+        robot,
+        "--dataset",
+        &cell.dataset.display().to_string(),
+        "--policy",
+        &cell.policy.policy,
+        "--profile",
+        &cell.policy.profile,
+        "--keypoints",
+        &cell.policy.keypoints,
+        "--settings",
+        &cell.setting,
+        "--budget",
+        &cell.latency.budget,
+        "--latency-mode",
+        &cell.latency.mode,
+        "--miss-rule",
+        &cell.latency.miss_rule,
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    if shard.1 > 1 {
+        a.extend(["--shard".into(), format!("{}/{}", shard.0, shard.1)]);
+    }
+    if cell.policy.command.is_some() {
+        a.extend([
+            "--connect-timeout".into(),
+            cell.policy.connect_timeout_s.to_string(),
+        ]);
+    }
+    a
+}
+
+/// The first difference between an existing plan and a new one, for a refusal that says
+/// what changed; `None` when they plan the same work.
+pub fn diff_plans(old: &Plan, new: &Plan) -> Option<String> {
+    if old.cells.len() != new.cells.len() || old.tasks.len() != new.tasks.len() {
+        return Some(format!(
+            "{} cells / {} tasks planned, the spec now gives {} cells / {} tasks",
+            old.cells.len(),
+            old.tasks.len(),
+            new.cells.len(),
+            new.tasks.len()
+        ));
+    }
+    for (a, b) in old.cells.iter().zip(&new.cells) {
+        if a != b {
+            let what = if a.policy != b.policy {
+                format!("policy `{}` → `{}`", a.policy.name, b.policy.name)
+            } else if a.dataset != b.dataset || a.dataset_sha256 != b.dataset_sha256 {
+                format!(
+                    "dataset {} ({}) → {} ({})",
+                    a.dataset.display(),
+                    &a.dataset_sha256[..a.dataset_sha256.len().min(12)],
+                    b.dataset.display(),
+                    &b.dataset_sha256[..b.dataset_sha256.len().min(12)]
+                )
+            } else if a.setting != b.setting {
+                format!("setting `{}` → `{}`", a.setting, b.setting)
+            } else if a.latency != b.latency {
+                format!("latency `{}` → `{}`", a.latency.name, b.latency.name)
+            } else {
+                "shards or episodes".to_string()
+            };
+            return Some(format!("cell {}: {what}", a.index));
+        }
+    }
+    if old.tasks != new.tasks {
+        return Some("the tasks' eval arguments differ".into());
+    }
+    None
+}

@@ -1,0 +1,231 @@
+//! The sweep spec: a TOML file naming the axes of a sweep. Unknown keys are refused (with
+//! the key named) so a typo never silently shrinks a sweep.
+
+use super::SweepError;
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// A sweep spec (`sweeps/*.toml`). Relative paths (datasets, `twist2:FILE`) and policy
+/// commands are taken relative to the spec file's directory.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SweepSpec {
+    /// Dataset directories (canonical format).
+    pub datasets: Vec<String>,
+    /// Force settings, as `eval --settings` takes them: `force`, `no-force`, a replay
+    /// coefficient (`0.5`), or `push:<N>`. Each is its own cell.
+    pub settings: Vec<String>,
+    /// Shards per cell (tasks per cell).
+    #[serde(default = "one")]
+    pub shards: usize,
+    /// Robot.
+    #[serde(default = "default_robot")]
+    pub robot: String,
+    /// Policies (`[[policy]]` tables).
+    #[serde(rename = "policy", default)]
+    pub policies: Vec<PolicySpec>,
+    /// Latency rules (`[[latency]]` tables); none given means one lock-step rule.
+    #[serde(rename = "latency", default)]
+    pub latency: Vec<LatencySpec>,
+}
+
+/// One policy of a sweep: in process (`policy`) or a process the task launches
+/// (`command`, with `{session}` and `{thorarena}` placeholders).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolicySpec {
+    /// Label in results (default: `policy`, or `command`'s first word).
+    pub name: Option<String>,
+    /// `hold`, `replay`, `balance` or `twist2:FILE.onnx`.
+    pub policy: Option<String>,
+    /// Shell command starting a policy process that joins session `{session}`;
+    /// `{thorarena}` is this binary.
+    pub command: Option<String>,
+    /// Dynamics profile.
+    #[serde(default = "default_name")]
+    pub profile: String,
+    /// Keypoint set.
+    #[serde(default = "default_name")]
+    pub keypoints: String,
+    /// Seconds a launched policy has to connect.
+    #[serde(default = "default_connect_timeout")]
+    pub connect_timeout_s: f64,
+}
+
+/// One latency rule: `eval`'s `--budget`, `--latency-mode` and `--miss-rule`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LatencySpec {
+    /// Label in results (default: `budget`/`mode`/`miss_rule`).
+    pub name: Option<String>,
+    /// `none` (lock-step) or a duration such as `5ms`.
+    #[serde(default = "default_budget")]
+    pub budget: String,
+    /// `ignore` or `measured`.
+    #[serde(default = "default_mode")]
+    pub mode: String,
+    /// `hold`, `zero` or `fail`.
+    #[serde(default = "default_miss_rule")]
+    pub miss_rule: String,
+}
+
+fn one() -> usize {
+    1
+}
+fn default_robot() -> String {
+    "g1_29dof".into()
+}
+fn default_name() -> String {
+    "default".into()
+}
+fn default_connect_timeout() -> f64 {
+    60.0
+}
+fn default_budget() -> String {
+    "none".into()
+}
+fn default_mode() -> String {
+    "ignore".into()
+}
+fn default_miss_rule() -> String {
+    "hold".into()
+}
+
+impl SweepSpec {
+    /// Reads and checks a spec file: TOML, no unknown keys, no empty axis.
+    pub fn load(path: &Path) -> Result<Self, SweepError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let spec: Self = toml::from_str(&text).map_err(|e| SweepError::Toml {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        spec.check(path)?;
+        Ok(spec)
+    }
+
+    fn check(&self, path: &Path) -> Result<(), SweepError> {
+        let invalid = |message: String| SweepError::Invalid {
+            path: path.to_path_buf(),
+            message,
+        };
+        for (key, empty) in [
+            ("datasets", self.datasets.is_empty()),
+            ("settings", self.settings.is_empty()),
+            ("[[policy]]", self.policies.is_empty()),
+        ] {
+            if empty {
+                return Err(invalid(format!(
+                    "the axis `{key}` is empty: give at least one"
+                )));
+            }
+        }
+        if self.shards == 0 {
+            return Err(invalid("`shards` must be at least 1".into()));
+        }
+        for (i, p) in self.policies.iter().enumerate() {
+            match (&p.policy, &p.command) {
+                (Some(_), Some(_)) => {
+                    return Err(invalid(format!(
+                        "[[policy]] #{}: give `policy` or `command`, not both",
+                        i + 1
+                    )))
+                }
+                (None, None) => {
+                    return Err(invalid(format!(
+                        "[[policy]] #{}: give `policy` (built-in or twist2:FILE) or `command`",
+                        i + 1
+                    )))
+                }
+                (None, Some(c)) if !c.contains("{session}") => {
+                    return Err(invalid(format!(
+                        "[[policy]] #{}: `command` must contain {{session}}, the session the task serves",
+                        i + 1
+                    )))
+                }
+                _ => {}
+            }
+            if !(p.connect_timeout_s.is_finite() && p.connect_timeout_s > 0.0) {
+                return Err(invalid(format!(
+                    "[[policy]] #{}: `connect_timeout_s` must be > 0",
+                    i + 1
+                )));
+            }
+        }
+        for (key, values) in [
+            ("datasets", &self.datasets),
+            ("settings", &self.settings),
+            (
+                "[[policy]] name",
+                &self.policies.iter().map(PolicySpec::label).collect(),
+            ),
+            (
+                "[[latency]] name",
+                &self.latency.iter().map(LatencySpec::label).collect(),
+            ),
+        ] {
+            let mut seen = std::collections::HashSet::new();
+            if let Some(dup) = values.iter().find(|v| !seen.insert(v.as_str())) {
+                return Err(invalid(format!("`{key}` lists `{dup}` twice")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The latency rules, the default lock-step one when none is given.
+    pub fn latency_rules(&self) -> Vec<LatencySpec> {
+        if self.latency.is_empty() {
+            vec![LatencySpec {
+                name: None,
+                budget: default_budget(),
+                mode: default_mode(),
+                miss_rule: default_miss_rule(),
+            }]
+        } else {
+            self.latency.clone()
+        }
+    }
+}
+
+impl PolicySpec {
+    /// The policy's label in results.
+    pub fn label(&self) -> String {
+        if let Some(n) = &self.name {
+            return n.clone();
+        }
+        match (&self.policy, &self.command) {
+            (Some(p), _) => match p.strip_prefix("twist2:") {
+                Some(file) => format!(
+                    "twist2:{}",
+                    Path::new(file)
+                        .file_stem()
+                        .map_or(file.into(), |s| s.to_string_lossy())
+                ),
+                None => p.clone(),
+            },
+            (None, Some(c)) => c.split_whitespace().next().unwrap_or("command").to_string(),
+            (None, None) => "policy".into(),
+        }
+    }
+}
+
+impl LatencySpec {
+    /// The rule's label in results.
+    pub fn label(&self) -> String {
+        self.name
+            .clone()
+            .unwrap_or_else(|| format!("{}/{}/{}", self.budget, self.mode, self.miss_rule))
+    }
+}
+
+/// `p` relative to `base` unless absolute.
+pub(super) fn resolve(base: &Path, p: &str) -> PathBuf {
+    let p = Path::new(p);
+    if p.is_absolute() {
+        p.to_path_buf()
+    } else {
+        base.join(p)
+    }
+}

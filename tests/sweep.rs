@@ -1,0 +1,476 @@
+//! `thorarena sweep`: a sweep's collected episodes equal separate `eval` runs of its cells
+//! bit for bit (any `--jobs`, any task order, policies in or out of process); a killed
+//! `sweep run` resumes without losing or duplicating an episode; a failing policy command
+//! fails its task alone; bad specs and sweep directories are clear errors that write
+//! nothing; the Kubernetes manifest is an Indexed Job.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+const SAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+
+fn thorarena(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("thorarena runs")
+}
+
+fn ok(o: Output) -> Output {
+    assert!(
+        o.status.success(),
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn err(o: &Output) -> String {
+    assert!(!o.status.success(), "expected a failure");
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Writes `body` as `spec.toml` in `dir` (datasets given absolute in the body).
+fn spec(dir: &Path, body: &str) -> PathBuf {
+    let p = dir.join("spec.toml");
+    std::fs::write(&p, body).unwrap();
+    p
+}
+
+const TWO_CELLS: &str = r#"
+datasets = ["DATA"]
+settings = ["no-force", "force"]
+shards = 2
+[[policy]]
+policy = "balance"
+"#;
+
+fn two_cells(dir: &Path) -> PathBuf {
+    spec(dir, &TWO_CELLS.replace("DATA", SAMPLE))
+}
+
+fn plan(spec: &Path, out: &Path) {
+    ok(thorarena(&[
+        "sweep",
+        "plan",
+        spec.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+}
+
+/// A run's episode records, one JSON line each, byte for byte, in a canonical order
+/// (`episodes.jsonl` is written in the order episodes finish, which depends on workers).
+fn records(path: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    lines.sort();
+    lines
+}
+
+/// `eval` of each cell on its own, unsharded: the reference a sweep must equal.
+fn separate_evals(tmp: &Path, policy: &str) -> Vec<Vec<String>> {
+    ["no-force", "force"]
+        .iter()
+        .map(|setting| {
+            let out = tmp.join(format!("eval-{policy}-{setting}"));
+            ok(thorarena(&[
+                "eval",
+                "--dataset",
+                SAMPLE,
+                "--policy",
+                policy,
+                "--settings",
+                setting,
+                "--out",
+                out.to_str().unwrap(),
+            ]));
+            records(&out.join("episodes.jsonl"))
+        })
+        .collect()
+}
+
+fn collected(sweep: &Path) -> Vec<Vec<String>> {
+    ok(thorarena(&["sweep", "collect", sweep.to_str().unwrap()]));
+    (0..2)
+        .map(|c| records(&sweep.join(format!("cells/{c:06}/episodes.jsonl"))))
+        .collect()
+}
+
+/// Equal record sets, reported by count and first differing record, not by dumping them.
+fn assert_same(got: &[Vec<String>], want: &[Vec<String>], what: &str) {
+    assert_eq!(got.len(), want.len(), "{what}: cells");
+    for (c, (g, w)) in got.iter().zip(want).enumerate() {
+        assert_eq!(g.len(), w.len(), "{what}: cell {c} episodes");
+        if let Some(i) = (0..g.len()).find(|&i| g[i] != w[i]) {
+            panic!(
+                "{what}: cell {c}, record {i} differs: {} … vs {} …",
+                &g[i][..g[i].len().min(120)],
+                &w[i][..w[i].len().min(120)]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_sweep_equals_separate_evals_for_any_jobs_order_and_kill() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = two_cells(tmp.path());
+    let reference = separate_evals(tmp.path(), "balance");
+    assert_eq!(reference[0].len(), 12);
+
+    // The pool, two at a time.
+    let a = tmp.path().join("a");
+    plan(&spec, &a);
+    ok(thorarena(&[
+        "sweep",
+        "run",
+        a.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]));
+    assert_same(&collected(&a), &reference, "sweep run --jobs 2");
+    let csv = std::fs::read_to_string(a.join("results.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count(),
+        3,
+        "a header and one row per cell:\n{csv}"
+    );
+    assert!(a.join("report.html").is_file());
+
+    // One task per process, last first (as a cluster may run them).
+    let b = tmp.path().join("b");
+    plan(&spec, &b);
+    for i in (0..4).rev() {
+        ok(Command::new(BIN)
+            .args(["sweep", "task", b.to_str().unwrap()])
+            .env("SLURM_ARRAY_TASK_ID", i.to_string())
+            .output()
+            .unwrap());
+    }
+    // A finished task run again is skipped, not redone.
+    let again = ok(thorarena(&[
+        "sweep",
+        "task",
+        b.to_str().unwrap(),
+        "--index",
+        "0",
+    ]));
+    assert!(String::from_utf8_lossy(&again.stdout).contains("already done"));
+    assert_same(&collected(&b), &reference, "tasks in reverse order");
+
+    // `sweep run` killed part-way, then run again.
+    let c = tmp.path().join("c");
+    plan(&spec, &c);
+    let mut run = Command::new(BIN)
+        .args(["sweep", "run", c.to_str().unwrap(), "--jobs", "1"])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    loop {
+        let done = c.join("tasks/000000/done.json").exists();
+        let started = std::fs::read_to_string(c.join("tasks/000001/run/episodes.jsonl"))
+            .is_ok_and(|t| t.lines().count() >= 1);
+        if done && started {
+            break;
+        }
+        assert!(Instant::now() < deadline, "the sweep did not get going");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    run.kill().unwrap(); // SIGKILL
+    run.wait().unwrap();
+    let status = ok(thorarena(&["sweep", "status", c.to_str().unwrap()]));
+    let status = String::from_utf8_lossy(&status.stdout).into_owned();
+    assert!(status.contains("not done (--array): 1-3"), "{status}");
+    ok(thorarena(&[
+        "sweep",
+        "run",
+        c.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]));
+    assert_same(&collected(&c), &reference, "killed and run again");
+}
+
+#[test]
+fn an_out_of_process_policy_gives_the_in_process_episodes_and_a_dead_one_fails_alone() {
+    let tmp = tempfile::tempdir().unwrap();
+    let body = format!(
+        r#"
+datasets = ["{SAMPLE}"]
+settings = ["no-force", "force"]
+[[policy]]
+name = "balance-ipc"
+command = "{{thorarena}} client --session {{session}} --policy balance"
+connect_timeout_s = 30
+"#
+    );
+    let spec_path = spec(tmp.path(), &body);
+    let reference = separate_evals(tmp.path(), "balance");
+    let dir = tmp.path().join("ipc");
+    plan(&spec_path, &dir);
+    ok(thorarena(&[
+        "sweep",
+        "run",
+        dir.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]));
+    assert_same(&collected(&dir), &reference, "policy process");
+
+    // A policy command that exits at once: its tasks fail, named by status, the others
+    // (another policy) finish.
+    let body = format!(
+        r#"
+datasets = ["{SAMPLE}"]
+settings = ["no-force"]
+[[policy]]
+policy = "hold"
+[[policy]]
+name = "broken"
+command = "echo 'cannot load the checkpoint {{session}}' >&2; exit 3"
+connect_timeout_s = 20
+"#
+    );
+    let spec_path = spec(tmp.path(), &body);
+    let dir = tmp.path().join("broken");
+    plan(&spec_path, &dir);
+    let o = thorarena(&["sweep", "run", dir.to_str().unwrap(), "--jobs", "2"]);
+    assert!(err(&o).contains("1 task(s) failed"), "{}", err(&o));
+    let status = ok(thorarena(&["sweep", "status", dir.to_str().unwrap()]));
+    let status = String::from_utf8_lossy(&status.stdout).into_owned();
+    assert!(status.contains("1 done, 1 failed"), "{status}");
+    assert!(
+        status.contains("failed: task 1") && status.contains("policy `broken`"),
+        "{status}"
+    );
+    assert!(status.contains("policy command exited"), "{status}");
+    assert!(status.contains("cannot load the checkpoint"), "{status}");
+    assert!(status.contains("not done (--array): 1"), "{status}");
+    // Collect refuses the unfinished cell, and --partial marks it.
+    let o = thorarena(&["sweep", "collect", dir.to_str().unwrap()]);
+    assert!(err(&o).contains("unfinished"), "{}", err(&o));
+    ok(thorarena(&[
+        "sweep",
+        "collect",
+        dir.to_str().unwrap(),
+        "--partial",
+    ]));
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(
+        rows[1].contains(",hold,") && rows[1].contains(",true,"),
+        "{csv}"
+    );
+    assert!(
+        rows[2].contains(",broken,") && rows[2].contains(",0,12,false,"),
+        "{csv}"
+    );
+}
+
+#[test]
+fn bad_specs_and_sweep_directories_are_clear_errors_that_write_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sweep");
+    let out_s = out.to_str().unwrap().to_string();
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "unknown key",
+            TWO_CELLS.replace("DATA", SAMPLE).replace("shards", "shard"),
+            "unknown field `shard`",
+        ),
+        (
+            "unknown policy key",
+            TWO_CELLS.replace("DATA", SAMPLE).replace(
+                "policy = \"balance\"",
+                "policy = \"balance\"\nprofil = \"x\"",
+            ),
+            "unknown field `profil`",
+        ),
+        (
+            "empty axis",
+            TWO_CELLS
+                .replace("DATA", SAMPLE)
+                .replace("[\"no-force\", \"force\"]", "[]"),
+            "the axis `settings` is empty",
+        ),
+        (
+            "missing dataset",
+            TWO_CELLS.replace("DATA", "/nonexistent/dataset"),
+            "/nonexistent/dataset",
+        ),
+        (
+            "missing ONNX",
+            TWO_CELLS
+                .replace("DATA", SAMPLE)
+                .replace("\"balance\"", "\"twist2:missing.onnx\""),
+            "missing.onnx",
+        ),
+        (
+            "bad setting",
+            TWO_CELLS
+                .replace("DATA", SAMPLE)
+                .replace("\"force\"]", "\"fore\"]"),
+            "setting `fore`",
+        ),
+        (
+            "bad budget",
+            TWO_CELLS.replace("DATA", SAMPLE) + "[[latency]]\nbudget = \"5 parsecs\"\n",
+            "5 parsecs",
+        ),
+        (
+            "command without session",
+            TWO_CELLS
+                .replace("DATA", SAMPLE)
+                .replace("policy = \"balance\"", "command = \"python3 policy.py\""),
+            "{session}",
+        ),
+    ];
+    for (what, body, needle) in cases {
+        let p = spec(tmp.path(), &body);
+        let o = thorarena(&["sweep", "plan", p.to_str().unwrap(), "--out", &out_s]);
+        let e = err(&o);
+        assert!(e.contains(needle), "{what}: `{needle}` not in: {e}");
+        assert!(!out.exists(), "{what}: nothing may be written");
+    }
+
+    // A changed spec against an existing plan.
+    let p = two_cells(tmp.path());
+    plan(&p, &out);
+    let before = std::fs::read(out.join("plan.json")).unwrap();
+    ok(thorarena(&[
+        "sweep",
+        "plan",
+        p.to_str().unwrap(),
+        "--out",
+        &out_s,
+    ]));
+    let changed = spec(
+        tmp.path(),
+        &TWO_CELLS
+            .replace("DATA", SAMPLE)
+            .replace("\"force\"]", "\"0.5\"]"),
+    );
+    let e = err(&thorarena(&[
+        "sweep",
+        "plan",
+        changed.to_str().unwrap(),
+        "--out",
+        &out_s,
+    ]));
+    assert!(e.contains("cell 1: setting `force` → `0.5`"), "{e}");
+    assert_eq!(std::fs::read(out.join("plan.json")).unwrap(), before);
+
+    // `sweep task` without an index, or beyond the plan.
+    let e = err(&Command::new(BIN)
+        .args(["sweep", "task", &out_s])
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("JOB_COMPLETION_INDEX")
+        .output()
+        .unwrap());
+    assert!(
+        e.contains("SLURM_ARRAY_TASK_ID") && e.contains("JOB_COMPLETION_INDEX"),
+        "{e}"
+    );
+    let e = err(&thorarena(&["sweep", "task", &out_s, "--index", "99"]));
+    assert!(e.contains("the plan has tasks 0..4"), "{e}");
+
+    // A sweep directory of another format version.
+    let text = String::from_utf8(before).unwrap();
+    std::fs::write(
+        out.join("plan.json"),
+        text.replacen("\"format\":1", "\"format\":99", 1),
+    )
+    .unwrap();
+    let e = err(&thorarena(&["sweep", "status", &out_s]));
+    assert!(e.contains("sweep format 99"), "{e}");
+}
+
+#[test]
+fn the_kubernetes_manifest_is_an_indexed_job_over_every_task() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sweep");
+    plan(&two_cells(tmp.path()), &out);
+    ok(thorarena(&[
+        "sweep",
+        "k8s",
+        out.to_str().unwrap(),
+        "--image",
+        "registry.example/thorarena:0.1",
+        "--claim",
+        "sweeps",
+        "--parallelism",
+        "3",
+    ]));
+    let text = std::fs::read_to_string(out.join("k8s/job.yaml")).unwrap();
+    let y: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    assert_eq!(y["apiVersion"], "batch/v1");
+    assert_eq!(y["kind"], "Job");
+    let spec = &y["spec"];
+    assert_eq!(spec["completionMode"], "Indexed");
+    assert_eq!(spec["completions"].as_u64(), Some(4));
+    assert_eq!(spec["parallelism"].as_u64(), Some(3));
+    let pod = &spec["template"]["spec"];
+    assert_eq!(pod["restartPolicy"], "Never");
+    let c = &pod["containers"][0];
+    assert_eq!(c["image"], "registry.example/thorarena:0.1");
+    let dir = std::fs::canonicalize(&out).unwrap();
+    let cmd: Vec<&str> = c["command"]
+        .as_sequence()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        cmd[..4],
+        ["thorarena", "sweep", "task", dir.to_str().unwrap()]
+    );
+    assert_eq!(c["volumeMounts"][0]["mountPath"], dir.to_str().unwrap());
+    assert_eq!(
+        pod["volumes"][0]["persistentVolumeClaim"]["claimName"],
+        "sweeps"
+    );
+    assert_eq!(c["volumeMounts"][0]["name"], pod["volumes"][0]["name"]);
+}
+
+#[test]
+fn the_slurm_script_is_an_array_over_the_tasks_not_done() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sweep");
+    plan(&two_cells(tmp.path()), &out);
+    ok(thorarena(&[
+        "sweep",
+        "task",
+        out.to_str().unwrap(),
+        "--index",
+        "2",
+    ]));
+    ok(thorarena(&[
+        "sweep",
+        "slurm",
+        out.to_str().unwrap(),
+        "--partition",
+        "cpu",
+        "--time",
+        "00:30:00",
+        "--cpus-per-task",
+        "2",
+        "--max-parallel",
+        "8",
+    ]));
+    let script = std::fs::read_to_string(out.join("slurm/sweep.sbatch")).unwrap();
+    for line in [
+        "#SBATCH --array=0-1,3%8",
+        "#SBATCH --cpus-per-task=2",
+        "#SBATCH --partition=cpu",
+        "#SBATCH --time=00:30:00",
+    ] {
+        assert!(script.contains(line), "`{line}` missing:\n{script}");
+    }
+    assert!(script.contains("/slurm/logs/task-%a.log"), "{script}");
+    assert!(script.contains(" sweep task "), "{script}");
+}
