@@ -109,6 +109,38 @@ fn make_runs(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
     (balance, hold, trace)
 }
 
+/// A two-cell sweep (hold, without and with force) collected into its report.
+fn make_sweep(dir: &Path) -> PathBuf {
+    let spec = dir.join("sweep.toml");
+    std::fs::write(
+        &spec,
+        format!(
+            "datasets = [\"{ROOT}/data/sample\"]\nsettings = [\"no-force\", \"force\"]\n[[policy]]\npolicy = \"hold\"\n"
+        ),
+    )
+    .unwrap();
+    let sweep = dir.join("sweep");
+    for args in [
+        vec![
+            "sweep",
+            "plan",
+            spec.to_str().unwrap(),
+            "--out",
+            sweep.to_str().unwrap(),
+        ],
+        vec!["sweep", "run", sweep.to_str().unwrap()],
+        vec!["sweep", "collect", sweep.to_str().unwrap()],
+    ] {
+        run(
+            Command::new(BIN)
+                .env_remove("THORARENA_WEB_DIST")
+                .args(&args),
+            args[1],
+        );
+    }
+    sweep.join("report.html")
+}
+
 fn differing(v: &Value) -> (u64, u64) {
     (
         v["differing"].as_u64().unwrap_or(0),
@@ -156,11 +188,14 @@ fn report_and_viewer_render_in_headless_chromium() {
             .arg(&view),
         "view",
     );
+    let sweep_report = make_sweep(runs.path());
     let out = run(
         Command::new("node")
             .arg(Path::new(ROOT).join("web/tests/browser.mjs"))
             .arg("--report")
             .arg(&report)
+            .arg("--sweep-report")
+            .arg(&sweep_report)
             .arg("--view")
             .arg(&view)
             .arg("--shots")
@@ -221,6 +256,30 @@ fn report_and_viewer_render_in_headless_chromium() {
         r["warning_box"], 0,
         "same dataset, profile and rules; {context}"
     );
+
+    // The sweep's report: its curves drawn with data, before the cells' comparison.
+    let s = &facts["sweep_report"];
+    for key in ["console_errors", "page_errors", "blocked_requests"] {
+        assert_eq!(
+            s[key],
+            serde_json::json!([]),
+            "sweep report {key}; {context}"
+        );
+    }
+    for id in ["sweep-fats-vs-coefficient", "sweep-survival-vs-coefficient"] {
+        let plot = s["plots"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["id"] == id)
+            .unwrap_or_else(|| panic!("sweep plot {id} missing; {context}"));
+        assert!(
+            plot["painted_pixels"].as_u64().unwrap_or(0) > 2000,
+            "#{id} is blank; {context}"
+        );
+        assert_eq!(s["points"][id], 2, "no force and force; {context}");
+    }
+    assert!(shots.join("sweep-report.png").is_file());
 
     let v = &facts["view"];
     for key in ["console_errors", "page_errors", "blocked_requests"] {

@@ -139,7 +139,21 @@ fn a_sweep_equals_separate_evals_for_any_jobs_order_and_kill() {
         3,
         "a header and one row per cell:\n{csv}"
     );
-    assert!(a.join("report.html").is_file());
+    let plots = report_plots(&a);
+    assert!(
+        plots.contains(&"sweep-fats-vs-coefficient".to_string()),
+        "{plots:?}"
+    );
+    assert!(
+        plots.contains(&"sweep-survival-vs-coefficient".to_string()),
+        "{plots:?}"
+    );
+    assert!(
+        !plots
+            .iter()
+            .any(|p| p.contains("budget") || p.contains("push")),
+        "axes that did not vary are not plotted: {plots:?}"
+    );
 
     // One task per process, last first (as a cluster may run them).
     let b = tmp.path().join("b");
@@ -268,6 +282,60 @@ connect_timeout_s = 20
     );
     assert!(
         rows[2].contains(",broken,") && rows[2].contains(",0,12,false,"),
+        "{csv}"
+    );
+}
+
+/// The canvas ids a collected sweep's report declares.
+fn report_plots(sweep: &Path) -> Vec<String> {
+    let html = std::fs::read_to_string(sweep.join("report.html")).unwrap();
+    let start = html.find("id=\"report-data\"").expect("report data");
+    let json_start = start + html[start..].find('>').unwrap() + 1;
+    let json_end = json_start + html[json_start..].find("</script>").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&html[json_start..json_end]).unwrap();
+    data["plots"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn latency_budgets_under_measured_latency_are_plotted_against_fats() {
+    let tmp = tempfile::tempdir().unwrap();
+    let body = format!(
+        r#"
+datasets = ["{SAMPLE}"]
+settings = ["no-force"]
+[[policy]]
+policy = "hold"
+[[latency]]
+name = "lock-step"
+[[latency]]
+budget = "5ms"
+mode = "measured"
+[[latency]]
+budget = "10ms"
+mode = "measured"
+"#
+    );
+    let dir = tmp.path().join("latency");
+    plan(&spec(tmp.path(), &body), &dir);
+    ok(thorarena(&["sweep", "run", dir.to_str().unwrap()]));
+    ok(thorarena(&["sweep", "collect", dir.to_str().unwrap()]));
+    let plots = report_plots(&dir);
+    assert_eq!(
+        plots
+            .iter()
+            .filter(|p| p.starts_with("sweep-"))
+            .collect::<Vec<_>>(),
+        ["sweep-fats-vs-budget"],
+        "one setting: no force curve; two measured budgets: the latency curve"
+    );
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    assert!(
+        csv.contains(",5ms,measured,hold,") && csv.contains(",10ms,measured,hold,"),
         "{csv}"
     );
 }

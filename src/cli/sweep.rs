@@ -1132,10 +1132,11 @@ fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
     let cell_dirs: Vec<PathBuf> = results.iter().flatten().map(|r| r.dir.clone()).collect();
     let report = args.dir.join("report.html");
-    super::report_html::run(&super::report_html::Args {
-        runs: cell_dirs,
-        out: report.clone(),
-    })?;
+    let runs = crate::report::load_runs(&cell_dirs)?;
+    let charts = sweep_charts(&plan, &results);
+    let script = crate::report::WebBundle::locate()?.script(crate::report::Page::Report)?;
+    let html = crate::report::sweep_report_html(&runs, &charts, &script);
+    std::fs::write(&report, html).with_context(|| format!("writing {}", report.display()))?;
     eprintln!(
         "collected {} cells{}: {} and {}",
         results.iter().flatten().count(),
@@ -1240,4 +1241,162 @@ fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String {
         w.write_record(&row).expect("in memory");
     }
     String::from_utf8(w.into_inner().expect("in memory")).expect("UTF-8")
+}
+
+/// A latency budget (`5ms`, `500us`, `0.01s`) in ms; `None` for `none`.
+fn budget_ms(budget: &str) -> Option<f64> {
+    let (num, factor) = if let Some(n) = budget.strip_suffix("ms") {
+        (n, 1.0)
+    } else if let Some(n) = budget.strip_suffix("us").or(budget.strip_suffix("µs")) {
+        (n, 1e-3)
+    } else if let Some(n) = budget.strip_suffix('s') {
+        (n, 1e3)
+    } else {
+        return None;
+    };
+    num.trim().parse::<f64>().ok().map(|v| v * factor)
+}
+
+/// The curves a sweep is for, from its cells' averages: FATS and survival against the
+/// force coefficient (and against a constant push), one line per policy, and FATS against
+/// the latency budget under `--latency-mode measured`. A quantity that takes fewer than
+/// two values is not plotted; labels name only the axes that vary.
+fn sweep_charts(plan: &Plan, results: &[Option<CellResult>]) -> Vec<crate::report::SweepChart> {
+    use crate::report::{CurveSeries, SweepChart};
+    use std::collections::BTreeSet;
+    let varies = |f: &dyn Fn(&crate::sweep::Cell) -> String| {
+        plan.cells.iter().map(f).collect::<BTreeSet<_>>().len() > 1
+    };
+    let many_datasets = varies(&|c| c.dataset.display().to_string());
+    let many_latency = varies(&|c| c.latency.name.clone());
+    let many_settings = varies(&|c| c.setting.clone());
+    let label = |c: &crate::sweep::Cell, with_latency: bool, with_setting: bool| {
+        let mut l = c.policy.name.clone();
+        if many_datasets {
+            l += &format!(
+                " · {}",
+                c.dataset
+                    .file_name()
+                    .map_or(String::new(), |n| n.to_string_lossy().into())
+            );
+        }
+        if with_latency && many_latency {
+            l += &format!(" · {}", c.latency.name);
+        }
+        if with_setting && many_settings {
+            l += &format!(" · {}", c.setting);
+        }
+        l
+    };
+    // (cell, fats, survival) of every cell with results.
+    let points: Vec<(&crate::sweep::Cell, f64, f64)> = plan
+        .cells
+        .iter()
+        .zip(results)
+        .filter_map(|(c, r)| {
+            let avg = r.as_ref()?.summary["settings"]
+                .as_object()?
+                .values()
+                .next()?["average"]
+                .clone();
+            Some((c, avg["fats"].as_f64()?, avg["survival"].as_f64()?))
+        })
+        .collect();
+    // Lines of (label → sorted points) for the cells `x` maps to a value.
+    let lines = |x: &dyn Fn(&crate::sweep::Cell) -> Option<f64>,
+                 y: &dyn Fn(f64, f64) -> f64,
+                 with_latency: bool,
+                 with_setting: bool| {
+        let mut by_label: BTreeMap<String, Vec<[f64; 2]>> = BTreeMap::new();
+        let mut xs = BTreeSet::new();
+        for &(c, fats, survival) in &points {
+            if let Some(xv) = x(c) {
+                xs.insert(xv.to_bits());
+                by_label
+                    .entry(label(c, with_latency, with_setting))
+                    .or_default()
+                    .push([xv, y(fats, survival)]);
+            }
+        }
+        let series: Vec<CurveSeries> = by_label
+            .into_iter()
+            .map(|(label, mut points)| {
+                points.sort_by(|a, b| a[0].total_cmp(&b[0]));
+                CurveSeries { label, points }
+            })
+            .collect();
+        (xs.len() >= 2).then_some(series)
+    };
+    let setting = |c: &crate::sweep::Cell| crate::runner::Setting::parse(&c.setting);
+    let coefficient = |c: &crate::sweep::Cell| {
+        setting(c)
+            .filter(|s| s.push_n == 0.0)
+            .map(|s| s.coefficient)
+    };
+    let push = |c: &crate::sweep::Cell| {
+        setting(c)
+            .filter(|s| s.coefficient == 0.0)
+            .map(|s| s.push_n)
+    };
+    let budget = |c: &crate::sweep::Cell| {
+        (c.latency.mode == "measured")
+            .then(|| budget_ms(&c.latency.budget))
+            .flatten()
+    };
+    let fats = |f: f64, _s: f64| f;
+    let survival = |_f: f64, s: f64| s;
+    let mut charts = Vec::new();
+    let mut chart =
+        |id: &str, title: &str, x_label: &str, y_label: &str, series: Option<Vec<CurveSeries>>| {
+            if let Some(series) = series {
+                charts.push(SweepChart {
+                    id: id.into(),
+                    title: title.into(),
+                    x_label: x_label.into(),
+                    y_label: y_label.into(),
+                    series,
+                });
+            }
+        };
+    chart(
+        "sweep-fats-vs-coefficient",
+        "FATS against the force replay coefficient (0 = no force, 1 = the recorded forces)",
+        "force replay coefficient",
+        "FATS",
+        lines(&coefficient, &fats, true, false),
+    );
+    chart(
+        "sweep-survival-vs-coefficient",
+        "Survival against the force replay coefficient",
+        "force replay coefficient",
+        "survival",
+        lines(&coefficient, &survival, true, false),
+    );
+    if points
+        .iter()
+        .any(|(c, _, _)| push(c).is_some_and(|p| p > 0.0))
+    {
+        chart(
+            "sweep-fats-vs-push",
+            "FATS against a constant push on each hand",
+            "push per hand (N)",
+            "FATS",
+            lines(&push, &fats, true, false),
+        );
+        chart(
+            "sweep-survival-vs-push",
+            "Survival against a constant push on each hand",
+            "push per hand (N)",
+            "survival",
+            lines(&push, &survival, true, false),
+        );
+    }
+    chart(
+        "sweep-fats-vs-budget",
+        "FATS against the latency budget (latency mode measured: the policy's latency delays its action)",
+        "latency budget (ms)",
+        "FATS",
+        lines(&budget, &fats, false, true),
+    );
+    charts
 }

@@ -258,9 +258,35 @@ struct LatencyPlots {
     series: Vec<LatencySeries>,
 }
 
+/// A line chart of a sweep: one series per policy (and per other varying axis), a metric
+/// against a swept quantity (force coefficient, push, latency budget).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepChart {
+    /// Canvas id.
+    pub id: String,
+    /// Caption.
+    pub title: String,
+    /// x axis label, with unit.
+    pub x_label: String,
+    /// y axis label.
+    pub y_label: String,
+    /// The lines.
+    pub series: Vec<CurveSeries>,
+}
+
+/// One line of a [`SweepChart`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CurveSeries {
+    /// Legend label.
+    pub label: String,
+    /// `[x, y]`, sorted by x.
+    pub points: Vec<[f64; 2]>,
+}
+
 /// Everything the report script plots; `plots` lists every canvas id it must fill.
 #[derive(Serialize)]
 struct ReportData<'a> {
+    sweep: Vec<SweepChart>,
     runs: Vec<RunInfo<'a>>,
     tasks: Vec<String>,
     radars: Vec<SettingPlot<Series>>,
@@ -278,6 +304,12 @@ fn fmt_opt(v: Option<f64>, decimals: usize) -> String {
 
 /// The report page for `runs` (one or several) with the bundled `script` inlined.
 pub fn report_html(runs: &[Run], script: &str) -> String {
+    sweep_report_html(runs, &[], script)
+}
+
+/// The report page of a sweep: the sweep's curves first, then the comparison of its
+/// cells (`runs`) as in [`report_html`].
+pub fn sweep_report_html(runs: &[Run], sweep: &[SweepChart], script: &str) -> String {
     let tasks = all_tasks(runs);
     let mut settings: Vec<String> = Vec::new();
     for r in runs {
@@ -362,7 +394,8 @@ pub fn report_html(runs: &[Run], script: &str) -> String {
         faults_id: "latency-faults",
         series: latency_series,
     });
-    let mut plots: Vec<String> = radars.iter().map(|p| p.id.clone()).collect();
+    let mut plots: Vec<String> = sweep.iter().map(|c| c.id.clone()).collect();
+    plots.extend(radars.iter().map(|p| p.id.clone()));
     plots.push("scatter-tracking-survival".into());
     plots.extend(regimes.iter().map(|p| p.id.clone()));
     if let Some(l) = &latency {
@@ -370,6 +403,7 @@ pub fn report_html(runs: &[Run], script: &str) -> String {
         plots.push(l.faults_id.into());
     }
     let data = ReportData {
+        sweep: sweep.to_vec(),
         runs: runs
             .iter()
             .map(|r| RunInfo {
@@ -422,6 +456,13 @@ fn figure(id: &str, caption: &str) -> String {
 /// (the script fills them).
 fn report_body(runs: &[Run], data: &ReportData) -> String {
     let mut s = String::new();
+    if !data.sweep.is_empty() {
+        s += "<section id=\"sweep\"><h2>Sweep</h2><div class=\"grid\">";
+        for c in &data.sweep {
+            s += &figure(&c.id, &c.title);
+        }
+        s += "</div></section>";
+    }
     s += "<section id=\"runs\"><h2>Runs</h2><table id=\"runs-table\"><thead><tr><th>run</th><th>policy</th><th>profile</th><th>dataset</th><th>keypoints</th><th>termination</th><th>settings</th><th>episodes</th><th>directory</th></tr></thead><tbody>";
     for r in runs {
         let h = &r.header;

@@ -14,7 +14,10 @@ mod runs;
 mod scene;
 mod tables;
 
-pub use html::{escape, report_html, view_html, Page, WebBundle, WEB_DIST_ENV};
+pub use html::{
+    escape, report_html, sweep_report_html, view_html, CurveSeries, Page, SweepChart, WebBundle,
+    WEB_DIST_ENV,
+};
 pub use runs::{
     comparison_warnings, label_runs, load_run, load_runs, ComparisonWarning, EpisodePoint,
     PolicyIoSummary, Run, WarningKind,

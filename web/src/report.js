@@ -54,6 +54,31 @@ function draw(id, config) {
   charts[id] = new Chart(canvas, config);
 }
 
+// A sweep's curves: a metric against the swept quantity, one line per series (runColor
+// indexes series here, not runs).
+for (const chart of data.sweep) {
+  draw(chart.id, {
+    type: "scatter",
+    data: {
+      datasets: chart.series.map((s, i) => ({
+        label: s.label,
+        data: s.points.map(([x, y]) => ({ x, y })),
+        showLine: true,
+        borderColor: runColor(i),
+        backgroundColor: runColor(i),
+        pointRadius: 4,
+      })),
+    },
+    options: {
+      scales: {
+        x: { type: "linear", title: { display: true, text: chart.x_label } },
+        y: { type: "linear", title: { display: true, text: chart.y_label } },
+      },
+      plugins: { legend: { position: "bottom" } },
+    },
+  });
+}
+
 for (const radar of data.radars) {
   draw(radar.id, {
     type: "radar",

@@ -3,7 +3,7 @@
 // prints what it saw as one JSON object on stdout. It judges nothing: the Rust test
 // `tests/report_browser.rs` asserts on these facts, so all the rules live in one place.
 //
-//   node web/tests/browser.mjs --report R.html --view V.html --shots DIR [--chromium PATH]
+//   node web/tests/browser.mjs --report R.html --view V.html --shots DIR [--sweep-report S.html] [--chromium PATH]
 //
 // Pages are opened from file:// with every http(s)/ws request aborted and recorded, so a
 // page that needs the network shows up as a blocked request, not as a silent success.
@@ -18,6 +18,7 @@ const { values: args } = parseArgs({
   options: {
     report: { type: "string" },
     view: { type: "string" },
+    "sweep-report": { type: "string" },
     shots: { type: "string" },
     chromium: { type: "string", default: "/usr/bin/chromium" },
   },
@@ -120,9 +121,9 @@ async function canvases(page, ids) {
 
 const result = {};
 
-// --- the report -------------------------------------------------------------------------
-{
-  const { page, seen, context } = await open(args.report, { width: 1400, height: 900 });
+// --- the report (and a sweep's report, the same page with the sweep's curves) --------
+async function checkReport(file, shot) {
+  const { page, seen, context } = await open(file, { width: 1400, height: 900 });
   await page.waitForFunction(() => window.thorarenaReport?.ready === true, null, { timeout: 20000 }).catch(() => {});
   const state = await page.evaluate(() => window.thorarenaReport ?? null);
   const declared = await page.evaluate(() => JSON.parse(document.getElementById("report-data").textContent).plots);
@@ -131,7 +132,7 @@ const result = {};
       [...document.querySelectorAll("table[id]")].map((t) => [t.id, t.querySelectorAll("tbody tr").length]),
     ),
   );
-  result.report = {
+  const facts = {
     ...seen,
     ready: state?.ready === true,
     declared_plots: declared,
@@ -140,9 +141,12 @@ const result = {};
     tables,
     warning_box: await page.locator("#comparability-warnings").count(),
   };
-  await page.screenshot({ path: join(args.shots, "report.png"), fullPage: true });
+  await page.screenshot({ path: join(args.shots, shot), fullPage: true });
   await context.close();
+  return facts;
 }
+result.report = await checkReport(args.report, "report.png");
+if (args["sweep-report"]) result.sweep_report = await checkReport(args["sweep-report"], "sweep-report.png");
 
 // --- the viewer ---------------------------------------------------------------------------
 {
