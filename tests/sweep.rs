@@ -286,6 +286,40 @@ connect_timeout_s = 20
     );
 }
 
+#[test]
+fn two_copies_of_one_task_racing_leave_one_complete_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("race");
+    plan(&two_cells(tmp.path()), &dir);
+    let d = dir.to_str().unwrap();
+    let copies: Vec<_> = (0..2)
+        .map(|_| {
+            Command::new(BIN)
+                .args(["sweep", "task", d, "--index", "1", "--workers", "1"])
+                .stdout(Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    let said: Vec<String> = copies
+        .into_iter()
+        .map(|c| String::from_utf8_lossy(&ok(c.wait_with_output().unwrap()).stdout).into_owned())
+        .collect();
+    // One ran it, the other waited for it and found it done.
+    assert_eq!(
+        said.iter().filter(|s| s.contains("task 1: done")).count(),
+        1,
+        "{said:?}"
+    );
+    assert_eq!(
+        said.iter().filter(|s| s.contains("already done")).count(),
+        1,
+        "{said:?}"
+    );
+    let run = records(&dir.join("tasks/000001/run/episodes.jsonl"));
+    assert_eq!(run.len(), 6, "shard 1 of 2 of 12 sequences, each once");
+}
+
 /// The canvas ids a collected sweep's report declares.
 fn report_plots(sweep: &Path) -> Vec<String> {
     let html = std::fs::read_to_string(sweep.join("report.html")).unwrap();

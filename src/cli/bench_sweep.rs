@@ -93,7 +93,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     );
 
     if args.plan_tasks > 0 {
-        plan_at_scale(&exe, &scratch, args.plan_tasks)?;
+        // Any finished task run of the first round stands in for every task of the large
+        // sweep when timing `collect`.
+        let source = Plan::task_dir(&scratch.join("sweep-0"), 0).join("run");
+        plan_at_scale(&exe, &scratch, args.plan_tasks, &source)?;
     }
     Ok(())
 }
@@ -151,8 +154,10 @@ fn baseline_commands(plan: &Plan, workers: usize, out: &Path) -> anyhow::Result<
 }
 
 /// Plans ≈ `tasks` tasks (the sample × many force coefficients × shards) and times the
-/// plan and a status census.
-fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize) -> anyhow::Result<()> {
+/// plan, a status census, and `collect` with every task finished — each task's run
+/// hard-linked from `source` (one real task run), so the merge reads and writes as much
+/// as real runs of that size, without simulating them.
+fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize, source: &Path) -> anyhow::Result<()> {
     let shards = 10;
     let settings = (tasks / (2 * shards)).max(1);
     let coefficients: Vec<String> = (0..settings)
@@ -182,7 +187,32 @@ fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize) -> anyhow::Result<()>
     let t = Instant::now();
     run_ok(Command::new(exe).args(["sweep", "status"]).arg(&dir))?;
     let status_s = t.elapsed().as_secs_f64();
-    println!("a sweep of {n} tasks: plan {plan_s:.2} s, status {status_s:.2} s");
+    let files: Vec<PathBuf> = std::fs::read_dir(source)
+        .with_context(|| format!("reading {}", source.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .collect();
+    let episodes = std::fs::read_to_string(source.join("episodes.jsonl"))?
+        .lines()
+        .count();
+    for i in 0..n {
+        let run = Plan::task_dir(&dir, i).join("run");
+        std::fs::create_dir_all(&run)?;
+        for f in &files {
+            std::fs::hard_link(f, run.join(f.file_name().expect("a file")))?;
+        }
+        std::fs::write(
+            Plan::task_dir(&dir, i).join("done.json"),
+            format!("{{\"task\":{i},\"episodes\":{episodes},\"wall_s\":0.0}}"),
+        )?;
+    }
+    let t = Instant::now();
+    run_ok(Command::new(exe).args(["sweep", "collect"]).arg(&dir))?;
+    let collect_s = t.elapsed().as_secs_f64();
+    println!(
+        "a sweep of {n} tasks: plan {plan_s:.2} s, status {status_s:.2} s, collect {collect_s:.2} s ({} episodes read, each task's run standing in for itself)",
+        n * episodes
+    );
     Ok(())
 }
 
