@@ -47,6 +47,9 @@ pub enum Termination {
     /// The policy process died or left mid-episode (not the policy's tracking: a run
     /// resumed with `--resume` runs such episodes again).
     PolicyFailed,
+    /// The physics state became non-finite (absurd forces or gains): counted as a fall,
+    /// and the step that diverged is not recorded, so no NaN reaches the results.
+    PhysicsDiverged,
 }
 
 /// One way a policy's answer can fail an environment for one control step.
@@ -316,6 +319,10 @@ impl<'a> Episode<'a> {
             physics.set_targets(&self.targets);
         }
         self.next_targets = new_targets;
+        if !(power.is_finite() && state_is_finite(&self.state)) {
+            self.termination = Some(Termination::PhysicsDiverged);
+            return;
+        }
         self.step += 1;
         let t = self.step as f64 * profile.control_dt_s;
         let frame = self.reference.sample(t);
@@ -407,6 +414,9 @@ impl<'a> Episode<'a> {
 
     /// Compares the robot's torso with the reference's (poses from `record`).
     fn check_termination(&mut self) {
+        if self.termination.is_some() {
+            return;
+        }
         let rule = self.setup.termination;
         let torso = frame_pose(
             self.setup.robot,
@@ -445,4 +455,31 @@ impl<'a> Episode<'a> {
     pub fn finish(self) -> (EpisodeSeries, Option<Termination>) {
         (self.series, self.termination)
     }
+}
+
+/// Every number of the state is finite (a diverged simulation is not).
+fn state_is_finite(state: &crate::physics::PhysicsState) -> bool {
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    let root_ok = state.root.as_ref().is_none_or(|r| {
+        r.world_from_root
+            .translation
+            .vector
+            .iter()
+            .all(|x| x.is_finite())
+            && r.world_from_root
+                .rotation
+                .coords
+                .iter()
+                .all(|x| x.is_finite())
+            && r.lin_vel_w.iter().all(|x| x.is_finite())
+            && r.ang_vel_w.iter().all(|x| x.is_finite())
+    });
+    root_ok
+        && finite(&state.q)
+        && finite(&state.qd)
+        && finite(&state.applied_torque_nm)
+        && state.world_from_body.iter().all(|p| {
+            p.translation.vector.iter().all(|x| x.is_finite())
+                && p.rotation.coords.iter().all(|x| x.is_finite())
+        })
 }

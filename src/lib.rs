@@ -14,6 +14,7 @@ pub mod embedded_data;
 pub mod episode;
 pub mod metrics;
 pub mod motion;
+pub mod names;
 pub mod physics;
 pub mod policy;
 pub mod profile;

@@ -162,3 +162,100 @@ fn rerunning_an_episode_is_bit_identical() {
     let b = run(&robot, &profile, &seq, &mut HoldPolicy);
     assert_eq!(format!("{a:?}"), format!("{b:?}"));
 }
+
+/// Rapier, except that from physics step `nan_from` on, the state reads as NaN (as a
+/// simulation blown up by absurd forces or gains would).
+struct DivergingPhysics {
+    inner: RapierPhysics,
+    steps: usize,
+    nan_from: usize,
+}
+
+impl thorarena::physics::Physics for DivergingPhysics {
+    fn model(&self) -> &RobotModel {
+        self.inner.model()
+    }
+    fn settings(&self) -> &PhysicsSettings {
+        self.inner.settings()
+    }
+    fn reset(&mut self, state: &thorarena::physics::ResetState) {
+        self.inner.reset(state)
+    }
+    fn set_gains(&mut self, gains: &thorarena::physics::PdGains) {
+        self.inner.set_gains(gains)
+    }
+    fn set_targets(&mut self, q_target: &[f64]) {
+        self.inner.set_targets(q_target)
+    }
+    fn set_external_force(&mut self, force: thorarena::physics::ExternalForce) {
+        self.inner.set_external_force(force)
+    }
+    fn clear_external_forces(&mut self) {
+        self.inner.clear_external_forces()
+    }
+    fn step(&mut self) {
+        self.steps += 1;
+        self.inner.step()
+    }
+    fn read_state(&self, out: &mut thorarena::physics::PhysicsState) {
+        self.inner.read_state(out);
+        if self.steps >= self.nan_from {
+            out.q[3] = f64::NAN;
+        }
+    }
+    fn time_s(&self) -> f64 {
+        self.inner.time_s()
+    }
+    fn contact_count(&self) -> usize {
+        self.inner.contact_count()
+    }
+}
+
+#[test]
+fn a_diverging_simulation_ends_the_episode_as_physics_diverged_without_nan() {
+    let robot = Arc::new(g1());
+    let profile = default_profile(&robot);
+    let seq = standing_sequence(&robot);
+    let setup = EpisodeSetup {
+        robot: &robot,
+        profile: &profile,
+        keypoints: robot.keypoint_set("default").unwrap(),
+        termination: TerminationRule::default(),
+        force_coefficient: 1.0,
+        push_n: 0.0,
+        reference_offsets_s: vec![0.0],
+    };
+    let settings = PhysicsSettings {
+        dt_s: profile.physics_dt_s,
+        ..Default::default()
+    };
+    // Diverges during control step 10 (4 physics steps per 20 ms control step).
+    let mut physics = DivergingPhysics {
+        inner: RapierPhysics::new(robot.clone(), settings, profile.gains.clone()),
+        steps: 0,
+        nan_from: 4 * 10 + 2,
+    };
+    let mut ep = Episode::start(&setup, &seq, &mut physics);
+    let mut actions = vec![vec![0.0; robot.n_joints()]];
+    while !ep.is_done() {
+        HoldPolicy.act(&[ep.observation()], &mut actions);
+        ep.advance(&mut physics, &actions[0]);
+    }
+    let (series, end) = ep.finish();
+    assert_eq!(end, Some(Termination::PhysicsDiverged));
+    assert_eq!(
+        series.kp_err_m.len(),
+        10,
+        "the ten finite steps, not the diverged one"
+    );
+    for v in series
+        .kp_err_m
+        .iter()
+        .chain(&series.power_w)
+        .chain(&series.root_drift_m)
+    {
+        assert!(v.is_finite());
+    }
+    let json = serde_json::to_string(&Some(Termination::PhysicsDiverged)).unwrap();
+    assert_eq!(json, "\"physics_diverged\"");
+}

@@ -168,7 +168,31 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
         ]),
         None => None,
     };
+    crate::names::check_name("--task", &args.task)?;
     let mut writer = DatasetWriter::append(&args.out, &robot)?;
+    // Sequence ids come from file names: check them, and that none is taken, before
+    // anything is read or written.
+    let mut ids = std::collections::HashSet::new();
+    for input in &args.inputs {
+        let stem = input
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .with_context(|| format!("{}: no file name", input.display()))?;
+        crate::names::check_name("sequence id (the file name)", stem)
+            .with_context(|| input.display().to_string())?;
+        if !ids.insert(stem) {
+            bail!(
+                "two inputs are named `{stem}`: sequence ids come from file names and must differ"
+            );
+        }
+        if writer.contains(&args.task, stem) {
+            bail!(
+                "{}/{stem} is already in {}: rename the file or import into another dataset",
+                args.task,
+                args.out.display()
+            );
+        }
+    }
     // All or nothing: every input is read, checked and converted before the first file is
     // written, so one rejected motion (a glitch, a bad field) leaves the dataset as it was.
     let mut seqs = Vec::with_capacity(args.inputs.len());
@@ -285,8 +309,13 @@ pub fn describe(ds: &Dataset, seqs: &[Sequence], robot: &RobotModel) -> String {
         "{:<16} {:>5} {:>10} {:>9} {:>9} {:>9} {:>12}",
         "", "", "s", "N", "N", "N", "rad"
     );
-    let mut tasks: Vec<&str> = seqs.iter().map(|q| q.task.as_str()).collect();
-    tasks.dedup();
+    // Tasks in order of first appearance, each once (a manifest need not be grouped).
+    let mut tasks: Vec<&str> = Vec::new();
+    for q in seqs {
+        if !tasks.contains(&q.task.as_str()) {
+            tasks.push(q.task.as_str());
+        }
+    }
     for task in tasks {
         let group: Vec<&Sequence> = seqs.iter().filter(|q| q.task == task).collect();
         let duration: f64 = group.iter().map(|q| q.duration_s()).sum();

@@ -53,8 +53,11 @@ pub struct RunArgs {
     #[arg(long, default_value = "default")]
     pub keypoints: String,
     /// Continue the run in `--out`: keep its finished episodes, run the rest.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "overwrite")]
     pub resume: bool,
+    /// Replace a run already in `--out` (without it, an existing run is refused).
+    #[arg(long)]
+    pub overwrite: bool,
     /// Run only shard I of N of the schedule (`I/N`, 0-based); merge shards with `thorarena merge`.
     #[arg(long, value_parser = parse_shard)]
     pub shard: Option<(usize, usize)>,
@@ -128,10 +131,21 @@ impl EvalContext {
             .iter()
             .map(|s| {
                 Setting::parse(s).with_context(|| {
-                    format!("--settings: `{s}` is not force, no-force, a number or push:<N>")
+                    format!(
+                        "--settings: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N> with |N| ≤ {}",
+                        Setting::MAX_COEFFICIENT,
+                        Setting::MAX_PUSH_N
+                    )
                 })
             })
             .collect::<anyhow::Result<_>>()?;
+        let mut seen = HashSet::new();
+        if let Some(dup) = settings.iter().find(|s| !seen.insert(s.name.clone())) {
+            bail!(
+                "--settings lists `{}` twice: every episode would run and count twice",
+                dup.name
+            );
+        }
         for (flag, v) in [
             ("--max-torso-height-error", args.max_torso_height_error),
             ("--max-torso-tilt-error", args.max_torso_tilt_error),
@@ -143,6 +157,12 @@ impl EvalContext {
         args.io.rules()?;
         let ds = Dataset::open(&dataset, &robot)?;
         let sequences = ds.load_all()?;
+        if sequences.is_empty() {
+            bail!(
+                "{} holds no sequence: nothing to evaluate",
+                dataset.display()
+            );
+        }
         for name in &args.trace {
             if !sequences
                 .iter()
@@ -183,6 +203,10 @@ impl EvalContext {
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let ctx = EvalContext::load(&args.run)?;
+    // An unusable --out is found before a policy process is made to connect.
+    if let Some(out) = &args.out {
+        check_out(out, &args.run)?;
+    }
     let mut policy = make_policy(
         &args.policy,
         &ctx.robot,
@@ -190,10 +214,33 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         &args.run.io,
         ctx.envs,
     )?;
-    let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("results").join(format!("{}-{}", policy.name(), ctx.dataset_name()))
-    });
+    let out = match &args.out {
+        Some(out) => out.clone(),
+        None => {
+            crate::names::check_name("policy name", policy.name())?;
+            let out =
+                PathBuf::from("results").join(format!("{}-{}", policy.name(), ctx.dataset_name()));
+            check_out(&out, &args.run)?;
+            out
+        }
+    };
     evaluate(&args.run, &ctx, policy.as_mut(), &out)
+}
+
+/// Refuses to replace a finished or started run unless `--resume` or `--overwrite` says
+/// what to do with it, and checks that the directory can be written.
+pub(super) fn check_out(out: &std::path::Path, args: &RunArgs) -> anyhow::Result<()> {
+    if out.join("run.json").exists() && !args.resume && !args.overwrite {
+        bail!(
+            "{} already holds a run: pass --resume to continue it, --overwrite to replace it, or choose another --out",
+            out.display()
+        );
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let probe = out.join(format!(".write-test-{}", std::process::id()));
+    std::fs::write(&probe, b"").with_context(|| format!("{} is not writable", out.display()))?;
+    let _ = std::fs::remove_file(probe);
+    Ok(())
 }
 
 /// Runs the benchmark for one connected policy into `out`.

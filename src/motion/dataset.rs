@@ -76,7 +76,7 @@ impl Dataset {
             Some(v) => {
                 return Err(DataError::SchemaVersion {
                     path,
-                    found: v as u32,
+                    found: v,
                     supported: SCHEMA_VERSION,
                 });
             }
@@ -98,9 +98,24 @@ impl Dataset {
                 "must be `wxyz` and `sensor`",
             ));
         }
+        if manifest.robot != robot.name {
+            return Err(bad(
+                &path,
+                "robot",
+                format!(
+                    "`{}`, but the robot evaluated is `{}` (retarget the motions, or pass --robot {})",
+                    manifest.robot, robot.name, manifest.robot
+                ),
+            ));
+        }
         check_joint_names(&path, "joint_names", &manifest.joint_names, robot)?;
         let mut seen = std::collections::HashSet::new();
         for (i, e) in manifest.sequences.iter().enumerate() {
+            // Ids become file names (traces, exports, run directories).
+            for (field, value) in [("task", &e.task), ("sequence_id", &e.sequence_id)] {
+                crate::names::check_name(field, value)
+                    .map_err(|n| bad(&path, format!("sequences[{i}].{field}"), n.to_string()))?;
+            }
             if !(e.fps.is_finite() && e.fps > 0.0) {
                 return Err(bad(
                     &path,
@@ -292,8 +307,20 @@ impl DatasetWriter {
         }
     }
 
+    /// Whether the dataset already has `task`/`sequence_id`.
+    pub fn contains(&self, task: &str, sequence_id: &str) -> bool {
+        self.manifest
+            .sequences
+            .iter()
+            .any(|e| e.task == task && e.sequence_id == sequence_id)
+    }
+
     /// Writes `seq` to `<task>/<sequence_id>.safetensors` and records it.
     pub fn add(&mut self, seq: &Sequence) -> Result<(), DataError> {
+        for (field, value) in [("task", &seq.task), ("sequence_id", &seq.sequence_id)] {
+            crate::names::check_name(field, value)
+                .map_err(|n| bad(&self.dir.join(MANIFEST), field, n.to_string()))?;
+        }
         let file = format!("{}/{}.safetensors", seq.task, seq.sequence_id);
         let path = self.dir.join(&file);
         if self

@@ -47,8 +47,8 @@ pub enum DataError {
     SchemaVersion {
         /// The manifest.
         path: PathBuf,
-        /// Version found.
-        found: u32,
+        /// Version found (as written: a huge number is reported, not truncated).
+        found: u64,
         /// Version supported.
         supported: u32,
     },

@@ -154,7 +154,7 @@ pub fn decode_sequence(bytes: &[u8], file: &Path) -> Result<Sequence, DataError>
     if meta.schema_version != SCHEMA_VERSION {
         return Err(DataError::SchemaVersion {
             path: file.to_path_buf(),
-            found: meta.schema_version,
+            found: meta.schema_version.into(),
             supported: SCHEMA_VERSION,
         });
     }

@@ -47,7 +47,15 @@ fn is_zero(v: &f64) -> bool {
 }
 
 impl Setting {
-    /// Parses `force`, `no-force`, a replay coefficient, or `push:<N>`.
+    /// Largest |replay coefficient| accepted: ten times the recorded forces is already
+    /// far beyond any interaction; larger values only make the physics diverge.
+    pub const MAX_COEFFICIENT: f64 = 10.0;
+    /// Largest |push| per hand accepted, N (the G1 weighs 33 kg; a probe beyond this
+    /// measures nothing but divergence).
+    pub const MAX_PUSH_N: f64 = 1000.0;
+
+    /// Parses `force`, `no-force`, a replay coefficient (|c| ≤ [`Self::MAX_COEFFICIENT`]),
+    /// or `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]).
     pub fn parse(s: &str) -> Option<Self> {
         let plain = |name: String, coefficient: f64| Self {
             name,
@@ -59,7 +67,10 @@ impl Setting {
             "no-force" => Some(plain("no-force".into(), 0.0)),
             other => {
                 if let Some(n) = other.strip_prefix("push:") {
-                    let n: f64 = n.parse().ok().filter(|n: &f64| n.is_finite())?;
+                    let n: f64 = n
+                        .parse()
+                        .ok()
+                        .filter(|n: &f64| n.is_finite() && n.abs() <= Self::MAX_PUSH_N)?;
                     return Some(Self {
                         name: format!("push-{n}"),
                         coefficient: 0.0,
@@ -69,7 +80,7 @@ impl Setting {
                 other
                     .parse::<f64>()
                     .ok()
-                    .filter(|c| c.is_finite())
+                    .filter(|c| c.is_finite() && c.abs() <= Self::MAX_COEFFICIENT)
                     .map(|c| plain(format!("coef-{c}"), c))
             }
         }

@@ -1,0 +1,311 @@
+//! Bad and hostile input (issue 14, first part): names that would become paths outside the
+//! output directory, manifests that lie about robot or version or are not grouped, runs
+//! that would be silently replaced or double-counted, imports that would half-write.
+//! Each is a clear error (or a correct result), never a panic, never a file outside the
+//! directory it was meant for.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+use thorarena::motion::{DatasetWriter, MANIFEST};
+
+mod common;
+use common::{g1, sample_sequence};
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+const SAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+
+fn thorarena(cwd: &Path, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .current_dir(cwd)
+        .args(args)
+        .output()
+        .expect("thorarena runs")
+}
+
+fn failure(o: &Output) -> String {
+    assert!(
+        !o.status.success(),
+        "expected an error; stdout: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!e.contains("panicked"), "a panic: {e}");
+    e
+}
+
+/// A two-sequence dataset in `dir` whose manifest is then edited by `edit`.
+fn dataset_with_manifest(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let robot = g1();
+    let mut w = DatasetWriter::create(dir, &robot).unwrap();
+    for (task, id) in [("clean_table", "a"), ("liftup_water", "b")] {
+        let mut s = sample_sequence(&robot, id);
+        s.task = task.into();
+        w.add(&s).unwrap();
+    }
+    w.finish().unwrap();
+    let path = dir.join(MANIFEST);
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    edit(&mut m);
+    std::fs::write(&path, serde_json::to_string_pretty(&m).unwrap()).unwrap();
+}
+
+#[test]
+fn hostile_ids_in_a_manifest_are_refused_before_any_path_is_made() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (field, value) in [
+        ("task", "../../evil"),
+        ("sequence_id", "/etc/passwd"),
+        ("sequence_id", ".."),
+        ("task", ""),
+    ] {
+        let ds = tmp.path().join("ds");
+        let _ = std::fs::remove_dir_all(&ds);
+        dataset_with_manifest(&ds, |m| m["sequences"][0][field] = value.into());
+        let e = failure(&thorarena(
+            tmp.path(),
+            &["eval", "--dataset", ds.to_str().unwrap(), "--out", "run"],
+        ));
+        assert!(e.contains(&format!("sequences[0].{field}")), "{e}");
+        assert!(e.contains("cannot become a file name"), "{e}");
+        assert!(!tmp.path().join("run").join("traces").exists());
+    }
+    assert!(!tmp.path().parent().unwrap().join("evil").exists());
+}
+
+#[test]
+fn a_hostile_task_name_on_import_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("walk.csv");
+    std::fs::write(&csv, "frame,x\n").unwrap();
+    for task in ["../../x", "/tmp/x", "a b", ""] {
+        let e = failure(&thorarena(
+            tmp.path(),
+            &[
+                "data",
+                "import",
+                "--format",
+                "lafan-csv",
+                csv.to_str().unwrap(),
+                "--out",
+                "ds",
+                "--task",
+                task,
+            ],
+        ));
+        assert!(e.contains("--task"), "{task}: {e}");
+        assert!(!tmp.path().join("ds").exists(), "{task}: nothing written");
+    }
+}
+
+#[test]
+fn a_policy_process_declaring_a_hostile_name_gets_no_directory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let work = tmp.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    let session = format!("hostile-{}", std::process::id());
+    let policy = format!("ipc:{session}");
+    let eval = Command::new(BIN)
+        .current_dir(&work)
+        .args([
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--settings",
+            "no-force",
+            "--policy",
+            &policy,
+            "--connect-timeout",
+            "30",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let mut client = Command::new(BIN)
+        .args([
+            "client",
+            "--session",
+            &session,
+            "--policy",
+            "hold",
+            "--name",
+            "../../escaped",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let out = eval.wait_with_output().unwrap();
+    let _ = client.kill();
+    let _ = client.wait();
+    let e = failure(&out);
+    assert!(
+        e.contains("policy name `../../escaped` cannot become a file name"),
+        "{e}"
+    );
+    assert!(!tmp.path().join("escaped").exists());
+    assert!(
+        !work.join("results").exists()
+            || std::fs::read_dir(work.join("results")).unwrap().count() == 0
+    );
+}
+
+#[test]
+fn a_manifest_for_another_robot_or_schema_is_refused_plainly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("h1");
+    dataset_with_manifest(&ds, |m| m["robot"] = "h1".into());
+    let e = failure(&thorarena(
+        tmp.path(),
+        &["eval", "--dataset", ds.to_str().unwrap(), "--out", "run"],
+    ));
+    assert!(
+        e.contains("robot") && e.contains("`h1`") && e.contains("g1_29dof"),
+        "{e}"
+    );
+
+    let ds = tmp.path().join("future");
+    dataset_with_manifest(&ds, |m| m["schema_version"] = (1u64 << 33 | 1).into());
+    let e = failure(&thorarena(
+        tmp.path(),
+        &["data", "info", ds.to_str().unwrap()],
+    ));
+    assert!(e.contains("schema version 8589934593"), "{e}");
+}
+
+#[test]
+fn runs_are_never_silently_replaced_double_counted_or_empty() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    dataset_with_manifest(&ds, |_| {});
+    let d = ds.to_str().unwrap();
+    let eval = |extra: &[&str]| {
+        let mut a = vec!["eval", "--dataset", d, "--policy", "hold", "--out", "run"];
+        a.extend(extra);
+        thorarena(tmp.path(), &a)
+    };
+    assert!(eval(&[]).status.success());
+    let before = std::fs::read(tmp.path().join("run/episodes.jsonl")).unwrap();
+    let e = failure(&eval(&[]));
+    assert!(
+        e.contains("already holds a run") && e.contains("--overwrite"),
+        "{e}"
+    );
+    assert_eq!(
+        std::fs::read(tmp.path().join("run/episodes.jsonl")).unwrap(),
+        before
+    );
+    assert!(eval(&["--resume"]).status.success());
+    assert!(eval(&["--overwrite"]).status.success());
+    assert_eq!(
+        std::fs::read(tmp.path().join("run/episodes.jsonl"))
+            .unwrap()
+            .len(),
+        before.len()
+    );
+
+    let e = failure(&eval(&["--settings", "force,force", "--overwrite"]));
+    assert!(e.contains("`force` twice"), "{e}");
+    for absurd in ["1e308", "push:1e300", "50", "push:-5000"] {
+        let e = failure(&eval(&["--settings", absurd, "--overwrite"]));
+        assert!(e.contains("within ±10") && e.contains("≤ 1000"), "{absurd}: {e}");
+    }
+
+    let empty = tmp.path().join("empty");
+    dataset_with_manifest(&empty, |m| m["sequences"] = serde_json::json!([]));
+    let e = failure(&thorarena(
+        tmp.path(),
+        &[
+            "eval",
+            "--dataset",
+            empty.to_str().unwrap(),
+            "--out",
+            "empty-run",
+        ],
+    ));
+    assert!(e.contains("holds no sequence"), "{e}");
+    assert!(!tmp.path().join("empty-run/tables.md").exists());
+}
+
+#[test]
+fn data_info_lists_each_task_once_however_the_manifest_is_ordered() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let robot = g1();
+    let mut w = DatasetWriter::create(&ds, &robot).unwrap();
+    for (task, id) in [
+        ("clean_table", "a"),
+        ("liftup_water", "b"),
+        ("clean_table", "c"),
+    ] {
+        let mut s = sample_sequence(&robot, id);
+        s.task = task.into();
+        w.add(&s).unwrap();
+    }
+    w.finish().unwrap();
+    // Ungroup the manifest: a, b, c → clean_table, liftup_water, clean_table.
+    let path = ds.join(MANIFEST);
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let seqs = m["sequences"].as_array_mut().unwrap();
+    seqs.sort_by_key(|e| e["sequence_id"].as_str().unwrap().to_string());
+    std::fs::write(&path, serde_json::to_string(&m).unwrap()).unwrap();
+    let o = thorarena(tmp.path(), &["data", "info", ds.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let rows = |task: &str| text.lines().filter(|l| l.starts_with(task)).count();
+    assert_eq!(rows("clean_table"), 1, "{text}");
+    assert_eq!(rows("liftup_water"), 1, "{text}");
+}
+
+#[test]
+fn an_import_with_a_taken_or_repeated_sequence_id_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    std::fs::create_dir_all(&a).unwrap();
+    std::fs::create_dir_all(&b).unwrap();
+    // Two LAFAN-style files with the same name in different folders.
+    let lafan = |dir: &Path| {
+        let p = dir.join("walk.csv");
+        let q0 = g1().default_pose();
+        let text: String = (0..45)
+            .map(|k| {
+                let mut row = vec![0.02 * k as f64, 0.0, 0.78, 0.0, 0.0, 0.0, 1.0];
+                row.extend(&q0);
+                let cells: Vec<String> = row.iter().map(|v| v.to_string()).collect();
+                cells.join(",") + "\n"
+            })
+            .collect();
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let (pa, pb) = (lafan(&a), lafan(&b));
+    let import = |inputs: &[&Path]| {
+        let mut args = vec!["data", "import", "--format", "lafan-csv"];
+        args.extend(inputs.iter().map(|p| p.to_str().unwrap()));
+        args.extend(["--out", "ds", "--task", "walk"]);
+        thorarena(tmp.path(), &args)
+    };
+    let e = failure(&import(&[&pa, &pb]));
+    assert!(e.contains("two inputs are named `walk`"), "{e}");
+    assert!(
+        !tmp.path().join("ds/walk").exists(),
+        "no orphan sequence file"
+    );
+    let first = import(&[&pa]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let manifest = std::fs::read(tmp.path().join("ds").join(MANIFEST)).unwrap();
+    let e = failure(&import(&[&pb]));
+    assert!(e.contains("walk/walk is already in"), "{e}");
+    assert_eq!(
+        std::fs::read(tmp.path().join("ds").join(MANIFEST)).unwrap(),
+        manifest
+    );
+}
