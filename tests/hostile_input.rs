@@ -211,7 +211,10 @@ fn runs_are_never_silently_replaced_double_counted_or_empty() {
     assert!(e.contains("`force` twice"), "{e}");
     for absurd in ["1e308", "push:1e300", "50", "push:-5000"] {
         let e = failure(&eval(&["--settings", absurd, "--overwrite"]));
-        assert!(e.contains("within ±10") && e.contains("≤ 1000"), "{absurd}: {e}");
+        assert!(
+            e.contains("within ±10") && e.contains("≤ 1000"),
+            "{absurd}: {e}"
+        );
     }
 
     let empty = tmp.path().join("empty");
@@ -307,5 +310,88 @@ fn an_import_with_a_taken_or_repeated_sequence_id_writes_nothing() {
     assert_eq!(
         std::fs::read(tmp.path().join("ds").join(MANIFEST)).unwrap(),
         manifest
+    );
+}
+
+#[test]
+fn a_policy_process_stopped_and_continued_finishes_the_run_unchanged() {
+    let tmp = tempfile::tempdir().unwrap();
+    let reference = thorarena(
+        tmp.path(),
+        &[
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--policy",
+            "hold",
+            "--settings",
+            "no-force",
+            "--out",
+            "in-process",
+        ],
+    );
+    assert!(reference.status.success());
+    let session = format!("stopcont-{}", std::process::id());
+    let policy = format!("ipc:{session}");
+    let eval = Command::new(BIN)
+        .current_dir(tmp.path())
+        .args([
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--settings",
+            "no-force",
+            "--policy",
+            &policy,
+            "--connect-timeout",
+            "30",
+            "--out",
+            "remote",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let client = Command::new(BIN)
+        .args(["client", "--session", &session, "--policy", "hold"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Ctrl-Z and `fg`, twice, while episodes run.
+    for _ in 0..2 {
+        std::thread::sleep(Duration::from_millis(800));
+        // SAFETY: signalling the child we started.
+        unsafe { libc::kill(client.id() as libc::pid_t, libc::SIGSTOP) };
+        std::thread::sleep(Duration::from_millis(300));
+        unsafe { libc::kill(client.id() as libc::pid_t, libc::SIGCONT) };
+    }
+    let out = eval.wait_with_output().unwrap();
+    let client_out = client.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "eval: {}\nclient: {}",
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&client_out.stderr)
+    );
+    assert!(
+        client_out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&client_out.stderr)
+    );
+    let sorted = |p: &Path| {
+        let mut v: Vec<String> = std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .map(String::from)
+            .collect();
+        v.sort();
+        v
+    };
+    assert!(
+        sorted(&tmp.path().join("remote/episodes.jsonl"))
+            == sorted(&tmp.path().join("in-process/episodes.jsonl")),
+        "the stopped policy's episodes differ from the in-process ones"
     );
 }

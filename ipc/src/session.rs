@@ -1,7 +1,7 @@
 //! What both sides share: service names per session, node creation, errors, and the
 //! spin-then-block wait.
 
-use iceoryx2::port::listener::Listener;
+use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -161,9 +161,13 @@ pub(crate) fn wait_for(
             }
             slice = slice.min(d - now);
         }
-        let n = listener
-            .timed_wait(|_| {}, slice)
-            .map_err(transport("waiting on the event listener"))?;
+        let n = match listener.timed_wait(|_| {}, slice) {
+            Ok(n) => n,
+            // A signal interrupted the wait (Ctrl-Z then `fg`: SIGSTOP, SIGCONT): nothing
+            // happened to the session, so wait again after the liveness check below.
+            Err(ListenerWaitError::InterruptSignal) => 0,
+            Err(e) => return Err(transport("waiting on the event listener")(e)),
+        };
         if n == 0 && !ready() && (!process_alive(peer_pid) || !peer_present()) {
             return Ok(Waited::PeerGone);
         }
