@@ -120,8 +120,8 @@ impl SimSession {
             ));
         }
         let node = create_node(&format!("thorarena-sim-{}", config.session))?;
-        let in_use = |e: &dyn std::fmt::Debug| {
-            if format!("{e:?}").contains("AlreadyExists") {
+        let in_use = |e: &dyn CreateError| {
+            if e.already_exists() {
                 IpcError::SessionInUse(config.session.clone())
             } else {
                 IpcError::Transport(format!("creating the session services: {e:?}"))
@@ -463,4 +463,22 @@ fn fixed_joints(v: &[f64]) -> [f64; MAX_JOINTS] {
     let mut out = [0.0; MAX_JOINTS];
     out[..v.len()].copy_from_slice(v);
     out
+}
+
+/// A service-creation error of iceoryx2 that may say "another live node owns this
+/// service" (its typed `AlreadyExists`), which is a session in use, not a transport fault.
+trait CreateError: std::fmt::Debug {
+    fn already_exists(&self) -> bool;
+}
+
+impl CreateError for iceoryx2::service::builder::request_response::RequestResponseCreateError {
+    fn already_exists(&self) -> bool {
+        matches!(self, Self::AlreadyExists)
+    }
+}
+
+impl CreateError for iceoryx2::service::builder::event::EventCreateError {
+    fn already_exists(&self) -> bool {
+        matches!(self, Self::AlreadyExists)
+    }
 }
