@@ -395,3 +395,61 @@ fn a_policy_process_stopped_and_continued_finishes_the_run_unchanged() {
         "the stopped policy's episodes differ from the in-process ones"
     );
 }
+
+#[test]
+fn a_second_policy_on_a_busy_session_is_told_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let session = format!("busy-{}", std::process::id());
+    let policy = format!("ipc:{session}");
+    let mut eval = Command::new(BIN)
+        .current_dir(tmp.path())
+        .args([
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--settings",
+            "no-force",
+            "--policy",
+            &policy,
+            "--connect-timeout",
+            "30",
+            "--out",
+            "run",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let mut first = Command::new(BIN)
+        .args(["client", "--session", &session, "--policy", "hold"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1000));
+    let started = std::time::Instant::now();
+    let second = Command::new(BIN)
+        .args([
+            "client",
+            "--session",
+            &session,
+            "--policy",
+            "hold",
+            "--connect-timeout",
+            "30",
+        ])
+        .output()
+        .unwrap();
+    let waited = started.elapsed();
+    let _ = first.kill();
+    let _ = eval.kill();
+    let _ = first.wait();
+    let _ = eval.wait();
+    let e = failure(&second);
+    assert!(e.contains("is in use: another policy is connected"), "{e}");
+    assert!(
+        waited < Duration::from_secs(5),
+        "told after {waited:?}, not at once"
+    );
+}

@@ -140,6 +140,17 @@ impl PolicyClient {
                 None => return Err(IpcError::NoSession(config.session.clone())),
             }
         };
+        // A policy already serves this session's steps: say so at once, rather than wait
+        // for a welcome the simulator cannot give in the middle of a run.
+        if step.dynamic_config().number_of_servers() > 0 {
+            return Err(IpcError::Refused {
+                status: Status::Busy,
+                message: format!(
+                    "session {:?} is in use: another policy is connected (a session serves one policy at a time)",
+                    config.session
+                ),
+            });
+        }
         let obs_ready = obs_ready
             .listener_builder()
             .create()
