@@ -71,6 +71,8 @@ struct Shared<'a> {
     jobs: &'a [(usize, usize)],
     policy_name: String,
     next_job: AtomicUsize,
+    /// Jobs to run again from their start (cut short by a policy that then came back).
+    retry: std::sync::Mutex<Vec<usize>>,
     stop: AtomicBool,
 }
 
@@ -111,6 +113,7 @@ pub fn run_eval(
         jobs,
         policy_name: policy.name().to_string(),
         next_job: AtomicUsize::new(0),
+        retry: std::sync::Mutex::new(Vec::new()),
         stop: AtomicBool::new(false),
     };
     let mut results: Vec<Option<EpisodeRecord>> = vec![None; jobs.len()];
@@ -131,6 +134,8 @@ pub fn run_eval(
         drop(report_tx);
 
         let mut commands: Vec<SlotCommand> = (0..n_slots).map(|_| SlotCommand::Idle).collect();
+        // Set once a failed policy has been replaced (`--on-policy-failure wait`).
+        let mut requeue_failed = false;
         let mut actions: Vec<Vec<f64>> = Vec::new();
         loop {
             for (w, tx) in command_txs.iter().enumerate() {
@@ -148,12 +153,23 @@ pub fn run_eval(
             for report in reports {
                 for f in report.finished {
                     policy.episode_ended(report.slot, f.record.termination.is_some());
+                    if requeue_failed && f.record.termination == Some(Termination::PolicyFailed) {
+                        // The policy came back: the episode it left runs again from its
+                        // start, as `--resume` would run it, instead of being scored.
+                        shared.retry.lock().expect("retry queue").push(f.job);
+                        continue;
+                    }
                     on_record(&f.record, f.trace.as_deref());
                     results[f.job] = Some(f.record);
                 }
                 observations.extend(report.observation);
             }
             if observations.is_empty() {
+                if !shared.retry.lock().expect("retry queue").is_empty()
+                    && !shared.stop.load(Ordering::SeqCst)
+                {
+                    continue; // idle slots take the jobs to run again next round
+                }
                 break; // every job ran (or the policy failed for good)
             }
             for o in observations.iter().filter(|o| o.step == 0) {
@@ -193,8 +209,12 @@ pub fn run_eval(
                     },
                 };
             }
-            if outcome == ActOutcome::Failed && !policy.recover() {
-                shared.stop.store(true, Ordering::SeqCst);
+            if outcome == ActOutcome::Failed {
+                if policy.recover() {
+                    requeue_failed = true;
+                } else {
+                    shared.stop.store(true, Ordering::SeqCst);
+                }
             }
         }
         drop(command_txs); // the workers' loops end
@@ -283,7 +303,8 @@ fn worker(
                 }
             }
             while running[k].is_none() && !shared.stop.load(Ordering::SeqCst) {
-                let j = shared.next_job.fetch_add(1, Ordering::SeqCst);
+                let retried = shared.retry.lock().expect("retry queue").pop();
+                let j = retried.unwrap_or_else(|| shared.next_job.fetch_add(1, Ordering::SeqCst));
                 let Some(&(q, s)) = shared.jobs.get(j) else {
                     break;
                 };
