@@ -313,6 +313,43 @@ fn an_import_with_a_taken_or_repeated_sequence_id_writes_nothing() {
     );
 }
 
+/// `eval` of the sample without force, serving `session` (output `out` under `cwd`), and
+/// after a moment a `thorarena client` running `hold` in it.
+fn serve_and_join(
+    cwd: &Path,
+    session: &str,
+    out: &str,
+) -> (std::process::Child, std::process::Child) {
+    let policy = format!("ipc:{session}");
+    let eval = Command::new(BIN)
+        .current_dir(cwd)
+        .args([
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--settings",
+            "no-force",
+            "--policy",
+            &policy,
+            "--connect-timeout",
+            "30",
+            "--out",
+            out,
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let client = Command::new(BIN)
+        .args(["client", "--session", session, "--policy", "hold"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    (eval, client)
+}
+
 #[test]
 fn a_policy_process_stopped_and_continued_finishes_the_run_unchanged() {
     let tmp = tempfile::tempdir().unwrap();
@@ -332,33 +369,7 @@ fn a_policy_process_stopped_and_continued_finishes_the_run_unchanged() {
     );
     assert!(reference.status.success());
     let session = format!("stopcont-{}", std::process::id());
-    let policy = format!("ipc:{session}");
-    let eval = Command::new(BIN)
-        .current_dir(tmp.path())
-        .args([
-            "eval",
-            "--dataset",
-            SAMPLE,
-            "--settings",
-            "no-force",
-            "--policy",
-            &policy,
-            "--connect-timeout",
-            "30",
-            "--out",
-            "remote",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(Duration::from_millis(300));
-    let client = Command::new(BIN)
-        .args(["client", "--session", &session, "--policy", "hold"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (eval, client) = serve_and_join(tmp.path(), &session, "remote");
     // Ctrl-Z and `fg`, twice, while episodes run.
     for _ in 0..2 {
         std::thread::sleep(Duration::from_millis(800));
@@ -400,33 +411,7 @@ fn a_policy_process_stopped_and_continued_finishes_the_run_unchanged() {
 fn a_second_policy_on_a_busy_session_is_told_at_once() {
     let tmp = tempfile::tempdir().unwrap();
     let session = format!("busy-{}", std::process::id());
-    let policy = format!("ipc:{session}");
-    let mut eval = Command::new(BIN)
-        .current_dir(tmp.path())
-        .args([
-            "eval",
-            "--dataset",
-            SAMPLE,
-            "--settings",
-            "no-force",
-            "--policy",
-            &policy,
-            "--connect-timeout",
-            "30",
-            "--out",
-            "run",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(Duration::from_millis(300));
-    let mut first = Command::new(BIN)
-        .args(["client", "--session", &session, "--policy", "hold"])
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
+    let (mut eval, mut first) = serve_and_join(tmp.path(), &session, "run");
     std::thread::sleep(Duration::from_millis(1000));
     let started = std::time::Instant::now();
     let second = Command::new(BIN)
