@@ -345,10 +345,16 @@ impl SimSession {
             .connection
             .as_mut()
             .ok_or(IpcError::PeerGone("policy"))?;
-        if let Some(old) = conn.overdue.take() {
-            if matches!(old.receive(), Ok(Some(_))) {
-                self.late_replies += 1;
-            }
+        // A late reply to the overdue request that is already here; if it is not, the
+        // request stays watched through this step's wait (checked again below), so a
+        // reply still on its way when the next batch goes out is counted, not lost.
+        if conn
+            .overdue
+            .as_ref()
+            .is_some_and(|old| matches!(old.receive(), Ok(Some(_))))
+        {
+            self.late_replies += 1;
+            conn.overdue = None;
         }
         conn.seq += 1;
         let mut request = conn
@@ -391,6 +397,11 @@ impl SimSession {
         )?;
         self.last_round_trip = sent.elapsed();
         self.late_replies += discarded;
+        if let Some(old) = conn.overdue.take() {
+            if matches!(old.receive(), Ok(Some(_))) {
+                self.late_replies += 1;
+            }
+        }
         if let Some(e) = receive_error {
             return Err(transport("receiving actions")(e));
         }
