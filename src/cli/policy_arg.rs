@@ -63,7 +63,9 @@ pub enum OnPolicyFailure {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Budget(pub Option<Duration>);
 
-fn parse_budget(s: &str) -> Result<Budget, String> {
+/// Parses `--budget` (`none`, `2ms`, `500us`, `0.004s`); shared with the sweep, whose
+/// latency curves put budgets on an axis.
+pub(super) fn parse_budget(s: &str) -> Result<Budget, String> {
     if s == "none" {
         return Ok(Budget(None));
     }

@@ -1,0 +1,371 @@
+//! `sweep collect`: shards merged into cells, `results.csv`, and the report with the
+//! sweep's curves.
+
+use super::*;
+
+/// What a cell's collected run holds.
+pub(super) struct CellResult {
+    dir: PathBuf,
+    episodes: usize,
+    complete: bool,
+    summary: serde_json::Value,
+    /// Summed over shards: deadline misses, invalid actions, policy failures.
+    faults: [u64; 3],
+    /// p50, p99, p99.9 µs of a single-shard cell (shards keep separate histograms).
+    latency_us: Option<[f64; 3]>,
+}
+
+pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
+    let plan = Plan::load(&args.dir)?;
+    let c = census(&args.dir, &plan)?;
+    let done: std::collections::HashSet<usize> = c.done.iter().copied().collect();
+    let mut by_cell: BTreeMap<usize, Vec<&Task>> = BTreeMap::new();
+    for t in &plan.tasks {
+        by_cell.entry(t.cell).or_default().push(t);
+    }
+    let unfinished: Vec<usize> = by_cell
+        .iter()
+        .filter(|(_, ts)| ts.iter().any(|t| !done.contains(&t.index)))
+        .map(|(&c, _)| c)
+        .collect();
+    if !unfinished.is_empty() && !args.partial {
+        bail!(
+            "{} of {} cells are unfinished (cells {}; tasks not done: {}): run them, or collect with --partial",
+            unfinished.len(),
+            plan.cells.len(),
+            compact_ranges(&unfinished),
+            compact_ranges(&c.not_done())
+        );
+    }
+    let robot = crate::cli::load_robot(&plan_robot(&plan.tasks[0]))?;
+    let mut results: Vec<Option<CellResult>> = Vec::new();
+    // Loaded once per dataset, however many cells share it.
+    let mut datasets: BTreeMap<PathBuf, Vec<crate::motion::Sequence>> = BTreeMap::new();
+    for cell in &plan.cells {
+        let tasks = &by_cell[&cell.index];
+        let runs: Vec<PathBuf> = tasks
+            .iter()
+            .filter(|t| done.contains(&t.index))
+            .map(|t| Plan::task_dir(&args.dir, t.index).join("run"))
+            .collect();
+        if runs.is_empty() {
+            results.push(None);
+            continue;
+        }
+        let (mut header, by_key) = read_shards(&runs)?;
+        header.shard = None;
+        if !datasets.contains_key(&cell.dataset) {
+            let ds = Dataset::open(&cell.dataset, &robot)?;
+            datasets.insert(cell.dataset.clone(), ds.load_all()?);
+        }
+        let sequences = &datasets[&cell.dataset];
+        let mut records: Vec<_> = by_key.into_values().collect();
+        sort_records(&mut records, &header, sequences);
+        let out = Plan::cell_dir(&args.dir, cell.index);
+        std::fs::create_dir_all(&out)?;
+        let mut w = std::io::BufWriter::new(File::create(out.join("episodes.jsonl"))?);
+        for r in &records {
+            crate::runner::write_record(&mut w, r)?;
+        }
+        w.flush()?;
+        write_header(&out, &header)?;
+        write_results(&out, &header, &records, sequences, None)?;
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json"))?)?;
+        let mut faults = [0u64; 3];
+        let mut latency_us = None;
+        for run in &runs {
+            let s: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(run.join("summary.json"))?)?;
+            let io = &s["policy_io"];
+            faults[0] += io["deadline_misses"].as_u64().unwrap_or(0);
+            faults[1] += io["invalid_actions"].as_u64().unwrap_or(0);
+            faults[2] += io["transport"]["policy_failures"].as_u64().unwrap_or(0);
+            if runs.len() == 1 {
+                let l = &io["latency"];
+                latency_us = Some([
+                    l["p50_us"].as_f64().unwrap_or(f64::NAN),
+                    l["p99_us"].as_f64().unwrap_or(f64::NAN),
+                    l["p999_us"].as_f64().unwrap_or(f64::NAN),
+                ]);
+            }
+        }
+        results.push(Some(CellResult {
+            dir: out,
+            episodes: records.len(),
+            complete: records.len() == cell.episodes,
+            summary,
+            faults,
+            latency_us,
+        }));
+    }
+    let csv = results_csv(&plan, &results);
+    let csv_path = args.dir.join("results.csv");
+    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    let cell_dirs: Vec<PathBuf> = results.iter().flatten().map(|r| r.dir.clone()).collect();
+    let report = args.dir.join("report.html");
+    let runs = crate::report::load_runs(&cell_dirs)?;
+    let charts = sweep_charts(&plan, &results);
+    let script = crate::report::WebBundle::locate()?.script(crate::report::Page::Report)?;
+    let html = crate::report::sweep_report_html(&runs, &charts, &script);
+    std::fs::write(&report, html).with_context(|| format!("writing {}", report.display()))?;
+    eprintln!(
+        "collected {} cells{}: {} and {}",
+        results.iter().flatten().count(),
+        if unfinished.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} partial)", unfinished.len())
+        },
+        csv_path.display(),
+        report.display()
+    );
+    Ok(())
+}
+
+/// Columns of `results.csv`, one row per cell (a cell has one setting).
+pub(super) const CSV_COLUMNS: [&str; 31] = [
+    "cell",
+    "policy",
+    "dataset",
+    "setting",
+    "force_coefficient",
+    "push_n",
+    "latency_rule",
+    "budget",
+    "latency_mode",
+    "miss_rule",
+    "profile",
+    "keypoints",
+    "episodes",
+    "episodes_expected",
+    "complete",
+    "fats",
+    "survival",
+    "kp_error_mm",
+    "low_kp_mm",
+    "high_kp_mm",
+    "robustness_rho",
+    "power_overhead_eta",
+    "upper_kp_mm",
+    "lower_kp_mm",
+    "fats_std",
+    "latency_p50_us",
+    "latency_p99_us",
+    "latency_p999_us",
+    "deadline_misses",
+    "invalid_actions",
+    "policy_failures",
+];
+
+pub(super) fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(CSV_COLUMNS).expect("in memory");
+    let num = |v: Option<f64>| {
+        v.filter(|x| x.is_finite())
+            .map_or(String::new(), |x| x.to_string())
+    };
+    for (cell, r) in plan.cells.iter().zip(results) {
+        let setting = crate::runner::Setting::parse(&cell.setting);
+        let avg = r.as_ref().and_then(|r| {
+            r.summary["settings"]
+                .as_object()
+                .and_then(|m| m.values().next())
+                .map(|s| s["average"].clone())
+        });
+        let d = |key: &str| num(avg.as_ref().and_then(|a| a[key].as_f64()));
+        let row = vec![
+            cell.index.to_string(),
+            cell.policy.name.clone(),
+            cell.dataset.display().to_string(),
+            cell.setting.clone(),
+            num(setting.as_ref().map(|s| s.coefficient)),
+            num(setting.as_ref().map(|s| s.push_n)),
+            cell.latency.name.clone(),
+            cell.latency.budget.clone(),
+            cell.latency.mode.clone(),
+            cell.latency.miss_rule.clone(),
+            cell.policy.profile.clone(),
+            cell.policy.keypoints.clone(),
+            r.as_ref().map_or(0, |r| r.episodes).to_string(),
+            cell.episodes.to_string(),
+            r.as_ref().is_some_and(|r| r.complete).to_string(),
+            d("fats"),
+            d("survival"),
+            d("kp_mm"),
+            d("low_kp_mm"),
+            d("high_kp_mm"),
+            d("robustness"),
+            d("power_overhead"),
+            d("upper_kp_mm"),
+            d("lower_kp_mm"),
+            d("fats_std"),
+            num(r.as_ref().and_then(|r| r.latency_us.map(|l| l[0]))),
+            num(r.as_ref().and_then(|r| r.latency_us.map(|l| l[1]))),
+            num(r.as_ref().and_then(|r| r.latency_us.map(|l| l[2]))),
+            r.as_ref()
+                .map_or(String::new(), |r| r.faults[0].to_string()),
+            r.as_ref()
+                .map_or(String::new(), |r| r.faults[1].to_string()),
+            r.as_ref()
+                .map_or(String::new(), |r| r.faults[2].to_string()),
+        ];
+        w.write_record(&row).expect("in memory");
+    }
+    String::from_utf8(w.into_inner().expect("in memory")).expect("UTF-8")
+}
+
+/// A latency budget in ms, parsed as `--budget` parses it; `None` for `none`.
+pub(super) fn budget_ms(budget: &str) -> Option<f64> {
+    crate::cli::policy_arg::parse_budget(budget)
+        .ok()
+        .and_then(|b| b.0)
+        .map(|d| d.as_secs_f64() * 1e3)
+}
+
+/// The curves a sweep is for, from its cells' averages: FATS and survival against the
+/// force coefficient (and against a constant push), one line per policy, and FATS against
+/// the latency budget under `--latency-mode measured`. A quantity that takes fewer than
+/// two values is not plotted; labels name only the axes that vary.
+pub(super) fn sweep_charts(
+    plan: &Plan,
+    results: &[Option<CellResult>],
+) -> Vec<crate::report::SweepChart> {
+    use crate::report::{CurveSeries, SweepChart};
+    use std::collections::BTreeSet;
+    let varies = |f: &dyn Fn(&crate::sweep::Cell) -> String| {
+        plan.cells.iter().map(f).collect::<BTreeSet<_>>().len() > 1
+    };
+    let many_datasets = varies(&|c| c.dataset.display().to_string());
+    let many_latency = varies(&|c| c.latency.name.clone());
+    let many_settings = varies(&|c| c.setting.clone());
+    let label = |c: &crate::sweep::Cell, with_latency: bool, with_setting: bool| {
+        let mut l = c.policy.name.clone();
+        if many_datasets {
+            l += &format!(
+                " · {}",
+                c.dataset
+                    .file_name()
+                    .map_or(String::new(), |n| n.to_string_lossy().into())
+            );
+        }
+        if with_latency && many_latency {
+            l += &format!(" · {}", c.latency.name);
+        }
+        if with_setting && many_settings {
+            l += &format!(" · {}", c.setting);
+        }
+        l
+    };
+    // (cell, fats, survival) of every cell with results.
+    let points: Vec<(&crate::sweep::Cell, f64, f64)> = plan
+        .cells
+        .iter()
+        .zip(results)
+        .filter_map(|(c, r)| {
+            let avg = r.as_ref()?.summary["settings"]
+                .as_object()?
+                .values()
+                .next()?["average"]
+                .clone();
+            Some((c, avg["fats"].as_f64()?, avg["survival"].as_f64()?))
+        })
+        .collect();
+    // Lines of (label → sorted points) for the cells `x` maps to a value.
+    let lines = |x: &dyn Fn(&crate::sweep::Cell) -> Option<f64>,
+                 y: &dyn Fn(f64, f64) -> f64,
+                 with_latency: bool,
+                 with_setting: bool| {
+        let mut by_label: BTreeMap<String, Vec<[f64; 2]>> = BTreeMap::new();
+        let mut xs = BTreeSet::new();
+        for &(c, fats, survival) in &points {
+            if let Some(xv) = x(c) {
+                xs.insert(xv.to_bits());
+                by_label
+                    .entry(label(c, with_latency, with_setting))
+                    .or_default()
+                    .push([xv, y(fats, survival)]);
+            }
+        }
+        let series: Vec<CurveSeries> = by_label
+            .into_iter()
+            .map(|(label, mut points)| {
+                points.sort_by(|a, b| a[0].total_cmp(&b[0]));
+                CurveSeries { label, points }
+            })
+            .collect();
+        (xs.len() >= 2).then_some(series)
+    };
+    let setting = |c: &crate::sweep::Cell| crate::runner::Setting::parse(&c.setting);
+    let coefficient = |c: &crate::sweep::Cell| {
+        setting(c)
+            .filter(|s| s.push_n == 0.0)
+            .map(|s| s.coefficient)
+    };
+    let push = |c: &crate::sweep::Cell| {
+        setting(c)
+            .filter(|s| s.coefficient == 0.0)
+            .map(|s| s.push_n)
+    };
+    let budget = |c: &crate::sweep::Cell| {
+        (c.latency.mode == "measured")
+            .then(|| budget_ms(&c.latency.budget))
+            .flatten()
+    };
+    let fats = |f: f64, _s: f64| f;
+    let survival = |_f: f64, s: f64| s;
+    let mut charts = Vec::new();
+    let mut chart =
+        |id: &str, title: &str, x_label: &str, y_label: &str, series: Option<Vec<CurveSeries>>| {
+            if let Some(series) = series {
+                charts.push(SweepChart {
+                    id: id.into(),
+                    title: title.into(),
+                    x_label: x_label.into(),
+                    y_label: y_label.into(),
+                    series,
+                });
+            }
+        };
+    chart(
+        "sweep-fats-vs-coefficient",
+        "FATS against the force replay coefficient (0 = no force, 1 = the recorded forces)",
+        "force replay coefficient",
+        "FATS",
+        lines(&coefficient, &fats, true, false),
+    );
+    chart(
+        "sweep-survival-vs-coefficient",
+        "Survival against the force replay coefficient",
+        "force replay coefficient",
+        "survival",
+        lines(&coefficient, &survival, true, false),
+    );
+    if points
+        .iter()
+        .any(|(c, _, _)| push(c).is_some_and(|p| p > 0.0))
+    {
+        chart(
+            "sweep-fats-vs-push",
+            "FATS against a constant push on each hand",
+            "push per hand (N)",
+            "FATS",
+            lines(&push, &fats, true, false),
+        );
+        chart(
+            "sweep-survival-vs-push",
+            "Survival against a constant push on each hand",
+            "push per hand (N)",
+            "survival",
+            lines(&push, &survival, true, false),
+        );
+    }
+    chart(
+        "sweep-fats-vs-budget",
+        "FATS against the latency budget (latency mode measured: the policy's latency delays its action)",
+        "latency budget (ms)",
+        "FATS",
+        lines(&budget, &fats, false, true),
+    );
+    charts
+}

@@ -1,0 +1,183 @@
+//! `thorarena sweep …`: plan a sweep from a spec, run its tasks (locally N at a time, or
+//! one per process on a Slurm array or a Kubernetes Indexed Job), show its status, and
+//! collect the cells into one comparison.
+//!
+//! A task is one `thorarena eval` process with the plan's exact arguments and
+//! `--out DIR/tasks/<I>/run --resume`, so a sweep's episodes are those of separate `eval`
+//! runs bit for bit, a killed task resumes, and shards merge with `merge`'s rules. A task
+//! is marked done (`done.json`, atomic rename) only after its run holds every planned
+//! episode and is flushed to disk; an advisory lock on `tasks/<I>/lock`, held by the task
+//! and inherited by its eval process, keeps two copies of one task from running at once.
+
+use super::merge::read_shards;
+use super::run_output::{sort_records, write_header, write_results};
+use crate::motion::Dataset;
+use crate::sweep::{
+    compact_ranges, diff_plans, task_state, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec,
+    Task, TaskState, PLAN_FILE,
+};
+use anyhow::{bail, Context};
+use clap::Parser;
+use std::collections::{BTreeMap, VecDeque};
+use std::fs::File;
+use std::io::{BufRead, Write};
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// `thorarena sweep …`
+#[derive(Debug, clap::Subcommand)]
+pub enum SweepCommand {
+    /// Validate a sweep spec and write its plan (cells, numbered tasks, exact eval
+    /// arguments) into a sweep directory. Planning the same spec again is a no-op; a
+    /// changed spec against an existing plan is refused with what changed.
+    Plan(PlanArgs),
+    /// Run every task that is not done, N at a time, with a progress bar over the sweep.
+    Run(RunArgs),
+    /// Run exactly one task (the index defaults to SLURM_ARRAY_TASK_ID, else
+    /// JOB_COMPLETION_INDEX): skipped when done, resumed when half-done.
+    Task(TaskArgs),
+    /// Done, failed and not-started tasks, failure reasons, and the not-done set as a
+    /// Slurm --array expression.
+    Status(StatusArgs),
+    /// Write DIR/slurm/sweep.sbatch, an array job over the not-done tasks; --submit hands
+    /// it to sbatch.
+    Slurm(SlurmArgs),
+    /// Write DIR/k8s/job.yaml, a Kubernetes Indexed Job over all tasks.
+    K8s(K8sArgs),
+    /// Merge each cell's shards and write DIR/results.csv and DIR/report.html.
+    Collect(CollectArgs),
+}
+
+/// Arguments of `sweep plan`.
+#[derive(Debug, clap::Args)]
+pub struct PlanArgs {
+    /// The sweep spec (TOML; see sweeps/*.toml).
+    pub spec: PathBuf,
+    /// The sweep directory (created; on every node of a cluster it must be the same
+    /// path, on a shared file system).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Arguments of `sweep run`.
+#[derive(Debug, clap::Args)]
+pub struct RunArgs {
+    /// The sweep directory.
+    pub dir: PathBuf,
+    /// Tasks at a time [default: the cores]; each task's eval gets cores / jobs workers.
+    #[arg(long)]
+    pub jobs: Option<usize>,
+}
+
+/// Arguments of `sweep task`.
+#[derive(Debug, clap::Args)]
+pub struct TaskArgs {
+    /// The sweep directory.
+    pub dir: PathBuf,
+    /// Task index [default: $SLURM_ARRAY_TASK_ID, else $JOB_COMPLETION_INDEX].
+    #[arg(long)]
+    pub index: Option<usize>,
+    /// Worker threads of the evaluation [default: $SLURM_CPUS_PER_TASK, else all cores].
+    #[arg(long)]
+    pub workers: Option<usize>,
+}
+
+/// Arguments of `sweep status`.
+#[derive(Debug, clap::Args)]
+pub struct StatusArgs {
+    /// The sweep directory.
+    pub dir: PathBuf,
+}
+
+/// Arguments of `sweep slurm`.
+#[derive(Debug, clap::Args)]
+pub struct SlurmArgs {
+    /// The sweep directory.
+    pub dir: PathBuf,
+    /// Slurm partition.
+    #[arg(long)]
+    pub partition: Option<String>,
+    /// Time limit per task, in Slurm's syntax (e.g. `01:00:00`).
+    #[arg(long)]
+    pub time: Option<String>,
+    /// CPUs per task (the evaluation's worker threads).
+    #[arg(long, default_value_t = 1)]
+    pub cpus_per_task: usize,
+    /// At most this many tasks at once (`%K` of --array).
+    #[arg(long)]
+    pub max_parallel: Option<usize>,
+    /// The thorarena binary the nodes run [default: this one; it must exist at that path
+    /// on every node].
+    #[arg(long)]
+    pub thorarena: Option<PathBuf>,
+    /// Submit with sbatch.
+    #[arg(long)]
+    pub submit: bool,
+    /// With --submit: return when the array has finished; non-zero if a task failed.
+    #[arg(long, requires = "submit")]
+    pub wait: bool,
+}
+
+/// Arguments of `sweep k8s`.
+#[derive(Debug, clap::Args)]
+pub struct K8sArgs {
+    /// The sweep directory.
+    pub dir: PathBuf,
+    /// Container image with `thorarena` on its PATH.
+    #[arg(long)]
+    pub image: String,
+    /// PersistentVolumeClaim holding the sweep directory and its datasets, mounted at the
+    /// same absolute paths as here.
+    #[arg(long)]
+    pub claim: String,
+    /// Path inside the claim's volume that is mounted [default: the volume root].
+    #[arg(long)]
+    pub sub_path: Option<String>,
+    /// Pods at once [default: all tasks].
+    #[arg(long)]
+    pub parallelism: Option<usize>,
+    /// CPUs per pod (request and the evaluation's workers).
+    #[arg(long, default_value_t = 1)]
+    pub cpus_per_task: usize,
+}
+
+/// Arguments of `sweep collect`.
+#[derive(Debug, clap::Args)]
+pub struct CollectArgs {
+    /// The sweep directory.
+    pub dir: PathBuf,
+    /// Collect although some cells are unfinished; their rows say how many episodes
+    /// they hold.
+    #[arg(long)]
+    pub partial: bool,
+}
+
+/// Runs a sweep subcommand.
+pub(super) fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
+    match cmd {
+        SweepCommand::Plan(a) => plan(a),
+        SweepCommand::Run(a) => run_all(a),
+        SweepCommand::Task(a) => task(a),
+        SweepCommand::Status(a) => status(a),
+        SweepCommand::Slurm(a) => slurm(a),
+        SweepCommand::K8s(a) => k8s(a),
+        SweepCommand::Collect(a) => collect(a),
+    }
+}
+
+mod cluster;
+mod collect;
+mod plan;
+mod pool;
+mod status;
+mod task;
+
+use cluster::{k8s, slurm};
+use collect::collect;
+use plan::plan;
+use pool::run_all;
+use status::{census, status};
+use task::{cores, plan_robot, run_task, task, write_atomic, Outcome};

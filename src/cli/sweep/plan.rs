@@ -1,0 +1,134 @@
+//! `sweep plan`: a spec expanded, validated with `eval`'s own parser and loader, written.
+
+use super::*;
+
+pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
+    let spec_path = std::fs::canonicalize(&args.spec)
+        .with_context(|| format!("reading the sweep spec {}", args.spec.display()))?;
+    let spec = SweepSpec::load(&spec_path)?;
+    let base = spec_path.parent().unwrap_or(Path::new("/"));
+    let robot = crate::cli::load_robot(&spec.robot).context("`robot` of the sweep spec")?;
+    let mut datasets = Vec::new();
+    for d in &spec.datasets {
+        let dir = std::fs::canonicalize(base.join(d)).with_context(|| {
+            format!(
+                "`datasets`: {d} (relative to {}) does not exist",
+                base.display()
+            )
+        })?;
+        let ds = Dataset::open(&dir, &robot).with_context(|| format!("`datasets`: {d}"))?;
+        let sequences = ds.load_all().with_context(|| format!("`datasets`: {d}"))?;
+        if sequences.is_empty() {
+            bail!("`datasets`: {d} holds no sequence");
+        }
+        datasets.push(DatasetInfo {
+            dir,
+            sha256: ds.content_hash(),
+            durations_s: sequences.iter().map(|s| s.duration_s()).collect(),
+        });
+    }
+    let plan = Plan::expand(&spec, &spec_path, &datasets)?;
+    validate(&plan)?;
+
+    let plan_path = args.out.join(PLAN_FILE);
+    if plan_path.exists() {
+        let existing = Plan::load(&args.out)?;
+        match diff_plans(&existing, &plan) {
+            None => {
+                println!(
+                    "{} already holds this plan: nothing to do ({})",
+                    args.out.display(),
+                    plan_summary(&plan)
+                );
+                return Ok(());
+            }
+            Some(change) => bail!(
+                "{} holds another plan ({change}); tasks may be running under its numbering, so it is not replaced: plan into a new directory",
+                args.out.display()
+            ),
+        }
+    }
+    std::fs::create_dir_all(args.out.join("tasks"))
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    write_atomic(&plan_path, serde_json::to_string(&plan)?.as_bytes())?;
+    println!(
+        "planned {} into {}",
+        plan_summary(&plan),
+        args.out.display()
+    );
+    Ok(())
+}
+
+pub(super) fn plan_summary(plan: &Plan) -> String {
+    let s = plan.simulated_s();
+    format!(
+        "{} cells, {} tasks, {} episodes, {:.0} simulated s ({:.2} h)",
+        plan.cells.len(),
+        plan.tasks.len(),
+        plan.episodes(),
+        s,
+        s / 3600.0
+    )
+}
+
+/// Checks every cell's evaluation before anything is written: its arguments parse as
+/// `eval`'s, its profile and keypoint set exist for the robot, its setting parses, and
+/// each network file loads.
+pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
+    use std::collections::HashSet;
+    let mut checked: HashSet<String> = HashSet::new();
+    for task in plan.tasks.iter().filter(|t| t.shard.0 == 0) {
+        let cell = &plan.cells[task.cell];
+        let args = eval_cli(task, "plan-check")
+            .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
+        if crate::runner::Setting::parse(&cell.setting).is_none() {
+            bail!(
+                "cell {}: setting `{}` is not force, no-force, a number or push:<N>",
+                cell.index,
+                cell.setting
+            );
+        }
+        // Loading the dataset, profile and keypoints once per combination keeps planning
+        // a sweep of thousands of cells fast.
+        let key = format!(
+            "{}|{}|{}|{}",
+            cell.policy.policy,
+            cell.policy.profile,
+            cell.policy.keypoints,
+            cell.dataset.display()
+        );
+        if !checked.insert(key) {
+            continue;
+        }
+        let ctx = crate::cli::eval::EvalContext::load(&args.run)
+            .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
+        if cell.policy.command.is_none() && checked.insert(format!("policy|{}", cell.policy.policy))
+        {
+            crate::cli::policy_arg::make_policy(
+                &cell.policy.policy,
+                &ctx.robot,
+                &ctx.profile,
+                &args.run.io,
+                1,
+            )
+            .with_context(|| format!("policy `{}`", cell.policy.name))?;
+        }
+    }
+    Ok(())
+}
+
+/// A task's `eval` arguments as `eval` parses them (`session` fills `{session}`).
+pub(super) fn eval_cli(task: &Task, session: &str) -> anyhow::Result<crate::cli::eval::Args> {
+    let argv = std::iter::once("thorarena".to_string()).chain(
+        task.eval_args
+            .iter()
+            .map(|a| a.replace("{session}", session)),
+    );
+    match crate::cli::Cli::try_parse_from(argv) {
+        Ok(crate::cli::Cli {
+            command: crate::cli::Command::Eval(a),
+        }) => Ok(a),
+        Ok(_) => bail!("not an eval command"),
+        Err(e) => bail!("{}", e.render().to_string().trim()),
+    }
+}
