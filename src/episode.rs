@@ -191,8 +191,7 @@ impl<'a> Episode<'a> {
             qd: first.joint_vel.clone(),
         });
         let n = robot.n_joints();
-        let steps_ref =
-            (reference.duration_s() / setup.profile.control_dt_s + 1e-9).floor() as usize;
+        let steps_ref = reference_steps(reference.duration_s(), setup.profile.control_dt_s);
         let mut state = PhysicsState::default();
         physics.read_state(&mut state);
         Self {
@@ -455,6 +454,12 @@ impl<'a> Episode<'a> {
     pub fn finish(self) -> (EpisodeSeries, Option<Termination>) {
         (self.series, self.termination)
     }
+}
+
+/// Control steps of a reference of `duration_s` at `control_dt_s` (`T_ref`): the steps
+/// an episode records when it runs to the end.
+pub fn reference_steps(duration_s: f64, control_dt_s: f64) -> usize {
+    (duration_s / control_dt_s + 1e-9).floor() as usize
 }
 
 /// Every number of the state is finite (a diverged simulation is not).

@@ -9,7 +9,6 @@
 //! ```
 #![warn(missing_docs)]
 
-pub mod cli;
 pub mod embedded_data;
 pub mod episode;
 pub mod metrics;
@@ -20,6 +19,7 @@ pub mod policy;
 pub mod profile;
 pub mod replay;
 pub mod report;
+pub mod results;
 pub mod robot;
 pub mod runner;
 pub mod scenario;

@@ -1,7 +1,10 @@
-//! The `thorarena` binary: everything lives in the library's `cli` module.
+//! The `thorarena` binary: the command line over the `thorarena` library. Errors here are
+//! `anyhow` chains printed once, at the top; the library's are typed.
+
+mod cli;
 
 fn main() -> std::process::ExitCode {
-    match thorarena::cli::run() {
+    match cli::run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");

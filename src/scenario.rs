@@ -12,7 +12,7 @@ use serde::Serialize;
 use std::sync::Arc;
 
 /// Which open-loop scenario.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Scenario {
     /// Pelvis welded 1 m above the ground, gravity on, armature-derived gains, every joint

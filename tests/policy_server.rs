@@ -183,8 +183,15 @@ fn a_policy_killed_mid_episode_fails_its_episodes_and_resume_completes_the_run()
         partial.contains("\"termination\":\"policy_failed\""),
         "{partial}"
     );
-    // The summary of what finished is written all the same.
-    assert!(out.join("summary.json").is_file());
+    // The summary of what finished is written all the same, marked partial.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["complete"], false);
+    let tables = std::fs::read_to_string(out.join("tables.md")).unwrap();
+    assert!(
+        tables.contains("partial run") && tables.contains("Episodes present / expected"),
+        "{tables}"
+    );
 
     let resumed = eval_cmd(&format!("ipc:{s}"), &out, &["--resume"])
         .spawn()

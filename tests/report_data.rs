@@ -12,8 +12,12 @@ use thorarena::report::{
     comparison_warnings, diagnostics_multi_table, diagnostics_table, fats_table, load_runs,
     report_html, view_scene, ReportError, TraceContext, WarningKind, WebBundle,
 };
+use thorarena::results::{
+    summarize, write_header, write_record, write_results, EpisodeRecord, PlannedSequence,
+    PolicyIoReport, RunHeader, RESULTS_VERSION,
+};
 use thorarena::robot::{self, forward_kinematics};
-use thorarena::runner::{summarize, EpisodeRecord, PolicyIoRules, RunHeader, Setting};
+use thorarena::runner::{LatencySummary, PolicyIoRules, Setting};
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
@@ -28,7 +32,7 @@ fn record(task: &str, id: &str, setting: &str, steps: usize, err_m: f64) -> Epis
         setting: setting.into(),
         coefficient: if setting == "force" { 1.0 } else { 0.0 },
         policy: "p".into(),
-        termination: None,
+        termination: (steps < 30).then_some(thorarena::episode::Termination::TorsoTilt),
         faults: Default::default(),
         series: EpisodeSeries {
             kp_err_m: (0..steps).map(err).collect(),
@@ -44,6 +48,7 @@ fn record(task: &str, id: &str, setting: &str, steps: usize, err_m: f64) -> Epis
 
 fn header(policy: &str) -> RunHeader {
     RunHeader {
+        results_version: RESULTS_VERSION,
         version: "0.1.0".into(),
         policy: policy.into(),
         profile: "default".into(),
@@ -56,34 +61,76 @@ fn header(policy: &str) -> RunHeader {
             Setting::parse("force").unwrap(),
             Setting::parse("no-force").unwrap(),
         ],
+        sequences: ["clean_table", "push_chair"]
+            .iter()
+            .flat_map(|task| {
+                ["000", "001"].map(|id| PlannedSequence {
+                    task: task.to_string(),
+                    sequence_id: format!("{task}_{id}"),
+                    steps_ref: 30,
+                })
+            })
+            .collect(),
         shard: None,
         io: PolicyIoRules::default(),
     }
 }
 
-/// Writes a run directory as `eval` would (the summary's scores are not read back).
+/// Writes a run directory as `eval` would, through the same writers, keeping the records
+/// the header plans (a shard's) under the header's policy name.
 fn write_run(dir: &Path, header: &RunHeader, records: &[EpisodeRecord], transport: bool) {
     std::fs::create_dir_all(dir).unwrap();
-    std::fs::write(dir.join("run.json"), serde_json::to_string(header).unwrap()).unwrap();
-    let lines: String = records
-        .iter()
-        .map(|r| serde_json::to_string(r).unwrap() + "\n")
+    write_header(dir, header).unwrap();
+    let planned: Vec<(String, String, String)> = header
+        .planned_jobs()
+        .into_iter()
+        .map(|(q, s)| {
+            let seq = &header.sequences[q];
+            (
+                seq.task.clone(),
+                seq.sequence_id.clone(),
+                header.settings[s].name.clone(),
+            )
+        })
         .collect();
-    std::fs::write(dir.join("episodes.jsonl"), lines).unwrap();
+    let records: Vec<EpisodeRecord> = records
+        .iter()
+        .filter(|r| planned.contains(&r.key()))
+        .map(|r| EpisodeRecord {
+            policy: header.policy.clone(),
+            ..r.clone()
+        })
+        .collect();
+    let mut file = std::fs::File::create(dir.join("episodes.jsonl")).unwrap();
+    for r in &records {
+        write_record(&mut file, r).unwrap();
+    }
     let th = RegimeThresholds::from_forces(&[0.0, 10.0, 20.0]);
-    let summary = serde_json::json!({
-        "header": header,
-        "thresholds": {"clean_table": th, "push_chair": th},
-        "policy_io": {
-            "latency": {"count": 120, "mean_us": 3.0, "p50_us": 2.0, "p90_us": 4.0,
-                        "p99_us": 9.0, "p999_us": 40.0, "max_us": 90.0},
-            "transport": transport.then(|| serde_json::json!({"round_trips": 120,
-                "deadline_misses": 2, "late_replies": 1, "policy_failures": 0, "reconnections": 0})),
-            "deadline_misses": if transport { 2 } else { 0 },
-            "invalid_actions": 0,
+    let thresholds = [
+        ("clean_table".to_string(), th),
+        ("push_chair".to_string(), th),
+    ]
+    .into_iter()
+    .collect();
+    let io = PolicyIoReport {
+        latency: LatencySummary {
+            count: 120,
+            mean_us: 3.0,
+            p50_us: 2.0,
+            p90_us: 4.0,
+            p99_us: 9.0,
+            p999_us: 40.0,
+            max_us: 90.0,
         },
-    });
-    std::fs::write(dir.join("summary.json"), summary.to_string()).unwrap();
+        transport: transport.then(|| {
+            serde_json::from_value(serde_json::json!({"round_trips": 120,
+            "deadline_misses": 2, "late_replies": 1, "policy_failures": 0, "reconnections": 0}))
+            .unwrap()
+        }),
+        deadline_misses: if transport { 2 } else { 0 },
+        invalid_actions: 0,
+    };
+    write_results(dir, header, &records, thresholds, Some(io)).unwrap();
 }
 
 fn standard_records(err_m: f64) -> Vec<EpisodeRecord> {

@@ -6,9 +6,8 @@ use thorarena::episode::TerminationRule;
 use thorarena::motion::Sequence;
 use thorarena::policy::HoldPolicy;
 use thorarena::profile::{bundled_profile_path, load_profile};
-use thorarena::runner::{
-    run_eval, schedule, summarize, task_thresholds, EvalPlan, PolicyIoRules, Setting,
-};
+use thorarena::results::summarize;
+use thorarena::runner::{run_eval, schedule, task_thresholds, EvalPlan, PolicyIoRules, Setting};
 
 mod common;
 use common::{g1, sample_sequence};

@@ -2,14 +2,14 @@
 //! seconds per wall second, and the share of time spent outside the physics step (force
 //! replay, metrics, policy, bookkeeping).
 
-use crate::episode::{Episode, EpisodeSetup, TerminationRule};
-use crate::motion::Dataset;
-use crate::physics::{PhysicsSettings, RapierPhysics};
-use crate::policy::{HoldPolicy, Policy, ReplayPolicy};
-use crate::profile::{bundled_profile_path, load_profile};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+use thorarena::episode::{Episode, EpisodeSetup, TerminationRule};
+use thorarena::motion::Dataset;
+use thorarena::physics::{PhysicsSettings, RapierPhysics};
+use thorarena::policy::{HoldPolicy, Policy, ReplayPolicy};
+use thorarena::profile::{bundled_profile_path, load_profile};
 
 /// Arguments of `bench eval`.
 #[derive(Debug, clap::Args)]

@@ -11,12 +11,12 @@
 //! costs.
 
 use super::bench_socket::socket_baseline;
-use crate::robot::RobotModel;
-use crate::runner::LatencyRecorder;
 use anyhow::{bail, Context};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
+use thorarena::robot::RobotModel;
+use thorarena::runner::LatencyRecorder;
 use thorarena_ipc::{
     EnvHeader, Layout, ObsBatchMut, SimConfig, SimSession, StepOutcome, WaitPolicy, FLAG_ACTIVE,
 };

@@ -2,10 +2,10 @@
 //! cost on the reference model measured in the same run when the `mujoco` Python package
 //! is installed.
 
-use crate::physics::{standing_default_pose, Physics, PhysicsSettings, RapierPhysics};
 use anyhow::Context;
 use std::sync::Arc;
 use std::time::Instant;
+use thorarena::physics::{standing_default_pose, Physics, PhysicsSettings, RapierPhysics};
 
 /// Arguments of `bench physics`.
 #[derive(Debug, clap::Args)]
@@ -53,7 +53,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         solver_iterations: args.iterations,
         ..Default::default()
     };
-    let gains = crate::physics::standing_gains(&model);
+    let gains = thorarena::physics::standing_gains(&model);
     let gains_for_mujoco = gains.clone();
     let mut physics = RapierPhysics::new(model.clone(), settings, gains);
     let start = standing_default_pose(&model);
@@ -72,7 +72,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             physics.step();
         }
         per_repeat_us.push(t0.elapsed().as_secs_f64() * 1e6 / args.steps as f64);
-        let mut state = crate::physics::PhysicsState::default();
+        let mut state = thorarena::physics::PhysicsState::default();
         physics.read_state(&mut state);
         z_end = state
             .root
@@ -136,7 +136,7 @@ fn mujoco_baseline(args: &Args, gains_json: &str) -> anyhow::Result<Option<(f64,
         .map(|o| o.status.success())
         .unwrap_or(false);
     let mjcf = args.mjcf.clone().unwrap_or_else(|| {
-        crate::reference_dir()
+        thorarena::reference_dir()
             .join("g1/g1_sim2sim_29dof.xml")
             .display()
             .to_string()

@@ -3,13 +3,13 @@
 //! the shared-memory path's wait (busy-poll a non-blocking socket, then `poll(2)`).
 
 use super::bench_ipc::{fill, Row};
-use crate::runner::LatencyRecorder;
 use std::io::{BufRead, BufReader, ErrorKind, Read, Write};
 use std::os::fd::AsRawFd;
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+use thorarena::runner::LatencyRecorder;
 use thorarena_ipc::{ActionBatchMut, Layout, ObsBatch, ObsBatchMut};
 
 /// Hidden subcommand: the socket baseline's echo peer.

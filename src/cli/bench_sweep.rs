@@ -4,11 +4,11 @@
 //! invocation — and how long planning and a status census take for a sweep of thousands
 //! of tasks.
 
-use crate::sweep::Plan;
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
+use thorarena::sweep::Plan;
 
 /// Arguments of `bench sweep`.
 #[derive(Debug, clap::Args)]
@@ -169,7 +169,7 @@ fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize, source: &Path) -> any
         &spec,
         format!(
             "datasets = [{:?}]\nsettings = [{}]\nshards = {shards}\n[[policy]]\npolicy = \"balance\"\n[[policy]]\npolicy = \"hold\"\n",
-            crate::data_dir().join("sample").display().to_string(),
+            thorarena::data_dir().join("sample").display().to_string(),
             coefficients.join(", ")
         ),
     )?;

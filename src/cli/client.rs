@@ -3,11 +3,13 @@
 //! (same policy in process and out of process gives the same episodes, bit for bit), and
 //! the echo policy of the latency benchmark.
 
-use crate::policy::wire::read_observation;
-use crate::policy::{BalanceGains, BalancePolicy, HoldPolicy, Observation, Policy, ReplayPolicy};
 use anyhow::{bail, Context};
 use std::io::Write;
 use std::time::Duration;
+use thorarena::policy::wire::read_observation;
+use thorarena::policy::{
+    BalanceGains, BalancePolicy, HoldPolicy, Observation, Policy, ReplayPolicy,
+};
 use thorarena_ipc::{Next, PolicyClient, PolicyConfig, WaitPolicy};
 
 /// Arguments of `client`.

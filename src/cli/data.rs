@@ -1,15 +1,15 @@
 //! `thorarena data …`: import motion files, describe a dataset.
 
-use crate::metrics::percentile;
-use crate::motion::import::canonical::{to_sequence, ImportOptions};
-use crate::motion::import::{force_csv, lafan_csv, npz, twist_pkl, RawMotion};
-use crate::motion::{
+use anyhow::{bail, Context};
+use std::path::{Path, PathBuf};
+use thorarena::metrics::percentile;
+use thorarena::motion::import::canonical::{to_sequence, ImportOptions};
+use thorarena::motion::import::{force_csv, lafan_csv, npz, twist_pkl, RawMotion};
+use thorarena::motion::{
     ground_check, scan_root_glitches, shift_root_height, Dataset, DatasetWriter, GlitchScan,
     Sequence, MAX_HUMAN_ROOT_SPEED_M_PER_S,
 };
-use crate::robot::RobotModel;
-use anyhow::{bail, Context};
-use std::path::{Path, PathBuf};
+use thorarena::robot::RobotModel;
 
 /// `thorarena data …`
 #[derive(Debug, clap::Subcommand)]
@@ -168,7 +168,7 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
         ]),
         None => None,
     };
-    crate::names::check_name("--task", &args.task)?;
+    thorarena::names::check_name("--task", &args.task)?;
     let mut writer = DatasetWriter::append(&args.out, &robot)?;
     // Sequence ids come from file names: check them, and that none is taken, before
     // anything is read or written.
@@ -178,7 +178,7 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
             .file_stem()
             .and_then(|s| s.to_str())
             .with_context(|| format!("{}: no file name", input.display()))?;
-        crate::names::check_name("sequence id (the file name)", stem)
+        thorarena::names::check_name("sequence id (the file name)", stem)
             .with_context(|| input.display().to_string())?;
         if !ids.insert(stem) {
             bail!(
@@ -272,7 +272,7 @@ fn export(args: &ExportArgs) -> anyhow::Result<()> {
     let robot = super::load_robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let ExportFormat::Npz = args.format;
-    let files = crate::motion::export_npz(&ds, &args.out, |done, total| {
+    let files = thorarena::motion::export_npz(&ds, &args.out, |done, total| {
         eprint!("\rexported {done}/{total}")
     })?;
     eprintln!("\n{}: {} files", args.out.display(), files.len());

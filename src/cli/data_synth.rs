@@ -1,10 +1,10 @@
 //! `thorarena data synth`: writes the synthetic six-task dataset.
 
 use super::data::{describe, SynthArgs};
-use crate::motion::synth::{synthesize, SynthOptions};
-use crate::motion::{DatasetWriter, Manifest, MANIFEST};
 use anyhow::{bail, Context};
 use std::path::Path;
+use thorarena::motion::synth::{synthesize, SynthOptions};
+use thorarena::motion::{DatasetWriter, Manifest, MANIFEST};
 
 pub(super) fn run(args: &SynthArgs) -> anyhow::Result<()> {
     let robot = super::load_robot(&args.robot)?;

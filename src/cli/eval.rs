@@ -3,17 +3,20 @@
 //! resumed after a crash, or sharded across machines and merged.
 
 use super::policy_arg::{make_policy, PolicyIoArgs};
-use super::run_output::{read_header, sort_records, write_header, write_results, PolicyIoReport};
-use crate::episode::{Termination, TerminationRule};
-use crate::motion::{Dataset, Sequence};
-use crate::policy::Policy;
-use crate::profile::{bundled_profile_path, load_profile, Profile};
-use crate::robot::RobotModel;
-use crate::runner::{read_records, run_eval, schedule, write_record, EvalPlan, RunHeader, Setting};
 use anyhow::{bail, Context};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::PathBuf;
+use thorarena::episode::{Termination, TerminationRule};
+use thorarena::motion::{Dataset, Sequence};
+use thorarena::policy::Policy;
+use thorarena::profile::{bundled_profile_path, load_profile, Profile};
+use thorarena::results::{
+    read_header, sort_records, write_header, write_record, write_results, EpisodeLog,
+    PlannedSequence, PolicyIoReport, RunHeader, RESULTS_VERSION,
+};
+use thorarena::robot::RobotModel;
+use thorarena::runner::{run_eval, task_thresholds, EvalPlan, Setting};
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
@@ -111,7 +114,7 @@ impl EvalContext {
         let dataset = args
             .dataset
             .clone()
-            .unwrap_or_else(|| crate::data_dir().join("sample"));
+            .unwrap_or_else(|| thorarena::data_dir().join("sample"));
         let robot = super::load_robot(&args.robot)?;
         let profile_path = if args.profile.ends_with(".toml") {
             PathBuf::from(&args.profile)
@@ -217,7 +220,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let out = match &args.out {
         Some(out) => out.clone(),
         None => {
-            crate::names::check_name("policy name", policy.name())?;
+            thorarena::names::check_name("policy name", policy.name())?;
             let out =
                 PathBuf::from("results").join(format!("{}-{}", policy.name(), ctx.dataset_name()));
             check_out(&out, &args.run)?;
@@ -252,6 +255,7 @@ pub(super) fn evaluate(
 ) -> anyhow::Result<()> {
     let sequences = &ctx.sequences;
     let header = RunHeader {
+        results_version: RESULTS_VERSION,
         version: env!("CARGO_PKG_VERSION").into(),
         policy: policy.name().to_string(),
         profile: ctx.profile.name.clone(),
@@ -264,6 +268,7 @@ pub(super) fn evaluate(
             max_torso_tilt_error_rad: args.max_torso_tilt_error,
         },
         settings: ctx.settings.clone(),
+        sequences: PlannedSequence::plan(sequences, ctx.profile.control_dt_s),
         shard: args.shard,
         io: args.io.rules()?,
     };
@@ -276,20 +281,26 @@ pub(super) fn evaluate(
     if args.resume && out.join("run.json").exists() {
         let previous = read_header(out)?;
         if previous != header {
-            bail!("--resume: {} was started with another configuration ({previous:?}); use another --out", out.display());
+            bail!(
+                "--resume: {} was started with another configuration (it differs in: {}); use another --out, or --overwrite",
+                out.display(),
+                previous.differences(&header).join(", ")
+            );
         }
-        let (records, _) = read_records(&episodes_path)
-            .with_context(|| format!("reading {}", episodes_path.display()))?;
-        done = records
+        let log = EpisodeLog::read(&episodes_path, &header)?;
+        if log.torn_tail {
+            eprintln!(
+                "--resume: {} ended in a line cut short; it is dropped",
+                episodes_path.display()
+            );
+        }
+        done = log
+            .records
             .into_iter()
             .filter(|r| r.termination != Some(Termination::PolicyFailed))
             .collect();
         // Rewrite without a torn last line or episodes to run again.
-        let mut file = std::io::BufWriter::new(std::fs::File::create(&episodes_path)?);
-        for r in &done {
-            write_record(&mut file, r)?;
-        }
-        file.flush()?;
+        EpisodeLog::rewrite(&episodes_path, &done)?;
     } else if args.resume {
         eprintln!(
             "--resume: nothing to resume in {}, starting afresh",
@@ -306,7 +317,8 @@ pub(super) fn evaluate(
         .iter()
         .map(|r| (r.task.clone(), r.sequence_id.clone(), r.setting.clone()))
         .collect();
-    let jobs: Vec<(usize, usize)> = schedule(sequences.len(), header.settings.len(), header.shard)
+    let jobs: Vec<(usize, usize)> = header
+        .planned_jobs()
         .into_iter()
         .filter(|&(q, s)| {
             let key = (
@@ -392,8 +404,9 @@ pub(super) fn evaluate(
     };
     let mut records = done;
     records.extend(outcome.records);
-    sort_records(&mut records, &header, sequences);
-    let tables = write_results(out, &header, &records, sequences, Some(&io_report))?;
+    sort_records(&mut records, &header);
+    let thresholds = task_thresholds(sequences, header.control_dt_s);
+    let tables = write_results(out, &header, &records, thresholds, Some(io_report))?;
     println!("{tables}");
     eprintln!(
         "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md}}",

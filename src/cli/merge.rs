@@ -1,12 +1,15 @@
 //! `thorarena merge`: combine the shards of one evaluation into the single run they add
 //! up to — the same records, summary and tables as an unsharded run.
 
-use super::run_output::{read_header, sort_records, write_header, write_results};
-use crate::motion::Dataset;
-use crate::runner::{read_records, schedule, write_record, EpisodeRecord, RunHeader};
 use anyhow::{bail, Context};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use thorarena::motion::Dataset;
+use thorarena::results::{
+    read_header, sort_records, write_header, write_record, write_results, EpisodeLog,
+    EpisodeRecord, RunHeader, EPISODES_FILE,
+};
+use thorarena::runner::task_thresholds;
 
 /// Episode records keyed by (task, sequence, setting).
 pub(super) type EpisodesByKey = BTreeMap<(String, String, String), EpisodeRecord>;
@@ -19,15 +22,17 @@ pub(super) fn read_shards(runs: &[PathBuf]) -> anyhow::Result<(RunHeader, Episod
     let header = read_header(first)?;
     let mut by_key = EpisodesByKey::new();
     for run in runs {
-        let mut h = read_header(run)?;
+        let own = read_header(run)?;
+        let mut h = own.clone();
         h.shard = header.shard;
         if h != header {
             bail!("{} is not a shard of the same evaluation as {} (policy, profile, dataset, keypoints, termination and settings must agree)", run.display(), first.display());
         }
-        let path = run.join("episodes.jsonl");
-        let (records, _) =
-            read_records(&path).with_context(|| format!("reading {}", path.display()))?;
-        for r in records {
+        let log = EpisodeLog::read(&run.join(EPISODES_FILE), &own)?;
+        if log.torn_tail {
+            bail!("{}: episodes.jsonl ends in a line cut short (the shard was killed mid-write); `thorarena eval --resume` it first", run.display());
+        }
+        for r in log.records {
             let key = (r.task.clone(), r.sequence_id.clone(), r.setting.clone());
             match by_key.get(&key) {
                 Some(existing) if existing != &r => bail!(
@@ -72,12 +77,13 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     let sequences = ds.load_all()?;
-    let missing: Vec<String> = schedule(sequences.len(), header.settings.len(), None)
+    let missing: Vec<String> = header
+        .planned_jobs()
         .into_iter()
         .map(|(q, s)| {
             (
-                sequences[q].task.clone(),
-                sequences[q].sequence_id.clone(),
+                header.sequences[q].task.clone(),
+                header.sequences[q].sequence_id.clone(),
                 header.settings[s].name.clone(),
             )
         })
@@ -97,14 +103,15 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     let mut records: Vec<EpisodeRecord> = by_key.into_values().collect();
-    sort_records(&mut records, &header, &sequences);
+    sort_records(&mut records, &header);
     std::fs::create_dir_all(&args.out)?;
     let mut w = std::io::BufWriter::new(std::fs::File::create(args.out.join("episodes.jsonl"))?);
     for r in &records {
         write_record(&mut w, r)?;
     }
     write_header(&args.out, &header)?;
-    let tables = write_results(&args.out, &header, &records, &sequences, None)?;
+    let thresholds = task_thresholds(&sequences, header.control_dt_s);
+    let tables = write_results(&args.out, &header, &records, thresholds, None)?;
     println!("{tables}");
     eprintln!(
         "merged {} runs, {} episodes → {}",

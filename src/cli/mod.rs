@@ -5,6 +5,7 @@ mod bench_ipc;
 mod bench_physics;
 mod bench_socket;
 mod bench_sweep;
+mod choices;
 mod client;
 mod data;
 mod data_synth;
@@ -13,7 +14,6 @@ mod merge;
 mod policy_arg;
 mod report_html;
 mod robot_info;
-mod run_output;
 mod serve;
 mod sim_trace;
 mod sweep;
@@ -135,13 +135,13 @@ pub fn run() -> anyhow::Result<()> {
 }
 
 /// Loads a bundled robot by name, or a robot directory when the argument is a path.
-pub(crate) fn load_robot(name_or_dir: &str) -> anyhow::Result<crate::robot::RobotModel> {
+pub(crate) fn load_robot(name_or_dir: &str) -> anyhow::Result<thorarena::robot::RobotModel> {
     use anyhow::Context;
     let path = std::path::Path::new(name_or_dir);
     let model = if path.join("robot.toml").is_file() {
-        crate::robot::load_robot_dir(path)
+        thorarena::robot::load_robot_dir(path)
     } else {
-        crate::robot::load_bundled(name_or_dir)
+        thorarena::robot::load_bundled(name_or_dir)
     };
     model.with_context(|| format!("loading robot `{name_or_dir}`"))
 }

@@ -1,15 +1,16 @@
 //! `--policy` and the policy-I/O options shared by `eval`, `serve` and `bench`: a built-in
 //! baseline, or `ipc:<session>` for a policy process connecting over shared memory.
 
-use crate::policy::{
-    BalanceGains, BalancePolicy, HoldPolicy, LatencyMode, MissRule, Policy, RemoteConfig,
-    RemotePolicy, ReplayPolicy, Twist2Policy,
-};
-use crate::profile::Profile;
-use crate::robot::RobotModel;
-use crate::runner::PolicyIoRules;
+use super::choices::{LatencyModeArg, MissRuleArg};
 use anyhow::{bail, Context};
 use std::time::Duration;
+use thorarena::policy::{
+    BalanceGains, BalancePolicy, HoldPolicy, Policy, RemoteConfig, RemotePolicy, ReplayPolicy,
+    Twist2Policy,
+};
+use thorarena::profile::Profile;
+use thorarena::robot::RobotModel;
+use thorarena::runner::PolicyIoRules;
 use thorarena_ipc::{SimConfig, WaitPolicy};
 
 /// Options of a policy's answers (all policies) and of the session (remote ones).
@@ -26,13 +27,13 @@ pub struct PolicyIoArgs {
     pub budget: Budget,
     /// What a missed deadline or an unusable action (non-finite, or beyond
     /// --max-abs-action) does: hold the last action, apply zero, or fail the episode.
-    #[arg(long, value_enum, default_value_t = MissRule::Hold)]
-    pub miss_rule: MissRule,
+    #[arg(long, value_enum, default_value = "hold")]
+    pub miss_rule: MissRuleArg,
     /// `measured`: the policy's measured latency delays its action's effect in simulated
     /// time (rounded to physics steps), so slow inference costs tracking as on a robot.
     /// `ignore`: actions act at once (deterministic results).
-    #[arg(long, value_enum, default_value_t = LatencyMode::Ignore)]
-    pub latency_mode: LatencyMode,
+    #[arg(long, value_enum, default_value = "ignore")]
+    pub latency_mode: LatencyModeArg,
     /// Largest usable |raw action| (the profile's action units).
     #[arg(long, default_value_t = PolicyIoRules::default().max_abs_action)]
     pub max_abs_action: f64,
@@ -95,8 +96,8 @@ impl PolicyIoArgs {
             bail!("--max-abs-action must be > 0, got {}", self.max_abs_action);
         }
         Ok(PolicyIoRules {
-            miss_rule: self.miss_rule,
-            latency_mode: self.latency_mode,
+            miss_rule: self.miss_rule.into(),
+            latency_mode: self.latency_mode.into(),
             max_abs_action: self.max_abs_action,
             budget_s: self.budget.0.map(|b| b.as_secs_f64()),
         })

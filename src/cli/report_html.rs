@@ -2,12 +2,12 @@
 //! FATS radar, tracking vs survival, low- vs high-force error, policy round trips), with
 //! the tables also as Markdown and CSV next to it for papers.
 
-use crate::report::{
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+use thorarena::report::{
     comparison_warnings, diagnostics_multi_table, fats_table, load_runs, report_html, Page,
     WebBundle,
 };
-use anyhow::Context;
-use std::path::{Path, PathBuf};
 
 /// Arguments of `report`.
 #[derive(Debug, clap::Args)]

@@ -1,6 +1,6 @@
 //! `thorarena robot info`: a human-readable dump of a robot model.
 
-use crate::robot::RobotModel;
+use thorarena::robot::RobotModel;
 
 /// Arguments of `robot info`.
 #[derive(Debug, clap::Args)]

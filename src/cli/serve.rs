@@ -3,8 +3,8 @@
 
 use super::eval::{evaluate, EvalContext, RunArgs};
 use super::policy_arg::connect_remote;
-use crate::policy::Policy;
 use std::path::PathBuf;
+use thorarena::policy::Policy;
 
 /// Arguments of `serve`.
 #[derive(Debug, clap::Args)]
@@ -36,7 +36,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             ctx.envs,
         )?;
         // The name a policy process declares becomes a directory name: check it first.
-        if let Err(e) = crate::names::check_name("policy name", policy.name()) {
+        if let Err(e) = thorarena::names::check_name("policy name", policy.name()) {
             eprintln!("refusing the policy that connected: {e}");
             drop(policy);
             if args.once {

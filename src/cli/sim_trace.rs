@@ -1,16 +1,17 @@
 //! `thorarena sim trace`: run an open-loop scenario and print it as JSON.
 
-use crate::physics::{PdForm, PhysicsSettings};
-use crate::scenario::{run_scenario, Scenario};
+use super::choices::ScenarioArg;
 use std::io::Write;
 use std::sync::Arc;
+use thorarena::physics::{PdForm, PhysicsSettings};
+use thorarena::scenario::run_scenario;
 
 /// Arguments of `sim trace`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Which scenario.
     #[arg(long, value_enum)]
-    pub scenario: Scenario,
+    pub scenario: ScenarioArg,
     /// Bundled robot name or robot directory.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
@@ -51,7 +52,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         },
         ..PhysicsSettings::default()
     };
-    let trace = run_scenario(model, args.scenario, settings);
+    let trace = run_scenario(model, args.scenario.into(), settings);
     let mut out = std::io::stdout().lock();
     serde_json::to_writer(&mut out, &trace)?;
     writeln!(out)?;

@@ -2,9 +2,9 @@
 //! self-contained HTML page — the robot's collision shapes, the reference as a ghost,
 //! the replayed hand forces as arrows, a timeline, and the keypoint error under it.
 
-use crate::report::{load_trace, trace_context, view_html, view_scene, Page, WebBundle};
 use anyhow::Context;
 use std::path::PathBuf;
+use thorarena::report::{load_trace, trace_context, view_html, view_scene, Page, WebBundle};
 
 /// Arguments of `view`.
 #[derive(Debug, clap::Args)]

@@ -12,27 +12,44 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Diagnostics {
     /// Mean episode score.
+    #[serde(deserialize_with = "nan_if_null")]
     pub fats: f64,
     /// Mean survival.
+    #[serde(deserialize_with = "nan_if_null")]
     pub survival: f64,
     /// Keypoint RMSE over all steps, mm.
+    #[serde(deserialize_with = "nan_if_null")]
     pub kp_mm: f64,
     /// Keypoint RMSE over low-force steps, mm (pooled over the task's steps).
+    #[serde(deserialize_with = "nan_if_null")]
     pub low_kp_mm: f64,
     /// Keypoint RMSE over high-force steps, mm.
+    #[serde(deserialize_with = "nan_if_null")]
     pub high_kp_mm: f64,
     /// Robustness ρ = E_low / E_high.
+    #[serde(deserialize_with = "nan_if_null")]
     pub robustness: f64,
     /// Power overhead η = P_high / P_low.
+    #[serde(deserialize_with = "nan_if_null")]
     pub power_overhead: f64,
     /// Upper-body keypoint RMSE, mm.
+    #[serde(deserialize_with = "nan_if_null")]
     pub upper_kp_mm: f64,
     /// Lower-body keypoint RMSE, mm.
+    #[serde(deserialize_with = "nan_if_null")]
     pub lower_kp_mm: f64,
     /// Population standard deviation of episode scores.
+    #[serde(deserialize_with = "nan_if_null")]
     pub fats_std: f64,
     /// Mean root drift, m.
+    #[serde(deserialize_with = "nan_if_null")]
     pub root_drift_m: f64,
+}
+
+/// Reads a number written by serde_json, which writes NaN (an undefined diagnostic) as
+/// `null`, back as NaN.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 /// One task's aggregate.

@@ -54,7 +54,7 @@ pub enum ActOutcome {
 
 /// What happens to an environment whose action missed the deadline or was unusable
 /// (non-finite, or beyond the profile's `max_abs_action`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MissRule {
     /// Keep applying the last action that reached the robot.
@@ -67,7 +67,7 @@ pub enum MissRule {
 }
 
 /// When a policy's action takes effect in simulated time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LatencyMode {
     /// At the start of the control step, whatever the policy took (lock-step; results are

@@ -19,8 +19,8 @@ pub use html::{
     WEB_DIST_ENV,
 };
 pub use runs::{
-    comparison_warnings, label_runs, load_run, load_runs, ComparisonWarning, EpisodePoint,
-    PolicyIoSummary, Run, WarningKind,
+    comparison_warnings, label_runs, load_run, load_runs, ComparisonWarning, EpisodePoint, Run,
+    WarningKind,
 };
 pub use scene::{
     load_trace, trace_context, view_scene, BodyShapes, ShapeView, TraceContext, ViewScene,
@@ -67,6 +67,9 @@ pub enum ReportError {
         /// What is wrong.
         reason: String,
     },
+    /// A run directory's files are unreadable or do not hold a valid run.
+    #[error(transparent)]
+    Results(#[from] crate::results::ResultsError),
     /// The bundle directory named by [`WEB_DIST_ENV`] lacks a script.
     #[error(
         "the front-end bundle directory named by {WEB_DIST_ENV} has no {path} \

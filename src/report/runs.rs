@@ -6,37 +6,12 @@
 
 use super::ReportError;
 use crate::metrics::{score_episode, Diagnostics, RegimeThresholds, TaskSummary, SIGMA_M};
-use crate::policy::TransportStats;
-use crate::runner::{
-    read_records, summarize, EpisodeRecord, LatencySummary, RunHeader, SettingResults,
+use crate::results::{
+    read_header, read_summary, summarize, Coverage, EpisodeLog, EpisodeRecord, PolicyIoReport,
+    RunHeader, SettingResults, EPISODES_FILE,
 };
-use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-
-/// The policy's answers during a run, as `summary.json` (`policy_io`) stores them.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-pub struct PolicyIoSummary {
-    /// Per-step latency percentiles (the run keeps percentiles, not samples).
-    pub latency: LatencySummary,
-    /// Transport counters; present only when the policy ran behind the policy server.
-    #[serde(default)]
-    pub transport: Option<TransportStats>,
-    /// Control steps whose actions missed the budget.
-    #[serde(default)]
-    pub deadline_misses: u64,
-    /// Control steps with unusable actions.
-    #[serde(default)]
-    pub invalid_actions: u64,
-}
-
-/// The parts of `summary.json` a report needs (its per-setting scores are recomputed).
-#[derive(Debug, Deserialize)]
-struct SummaryFile {
-    thresholds: BTreeMap<String, RegimeThresholds>,
-    #[serde(default)]
-    policy_io: Option<PolicyIoSummary>,
-}
 
 /// One run directory, read back and scored.
 #[derive(Debug, Clone)]
@@ -54,7 +29,12 @@ pub struct Run {
     /// Per setting: task summaries and the average over tasks.
     pub results: SettingResults,
     /// Latency and faults of the policy, when the run measured them.
-    pub policy_io: Option<PolicyIoSummary>,
+    pub policy_io: Option<PolicyIoReport>,
+    /// Episodes present and expected per (setting, task): a run stopped early, cut short
+    /// or with a failed policy is read as partial and every table says so.
+    pub coverage: Coverage,
+    /// `episodes.jsonl` ended in a line cut short (a run killed mid-write).
+    pub torn_tail: bool,
 }
 
 /// One episode's place on the tracking-vs-survival plane.
@@ -145,39 +125,28 @@ impl Run {
     }
 }
 
-fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ReportError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ReportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    serde_json::from_str(&text).map_err(|source| ReportError::Json {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
-/// Reads one run directory (`run.json`, `episodes.jsonl`, `summary.json`) and scores it.
-/// The label is the policy name; [`load_runs`] makes labels unique.
+/// Reads one run directory (`run.json`, `episodes.jsonl`, `summary.json`), checking every
+/// record against the header, and scores it. The label is the policy name; [`load_runs`]
+/// makes labels unique. A run holding fewer episodes than it planned is read (its
+/// [`Run::coverage`] says what is missing); a run holding none is an error.
 pub fn load_run(dir: &Path) -> Result<Run, ReportError> {
-    let header: RunHeader = read_json(&dir.join("run.json"))?;
-    let summary: SummaryFile = read_json(&dir.join("summary.json"))?;
-    let episodes = dir.join("episodes.jsonl");
-    let (records, _) = read_records(&episodes).map_err(|source| ReportError::Io {
-        path: episodes.clone(),
-        source,
-    })?;
-    if records.is_empty() {
+    let header = read_header(dir)?;
+    let summary = read_summary(dir)?;
+    let log = EpisodeLog::read(&dir.join(EPISODES_FILE), &header)?;
+    if log.records.is_empty() {
         return Err(ReportError::BadRun {
             path: dir.to_path_buf(),
             reason: "episodes.jsonl holds no finished episode".into(),
         });
     }
-    let results = summarize(&records, &summary.thresholds);
+    let results = summarize(&log.records, &summary.thresholds);
     Ok(Run {
         dir: dir.to_path_buf(),
         label: header.policy.clone(),
+        coverage: Coverage::of(&header, &log.records),
+        torn_tail: log.torn_tail,
         header,
-        records,
+        records: log.records,
         thresholds: summary.thresholds,
         results,
         policy_io: summary.policy_io,
@@ -344,6 +313,34 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
         }
     }
     for r in runs {
+        if let Some(sentence) = r.coverage.sentence() {
+            let cells: Vec<String> = r
+                .coverage
+                .cells
+                .iter()
+                .filter(|c| c.present != c.expected || c.policy_failed > 0)
+                .map(|c| {
+                    format!(
+                        "{}/{}: {} of {} present, {} cut short by a policy failure",
+                        c.setting, c.task, c.present, c.expected, c.policy_failed
+                    )
+                })
+                .collect();
+            let torn = if r.torn_tail {
+                " (episodes.jsonl ends in a line cut short)"
+            } else {
+                ""
+            };
+            out.push(ComparisonWarning {
+                kind: WarningKind::Partial,
+                message: format!(
+                    "{} ({}) is a {sentence}{torn} — {}",
+                    r.label,
+                    r.dir.display(),
+                    cells.join("; ")
+                ),
+            });
+        }
         if let Some((i, n)) = r.header.shard {
             out.push(ComparisonWarning {
                 kind: WarningKind::Partial,

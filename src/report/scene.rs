@@ -5,8 +5,8 @@
 
 use super::ReportError;
 use crate::episode::TraceStep;
+use crate::results::{read_header, EpisodeLog, EpisodeRecord, RunHeader, EPISODES_FILE};
 use crate::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
-use crate::runner::{read_records, EpisodeRecord, RunHeader};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::Serialize;
 use std::path::Path;
@@ -98,14 +98,13 @@ pub fn trace_context(trace: &Path) -> TraceContext {
     let Some(run) = trace.parent().and_then(Path::parent) else {
         return TraceContext::default();
     };
-    let header: Option<RunHeader> = std::fs::read_to_string(run.join("run.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok());
+    let header: Option<RunHeader> = read_header(run).ok();
     let stem = trace.file_stem().map(|s| s.to_string_lossy().to_string());
-    let record = read_records(&run.join("episodes.jsonl"))
-        .ok()
-        .and_then(|(records, _)| {
-            records.into_iter().find(|r| {
+    let record = header
+        .as_ref()
+        .and_then(|h| EpisodeLog::read(&run.join(EPISODES_FILE), h).ok())
+        .and_then(|log| {
+            log.records.into_iter().find(|r| {
                 stem.as_deref() == Some(&format!("{}-{}-{}", r.task, r.sequence_id, r.setting))
             })
         });

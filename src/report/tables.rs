@@ -5,7 +5,7 @@
 
 use super::runs::Run;
 use crate::metrics::Diagnostics;
-use crate::runner::SettingResults;
+use crate::results::SettingResults;
 use std::fmt::Write;
 
 /// One row of the diagnostics table: how to read it from [`Diagnostics`] and print it.

@@ -9,11 +9,12 @@
 //! every slot's episode sees only its own observations.
 
 use super::latency::LatencyRecorder;
-use super::{EpisodeRecord, EvalPlan, LatencySummary};
+use super::{EvalPlan, LatencySummary};
 use crate::episode::{Episode, EpisodeSetup, PolicyFault, Termination, TraceStep};
 use crate::motion::Sequence;
 use crate::physics::{PhysicsSettings, RapierPhysics};
 use crate::policy::{ActOutcome, LatencyMode, MissRule, Observation, Policy, TransportStats};
+use crate::results::EpisodeRecord;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::sync::Arc;

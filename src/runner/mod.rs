@@ -18,15 +18,14 @@ mod lockstep;
 pub use latency::{LatencyRecorder, LatencySummary};
 pub use lockstep::{run_eval, RunOutcome};
 
-use crate::episode::{PolicyFaults, Termination, TerminationRule};
-use crate::metrics::{aggregate, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary};
+use crate::episode::TerminationRule;
+use crate::metrics::RegimeThresholds;
 use crate::motion::{Reference, Sequence};
 use crate::policy::{LatencyMode, MissRule};
 use crate::profile::Profile;
 use crate::robot::RobotModel;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::io::Write;
 
 /// A force setting: a name, the replay coefficient, and an optional constant push.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -85,28 +84,6 @@ impl Setting {
             }
         }
     }
-}
-
-/// One finished episode, as streamed to `episodes.jsonl`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct EpisodeRecord {
-    /// Task.
-    pub task: String,
-    /// Sequence id.
-    pub sequence_id: String,
-    /// Setting name.
-    pub setting: String,
-    /// Replay coefficient.
-    pub coefficient: f64,
-    /// Policy name.
-    pub policy: String,
-    /// Why it ended early, if it did.
-    pub termination: Option<Termination>,
-    /// Deadline misses and invalid actions (absent when there were none).
-    #[serde(default, skip_serializing_if = "PolicyFaults::is_empty")]
-    pub faults: PolicyFaults,
-    /// The per-step series the scores are computed from.
-    pub series: EpisodeSeries,
 }
 
 /// Everything an evaluation needs.
@@ -193,100 +170,4 @@ pub fn schedule(
         .filter(|(j, _)| shard.is_none_or(|(i, n)| j % n == i))
         .map(|(_, job)| job)
         .collect()
-}
-
-/// What identifies a run; runs may be merged or resumed only if these agree.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunHeader {
-    /// ThorArena version.
-    pub version: String,
-    /// Policy name.
-    pub policy: String,
-    /// Profile name.
-    pub profile: String,
-    /// The profile's control step (the clock of the metrics and regime thresholds), s.
-    pub control_dt_s: f64,
-    /// Dataset directory as given.
-    pub dataset: String,
-    /// Dataset content hash.
-    pub dataset_sha256: String,
-    /// Keypoint set.
-    pub keypoints: String,
-    /// Termination rule.
-    pub termination: TerminationRule,
-    /// Settings, in schedule order.
-    pub settings: Vec<Setting>,
-    /// `(i, n)` when this run is shard i of n.
-    pub shard: Option<(usize, usize)>,
-    /// Rules of the policy's answers (miss rule, latency mode, budget).
-    #[serde(default)]
-    pub io: PolicyIoRules,
-}
-
-/// Reads `episodes.jsonl`. A torn last line (a run killed mid-write) is ignored; the
-/// returned byte length is where the good records end, so the caller can cut the file
-/// there before appending.
-pub fn read_records(path: &std::path::Path) -> std::io::Result<(Vec<EpisodeRecord>, u64)> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok((Vec::new(), 0)),
-        Err(e) => return Err(e),
-    };
-    let mut records = Vec::new();
-    let mut good_end = 0u64;
-    let lines: Vec<&str> = text.split_inclusive('\n').collect();
-    for (i, line) in lines.iter().enumerate() {
-        let last = i + 1 == lines.len();
-        match serde_json::from_str::<EpisodeRecord>(line.trim_end()) {
-            Ok(r) if line.ends_with('\n') => {
-                records.push(r);
-                good_end += line.len() as u64;
-            }
-            _ if last => break, // torn final write
-            Err(e) => {
-                let msg = format!("{} line {}: {e}", path.display(), i + 1);
-                return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, msg));
-            }
-            Ok(_) => unreachable!("only the last line can lack its newline"),
-        }
-    }
-    Ok((records, good_end))
-}
-
-/// Per setting: per-task summaries and the average over tasks.
-pub type SettingResults = BTreeMap<String, (Vec<TaskSummary>, Diagnostics)>;
-
-/// Scores records with the task thresholds.
-pub fn summarize(
-    records: &[EpisodeRecord],
-    thresholds: &BTreeMap<String, RegimeThresholds>,
-) -> SettingResults {
-    let mut by_setting: BTreeMap<String, Vec<(String, String, EpisodeSeries)>> = BTreeMap::new();
-    for r in records {
-        by_setting.entry(r.setting.clone()).or_default().push((
-            r.task.clone(),
-            r.sequence_id.clone(),
-            r.series.clone(),
-        ));
-    }
-    let th = |task: &str| {
-        thresholds.get(task).copied().unwrap_or(RegimeThresholds {
-            p33_n: 0.0,
-            p66_n: 0.0,
-        })
-    };
-    by_setting
-        .into_iter()
-        .map(|(setting, eps)| {
-            let (_, tasks, overall) = aggregate(&eps, &th);
-            (setting, (tasks, overall))
-        })
-        .collect()
-}
-
-/// Appends a record as one JSON line and flushes (a crash loses nothing finished).
-pub fn write_record(out: &mut impl Write, record: &EpisodeRecord) -> std::io::Result<()> {
-    serde_json::to_writer(&mut *out, record)?;
-    out.write_all(b"\n")?;
-    out.flush()
 }

@@ -8,7 +8,7 @@ pub(super) struct CellResult {
     dir: PathBuf,
     episodes: usize,
     complete: bool,
-    summary: serde_json::Value,
+    summary: Summary,
     /// Summed over shards: deadline misses, invalid actions, policy failures.
     faults: [u64; 3],
     /// p50, p99, p99.9 µs of a single-shard cell (shards keep separate histograms).
@@ -40,7 +40,7 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     let robot = crate::cli::load_robot(&plan_robot(&plan.tasks[0]))?;
     let mut results: Vec<Option<CellResult>> = Vec::new();
     // Loaded once per dataset, however many cells share it.
-    let mut datasets: BTreeMap<PathBuf, Vec<crate::motion::Sequence>> = BTreeMap::new();
+    let mut datasets: BTreeMap<PathBuf, Vec<thorarena::motion::Sequence>> = BTreeMap::new();
     for cell in &plan.cells {
         let tasks = &by_cell[&cell.index];
         let runs: Vec<PathBuf> = tasks
@@ -60,40 +60,36 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         }
         let sequences = &datasets[&cell.dataset];
         let mut records: Vec<_> = by_key.into_values().collect();
-        sort_records(&mut records, &header, sequences);
+        sort_records(&mut records, &header);
         let out = Plan::cell_dir(&args.dir, cell.index);
         std::fs::create_dir_all(&out)?;
         let mut w = std::io::BufWriter::new(File::create(out.join("episodes.jsonl"))?);
         for r in &records {
-            crate::runner::write_record(&mut w, r)?;
+            write_record(&mut w, r)?;
         }
         w.flush()?;
         write_header(&out, &header)?;
-        write_results(&out, &header, &records, sequences, None)?;
-        let summary: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json"))?)?;
+        let thresholds = thorarena::runner::task_thresholds(sequences, header.control_dt_s);
+        write_results(&out, &header, &records, thresholds, None)?;
+        let summary = read_summary(&out)?;
         let mut faults = [0u64; 3];
         let mut latency_us = None;
         for run in &runs {
-            let s: serde_json::Value =
-                serde_json::from_str(&std::fs::read_to_string(run.join("summary.json"))?)?;
-            let io = &s["policy_io"];
-            faults[0] += io["deadline_misses"].as_u64().unwrap_or(0);
-            faults[1] += io["invalid_actions"].as_u64().unwrap_or(0);
-            faults[2] += io["transport"]["policy_failures"].as_u64().unwrap_or(0);
+            let Some(io) = read_summary(run)?.policy_io else {
+                continue;
+            };
+            faults[0] += io.deadline_misses;
+            faults[1] += io.invalid_actions;
+            faults[2] += io.transport.map_or(0, |t| t.policy_failures);
             if runs.len() == 1 {
-                let l = &io["latency"];
-                latency_us = Some([
-                    l["p50_us"].as_f64().unwrap_or(f64::NAN),
-                    l["p99_us"].as_f64().unwrap_or(f64::NAN),
-                    l["p999_us"].as_f64().unwrap_or(f64::NAN),
-                ]);
+                let l = io.latency;
+                latency_us = Some([l.p50_us, l.p99_us, l.p999_us]);
             }
         }
         results.push(Some(CellResult {
             dir: out,
             episodes: records.len(),
-            complete: records.len() == cell.episodes,
+            complete: records.len() == cell.episodes && summary.complete,
             summary,
             faults,
             latency_us,
@@ -104,10 +100,10 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
     let cell_dirs: Vec<PathBuf> = results.iter().flatten().map(|r| r.dir.clone()).collect();
     let report = args.dir.join("report.html");
-    let runs = crate::report::load_runs(&cell_dirs)?;
+    let runs = thorarena::report::load_runs(&cell_dirs)?;
     let charts = sweep_charts(&plan, &results);
-    let script = crate::report::WebBundle::locate()?.script(crate::report::Page::Report)?;
-    let html = crate::report::sweep_report_html(&runs, &charts, &script);
+    let script = thorarena::report::WebBundle::locate()?.script(thorarena::report::Page::Report)?;
+    let html = thorarena::report::sweep_report_html(&runs, &charts, &script);
     std::fs::write(&report, html).with_context(|| format!("writing {}", report.display()))?;
     eprintln!(
         "collected {} cells{}: {} and {}",
@@ -166,12 +162,10 @@ pub(super) fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String
             .map_or(String::new(), |x| x.to_string())
     };
     for (cell, r) in plan.cells.iter().zip(results) {
-        let setting = crate::runner::Setting::parse(&cell.setting);
+        let setting = thorarena::runner::Setting::parse(&cell.setting);
         let avg = r.as_ref().and_then(|r| {
-            r.summary["settings"]
-                .as_object()
-                .and_then(|m| m.values().next())
-                .map(|s| s["average"].clone())
+            let s = r.summary.settings.values().next()?;
+            serde_json::to_value(&s.average).ok()
         });
         let d = |key: &str| num(avg.as_ref().and_then(|a| a[key].as_f64()));
         let row = vec![
@@ -230,16 +224,16 @@ pub(super) fn budget_ms(budget: &str) -> Option<f64> {
 pub(super) fn sweep_charts(
     plan: &Plan,
     results: &[Option<CellResult>],
-) -> Vec<crate::report::SweepChart> {
-    use crate::report::{CurveSeries, SweepChart};
+) -> Vec<thorarena::report::SweepChart> {
     use std::collections::BTreeSet;
-    let varies = |f: &dyn Fn(&crate::sweep::Cell) -> String| {
+    use thorarena::report::{CurveSeries, SweepChart};
+    let varies = |f: &dyn Fn(&thorarena::sweep::Cell) -> String| {
         plan.cells.iter().map(f).collect::<BTreeSet<_>>().len() > 1
     };
     let many_datasets = varies(&|c| c.dataset.display().to_string());
     let many_latency = varies(&|c| c.latency.name.clone());
     let many_settings = varies(&|c| c.setting.clone());
-    let label = |c: &crate::sweep::Cell, with_latency: bool, with_setting: bool| {
+    let label = |c: &thorarena::sweep::Cell, with_latency: bool, with_setting: bool| {
         let mut l = c.policy.name.clone();
         if many_datasets {
             l += &format!(
@@ -258,21 +252,21 @@ pub(super) fn sweep_charts(
         l
     };
     // (cell, fats, survival) of every cell with results.
-    let points: Vec<(&crate::sweep::Cell, f64, f64)> = plan
+    let points: Vec<(&thorarena::sweep::Cell, f64, f64)> = plan
         .cells
         .iter()
         .zip(results)
         .filter_map(|(c, r)| {
-            let avg = r.as_ref()?.summary["settings"]
-                .as_object()?
-                .values()
-                .next()?["average"]
-                .clone();
-            Some((c, avg["fats"].as_f64()?, avg["survival"].as_f64()?))
+            let avg = &r.as_ref()?.summary.settings.values().next()?.average;
+            (avg.fats.is_finite() && avg.survival.is_finite()).then_some((
+                c,
+                avg.fats,
+                avg.survival,
+            ))
         })
         .collect();
     // Lines of (label → sorted points) for the cells `x` maps to a value.
-    let lines = |x: &dyn Fn(&crate::sweep::Cell) -> Option<f64>,
+    let lines = |x: &dyn Fn(&thorarena::sweep::Cell) -> Option<f64>,
                  y: &dyn Fn(f64, f64) -> f64,
                  with_latency: bool,
                  with_setting: bool| {
@@ -296,18 +290,18 @@ pub(super) fn sweep_charts(
             .collect();
         (xs.len() >= 2).then_some(series)
     };
-    let setting = |c: &crate::sweep::Cell| crate::runner::Setting::parse(&c.setting);
-    let coefficient = |c: &crate::sweep::Cell| {
+    let setting = |c: &thorarena::sweep::Cell| thorarena::runner::Setting::parse(&c.setting);
+    let coefficient = |c: &thorarena::sweep::Cell| {
         setting(c)
             .filter(|s| s.push_n == 0.0)
             .map(|s| s.coefficient)
     };
-    let push = |c: &crate::sweep::Cell| {
+    let push = |c: &thorarena::sweep::Cell| {
         setting(c)
             .filter(|s| s.coefficient == 0.0)
             .map(|s| s.push_n)
     };
-    let budget = |c: &crate::sweep::Cell| {
+    let budget = |c: &thorarena::sweep::Cell| {
         (c.latency.mode == "measured")
             .then(|| budget_ms(&c.latency.budget))
             .flatten()

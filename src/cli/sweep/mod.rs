@@ -10,12 +10,6 @@
 //! and inherited by its eval process, keeps two copies of one task from running at once.
 
 use super::merge::read_shards;
-use super::run_output::{sort_records, write_header, write_results};
-use crate::motion::Dataset;
-use crate::sweep::{
-    compact_ranges, diff_plans, task_state, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec,
-    Task, TaskState, PLAN_FILE,
-};
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::collections::{BTreeMap, VecDeque};
@@ -26,6 +20,14 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+use thorarena::motion::Dataset;
+use thorarena::results::{
+    read_summary, sort_records, write_header, write_record, write_results, Summary,
+};
+use thorarena::sweep::{
+    compact_ranges, diff_plans, task_state, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec,
+    Task, TaskState, PLAN_FILE,
+};
 
 /// `thorarena sweep …`
 #[derive(Debug, clap::Subcommand)]

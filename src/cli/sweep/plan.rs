@@ -81,7 +81,7 @@ pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
         let cell = &plan.cells[task.cell];
         let args = eval_cli(task, "plan-check")
             .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
-        if crate::runner::Setting::parse(&cell.setting).is_none() {
+        if thorarena::runner::Setting::parse(&cell.setting).is_none() {
             bail!(
                 "cell {}: setting `{}` is not force, no-force, a number or push:<N>",
                 cell.index,

@@ -137,8 +137,8 @@ pub(super) fn run_task(
     }
     // Complete and on disk before it counts as done.
     let episodes_path = run_dir.join("episodes.jsonl");
-    let (records, _) = crate::runner::read_records(&episodes_path)
-        .with_context(|| format!("reading {}", episodes_path.display()))?;
+    let header = thorarena::results::read_header(&run_dir)?;
+    let records = thorarena::results::EpisodeLog::read(&episodes_path, &header)?.records;
     if records.len() != task.episodes {
         return fail(
             format!(

@@ -1,0 +1,157 @@
+//! `run.json`: what a run measured.
+
+use super::{ResultsError, HEADER_FILE, RESULTS_VERSION};
+use crate::episode::{reference_steps, TerminationRule};
+use crate::motion::{Reference, Sequence};
+use crate::runner::{PolicyIoRules, Setting};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// One sequence the run plans to evaluate under every setting, with the control steps of
+/// its reference: the length every episode record of it must declare.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PlannedSequence {
+    /// Task.
+    pub task: String,
+    /// Sequence id.
+    pub sequence_id: String,
+    /// Control steps of the reference (`T_ref`).
+    pub steps_ref: usize,
+}
+
+impl PlannedSequence {
+    /// The plan of `sequences` at control step `control_dt_s`, in dataset order.
+    pub fn plan(sequences: &[Sequence], control_dt_s: f64) -> Vec<Self> {
+        sequences
+            .iter()
+            .map(|seq| Self {
+                task: seq.task.clone(),
+                sequence_id: seq.sequence_id.clone(),
+                steps_ref: reference_steps(Reference::new(seq).duration_s(), control_dt_s),
+            })
+            .collect()
+    }
+}
+
+/// What identifies a run; runs may be merged or resumed only if these agree.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunHeader {
+    /// [`RESULTS_VERSION`] of the writer.
+    pub results_version: u32,
+    /// ThorArena version.
+    pub version: String,
+    /// Policy name.
+    pub policy: String,
+    /// Profile name.
+    pub profile: String,
+    /// The profile's control step (the clock of the metrics and regime thresholds), s.
+    pub control_dt_s: f64,
+    /// Dataset directory as given.
+    pub dataset: String,
+    /// Dataset content hash.
+    pub dataset_sha256: String,
+    /// Keypoint set.
+    pub keypoints: String,
+    /// Termination rule.
+    pub termination: TerminationRule,
+    /// Settings, in schedule order.
+    pub settings: Vec<Setting>,
+    /// The dataset's sequences, in dataset order (the schedule runs each under every
+    /// setting).
+    pub sequences: Vec<PlannedSequence>,
+    /// `(i, n)` when this run is shard i of n.
+    pub shard: Option<(usize, usize)>,
+    /// Rules of the policy's answers (miss rule, latency mode, budget).
+    #[serde(default)]
+    pub io: PolicyIoRules,
+}
+
+impl RunHeader {
+    /// The episodes this run (or shard) plans, as (sequence index, setting index), in
+    /// schedule order.
+    pub fn planned_jobs(&self) -> Vec<(usize, usize)> {
+        crate::runner::schedule(self.sequences.len(), self.settings.len(), self.shard)
+    }
+
+    /// The fields in which `other` differs from this header, by name (`version`,
+    /// `policy`, `settings`, …): what a refused resume or merge reports.
+    pub fn differences(&self, other: &Self) -> Vec<&'static str> {
+        let mut d = Vec::new();
+        let mut check = |name, same: bool| {
+            if !same {
+                d.push(name);
+            }
+        };
+        check(
+            "results_version",
+            self.results_version == other.results_version,
+        );
+        check("version", self.version == other.version);
+        check("policy", self.policy == other.policy);
+        check("profile", self.profile == other.profile);
+        check("control_dt_s", self.control_dt_s == other.control_dt_s);
+        check("dataset", self.dataset == other.dataset);
+        check(
+            "dataset_sha256",
+            self.dataset_sha256 == other.dataset_sha256,
+        );
+        check("keypoints", self.keypoints == other.keypoints);
+        check("termination", self.termination == other.termination);
+        check("settings", self.settings == other.settings);
+        check("sequences", self.sequences == other.sequences);
+        check("shard", self.shard == other.shard);
+        check("io", self.io == other.io);
+        d
+    }
+
+    /// Index of a setting by name.
+    pub fn setting_index(&self, name: &str) -> Option<usize> {
+        self.settings.iter().position(|s| s.name == name)
+    }
+
+    /// Index of a planned sequence.
+    pub fn sequence_index(&self, task: &str, sequence_id: &str) -> Option<usize> {
+        self.sequences
+            .iter()
+            .position(|s| s.task == task && s.sequence_id == sequence_id)
+    }
+}
+
+/// Parses a results file whose top level carries `results_version`, refusing another
+/// version before reading the rest (whose meaning may have changed).
+pub(super) fn parse_versioned<T: serde::de::DeserializeOwned>(
+    path: &Path,
+    text: &str,
+) -> Result<T, ResultsError> {
+    let json = |source| ResultsError::Json {
+        path: path.to_path_buf(),
+        line: None,
+        source,
+    };
+    let value: serde_json::Value = serde_json::from_str(text).map_err(json)?;
+    let found = value
+        .get("results_version")
+        .and_then(serde_json::Value::as_u64)
+        .unwrap_or(0);
+    if found != u64::from(RESULTS_VERSION) {
+        return Err(ResultsError::Version {
+            path: path.to_path_buf(),
+            found,
+        });
+    }
+    serde_json::from_value(value).map_err(json)
+}
+
+/// Reads `<run>/run.json`.
+pub fn read_header(run: &Path) -> Result<RunHeader, ResultsError> {
+    let path = run.join(HEADER_FILE);
+    let text = std::fs::read_to_string(&path).map_err(ResultsError::io(&path))?;
+    parse_versioned(&path, &text)
+}
+
+/// Writes `<run>/run.json`.
+pub fn write_header(run: &Path, header: &RunHeader) -> Result<(), ResultsError> {
+    let path = run.join(HEADER_FILE);
+    let text = serde_json::to_string_pretty(header).expect("a header serializes") + "\n";
+    std::fs::write(&path, text).map_err(ResultsError::io(&path))
+}

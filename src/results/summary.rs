@@ -1,0 +1,203 @@
+//! `summary.json` and `tables.md`: the scores of a run's records, written the same way by
+//! `eval`, `merge` and a sweep's collect, so a merged run is written exactly as a single
+//! one.
+
+use super::header::parse_versioned;
+use super::{Coverage, EpisodeRecord, ResultsError, RunHeader, SUMMARY_FILE, TABLES_FILE};
+use crate::metrics::{aggregate, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary};
+use crate::policy::TransportStats;
+use crate::report::{diagnostics_table, task_fats_table};
+use crate::runner::LatencySummary;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// How the policy answered during a run: latency and faults (not part of the scores,
+/// but part of the results: a deployment engineer reads these first).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PolicyIoReport {
+    /// Per-step latency of the policy (percentiles; the run keeps no samples).
+    pub latency: LatencySummary,
+    /// Transport counters; present only when the policy ran behind the policy server.
+    #[serde(default)]
+    pub transport: Option<TransportStats>,
+    /// Control steps whose actions missed the budget, summed over episodes.
+    #[serde(default)]
+    pub deadline_misses: u64,
+    /// Control steps with unusable actions, summed over episodes.
+    #[serde(default)]
+    pub invalid_actions: u64,
+}
+
+impl PolicyIoReport {
+    fn markdown(&self, header: &RunHeader) -> String {
+        let l = &self.latency;
+        let budget = header
+            .io
+            .budget_s
+            .map_or("none (lock-step)".to_string(), |b| {
+                format!("{:.3} ms", b * 1e3)
+            });
+        let mut s = format!(
+            "## Policy I/O
+
+Per-step latency over {} steps (µs): p50 {:.1}, p90 {:.1}, p99 {:.1}, p99.9 {:.1}, max {:.1}. Budget {budget}, miss rule `{:?}`, latency mode `{:?}`. Deadline misses: {}; invalid actions: {}.",
+            l.count, l.p50_us, l.p90_us, l.p99_us, l.p999_us, l.max_us,
+            header.io.miss_rule, header.io.latency_mode, self.deadline_misses, self.invalid_actions
+        );
+        if let Some(t) = &self.transport {
+            s += &format!(
+                " Late replies: {}; policy failures: {}; reconnections: {}.",
+                t.late_replies, t.policy_failures, t.reconnections
+            );
+        }
+        s + "\n"
+    }
+}
+
+/// One setting's scores.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SettingSummary {
+    /// Per task.
+    pub tasks: Vec<TaskSummary>,
+    /// Averaged over tasks.
+    pub average: Diagnostics,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// [`super::RESULTS_VERSION`] of the writer.
+    pub results_version: u32,
+    /// The run's header.
+    pub header: RunHeader,
+    /// Episodes scored.
+    pub episodes: usize,
+    /// Regime thresholds per task (percentiles of the references' hand forces).
+    pub thresholds: BTreeMap<String, RegimeThresholds>,
+    /// Scores per setting.
+    pub settings: BTreeMap<String, SettingSummary>,
+    /// Episodes present and expected per (setting, task).
+    pub coverage: Coverage,
+    /// Every planned episode is present and none was cut short by a policy failure.
+    pub complete: bool,
+    /// Latency and faults of the policy, when the writer ran the episodes (a merge of
+    /// shards has no single latency histogram).
+    pub policy_io: Option<PolicyIoReport>,
+}
+
+/// Per setting: per-task summaries and the average over tasks.
+pub type SettingResults = BTreeMap<String, (Vec<TaskSummary>, Diagnostics)>;
+
+/// Scores records with the task thresholds (a task without thresholds has every step in
+/// the low-force regime).
+pub fn summarize(
+    records: &[EpisodeRecord],
+    thresholds: &BTreeMap<String, RegimeThresholds>,
+) -> SettingResults {
+    let mut by_setting: BTreeMap<String, Vec<(String, String, EpisodeSeries)>> = BTreeMap::new();
+    for r in records {
+        by_setting.entry(r.setting.clone()).or_default().push((
+            r.task.clone(),
+            r.sequence_id.clone(),
+            r.series.clone(),
+        ));
+    }
+    let th = |task: &str| {
+        thresholds.get(task).copied().unwrap_or(RegimeThresholds {
+            p33_n: 0.0,
+            p66_n: 0.0,
+        })
+    };
+    by_setting
+        .into_iter()
+        .map(|(setting, eps)| {
+            let (_, tasks, overall) = aggregate(&eps, &th);
+            (setting, (tasks, overall))
+        })
+        .collect()
+}
+
+/// Scores the records, writes `summary.json` and `tables.md`, returns the tables. A run
+/// that does not hold its whole plan says so at the top of the tables, cell by cell.
+pub fn write_results(
+    out: &Path,
+    header: &RunHeader,
+    records: &[EpisodeRecord],
+    thresholds: BTreeMap<String, RegimeThresholds>,
+    io: Option<PolicyIoReport>,
+) -> Result<String, ResultsError> {
+    let results = summarize(records, &thresholds);
+    let coverage = Coverage::of(header, records);
+    let shard_note = match header.shard {
+        Some((i, n)) => format!("\n\n**Shard {i}/{n}: partial results; `thorarena merge` the shards for the benchmark.**"),
+        None => String::new(),
+    };
+    let partial_note = match coverage.sentence() {
+        Some(s) => format!("\n\n**Warning — {s}.**\n\n{}", coverage.markdown()),
+        None => String::new(),
+    };
+    let title = format!(
+        "ThorArena {} — policy `{}`, profile `{}`, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{shard_note}{partial_note}",
+        header.version,
+        header.policy,
+        header.profile,
+        header.dataset,
+        &header.dataset_sha256[..header.dataset_sha256.len().min(16)],
+        header.keypoints,
+        header.termination.max_torso_height_error_m,
+        header.termination.max_torso_tilt_error_rad
+    );
+    let mut tables = format!(
+        "{title}\n\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
+        task_fats_table(&results),
+        diagnostics_table(&results)
+    );
+    if let Some(io) = &io {
+        tables += &format!("\n{}", io.markdown(header));
+    }
+    let tables_path = out.join(TABLES_FILE);
+    std::fs::write(&tables_path, &tables).map_err(ResultsError::io(&tables_path))?;
+    let summary = Summary {
+        results_version: super::RESULTS_VERSION,
+        header: header.clone(),
+        episodes: records.len(),
+        thresholds,
+        settings: results
+            .into_iter()
+            .map(|(k, (tasks, average))| (k, SettingSummary { tasks, average }))
+            .collect(),
+        complete: coverage.is_complete(),
+        coverage,
+        policy_io: io,
+    };
+    let path = out.join(SUMMARY_FILE);
+    let text = serde_json::to_string_pretty(&summary).expect("a summary serializes") + "\n";
+    std::fs::write(&path, text).map_err(ResultsError::io(&path))?;
+    Ok(tables)
+}
+
+/// Reads `<run>/summary.json`.
+pub fn read_summary(run: &Path) -> Result<Summary, ResultsError> {
+    let path = run.join(SUMMARY_FILE);
+    let text = std::fs::read_to_string(&path).map_err(ResultsError::io(&path))?;
+    parse_versioned(&path, &text)
+}
+
+/// Records sorted into schedule order (the header's setting order, then dataset order).
+pub fn sort_records(records: &mut [EpisodeRecord], header: &RunHeader) {
+    let rank: std::collections::HashMap<(&str, &str), usize> = header
+        .sequences
+        .iter()
+        .enumerate()
+        .map(|(i, s)| ((s.task.as_str(), s.sequence_id.as_str()), i))
+        .collect();
+    records.sort_by_cached_key(|r| {
+        (
+            header.setting_index(&r.setting).unwrap_or(usize::MAX),
+            rank.get(&(r.task.as_str(), r.sequence_id.as_str()))
+                .copied()
+                .unwrap_or(usize::MAX),
+        )
+    });
+}
