@@ -438,3 +438,36 @@ fn a_second_policy_on_a_busy_session_is_told_at_once() {
         "told after {waited:?}, not at once"
     );
 }
+
+#[test]
+fn a_deeply_nested_pickle_is_an_error_not_a_stack_overflow() {
+    let tmp = tempfile::tempdir().unwrap();
+    // {'fps': [[[…]]]}: 10 000 nested lists in about 20 KB (protocol 2 opcodes).
+    let n = 10_000;
+    let mut p = vec![0x80, 2, b'}', b'X', 3, 0, 0, 0];
+    p.extend(b"fps");
+    p.extend(std::iter::repeat_n(b']', n));
+    p.extend(std::iter::repeat_n(b'a', n - 1));
+    p.extend([b's', b'.']);
+    assert!(p.len() < 21_000);
+    let file = tmp.path().join("deep.pkl");
+    std::fs::write(&file, &p).unwrap();
+    let o = thorarena(
+        tmp.path(),
+        &[
+            "data",
+            "import",
+            "--format",
+            "twist-pkl",
+            file.to_str().unwrap(),
+            "--task",
+            "t",
+            "--out",
+            "ds",
+        ],
+    );
+    let e = failure(&o);
+    assert_eq!(o.status.code(), Some(1), "an error exit, not an abort: {e}");
+    assert!(e.contains("deep.pkl") && e.contains("nest more than 100 levels"), "{e}");
+    assert!(!tmp.path().join("ds").exists(), "nothing written");
+}

@@ -60,6 +60,10 @@ pub fn read_twist_pkl(path: &std::path::Path) -> Result<super::RawMotion, super:
     let options = DeOptions::new()
         .replace_unresolved_globals()
         .keep_restore_state();
+    // Decoding recurses once per level of nesting: bound it first (a hostile 20 KB pickle
+    // of nested lists would otherwise overflow the stack).
+    super::pickle_depth::check_nesting(&bytes, super::pickle_depth::MAX_NESTING)
+        .map_err(|e| format_err(format!("not a motion pickle: {e}")))?;
     let value = serde_pickle::value_from_slice(&bytes, options)
         .map_err(|e| format_err(format!("pickle decoding failed: {e}")))?;
     let Value::Dict(dict) = value else {
