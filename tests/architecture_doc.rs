@@ -40,3 +40,38 @@ fn architecture_module_tables_match_the_source_trees() {
         "ARCHITECTURE.md ipc module table vs ipc/src/lib.rs"
     );
 }
+
+/// The library never prints: its news goes through `log`, and the binary (`src/cli/`,
+/// `src/main.rs`) decides what reaches the terminal.
+#[test]
+fn library_code_never_prints() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut offenders = Vec::new();
+    let mut stack = vec![root.join("src"), root.join("ipc/src")];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                if !path.ends_with("src/cli") {
+                    stack.push(path);
+                }
+                continue;
+            }
+            if path.ends_with("src/main.rs") || path.extension().is_none_or(|e| e != "rs") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).unwrap();
+            // Unit tests (after `#[cfg(test)]`) may print.
+            let code = text.split("#[cfg(test)]").next().unwrap_or("");
+            for (i, line) in code.lines().enumerate() {
+                if ["println!", "eprintln!", "print!(", "eprint!("]
+                    .iter()
+                    .any(|m| line.contains(m) && !line.trim_start().starts_with("//"))
+                {
+                    offenders.push(format!("{}:{}", path.display(), i + 1));
+                }
+            }
+        }
+    }
+    assert!(offenders.is_empty(), "library code prints: {offenders:?}");
+}

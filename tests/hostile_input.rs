@@ -468,6 +468,9 @@ fn a_deeply_nested_pickle_is_an_error_not_a_stack_overflow() {
     );
     let e = failure(&o);
     assert_eq!(o.status.code(), Some(1), "an error exit, not an abort: {e}");
-    assert!(e.contains("deep.pkl") && e.contains("nest more than 100 levels"), "{e}");
+    assert!(
+        e.contains("deep.pkl") && e.contains("nest more than 100 levels"),
+        "{e}"
+    );
     assert!(!tmp.path().join("ds").exists(), "nothing written");
 }

@@ -10,6 +10,7 @@ mod client;
 mod data;
 mod data_synth;
 mod eval;
+mod logging;
 mod merge;
 mod policy_arg;
 mod report_html;
@@ -115,6 +116,7 @@ pub enum BenchCommand {
 /// Parses the command line and runs it.
 pub fn run() -> anyhow::Result<()> {
     let cli = Cli::parse();
+    logging::init();
     match cli.command {
         Command::Robot(RobotCommand::Info(args)) => robot_info::run(&args),
         Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),

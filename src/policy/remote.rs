@@ -141,7 +141,7 @@ impl Policy for RemotePolicy {
             }
             Ok(StepOutcome::PolicyGone) => {
                 self.stats.policy_failures += 1;
-                eprintln!(
+                log::warn!(
                     "policy `{}` is gone (its process died or left the session)",
                     self.name
                 );
@@ -151,7 +151,7 @@ impl Policy for RemotePolicy {
                 // A malformed answer or a transport failure: the policy cannot be trusted
                 // with this session any more.
                 self.stats.policy_failures += 1;
-                eprintln!("policy `{}` failed: {e}", self.name);
+                log::warn!("policy `{}` failed: {e}", self.name);
                 self.session.drop_policy();
                 ActOutcome::Failed
             }
@@ -167,29 +167,31 @@ impl Policy for RemotePolicy {
             return false;
         }
         self.session.drop_policy();
-        eprintln!(
+        log::info!(
             "waiting for a policy to reconnect to session `{}` (it must ask for the same reference offsets {:?})",
             self.config.session.session, self.offsets_s
         );
         loop {
             let info = match self.session.accept(self.config.connect_timeout, |m| {
-                eprintln!("refused a policy: {m}")
+                log::warn!("refused a policy: {m}")
             }) {
                 Ok(info) => info,
                 Err(e) => {
-                    eprintln!("no policy reconnected: {e}");
+                    log::warn!("no policy reconnected: {e}");
                     return false;
                 }
             };
             if info.reference_offsets_s == self.offsets_s {
-                eprintln!("policy `{}` (pid {}) connected", info.name, info.pid);
+                log::info!("policy `{}` (pid {}) connected", info.name, info.pid);
                 self.stats.reconnections += 1;
                 self.name = info.name;
                 return true;
             }
-            eprintln!(
+            log::warn!(
                 "refused policy `{}`: it asks for reference offsets {:?}, the run uses {:?}",
-                info.name, info.reference_offsets_s, self.offsets_s
+                info.name,
+                info.reference_offsets_s,
+                self.offsets_s
             );
             self.session.end();
         }

@@ -231,7 +231,7 @@ impl Policy for Twist2Policy {
                 // A network that fails at run time answers NaN: the runner's miss rule
                 // keeps it away from the physics and counts it.
                 Err(e) => {
-                    eprintln!("twist2: inference failed: {e:#}");
+                    log::warn!("twist2: inference failed: {e:#}");
                     action.fill(f64::NAN);
                 }
             }
