@@ -1,0 +1,400 @@
+//! Property tests of every reader of outside input: the motion importers (TWIST pickle,
+//! BeyondMimic npz, LAFAN CSV, force CSV), the dataset reader (manifest and sequence
+//! files) and the results reader (`run.json`, `episodes.jsonl`, `summary.json`). Each is
+//! fed valid files damaged at random — cut short, bits flipped, bytes inserted or
+//! overwritten, containers nested thousands deep — and must return (an error, or a value)
+//! within seconds: never a panic, never a hang.
+//!
+//! `PROPTEST_CASES` sets the cases per reader (default 800 here: 4 000 in all, run by
+//! CI). A longer run: `PROPTEST_CASES=50000 cargo test --release --test fuzz_inputs`.
+
+use proptest::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::Duration;
+use thorarena::motion::import::force_csv::read_force_csv;
+use thorarena::motion::import::lafan_csv::read_lafan_csv;
+use thorarena::motion::import::npz::read_beyondmimic_npz;
+use thorarena::motion::import::twist_pkl::read_twist_pkl;
+use thorarena::motion::{Dataset, DatasetWriter};
+use thorarena::results::{read_header, read_summary, EpisodeLog};
+
+mod common;
+use common::{g1, sample_sequence};
+
+/// Longest a reader may take on one damaged file.
+const WATCHDOG: Duration = Duration::from_secs(20);
+
+fn config() -> ProptestConfig {
+    let cases = std::env::var("PROPTEST_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(800);
+    ProptestConfig {
+        cases,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    }
+}
+
+/// One damage done to a file; positions are fractions of its length.
+#[derive(Debug, Clone)]
+enum Damage {
+    Truncate(f64),
+    FlipBit(f64, u8),
+    Insert(f64, Vec<u8>),
+    Overwrite(f64, Vec<u8>),
+    /// `count` openings then `count` closings inserted: `[[…]]` in JSON, lists appended
+    /// into lists or tuples of tuples in a pickle.
+    Nest(f64, (&'static [u8], &'static [u8]), usize),
+    /// The whole file made the innermost of `count` nested containers: openings before
+    /// it (after a pickle's PROTO), closings after it (before a pickle's STOP).
+    Wrap((&'static [u8], &'static [u8]), usize),
+}
+
+fn damage() -> impl Strategy<Value = Damage> {
+    // Anywhere, or near the start, where the structure is (a pickle or npz is mostly
+    // array bytes).
+    let at = prop_oneof![0.0..1.0f64, 0.0..0.002f64];
+    prop_oneof![
+        at.clone().prop_map(Damage::Truncate),
+        (at.clone(), 0u8..8).prop_map(|(p, b)| Damage::FlipBit(p, b)),
+        (at.clone(), prop::collection::vec(any::<u8>(), 1..64))
+            .prop_map(|(p, v)| Damage::Insert(p, v)),
+        (at.clone(), prop::collection::vec(any::<u8>(), 1..64))
+            .prop_map(|(p, v)| Damage::Overwrite(p, v)),
+        (
+            at,
+            prop::sample::select(vec![
+                (&b"["[..], &b"]"[..]),
+                (&b"{\"a\":"[..], &b"}"[..]),
+                (&b"]"[..], &b"a"[..]),
+                (&b"(N"[..], &b"t"[..]),
+            ]),
+            1usize..20_000
+        )
+            .prop_map(|(p, u, n)| Damage::Nest(p, u, n)),
+    ]
+}
+
+fn wrap() -> impl Strategy<Value = Damage> {
+    (
+        prop::sample::select(vec![
+            (&b"["[..], &b"]"[..]),
+            (&b"{\"a\":"[..], &b"}"[..]),
+            (&b"]"[..], &b"a"[..]),
+            (&b"("[..], &b"t"[..]),
+        ]),
+        1usize..20_000,
+    )
+        .prop_map(|(u, n)| Damage::Wrap(u, n))
+}
+
+fn damages() -> impl Strategy<Value = Vec<Damage>> {
+    prop_oneof![
+        3 => prop::collection::vec(damage(), 1..4),
+        1 => wrap().prop_map(|w| vec![w]),
+    ]
+}
+
+fn apply(bytes: &[u8], damages: &[Damage]) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    let at = |b: &Vec<u8>, p: f64| ((b.len() as f64) * p) as usize;
+    for d in damages {
+        match d {
+            Damage::Truncate(p) => {
+                let n = at(&b, *p);
+                b.truncate(n);
+            }
+            Damage::FlipBit(p, bit) => {
+                if !b.is_empty() {
+                    let i = at(&b, *p).min(b.len() - 1);
+                    b[i] ^= 1 << bit;
+                }
+            }
+            Damage::Insert(p, v) => {
+                let i = at(&b, *p);
+                b.splice(i..i, v.iter().copied());
+            }
+            Damage::Overwrite(p, v) => {
+                let i = at(&b, *p);
+                let end = (i + v.len()).min(b.len());
+                b.splice(i..end, v.iter().copied());
+            }
+            Damage::Nest(p, (open, close), n) => {
+                let i = at(&b, *p);
+                let mut nest = open.repeat(*n);
+                nest.extend(close.repeat(*n));
+                b.splice(i..i, nest);
+            }
+            Damage::Wrap((open, close), n) => {
+                let start = if b.first() == Some(&0x80) {
+                    2.min(b.len())
+                } else {
+                    0
+                };
+                b.splice(start..start, open.repeat(*n));
+                let end = if b.last() == Some(&b'.') {
+                    b.len() - 1
+                } else {
+                    b.len()
+                };
+                b.splice(end..end, close.repeat(*n));
+            }
+        }
+    }
+    b
+}
+
+/// Runs `read` on another thread and fails if it panics or outlasts [`WATCHDOG`].
+fn returns_in_time(what: &str, read: impl FnOnce() + Send + 'static) {
+    let (tx, rx) = mpsc::channel();
+    let reader = std::thread::Builder::new()
+        .stack_size(8 << 20) // the main thread's size: a recursion bound must hold there
+        .spawn(move || {
+            read();
+            let _ = tx.send(());
+        })
+        .expect("spawn reader");
+    match rx.recv_timeout(WATCHDOG) {
+        Ok(()) => reader.join().expect("reader returned"),
+        Err(mpsc::RecvTimeoutError::Disconnected) => {
+            panic!("{what}: the reader panicked (see above)")
+        }
+        Err(mpsc::RecvTimeoutError::Timeout) => panic!("{what}: no answer in {WATCHDOG:?}"),
+    }
+}
+
+/// Seeds written once per test binary.
+struct Seeds {
+    _dir: tempfile::TempDir,
+    root: PathBuf,
+}
+
+fn seeds() -> &'static Seeds {
+    static SEEDS: std::sync::OnceLock<Seeds> = std::sync::OnceLock::new();
+    SEEDS.get_or_init(|| {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let root = dir.path().to_path_buf();
+        write_seeds(&root);
+        Seeds { _dir: dir, root }
+    })
+}
+
+fn write_seeds(root: &Path) {
+    let robot = g1();
+    // A dataset of two sequences (manifest + safetensors), as `data import` writes it.
+    let ds = root.join("dataset");
+    let mut w = DatasetWriter::create(&ds, &robot).unwrap();
+    for id in ["a", "b"] {
+        w.add(&sample_sequence(&robot, id)).unwrap();
+    }
+    w.finish().unwrap();
+    // A finished run of that dataset.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["eval", "--policy", "hold", "--dataset"])
+        .arg(&ds)
+        .arg("--out")
+        .arg(root.join("run"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // A motion pickle: the real TWIST2 walk when the reference artifacts are here, else
+    // one serde-pickle writes with the same keys.
+    let walk = thorarena::reference_dir().join("twist2/motions/0807_yanjie_walk_001.pkl");
+    let pickle = std::fs::read(&walk).unwrap_or_else(|_| {
+        use serde_pickle::{HashableValue as K, Value as V};
+        let rows = |n: usize, w: usize| {
+            V::List(
+                (0..n)
+                    .map(|k| V::List(vec![V::F64(k as f64 * 0.01); w]))
+                    .collect(),
+            )
+        };
+        let dict = [
+            ("fps", V::F64(30.0)),
+            ("root_pos", rows(20, 3)),
+            ("root_rot", rows(20, 4)),
+            ("dof_pos", rows(20, 29)),
+        ]
+        .into_iter()
+        .map(|(k, v)| (K::String(k.into()), v))
+        .collect();
+        serde_pickle::value_to_vec(&V::Dict(dict), Default::default()).unwrap()
+    });
+    std::fs::write(root.join("motion.pkl"), pickle).unwrap();
+    // A BeyondMimic npz (npyz's writer) and the two CSVs.
+    write_npz(&root.join("motion.npz"));
+    let q0 = robot.default_pose();
+    let lafan: String = (0..20)
+        .map(|k| {
+            let mut row = vec![0.01 * k as f64, 0.0, 0.78, 0.0, 0.0, 0.0, 1.0];
+            row.extend(&q0);
+            row.iter().map(f64::to_string).collect::<Vec<_>>().join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(root.join("motion.csv"), lafan).unwrap();
+    let force: String = std::iter::once("time,fx,fy,fz\n".to_string())
+        .chain((0..50).map(|k| format!("{},{},0.5,-1\n", k as f64 * 0.01, k)))
+        .collect();
+    std::fs::write(root.join("force.csv"), force).unwrap();
+}
+
+fn write_npz(path: &Path) {
+    use npyz::npz::NpzWriter;
+    use npyz::zip::write::FileOptions;
+    use npyz::zip::CompressionMethod;
+    use npyz::WriterBuilder;
+    let (t, b, j) = (10u64, 2u64, 29u64);
+    let mut w = NpzWriter::create(path).unwrap();
+    let members: [(&str, Vec<u64>); 5] = [
+        ("fps", vec![1]),
+        ("joint_pos", vec![t, j]),
+        ("joint_vel", vec![t, j]),
+        ("body_pos_w", vec![t, b, 3]),
+        ("body_quat_w", vec![t, b, 4]),
+    ];
+    for (name, shape) in members {
+        let n: u64 = shape.iter().product();
+        let data: Vec<f64> = if name == "fps" {
+            vec![50.0]
+        } else if name == "body_quat_w" {
+            (0..n).map(|i| if i % 4 == 0 { 1.0 } else { 0.0 }).collect()
+        } else {
+            (0..n).map(|i| i as f64 * 1e-3).collect()
+        };
+        let opts = FileOptions::default().compression_method(CompressionMethod::Stored);
+        let mut a = w
+            .array::<f64>(name, opts)
+            .unwrap()
+            .default_dtype()
+            .shape(&shape)
+            .begin_nd()
+            .unwrap();
+        a.extend(data).unwrap();
+        a.finish().unwrap();
+    }
+    w.zip_writer().finish().unwrap();
+}
+
+/// A copy of seed file `name` with `damages` done, at a fresh path; returns that path.
+fn damaged(name: &str, damages: &[Damage]) -> (tempfile::TempDir, PathBuf) {
+    let bytes = std::fs::read(seeds().root.join(name)).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, apply(&bytes, damages)).unwrap();
+    (dir, path)
+}
+
+/// A copy of the seed directory `name` with one of its files damaged.
+fn damaged_dir(name: &str, file: &str, damages: &[Damage]) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join(name);
+    copy_dir(&seeds().root.join(name), &copy);
+    let bytes = std::fs::read(copy.join(file)).unwrap();
+    std::fs::write(copy.join(file), apply(&bytes, damages)).unwrap();
+    (dir, copy)
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        let dest = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_dir(&p, &dest);
+        } else {
+            std::fs::copy(&p, &dest).unwrap();
+        }
+    }
+}
+
+/// The first sequence file of the seed dataset, relative to it.
+fn first_sequence_file() -> String {
+    let ds = seeds().root.join("dataset");
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(ds.join("manifest.json")).unwrap()).unwrap();
+    manifest["sequences"][0]["file"]
+        .as_str()
+        .unwrap()
+        .to_string()
+}
+
+proptest! {
+    #![proptest_config(config())]
+
+    #[test]
+    fn twist_pickles(d in damages()) {
+        let (_tmp, path) = damaged("motion.pkl", &d);
+        returns_in_time("read_twist_pkl", move || {
+            let _ = read_twist_pkl(&path);
+        });
+    }
+
+    #[test]
+    fn beyondmimic_npz(d in damages()) {
+        let (_tmp, path) = damaged("motion.npz", &d);
+        returns_in_time("read_beyondmimic_npz", move || {
+            let _ = read_beyondmimic_npz(&path, None);
+        });
+    }
+
+    #[test]
+    fn lafan_and_force_csv(d in damages()) {
+        let (_a, motion) = damaged("motion.csv", &d);
+        let (_b, force) = damaged("force.csv", &d);
+        returns_in_time("read_lafan_csv / read_force_csv", move || {
+            let _ = read_lafan_csv(&motion, 30.0);
+            let _ = read_force_csv(&force);
+        });
+    }
+
+    #[test]
+    fn dataset_manifest_and_sequences(d in damages(), manifest in any::<bool>()) {
+        let file = if manifest { "manifest.json".to_string() } else { first_sequence_file() };
+        let (_tmp, ds) = damaged_dir("dataset", &file, &d);
+        returns_in_time("Dataset::open / load_all", move || {
+            if let Ok(dataset) = Dataset::open(&ds, &g1()) {
+                let _ = dataset.load_all();
+            }
+        });
+    }
+
+    #[test]
+    fn results_run_directory(d in damages(), which in 0usize..3) {
+        let file = ["run.json", "episodes.jsonl", "summary.json"][which];
+        let (_tmp, run) = damaged_dir("run", file, &d);
+        returns_in_time("read_header / EpisodeLog::read / read_summary", move || {
+            let _ = read_summary(&run);
+            if let Ok(header) = read_header(&run) {
+                let _ = EpisodeLog::read(&run.join("episodes.jsonl"), &header);
+            }
+        });
+    }
+}
+
+#[test]
+fn the_seeds_are_valid_so_the_damage_is_what_is_tested() {
+    let s = &seeds().root;
+    read_twist_pkl(&s.join("motion.pkl")).unwrap();
+    read_beyondmimic_npz(&s.join("motion.npz"), None).unwrap();
+    read_lafan_csv(&s.join("motion.csv"), 30.0).unwrap();
+    read_force_csv(&s.join("force.csv")).unwrap();
+    Dataset::open(&s.join("dataset"), &g1())
+        .unwrap()
+        .load_all()
+        .unwrap();
+    let header = read_header(&s.join("run")).unwrap();
+    assert_eq!(
+        EpisodeLog::read(&s.join("run/episodes.jsonl"), &header)
+            .unwrap()
+            .records
+            .len(),
+        4
+    );
+    read_summary(&s.join("run")).unwrap();
+}
