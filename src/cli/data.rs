@@ -4,7 +4,7 @@ use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use thorarena::metrics::percentile;
 use thorarena::motion::import::canonical::{to_sequence, ImportOptions};
-use thorarena::motion::import::{force_csv, lafan_csv, npz, twist_pkl, RawMotion};
+use thorarena::motion::import::{force_csv, lafan_csv, npz, onnx_motion, twist_pkl, RawMotion};
 use thorarena::motion::{
     ground_check, scan_root_glitches, shift_root_height, Dataset, DatasetWriter, GlitchScan,
     Sequence, MAX_HUMAN_ROOT_SPEED_M_PER_S,
@@ -56,6 +56,9 @@ pub enum Format {
     BeyondmimicNpz,
     /// Unitree's retargeted LAFAN1 CSV (no header, 36 columns, xyzw).
     LafanCsv,
+    /// The reference motion embedded in a BeyondMimic-style tracking network (holosoma's
+    /// exports), read by evaluating its motion outputs at every time step; no forces.
+    OnnxMotion,
 }
 
 /// Arguments of `data import`.
@@ -88,6 +91,11 @@ pub struct ImportArgs {
     /// Frame rate of CSV motions, Hz.
     #[arg(long, default_value_t = 30.0)]
     pub fps: f64,
+    /// onnx-motion: the profile (a name under data/profiles or a .toml path) the network runs under (its control rate is the motion's
+    /// frame rate; its `[beyondmimic]` anchor body is the body whose pose the network
+    /// outputs).
+    #[arg(long, default_value = "holosoma-wbt")]
+    pub profile: String,
     /// Joint names of npz columns, comma separated (default: the IsaacLab G1 order).
     #[arg(long, value_delimiter = ',')]
     pub joint_names: Option<Vec<String>>,
@@ -148,11 +156,29 @@ pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
     }
 }
 
-fn read_raw(format: Format, path: &Path, args: &ImportArgs) -> anyhow::Result<RawMotion> {
+fn read_raw(
+    format: Format,
+    path: &Path,
+    args: &ImportArgs,
+    robot: &thorarena::robot::RobotModel,
+) -> anyhow::Result<RawMotion> {
     Ok(match format {
         Format::TwistPkl => twist_pkl::read_twist_pkl(path)?,
         Format::BeyondmimicNpz => npz::read_beyondmimic_npz(path, args.joint_names.as_deref())?,
         Format::LafanCsv => lafan_csv::read_lafan_csv(path, args.fps)?,
+        Format::OnnxMotion => {
+            let profile_path = if args.profile.ends_with(".toml") {
+                std::path::PathBuf::from(&args.profile)
+            } else {
+                thorarena::profile::bundled_profile_path(&args.profile)
+            };
+            let profile = thorarena::profile::load_profile(&profile_path, robot)?;
+            let body = profile
+                .beyondmimic
+                .as_ref()
+                .map_or("torso_link", |b| b.anchor_body.as_str());
+            onnx_motion::read_onnx_motion(path, robot, body, profile.control_dt_s)?
+        }
     })
 }
 
@@ -202,7 +228,7 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
             .and_then(|s| s.to_str())
             .with_context(|| format!("{}: no file name", input.display()))?;
         eprintln!("{}:", input.display());
-        let raw = read_raw(args.format, input, args)?;
+        let raw = read_raw(args.format, input, args, &robot)?;
         let opts = ImportOptions {
             task: args.task.clone(),
             sequence_id: stem.to_string(),

@@ -23,7 +23,9 @@ use thorarena::runner::{run_eval, task_thresholds, EvalPlan, Setting};
 pub struct Args {
     /// Built-in policy: `balance` (reference PD + tilt feedback), `replay` (reference
     /// joints, open loop) or `hold` (default pose); `twist2:<file.onnx>` for the TWIST2
-    /// network in process (with `--profile twist2`); or `ipc:<session>` to serve a session
+    /// network in process (with `--profile twist2`); `beyondmimic:<file.onnx>` for a
+    /// BeyondMimic-style tracking network (mjlab, whole_body_tracking, holosoma; e.g. with
+    /// `--profile holosoma-wbt`); or `ipc:<session>` to serve a session
     /// and evaluate whichever policy process connects to it (Python, C++, Rust clients).
     #[arg(long, default_value = "balance")]
     pub policy: String,

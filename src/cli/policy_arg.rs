@@ -5,8 +5,8 @@ use super::choices::{LatencyModeArg, MissRuleArg};
 use anyhow::{bail, Context};
 use std::time::Duration;
 use thorarena::policy::{
-    BalanceGains, BalancePolicy, HoldPolicy, Policy, RemoteConfig, RemotePolicy, ReplayPolicy,
-    Twist2Policy,
+    BalanceGains, BalancePolicy, BeyondMimicPolicy, HoldPolicy, Policy, RemoteConfig, RemotePolicy,
+    ReplayPolicy, Twist2Policy,
 };
 use thorarena::profile::Profile;
 use thorarena::robot::RobotModel;
@@ -148,8 +148,16 @@ pub fn make_policy(
                     profile.action_offset_rad.clone(),
                 )?));
             }
+            if let Some(path) = other.strip_prefix("beyondmimic:") {
+                let policy = BeyondMimicPolicy::load(
+                    std::path::Path::new(path),
+                    std::sync::Arc::new(robot.clone()),
+                    profile,
+                )?;
+                return Ok(Box::new(policy));
+            }
             let Some(session) = ipc_session(other) else {
-                bail!("unknown policy `{other}` (built-in: hold, replay, balance; twist2:<file.onnx>; or ipc:<session> for a policy process)");
+                bail!("unknown policy `{other}` (built-in: hold, replay, balance; twist2:<file.onnx>; beyondmimic:<file.onnx>; or ipc:<session> for a policy process)");
             };
             Box::new(connect_remote(session, robot, profile, io, envs)?)
         }

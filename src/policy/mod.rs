@@ -2,11 +2,13 @@
 //! and a C++ policy all see the same loop — the built-in baselines, and the remote policy
 //! that speaks `thorarena-ipc` to a policy process.
 
+pub mod beyondmimic;
 mod builtin;
 mod remote;
 pub mod twist2;
 pub mod wire;
 
+pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use remote::{RemoteConfig, RemoteError, RemotePolicy, TransportStats};
 pub use twist2::Twist2Policy;

@@ -64,6 +64,25 @@ struct ProfileFile {
     effort_limit_nm: PerGroup,
     #[serde(default)]
     source: String,
+    #[serde(default)]
+    beyondmimic: Option<BeyondMimicProfile>,
+}
+
+/// `[beyondmimic]`: what a `beyondmimic:` policy is fed when its file does not say
+/// (holosoma's exports carry no observation metadata).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeyondMimicProfile {
+    /// Observation terms in order (names as in `observation_names` metadata).
+    #[serde(default)]
+    pub observation_names: Vec<String>,
+    /// The body whose pose anchors the reference (`torso_link` in every G1 export known).
+    #[serde(default = "torso_link")]
+    pub anchor_body: String,
+}
+
+fn torso_link() -> String {
+    "torso_link".into()
 }
 
 /// A resolved profile: every per-joint quantity in the robot's canonical order.
@@ -92,6 +111,8 @@ pub struct Profile {
     pub gains: PdGains,
     /// Where the numbers come from.
     pub source: String,
+    /// Defaults for `beyondmimic:` policies.
+    pub beyondmimic: Option<BeyondMimicProfile>,
 }
 
 impl Profile {
@@ -228,6 +249,7 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
             effort_limit_nm: resolve("effort_limit_nm", &file.effort_limit_nm, Some(&effort))?,
         },
         source: file.source,
+        beyondmimic: file.beyondmimic,
     })
 }
 

@@ -8,6 +8,7 @@ test (skipped without the `onnx` package or onnxruntime), checks the file path e
 from __future__ import annotations
 
 import importlib.util
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -123,15 +124,28 @@ JOINT_POS, JOINT_VEL, ACTIONS = slice(73, 102), slice(102, 131), slice(131, 160)
 def test_metadata_is_read_as_the_exporter_writes_it() -> None:
     meta = BeyondMimicMetadata.from_onnx(metadata_map(action_scale="0.5"))
     assert meta.joint_names == tuple(ISAACLAB_ORDER)
+    assert meta.default_joint_pos is not None
     np.testing.assert_allclose(meta.default_joint_pos, DEFAULT_POLICY)
     np.testing.assert_array_equal(meta.action_scale, np.full(29, 0.5))
     assert meta.joint_stiffness is not None and meta.joint_stiffness[0] == 14.0
     assert meta.anchor_body_name == "torso_link"
     old_names = "command,motion_ref_pos_b,motion_ref_ori_b,base_lin_vel,base_ang_vel,joint_pos"
     meta = BeyondMimicMetadata.from_onnx(metadata_map(observation_names=old_names))
+    assert meta.observation_names is not None
     assert meta.observation_names[1:3] == ("motion_anchor_pos_b", "motion_anchor_ori_b")
     with pytest.raises(ValueError, match="not a BeyondMimic export"):
-        BeyondMimicMetadata.from_onnx({"joint_names": "a"})
+        BeyondMimicMetadata.from_onnx({"kp": "[1.0]"})
+
+
+def test_holosoma_metadata_json_lists_and_no_layout_keys() -> None:
+    """holosoma writes `dof_names`, `kp`, `kd` as JSON and nothing else the adapter reads:
+    the default pose and scale are then the session's, the terms chosen by width."""
+    names = json.dumps(list(ISAACLAB_ORDER))
+    meta = BeyondMimicMetadata.from_onnx({"dof_names": names, "kp": json.dumps([14.0] * 29)})
+    assert meta.joint_names == tuple(ISAACLAB_ORDER)
+    assert meta.joint_stiffness is not None and meta.joint_stiffness[0] == 14.0
+    assert meta.default_joint_pos is None and meta.action_scale is None
+    assert meta.observation_names is None
 
 
 def test_the_observation_is_160_values_in_the_term_order() -> None:

@@ -35,7 +35,7 @@ REFERENCE = Path(
 )
 ONNX = REFERENCE / "twist2" / "twist2_1017_25k.onnx"
 FIXTURE = HERE / "fixtures" / "twist2_dump.json"
-CHECK_TOOL = PACKAGE / "examples" / "twist2" / "check_against_dump.py"
+CHECK_TOOL = PACKAGE / "examples" / "check_against_dump.py"
 
 DEFAULT = np.array(
     [-0.2, 0, 0, 0.4, -0.2, 0] * 2 + [0, 0, 0] + [0, 0.4, 0, 1.2, 0, 0, 0, 0, -0.4, 0, 1.2, 0, 0, 0]
@@ -405,7 +405,16 @@ def run_check_tool(dump_path: Path, onnx: Path) -> subprocess.CompletedProcess[s
         os.environ, PYTHONPATH=os.pathsep.join([str(PACKAGE), os.environ.get("PYTHONPATH", "")])
     )
     return subprocess.run(
-        [sys.executable, str(CHECK_TOOL), "--dump", str(dump_path), "--onnx", str(onnx)],
+        [
+            sys.executable,
+            str(CHECK_TOOL),
+            "--adapter",
+            "twist2",
+            "--dump",
+            str(dump_path),
+            "--onnx",
+            str(onnx),
+        ],
         capture_output=True,
         text=True,
         env=env,

@@ -6,6 +6,7 @@ pub mod canonical;
 pub mod force_csv;
 pub mod lafan_csv;
 pub mod npz;
+pub mod onnx_motion;
 mod pickle_depth;
 pub mod twist_pkl;
 

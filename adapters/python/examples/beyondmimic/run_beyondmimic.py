@@ -34,7 +34,7 @@ def main() -> int:
 
     adapter = BeyondMimicAdapter.from_onnx(args.onnx, intra_op_threads=args.threads)
     meta = adapter.metadata
-    print(f"observation: {', '.join(meta.observation_names)} ({adapter.obs_dim})", flush=True)
+    print(f"observation: {', '.join(adapter.terms)} ({adapter.obs_dim})", flush=True)
     print(f"anchor body: {meta.anchor_body_name}", flush=True)
     for what, values in (("kp", meta.joint_stiffness), ("kd", meta.joint_damping)):
         if values is not None:

@@ -28,6 +28,13 @@ here; mjlab's port of the same task is):
   `actions` [1, 29] first, then the motion it was trained on (ignored here: the benchmark's
   reference comes over the wire).
 
+holosoma's exports (amazon-far/holosoma, `inference/policies/wbt.py`) carry `dof_names`,
+`kp` and `kd` as JSON lists and no observation, default-pose or scale keys: their
+observation is holosoma's `wbt` layout (154; `config_values/observation.py`, its terms in
+alphabetical order of holosoma's names, see `HOLOSOMA_TERMS`), chosen
+here by the network's input width when the file names no terms, and their default pose and
+action scale are the session's (the `holosoma-wbt` profile's).
+
 The policy's joint order (IsaacLab's breadth-first order, or mjlab's) is mapped to the
 canonical order by name, both ways. Actions: the policy means target = default_joint_pos +
 action_scale · action (its own numbers, in its order); the adapter writes the raw action
@@ -49,6 +56,8 @@ metadata key, when present, may also name `pelvis`.
 
 from __future__ import annotations
 
+import contextlib
+import json
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -75,9 +84,23 @@ DEFAULT_TERMS = (
     "actions",
 )
 """The G1 tracking task's policy observation, in order (160 for 29 joints)."""
+HOLOSOMA_TERMS = (
+    "actions",
+    "base_ang_vel",
+    "joint_pos",
+    "joint_vel",
+    "command",
+    "motion_anchor_ori_b",
+)
+"""holosoma's `wbt` observation (154 for 29 joints): its terms `actions`, `base_ang_vel`,
+`dof_pos`, `dof_vel`, `motion_command`, `motion_ref_ori_b` in alphabetical order of those
+names, as holosoma concatenates every observation group."""
 TERM_ALIASES = {
     "motion_ref_pos_b": "motion_anchor_pos_b",
     "motion_ref_ori_b": "motion_anchor_ori_b",
+    "motion_command": "command",
+    "dof_pos": "joint_pos",
+    "dof_vel": "joint_vel",
 }
 ANCHOR_BODIES = ("torso_link", "pelvis")
 
@@ -97,12 +120,23 @@ def term_sizes(n_joints: int) -> dict[str, int]:
     }
 
 
+def _items(text: str) -> list[str]:
+    """A metadata value as a list: a JSON array (holosoma), else comma-separated text."""
+    try:
+        value = json.loads(text)
+    except ValueError:
+        value = None
+    if isinstance(value, list):
+        return [v if isinstance(v, str) else json.dumps(v) for v in value]
+    return [v.strip() for v in text.split(",") if v.strip()]
+
+
 def _floats(text: str) -> np.ndarray:
-    return np.array([float(v) for v in text.split(",")], dtype=np.float64)
+    return np.array([float(v) for v in _items(text)], dtype=np.float64)
 
 
 def _names(text: str) -> tuple[str, ...]:
-    return tuple(v.strip() for v in text.split(",") if v.strip())
+    return tuple(_items(text))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -111,47 +145,54 @@ class BeyondMimicMetadata:
 
     joint_names: tuple[str, ...]
     """The policy's joint order."""
-    default_joint_pos: np.ndarray
-    """rad, the action offset and the zero of the `joint_pos` term."""
-    action_scale: np.ndarray
-    """rad per unit action."""
+    default_joint_pos: np.ndarray | None = None
+    """rad, the action offset and the zero of the `joint_pos` term (None: the session's)."""
+    action_scale: np.ndarray | None = None
+    """rad per unit action (None: the session's)."""
     joint_stiffness: np.ndarray | None = None
     """kp the policy was trained with, N·m/rad (the simulator's profile sets the real one)."""
     joint_damping: np.ndarray | None = None
     """kd, N·m·s/rad."""
-    observation_names: tuple[str, ...] = DEFAULT_TERMS
-    """Observation terms in order."""
+    observation_names: tuple[str, ...] | None = DEFAULT_TERMS
+    """Observation terms in order (None: the known layout of the network's input width)."""
     anchor_body_name: str = "torso_link"
 
     @classmethod
     def from_onnx(cls, metadata: Mapping[str, str]) -> BeyondMimicMetadata:
-        """Reads the keys `attach_onnx_metadata` writes; `joint_names`, `default_joint_pos`
-        and `action_scale` are required."""
-        missing = [
-            k for k in ("joint_names", "default_joint_pos", "action_scale") if k not in metadata
-        ]
-        if missing:
+        """Reads the keys `attach_onnx_metadata` (mjlab, whole_body_tracking) or holosoma
+        write; the joint order (`joint_names` or `dof_names`) is required."""
+        names_key = next((k for k in ("joint_names", "dof_names") if k in metadata), None)
+        if names_key is None:
             raise ValueError(
-                f"not a BeyondMimic export: metadata lacks {missing} (has {sorted(metadata)})"
+                "not a BeyondMimic export: metadata lacks joint_names / dof_names "
+                f"(has {sorted(metadata)})"
             )
-        names = _names(metadata["joint_names"])
+        names = _names(metadata[names_key])
         n = len(names)
-        scale = _floats(metadata["action_scale"])
-        if len(scale) == 1:
+
+        def optional(*keys: str) -> np.ndarray | None:
+            key = next((k for k in keys if k in metadata), None)
+            return _floats(metadata[key]) if key is not None else None
+
+        scale = optional("action_scale")
+        if scale is not None and len(scale) == 1:
             scale = np.full(n, scale[0])
-
-        def optional(key: str) -> np.ndarray | None:
-            return _floats(metadata[key]) if key in metadata else None
-
-        terms = _names(metadata.get("observation_names", ",".join(DEFAULT_TERMS)))
+        terms = (
+            tuple(TERM_ALIASES.get(t, t) for t in _names(metadata["observation_names"]))
+            if "observation_names" in metadata
+            else None
+        )
+        anchor = metadata.get("anchor_body_name", "torso_link")
+        with contextlib.suppress(ValueError):
+            anchor = str(json.loads(anchor))
         return cls(
             joint_names=names,
-            default_joint_pos=_floats(metadata["default_joint_pos"]),
+            default_joint_pos=optional("default_joint_pos"),
             action_scale=scale,
-            joint_stiffness=optional("joint_stiffness"),
-            joint_damping=optional("joint_damping"),
-            observation_names=tuple(TERM_ALIASES.get(t, t) for t in terms),
-            anchor_body_name=metadata.get("anchor_body_name", "torso_link"),
+            joint_stiffness=optional("joint_stiffness", "kp"),
+            joint_damping=optional("joint_damping", "kd"),
+            observation_names=terms,
+            anchor_body_name=anchor,
         )
 
 
@@ -189,10 +230,9 @@ class BeyondMimicAdapter(Adapter):
         if len(metadata.joint_names) != n:
             raise ValueError(f"the policy has {len(metadata.joint_names)} joints, the G1 has {n}")
         for key in ("default_joint_pos", "action_scale"):
-            if getattr(metadata, key).shape != (n,):
-                raise ValueError(
-                    f"metadata {key} has {len(getattr(metadata, key))} entries, not {n}"
-                )
+            value = getattr(metadata, key)
+            if value is not None and value.shape != (n,):
+                raise ValueError(f"metadata {key} has {len(value)} entries, not {n}")
         if metadata.anchor_body_name not in ANCHOR_BODIES:
             raise ValueError(
                 f"anchor body {metadata.anchor_body_name!r}: the adapter knows {ANCHOR_BODIES}"
@@ -201,10 +241,24 @@ class BeyondMimicAdapter(Adapter):
         self.to_canonical = canonical_indices(metadata.joint_names)
         """Canonical index of each policy joint: `canonical[:, to_canonical]` is in policy order."""
         sizes = term_sizes(n)
-        unknown = [t for t in metadata.observation_names if t not in sizes]
+        terms = metadata.observation_names
+        if terms is None:
+            width = policy.input_dim if policy is not None else None
+            known = {
+                sum(sizes[t] for t in layout): layout for layout in (DEFAULT_TERMS, HOLOSOMA_TERMS)
+            }
+            if width not in known:
+                raise ValueError(
+                    f"no observation_names in the metadata and the input width {width} is none "
+                    f"of the known layouts' ({sorted(known)})"
+                )
+            terms = known[width]
+        unknown = [t for t in terms if t not in sizes]
         if unknown:
             raise ValueError(f"observation terms the adapter cannot build: {unknown}")
-        self.obs_dim = sum(sizes[t] for t in metadata.observation_names)
+        self.terms: tuple[str, ...] = terms
+        """Observation terms in order."""
+        self.obs_dim = sum(sizes[t] for t in terms)
 
     @classmethod
     def from_onnx(
@@ -219,32 +273,44 @@ class BeyondMimicAdapter(Adapter):
         out[..., self.to_canonical] = policy_order
         return out
 
+    def default_joint_pos(self) -> np.ndarray:
+        """The policy's default pose, its order: the metadata's, else the session's offset."""
+        if self.metadata.default_joint_pos is not None:
+            return self.metadata.default_joint_pos
+        return np.asarray(self.action_offset_rad[self.to_canonical], dtype=np.float64)
+
+    def policy_action_scale(self) -> np.ndarray:
+        """The policy's action scale, its order: the metadata's, else the session's."""
+        if self.metadata.action_scale is not None:
+            return self.metadata.action_scale
+        return np.asarray(self.action_scale[self.to_canonical], dtype=np.float64)
+
     def mapping_mismatch(self) -> float:
         """Largest difference, rad, between the target the policy means and the one the
         session's mapping gives the same action, over actions in [-1, 1]: how far the
         session's profile is from the metadata (0 when they agree)."""
-        offset = self.canonical(self.metadata.default_joint_pos)
-        scale = self.canonical(self.metadata.action_scale)
+        offset = self.canonical(self.default_joint_pos())
+        scale = self.canonical(self.policy_action_scale())
         return float(
             np.max(np.abs(offset - self.action_offset_rad) + np.abs(scale - self.action_scale))
         )
 
     def observe(self, records: np.ndarray, slots: np.ndarray) -> np.ndarray:
         p = self.to_canonical
-        meta = self.metadata
+        default = self.default_joint_pos()
         ref = records["reference"][:, 0]
         target = self.action_offset_rad + self.action_scale * records["last_action"]
-        last_action = (target[:, p] - meta.default_joint_pos) / meta.action_scale
+        last_action = (target[:, p] - default) / self.policy_action_scale()
         last_action[records["step"] == 0] = 0.0  # exactly 0, as in training, at a start
         terms = {
             "command": np.concatenate([ref["joint_pos"][:, p], ref["joint_vel"][:, p]], axis=1),
             "base_lin_vel": records["root_lin_vel_b"],
             "base_ang_vel": records["root_ang_vel_b"],
-            "joint_pos": records["q"][:, p] - meta.default_joint_pos,
+            "joint_pos": records["q"][:, p] - default,
             "joint_vel": records["qd"][:, p],
             "actions": last_action,
         }
-        names = meta.observation_names
+        names = self.terms
         if "motion_anchor_pos_b" in names or "motion_anchor_ori_b" in names:
             pos_b, rot_b = self.reference_anchor_in_robot_anchor(records)
             terms["motion_anchor_pos_b"] = pos_b
@@ -269,6 +335,5 @@ class BeyondMimicAdapter(Adapter):
         return pos_b, robot_from_world @ world_from_ref
 
     def actions_from_outputs(self, outputs: np.ndarray, records: np.ndarray) -> np.ndarray:
-        meta = self.metadata
-        target = self.canonical(meta.default_joint_pos + meta.action_scale * outputs)
+        target = self.canonical(self.default_joint_pos() + self.policy_action_scale() * outputs)
         return (target - self.action_offset_rad) / self.action_scale

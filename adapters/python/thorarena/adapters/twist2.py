@@ -31,8 +31,8 @@ and 1 all 10 rows become `single` (training refills it after a reset), later it 
 one and appends `single`; before step 0 it is zeros. The action written is the raw network
 output; the `twist2` profile clips it to ±10 and maps target = default + 0.5 · action.
 
-`src/policy/twist2.rs` builds the same observation in Rust; `examples/twist2/
-check_against_dump.py` compares the two (observation ≤ 1e-5, action ≤ 1e-4).
+`src/policy/twist2.rs` builds the same observation in Rust; `examples/
+check_against_dump.py --adapter twist2` compares the two (observation ≤ 1e-5, action ≤ 1e-4).
 """
 
 from __future__ import annotations

@@ -1,0 +1,259 @@
+//! The BeyondMimic family's observation, block by block, from hand-made states: the 160-
+//! and the 154-term layouts (holosoma's terms sorted by name), the joint order mapped by name (a reversed order moves every
+//! per-joint block), the anchor pose of the reference in the robot's anchor frame (a shift
+//! becomes `motion_anchor_pos_b`, a 90° yaw the two columns of `motion_anchor_ori_b`), base
+//! velocities in the root frame; and a network whose metadata contradicts the profile is
+//! reported.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use thorarena::motion::ReferenceFrame;
+use thorarena::physics::RootState;
+use thorarena::policy::beyondmimic::{
+    build_observation, layout_width, ObservationSpec, Scratch, Term, LAYOUT_154, LAYOUT_160,
+};
+use thorarena::policy::Observation;
+use thorarena::robot::RobotModel;
+
+mod prereq;
+
+fn g1() -> RobotModel {
+    thorarena::robot::load_bundled("g1_29dof").unwrap()
+}
+
+/// Joint j's angle in the hand-made states: 0.01·j rad, the waist (12–14) at zero so that
+/// the torso anchor is the pelvis shifted, not turned.
+fn q(j: f64) -> f64 {
+    if (12.0..=14.0).contains(&j) {
+        0.0
+    } else {
+        0.01 * j
+    }
+}
+
+/// The robot at the origin, yawed by `yaw`, moving +x in the world at 1 m/s and turning
+/// about z at 2 rad/s; joint j at `q(j)`, velocity 0.1·j.
+fn observation(yaw: f64, reference: ReferenceFrame) -> Observation {
+    Observation {
+        env: 0,
+        episode_id: 0,
+        step: 3,
+        time_s: 0.06,
+        root: RootState {
+            world_from_root: Isometry3::from_parts(
+                Translation3::new(0.0, 0.0, 0.79),
+                UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+            ),
+            lin_vel_w: Vector3::new(1.0, 0.0, 0.0),
+            ang_vel_w: Vector3::new(0.0, 0.0, 2.0),
+        },
+        q: (0..29).map(|j| q(j as f64)).collect(),
+        qd: (0..29).map(|j| j as f64 * 0.1).collect(),
+        last_action: vec![0.0; 29],
+        reference: vec![reference],
+    }
+}
+
+/// The reference: root at `(x, y)`, yawed by `yaw`, the same joints as the robot, joint
+/// velocities −j.
+fn reference(x: f64, y: f64, yaw: f64) -> ReferenceFrame {
+    ReferenceFrame {
+        world_from_root: Isometry3::from_parts(
+            Translation3::new(x, y, 0.79),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+        ),
+        root_lin_vel_w: Vector3::zeros(),
+        root_ang_vel_w: Vector3::zeros(),
+        joint_pos: (0..29).map(|j| q(j as f64)).collect(),
+        joint_vel: (0..29).map(|j| -(j as f64)).collect(),
+        force_sensor: [Vector3::zeros(); 2],
+    }
+}
+
+fn spec(robot: &RobotModel, terms: &[Term], reversed: bool) -> ObservationSpec {
+    let to_canonical: Vec<usize> = if reversed {
+        (0..29).rev().collect()
+    } else {
+        (0..29).collect()
+    };
+    ObservationSpec {
+        terms: terms.to_vec(),
+        default_pos: to_canonical.iter().map(|&c| c as f64 * 0.001).collect(),
+        to_canonical,
+        anchor_frame: robot.frame_index("torso_link").unwrap(),
+    }
+}
+
+fn build(robot: &RobotModel, spec: &ObservationSpec, obs: &Observation) -> Vec<f32> {
+    let last: Vec<f64> = (0..29).map(|i| 100.0 + i as f64).collect();
+    let mut out = Vec::new();
+    build_observation(
+        spec,
+        robot,
+        obs,
+        &obs.reference[0],
+        &last,
+        &mut Scratch::default(),
+        &mut out,
+    );
+    out
+}
+
+fn close(a: &[f32], b: &[f64], tol: f64) {
+    assert_eq!(a.len(), b.len());
+    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+        assert!(
+            (f64::from(*x) - y).abs() < tol,
+            "index {i}: {x} vs {y}\n{a:?}\nvs {b:?}"
+        );
+    }
+}
+
+#[test]
+fn the_160_term_layout_has_the_documented_blocks() {
+    let robot = g1();
+    let s = spec(&robot, &LAYOUT_160, false);
+    assert_eq!(layout_width(&LAYOUT_160, 29), 160);
+    // Robot and reference differ by a shift (1, 2) m only: the anchors differ by the same.
+    let x = build(&robot, &s, &observation(0.0, reference(1.0, 2.0, 0.0)));
+    assert_eq!(x.len(), 160);
+    let qs: Vec<f64> = (0..29).map(|j| q(j as f64)).collect();
+    close(&x[..29], &qs, 1e-6); // command: reference joint positions
+    close(
+        &x[29..58],
+        &(0..29).map(|j| -(j as f64)).collect::<Vec<_>>(),
+        1e-6,
+    );
+    close(&x[58..61], &[1.0, 2.0, 0.0], 1e-6); // anchor position
+    close(&x[61..67], &[1.0, 0.0, 0.0, 1.0, 0.0, 0.0], 1e-6); // identity, two columns
+    close(&x[67..70], &[1.0, 0.0, 0.0], 1e-6); // base linear velocity
+    close(&x[70..73], &[0.0, 0.0, 2.0], 1e-6); // base angular velocity
+    let rel: Vec<f64> = (0..29).map(|j| q(j as f64) - j as f64 * 0.001).collect();
+    close(&x[73..102], &rel, 1e-6); // q − default
+    close(
+        &x[102..131],
+        &(0..29).map(|j| j as f64 * 0.1).collect::<Vec<_>>(),
+        1e-6,
+    );
+    close(
+        &x[131..160],
+        &(0..29).map(|i| 100.0 + i as f64).collect::<Vec<_>>(),
+        1e-6,
+    );
+}
+
+#[test]
+fn a_yawed_robot_sees_the_reference_anchor_and_its_velocity_in_its_own_frame() {
+    let robot = g1();
+    let s = spec(&robot, &LAYOUT_160, false);
+    // Robot yawed +90°, reference unyawed and 1 m ahead in world x: in the robot's frame
+    // the reference is 1 m to its right (−y) and turned −90°; its world +x velocity is −y.
+    let x = build(
+        &robot,
+        &s,
+        &observation(std::f64::consts::FRAC_PI_2, reference(1.0, 0.0, 0.0)),
+    );
+    // Exactly: the anchors through the kinematics' own torso offset.
+    let torso = robot.frame_index("torso_link").unwrap();
+    let mut poses = Vec::new();
+    thorarena::robot::forward_kinematics(
+        &robot,
+        &Isometry3::identity(),
+        &(0..29).map(|j| q(j as f64)).collect::<Vec<_>>(),
+        &mut poses,
+    );
+    let t = thorarena::robot::frame_pose(&robot, &poses, torso);
+    let robot_anchor = Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, 0.79),
+        UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+    ) * t;
+    let ref_anchor = Isometry3::translation(1.0, 0.0, 0.79) * t;
+    let rel = robot_anchor.inverse() * ref_anchor;
+    let p = rel.translation.vector;
+    close(&x[58..61], &[p.x, p.y, p.z], 1e-6);
+    let m = rel.rotation.to_rotation_matrix();
+    close(
+        &x[61..67],
+        &[
+            m[(0, 0)],
+            m[(0, 1)],
+            m[(1, 0)],
+            m[(1, 1)],
+            m[(2, 0)],
+            m[(2, 1)],
+        ],
+        1e-6,
+    );
+    // Roughly: the reference 1 m to the right, turned −90° (the torso is 4 mm behind the
+    // pelvis axis).
+    assert!((p.y + 1.0).abs() < 0.05 && p.x.abs() < 0.05, "{p:?}");
+    assert!(m[(1, 0)] < -0.99, "{m:?}");
+    close(&x[67..70], &[0.0, -1.0, 0.0], 1e-6);
+}
+
+#[test]
+fn the_154_term_layout_drops_anchor_position_and_linear_velocity() {
+    let robot = g1();
+    assert_eq!(layout_width(&LAYOUT_154, 29), 154);
+    let full = build(
+        &robot,
+        &spec(&robot, &LAYOUT_160, false),
+        &observation(0.3, reference(0.5, -0.2, 0.1)),
+    );
+    let short = build(
+        &robot,
+        &spec(&robot, &LAYOUT_154, false),
+        &observation(0.3, reference(0.5, -0.2, 0.1)),
+    );
+    assert_eq!(short.len(), 154);
+    // holosoma's order: actions, angular velocity, joint positions, joint velocities,
+    // command, orientation (its names sorted).
+    assert_eq!(short[..29], full[131..160]);
+    assert_eq!(short[29..32], full[70..73]);
+    assert_eq!(short[32..61], full[73..102]);
+    assert_eq!(short[61..90], full[102..131]);
+    assert_eq!(short[90..148], full[..58]);
+    assert_eq!(short[148..154], full[61..67]);
+}
+
+#[test]
+fn the_policy_joint_order_is_mapped_by_name() {
+    let robot = g1();
+    let x = build(
+        &robot,
+        &spec(&robot, &LAYOUT_154, true),
+        &observation(0.0, reference(0.0, 0.0, 0.0)),
+    );
+    // Policy joint i is canonical joint 28 − i in every per-joint block.
+    let rev = |f: &dyn Fn(f64) -> f64| (0..29).rev().map(|j| f(j as f64)).collect::<Vec<f64>>();
+    close(&x[90..119], &rev(&q), 1e-6);
+    close(&x[119..148], &rev(&|j| -j), 1e-6);
+    close(&x[32..61], &rev(&|j| q(j) - j * 0.001), 1e-6);
+    close(&x[61..90], &rev(&|j| j * 0.1), 1e-6);
+}
+
+#[test]
+fn a_network_whose_metadata_contradicts_the_profile_is_reported() {
+    const TEST: &str = "beyondmimic_observation::metadata_contradicts_profile";
+    let onnx = thorarena::reference_dir().join("holosoma/fastsac_g1_29dof_dancing.onnx");
+    if !onnx.is_file() {
+        return prereq::skip(TEST, &format!("{} is absent", onnx.display()));
+    }
+    let robot = std::sync::Arc::new(g1());
+    let path = thorarena::profile::bundled_profile_path("holosoma-wbt");
+    let profile = thorarena::profile::load_profile(&path, &robot).unwrap();
+    let agrees =
+        thorarena::policy::BeyondMimicPolicy::load(&onnx, robot.clone(), &profile).unwrap();
+    assert_eq!(agrees.disagreements(), [] as [String; 0]);
+    assert_eq!(agrees.terms(), LAYOUT_154);
+    // The same network under a profile whose knee gains are doubled.
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    text = text.replace("knee = 99.098428", "knee = 198.196856");
+    let dir = tempfile::tempdir().unwrap();
+    let edited = dir.path().join("edited.toml");
+    std::fs::write(&edited, text).unwrap();
+    let profile = thorarena::profile::load_profile(&edited, &robot).unwrap();
+    let differs = thorarena::policy::BeyondMimicPolicy::load(&onnx, robot, &profile).unwrap();
+    let d = differs.disagreements();
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert!(d[0].starts_with("kp:") && d[0].contains("knee"), "{d:?}");
+}

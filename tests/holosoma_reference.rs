@@ -1,0 +1,321 @@
+//! holosoma's published G1 whole-body tracking policy
+//! (`../shared/reference/holosoma/fastsac_g1_29dof_dancing.onnx`, BeyondMimic-style, 154
+//! inputs, its motion embedded) end to end, with no Python: its motion is imported from the
+//! network (`data import --format onnx-motion`), and `--policy beyondmimic:FILE` with
+//! `--profile holosoma-wbt` tracks all 135 s of it without force — survival 1.0 and a
+//! keypoint error within 10 % of MuJoCo's on holosoma's own model
+//! (`tools/holosoma_mujoco.py`: 49.4 mm RMS). README's table of the two published
+//! policies under constant hand pushes is re-derived here. The Python BeyondMimic adapter
+//! builds the same observation and action step by step. Skipped, saying so, when
+//! `../shared/reference` (or Python's onnxruntime) is absent; never in CI.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+#[path = "common/dump.rs"]
+mod dump;
+mod prereq;
+mod readme;
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+
+/// RMS keypoint error (the default 13 keypoints, re-anchored as `metrics::reanchor`) of
+/// the policy on its whole motion in MuJoCo, holosoma's MJCF at dt 2 ms:
+/// `python3 tools/holosoma_mujoco.py --json` → `keypoint_error_rms_mm`.
+const MUJOCO_KP_RMS_MM: f64 = 49.39;
+
+/// The walks TWIST2 publishes (README's TWIST2 section).
+const WALKS: [&str; 3] = [
+    "0807_yanjie_walk_001",
+    "0807_yanjie_walk_002",
+    "0807_yanjie_walk_003",
+];
+
+const SETTINGS: &str = "no-force,push:10,push:20,push:30";
+
+fn onnx(test: &str) -> Option<PathBuf> {
+    prereq::reference(test, "holosoma/fastsac_g1_29dof_dancing.onnx")
+}
+
+fn run(args: &[&str]) -> String {
+    let out = Command::new(BIN).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "thorarena {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn import_dance(onnx: &Path, out: &Path) {
+    run(&[
+        "data",
+        "import",
+        "--format",
+        "onnx-motion",
+        onnx.to_str().unwrap(),
+        "--task",
+        "dance",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+}
+
+/// Per setting (`no-force`, `push-10`, …): survival and keypoint error (mm) averaged over
+/// tasks, from the run's `summary.json`.
+fn averages(run_dir: &Path) -> Vec<(String, f64, f64)> {
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run_dir.join("summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(s["complete"], true);
+    s["settings"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(k, v)| {
+            let a = &v["average"];
+            (
+                k.clone(),
+                a["survival"].as_f64().unwrap(),
+                a["kp_mm"].as_f64().unwrap(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
+    let Some(onnx) = onnx("holosoma_reference::tracks") else {
+        return;
+    };
+    let reference = thorarena::reference_dir();
+    let dir = tempfile::tempdir().unwrap();
+    let dance = dir.path().join("dance");
+    import_dance(&onnx, &dance);
+    let holosoma_run = dir.path().join("holosoma");
+    run(&[
+        "eval",
+        "--dataset",
+        dance.to_str().unwrap(),
+        "--policy",
+        &format!("beyondmimic:{}", onnx.display()),
+        "--profile",
+        "holosoma-wbt",
+        "--settings",
+        SETTINGS,
+        "--out",
+        holosoma_run.to_str().unwrap(),
+    ]);
+    let holosoma = averages(&holosoma_run);
+    let (_, survival, kp) = &holosoma[0];
+    eprintln!("holosoma without force: survival {survival:.3}, keypoint error {kp:.1} mm (MuJoCo {MUJOCO_KP_RMS_MM} mm)");
+    assert_eq!(*survival, 1.0, "the policy fell on its own motion");
+    assert!(
+        (kp - MUJOCO_KP_RMS_MM).abs() <= 0.1 * MUJOCO_KP_RMS_MM,
+        "keypoint error {kp:.1} mm is not within 10 % of MuJoCo's {MUJOCO_KP_RMS_MM} mm"
+    );
+
+    // TWIST2 on the released walks under the same pushes, same keypoints.
+    let walks = dir.path().join("walks");
+    let mut import = vec!["data", "import", "--format", "twist-pkl"];
+    let files: Vec<String> = WALKS
+        .iter()
+        .map(|w| {
+            reference
+                .join(format!("twist2/motions/{w}.pkl"))
+                .display()
+                .to_string()
+        })
+        .collect();
+    import.extend(files.iter().map(String::as_str));
+    import.extend([
+        "--out",
+        walks.to_str().unwrap(),
+        "--task",
+        "walk",
+        "--ground-correct",
+    ]);
+    run(&import);
+    let twist2_run = dir.path().join("twist2");
+    let twist2_onnx = reference.join("twist2/twist2_1017_25k.onnx");
+    run(&[
+        "eval",
+        "--dataset",
+        walks.to_str().unwrap(),
+        "--policy",
+        &format!("twist2:{}", twist2_onnx.display()),
+        "--profile",
+        "twist2",
+        "--settings",
+        SETTINGS,
+        "--out",
+        twist2_run.to_str().unwrap(),
+    ]);
+    let twist2 = averages(&twist2_run);
+
+    let table = readme::readme_table("published-policies-force");
+    assert_eq!(table.len(), 4);
+    for (row, (t, h)) in table.iter().zip(twist2.iter().zip(&holosoma)) {
+        let measured = [
+            format!("{:.2}", t.1),
+            format!("{:.1}", t.2),
+            format!("{:.2}", h.1),
+            format!("{:.1}", h.2),
+        ];
+        eprintln!(
+            "{}: TWIST2 {:?}, holosoma {:?}",
+            row[0],
+            &measured[..2],
+            &measured[2..]
+        );
+        assert_eq!(
+            row[1..],
+            measured,
+            "README's row `{}` differs from what was measured ({})",
+            row[0],
+            t.0
+        );
+    }
+}
+
+#[test]
+fn the_motion_in_the_network_is_imported_and_a_network_without_one_is_refused() {
+    let Some(onnx) = onnx("holosoma_reference::import") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let dance = dir.path().join("dance");
+    import_dance(&onnx, &dance);
+    let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
+    let ds = thorarena::motion::Dataset::open(&dance, &robot).unwrap();
+    let seq = ds.load(0).unwrap();
+    // 6774 frames (the network's clamp index 6773, + 1) at the policy's 50 Hz.
+    assert_eq!(seq.root_pos.len(), 6774);
+    assert_eq!(seq.fps, 50.0);
+    assert!(!seq.forces_recorded, "no forces are recorded in a network");
+    // The root was derived from the torso pose the network gives: at frame 0 the torso is
+    // at (−0.004, 0, 0.843) m (the network's `ref_pos_xyz`), above a pelvis at ≈ 0.79 m.
+    let torso = robot.frame_index("torso_link").unwrap();
+    let mut poses = Vec::new();
+    let q = seq.joint_pos[0].clone();
+    let [w, x, y, z] = seq.root_quat_wxyz[0];
+    let root = nalgebra::Isometry3::from_parts(
+        nalgebra::Translation3::from(nalgebra::Vector3::from(seq.root_pos[0])),
+        nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z)),
+    );
+    thorarena::robot::forward_kinematics(&robot, &root, &q, &mut poses);
+    let t = thorarena::robot::frame_pose(&robot, &poses, torso)
+        .translation
+        .vector;
+    assert!(
+        (t - nalgebra::Vector3::new(-0.00396729, 0.0, 0.84326434)).norm() < 1e-5,
+        "{t:?}"
+    );
+    assert!(
+        (seq.root_pos[0][2] - 0.79).abs() < 0.02,
+        "{:?}",
+        seq.root_pos[0]
+    );
+
+    // A network without an embedded motion (TWIST2's) is refused plainly.
+    let twist2 = thorarena::reference_dir().join("twist2/twist2_1017_25k.onnx");
+    let out = Command::new(BIN)
+        .args(["data", "import", "--format", "onnx-motion"])
+        .arg(&twist2)
+        .args(["--task", "x", "--out"])
+        .arg(dir.path().join("none"))
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && !e.contains("panicked"), "{e}");
+    assert!(
+        e.contains("no motion outputs") && e.contains("joint_pos"),
+        "{e}"
+    );
+    assert!(!dir.path().join("none/manifest.json").exists());
+}
+
+#[test]
+fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
+    use std::sync::Arc;
+    use thorarena::episode::{Episode, EpisodeSetup, TerminationRule};
+    use thorarena::physics::{PhysicsSettings, RapierPhysics};
+    use thorarena::policy::{BeyondMimicPolicy, Policy};
+    const TEST: &str = "holosoma_reference::python_adapter";
+    let Some(onnx) = onnx(TEST) else {
+        return;
+    };
+    if !prereq::python_modules(
+        TEST,
+        &["onnxruntime", "iceoryx2", "numpy"],
+        "pip install './adapters/python[policies]'",
+    ) {
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let robot = Arc::new(thorarena::robot::load_bundled("g1_29dof").unwrap());
+    let profile = thorarena::profile::load_profile(
+        &thorarena::profile::bundled_profile_path("holosoma-wbt"),
+        &robot,
+    )
+    .unwrap();
+    let mut policy = BeyondMimicPolicy::load(&onnx, robot.clone(), &profile).unwrap();
+    let offsets = policy.reference_offsets_s();
+    let dir = tempfile::tempdir().unwrap();
+    let dance = dir.path().join("dance");
+    import_dance(&onnx, &dance);
+    let seq = thorarena::motion::Dataset::open(&dance, &robot)
+        .unwrap()
+        .load(0)
+        .unwrap();
+    let setup = EpisodeSetup {
+        robot: &robot,
+        profile: &profile,
+        keypoints: robot.keypoint_set("default").unwrap(),
+        termination: TerminationRule::default(),
+        force_coefficient: 0.0,
+        push_n: 0.0,
+        reference_offsets_s: offsets.clone(),
+    };
+    let settings = PhysicsSettings {
+        dt_s: profile.physics_dt_s,
+        ..Default::default()
+    };
+    let mut physics = RapierPhysics::new(robot.clone(), settings, profile.gains.clone());
+    let mut ep = Episode::start(&setup, &seq, &mut physics);
+    let mut steps = Vec::new();
+    let mut actions = vec![vec![0.0; 29]];
+    while !ep.is_done() && steps.len() < 150 {
+        let obs = ep.observation();
+        policy.act(std::slice::from_ref(&obs), &mut actions);
+        steps.push(serde_json::json!({
+            "env": dump::wire_json(&obs, &offsets),
+            "obs": policy.last_inputs()[0],
+            "action": actions[0],
+        }));
+        ep.advance(&mut physics, &actions[0]);
+    }
+    assert_eq!(steps.len(), 150, "the episode ended early");
+    let dump = serde_json::json!({
+        "action_offset_rad": profile.action_offset_rad,
+        "action_scale": profile.action_scale,
+        "steps": steps,
+    });
+    let path = dir.path().join("holosoma-dump.json");
+    std::fs::write(&path, dump.to_string()).unwrap();
+    let out = Command::new("python3")
+        .arg(root.join("adapters/python/examples/check_against_dump.py"))
+        .args(["--adapter", "beyondmimic", "--dump"])
+        .arg(&path)
+        .arg("--onnx")
+        .arg(&onnx)
+        .env("PYTHONPATH", root.join("adapters/python"))
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{report}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "Python and Rust BeyondMimic disagree: {report}"
+    );
+}
