@@ -18,7 +18,7 @@
 //!
 //! Sources: mjlab `src/mjlab/tasks/tracking/mdp/observations.py` (anchor terms as
 //! `subtract_frame_transforms(robot_anchor, reference_anchor)`, `mat[..., :2]`), holosoma
-//! `inference/policies/wbt.py:262-290` (the same terms under the names `motion_command`,
+//! `inference/policies/wbt.py:262-293` (the same terms under the names `motion_command`,
 //! `motion_ref_ori_b`, `dof_pos`, `dof_vel`, concatenated in alphabetical order of those
 //! names). The order of the terms is the file's or the profile's; nothing here sorts. The anchor body's pose comes from forward
 //! kinematics of the robot model, for the robot from its root pose and q, for the reference
