@@ -7,6 +7,7 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 fn main() {
+    mujoco_rpath();
     let root = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let data = root.join("data");
     println!("cargo:rerun-if-changed=data");
@@ -45,5 +46,23 @@ fn collect(dir: &Path, files: &mut Vec<PathBuf>) {
         } else {
             files.push(path);
         }
+    }
+}
+
+/// With the `mujoco` feature, the binaries find `libmujoco.so` at run time where they were
+/// linked against it (`MUJOCO_DYNAMIC_LINK_DIR`, which `mujoco-rs` requires and which must
+/// then also hold `libmujoco.so.3.17.0`, its soname): an rpath, so tests and `cargo run`
+/// need no `LD_LIBRARY_PATH`. A missing variable is `mujoco-rs`'s error, which says what to
+/// set; ours adds how (README, "MuJoCo backend").
+fn mujoco_rpath() {
+    println!("cargo:rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
+    if std::env::var_os("CARGO_FEATURE_MUJOCO").is_none() {
+        return;
+    }
+    match std::env::var("MUJOCO_DYNAMIC_LINK_DIR") {
+        Ok(dir) => println!("cargo:rustc-link-arg=-Wl,-rpath,{dir}"),
+        Err(_) => println!(
+            "cargo:warning=the `mujoco` feature needs MUJOCO_DYNAMIC_LINK_DIR: `eval \"$(tools/mujoco-lib.sh)\"` sets it up from the PyPI wheel mujoco==3.17.0"
+        ),
     }
 }

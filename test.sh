@@ -8,7 +8,10 @@
 #     and the policy client ./adapters/python[policies,test], editable;
 #   - the front end's node packages (web/node_modules: esbuild, playwright-core);
 #   - g++, make and chromium through apt-get, only if missing and only when run as root;
-#     otherwise the tests that need them are counted as skipped and the line says so.
+#     otherwise the tests that need them are counted as skipped and the line says so;
+#   - MuJoCo 3.17.0's library from the PyPI wheel into target/mujoco-3.17.0/
+#     (tools/mujoco-lib.sh), so the tests build with the `mujoco` feature (the MuJoCo
+#     backend); without it they build without, and its tests count as skipped.
 # A test whose prerequisite is missing is counted as skipped here; under CI=true it fails.
 set -uo pipefail
 cd "$(dirname "$0")"
@@ -57,10 +60,19 @@ else
     say "node/npm missing: the bundle check and the browser test count as skipped"
 fi
 
-say "rust tests (cargo test --release --workspace; the first build takes ~15 min on 2 cores)"
+say "MuJoCo 3.17.0 library (tools/mujoco-lib.sh)"
+features=()
+if mujoco_env=$(tools/mujoco-lib.sh); then
+    eval "$mujoco_env"
+    features=(--features thorarena/mujoco)
+else
+    say "no MuJoCo 3.17.0 library: building without the mujoco feature (its tests count as skipped)"
+fi
+
+say "rust tests (cargo test --release --workspace ${features[*]}; the first build takes ~15 min on 2 cores)"
 export THORARENA_SKIP_LOG=$logs/skipped.tsv
 : > "$THORARENA_SKIP_LOG"
-cargo test --release --workspace --no-fail-fast 2>&1 | tee "$logs/cargo-test.log"
+cargo test --release --workspace "${features[@]}" --no-fail-fast 2>&1 | tee "$logs/cargo-test.log"
 rust_rc=${PIPESTATUS[0]}
 
 say "python tests (pytest tools/tests adapters/python/tests)"

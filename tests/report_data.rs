@@ -53,6 +53,8 @@ fn header(policy: &str) -> RunHeader {
         policy: policy.into(),
         profile: "default".into(),
         control_dt_s: 0.02,
+        physics_dt_s: 0.005,
+        engine: thorarena::physics::Engine::Rapier,
         dataset: "data/sample".into(),
         dataset_sha256: "ab".repeat(32),
         keypoints: "default".into(),
@@ -253,7 +255,13 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
     other_profile.profile = "twist2".into();
     let mut shard = header("e");
     shard.shard = Some((0, 2));
+    let mut other_engine = header("f");
+    other_engine.engine = thorarena::physics::Engine::Mujoco {
+        mjcf: "g1.xml".into(),
+    };
+    other_engine.physics_dt_s = 0.001;
     let cases = [
+        (other_engine, WarningKind::Physics),
         (other_data, WarningKind::Dataset),
         (other_rule, WarningKind::Termination),
         (other_profile, WarningKind::Profile),

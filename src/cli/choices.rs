@@ -60,3 +60,12 @@ impl From<ScenarioArg> for Scenario {
         }
     }
 }
+
+/// `eval --engine`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum EngineArg {
+    /// rapier3d multibody on the robot model.
+    Rapier,
+    /// MuJoCo on the MJCF given by --mjcf (a build with the `mujoco` feature).
+    Mujoco,
+}

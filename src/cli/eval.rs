@@ -80,6 +80,17 @@ pub struct RunArgs {
     /// Robot.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
+    /// Physics engine: `rapier` (built in), or `mujoco` (a build with the `mujoco`
+    /// feature) on the MJCF given by --mjcf.
+    #[arg(long, value_enum, default_value = "rapier")]
+    pub engine: super::choices::EngineArg,
+    /// The robot's MJCF for `--engine mujoco`: joints and bodies named as in the robot
+    /// model (e.g. TWIST2's `g1/g1_sim2sim_29dof.xml` of the reference artifacts).
+    #[arg(long)]
+    pub mjcf: Option<PathBuf>,
+    /// Physics step, s, instead of the profile's (a whole fraction of its control step).
+    #[arg(long)]
+    pub physics_dt: Option<f64>,
     /// Policy I/O: slots, latency budget, miss rule, latency mode, session options.
     #[command(flatten)]
     pub io: PolicyIoArgs,
@@ -101,6 +112,7 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
 pub(super) struct EvalContext {
     pub robot: RobotModel,
     pub profile: Profile,
+    pub engine: thorarena::physics::Engine,
     pub dataset: PathBuf,
     pub dataset_sha256: String,
     pub sequences: Vec<Sequence>,
@@ -123,7 +135,41 @@ impl EvalContext {
         } else {
             bundled_profile_path(&args.profile)
         };
-        let profile = load_profile(&profile_path, &robot)?;
+        let mut profile = load_profile(&profile_path, &robot)?;
+        if let Some(dt) = args.physics_dt {
+            let ratio = profile.control_dt_s / dt;
+            if !(dt.is_finite() && dt > 0.0) || (ratio - ratio.round()).abs() > 1e-6 || ratio < 0.5
+            {
+                bail!(
+                    "--physics-dt {dt}: must be > 0 and divide the profile's control step {} s",
+                    profile.control_dt_s
+                );
+            }
+            profile.physics_dt_s = dt;
+            profile.substeps = ratio.round() as usize;
+        }
+        let engine = match (args.engine, &args.mjcf) {
+            (super::choices::EngineArg::Rapier, None) => thorarena::physics::Engine::Rapier,
+            (super::choices::EngineArg::Rapier, Some(_)) => {
+                bail!("--mjcf is for --engine mujoco (rapier simulates the robot model itself)")
+            }
+            (super::choices::EngineArg::Mujoco, Some(mjcf)) => thorarena::physics::Engine::Mujoco {
+                mjcf: mjcf.clone(),
+            },
+            (super::choices::EngineArg::Mujoco, None) => bail!(
+                "--engine mujoco needs --mjcf FILE: the robot's MJCF (e.g. $THORARENA_REFERENCE/g1/g1_sim2sim_29dof.xml); a model generated from the robot is not available yet"
+            ),
+        };
+        // The engine is checked here, once, so that the run's workers cannot fail to make it.
+        thorarena::physics::make_physics(
+            &engine,
+            std::sync::Arc::new(robot.clone()),
+            thorarena::physics::PhysicsSettings {
+                dt_s: profile.physics_dt_s,
+                ..Default::default()
+            },
+            profile.gains.clone(),
+        )?;
         if robot.keypoint_set(&args.keypoints).is_none() {
             bail!(
                 "unknown keypoint set `{}` for robot {}",
@@ -189,6 +235,7 @@ impl EvalContext {
             dataset_sha256: ds.content_hash(),
             robot,
             profile,
+            engine,
             dataset,
             sequences,
             settings,
@@ -262,6 +309,8 @@ pub(super) fn evaluate(
         policy: policy.name().to_string(),
         profile: ctx.profile.name.clone(),
         control_dt_s: ctx.profile.control_dt_s,
+        physics_dt_s: ctx.profile.physics_dt_s,
+        engine: ctx.engine.clone(),
         dataset: ctx.dataset.display().to_string(),
         dataset_sha256: ctx.dataset_sha256.clone(),
         keypoints: args.keypoints.clone(),
@@ -342,6 +391,7 @@ pub(super) fn evaluate(
         envs: ctx.envs,
         io: header.io,
         trace: args.trace.clone(),
+        engine: ctx.engine.clone(),
     };
     let traces_dir = out.join("traces");
     if !args.trace.is_empty() {

@@ -4,12 +4,18 @@
 //! Everything engine-specific stays behind the trait, so episodes, force replay and
 //! metrics never see rapier types, and another backend can run the same conformance tests.
 
+mod engine;
 mod gains;
+#[cfg(feature = "mujoco")]
+mod mujoco;
 mod rapier;
 mod settings;
 mod state;
 
+pub use engine::{make_physics, Engine, EngineError};
 pub use gains::{armature_derived_gains, legged_gym_gains, standing_gains};
+#[cfg(feature = "mujoco")]
+pub use mujoco::{MujocoError, MujocoPhysics, MUJOCO_VERSION};
 pub use rapier::{standing_default_pose, RapierPhysics};
 pub use settings::{ContactMode, PdForm, PhysicsSettings};
 pub use state::{ExternalForce, PdGains, PhysicsState, ResetState, RootState};

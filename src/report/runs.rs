@@ -201,6 +201,8 @@ pub enum WarningKind {
     Dataset,
     /// Different dynamics profile (gains, control rate, delay).
     Profile,
+    /// Different physics engine, robot model (MJCF) or physics step.
+    Physics,
     /// Different termination rule: survival means something else.
     Termination,
     /// Different keypoint set: the tracking error measures other points.
@@ -266,6 +268,17 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
         format!(
             "`{}` (control step {} s)",
             r.header.profile, r.header.control_dt_s
+        )
+    });
+    flag(WarningKind::Physics, "Physics engines or steps", &|r| {
+        let model = match &r.header.engine {
+            crate::physics::Engine::Rapier => String::new(),
+            crate::physics::Engine::Mujoco { mjcf } => format!(" on {}", mjcf.display()),
+        };
+        format!(
+            "{}{model} at {} ms",
+            r.header.engine.name(),
+            r.header.physics_dt_s * 1e3
         )
     });
     flag(WarningKind::Termination, "Termination rules", &|r| {

@@ -46,6 +46,10 @@ pub struct RunHeader {
     pub profile: String,
     /// The profile's control step (the clock of the metrics and regime thresholds), s.
     pub control_dt_s: f64,
+    /// The physics step, s (the profile's, or `--physics-dt`).
+    pub physics_dt_s: f64,
+    /// The physics engine and its model of the robot.
+    pub engine: crate::physics::Engine,
     /// Dataset directory as given.
     pub dataset: String,
     /// Dataset content hash.
@@ -90,6 +94,8 @@ impl RunHeader {
         check("policy", self.policy == other.policy);
         check("profile", self.profile == other.profile);
         check("control_dt_s", self.control_dt_s == other.control_dt_s);
+        check("physics_dt_s", self.physics_dt_s == other.physics_dt_s);
+        check("engine", self.engine == other.engine);
         check("dataset", self.dataset == other.dataset);
         check(
             "dataset_sha256",

@@ -12,7 +12,7 @@ use super::latency::LatencyRecorder;
 use super::{EvalPlan, LatencySummary};
 use crate::episode::{Episode, EpisodeSetup, PolicyFault, Termination, TraceStep};
 use crate::motion::Sequence;
-use crate::physics::{PhysicsSettings, RapierPhysics};
+use crate::physics::{make_physics, Physics, PhysicsSettings};
 use crate::policy::{ActOutcome, LatencyMode, MissRule, Observation, Policy, TransportStats};
 use crate::results::EpisodeRecord;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -268,9 +268,17 @@ fn worker(
         dt_s: plan.profile.physics_dt_s,
         ..Default::default()
     };
-    let mut physics: Vec<RapierPhysics> = slots
+    let mut physics: Vec<Box<dyn Physics + Send>> = slots
         .iter()
-        .map(|_| RapierPhysics::new(robot.clone(), settings.clone(), plan.profile.gains.clone()))
+        .map(|_| {
+            make_physics(
+                &plan.engine,
+                robot.clone(),
+                settings.clone(),
+                plan.profile.gains.clone(),
+            )
+            .expect("the engine was checked before the run (EvalPlan::engine)")
+        })
         .collect();
     let mut running: Vec<Option<(usize, Episode)>> = slots.iter().map(|_| None).collect();
     while let Ok(batch) = commands.recv() {
@@ -288,7 +296,7 @@ fn worker(
                         if let Some(f) = fault {
                             ep.count_fault(f);
                         }
-                        ep.advance_delayed(&mut physics[k], &action, effect_delay_substeps);
+                        ep.advance_delayed(physics[k].as_mut(), &action, effect_delay_substeps);
                     }
                     SlotCommand::Terminate { why, fault } => {
                         if let Some(f) = fault {
@@ -310,7 +318,7 @@ fn worker(
                     break;
                 };
                 let seq = &shared.sequences[q];
-                let mut ep = Episode::start(&shared.setups[s], seq, &mut physics[k]);
+                let mut ep = Episode::start(&shared.setups[s], seq, physics[k].as_mut());
                 if plan
                     .trace
                     .contains(&format!("{}/{}", seq.task, seq.sequence_id))

@@ -106,6 +106,9 @@ pub struct EvalPlan<'a> {
     pub io: PolicyIoRules,
     /// Record rollout traces of the sequences with these `task/sequence_id` names.
     pub trace: Vec<String>,
+    /// The physics engine (checked by the caller: [`crate::physics::make_physics`] must
+    /// succeed for it before the run).
+    pub engine: crate::physics::Engine,
 }
 
 /// The rules of the policy's answers: the same for every policy of a comparison, so they

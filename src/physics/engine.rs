@@ -1,0 +1,65 @@
+//! Which engine simulates the robot, chosen per run (`eval --engine`), and the one place a
+//! [`Physics`] is made for it.
+
+use super::{PdGains, Physics, PhysicsSettings, RapierPhysics};
+use crate::robot::RobotModel;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// A physics engine and its model of the robot.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(tag = "name", rename_all = "snake_case")]
+pub enum Engine {
+    /// rapier3d multibody on the robot model (the default).
+    #[default]
+    Rapier,
+    /// MuJoCo on an MJCF of the same robot (cargo feature `mujoco`).
+    Mujoco {
+        /// The MJCF, joints and bodies named as in the robot model.
+        mjcf: PathBuf,
+    },
+}
+
+impl Engine {
+    /// `rapier` or `mujoco`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Rapier => "rapier",
+            Self::Mujoco { .. } => "mujoco",
+        }
+    }
+}
+
+/// Why a physics could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum EngineError {
+    /// This build has no MuJoCo.
+    #[error("this thorarena was built without MuJoCo: build it with `--features mujoco` against the libmujoco.so of the PyPI wheel mujoco==3.17.0 (README, \"MuJoCo backend\")")]
+    NotBuilt,
+    /// MuJoCo refused the model.
+    #[cfg(feature = "mujoco")]
+    #[error(transparent)]
+    Mujoco(#[from] super::mujoco::MujocoError),
+}
+
+/// A physics of `engine` for `model`, at rest in the default pose.
+pub fn make_physics(
+    engine: &Engine,
+    model: Arc<RobotModel>,
+    settings: PhysicsSettings,
+    gains: PdGains,
+) -> Result<Box<dyn Physics + Send>, EngineError> {
+    match engine {
+        Engine::Rapier => Ok(Box::new(RapierPhysics::new(model, settings, gains))),
+        #[cfg(feature = "mujoco")]
+        Engine::Mujoco { mjcf } => Ok(Box::new(super::mujoco::MujocoPhysics::from_mjcf(
+            mjcf, model, settings, gains,
+        )?)),
+        #[cfg(not(feature = "mujoco"))]
+        Engine::Mujoco { .. } => {
+            let _ = (model, settings, gains);
+            Err(EngineError::NotBuilt)
+        }
+    }
+}

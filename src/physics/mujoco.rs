@@ -1,0 +1,375 @@
+//! The MuJoCo backend (cargo feature `mujoco`; `mujoco-rs` 7.0.0 bound to MuJoCo 3.17.0):
+//! the same robot behind the same [`Physics`] trait, on an MJCF of the robot — a user's
+//! (`--mjcf`, e.g. TWIST2's `g1_sim2sim_29dof.xml`) with joints and bodies matched to the
+//! robot model by name.
+//!
+//! The benchmark's PD law, as in rapier: `clamp(kp·(q* − q), ±effort)` as an explicit joint
+//! torque (`qfrc_applied`) plus `kd` as joint damping (`dof_damping`, which MuJoCo's Euler
+//! and implicit integrators integrate implicitly; the MJCF's own damping is replaced), or
+//! the whole law explicit ([`PdForm::Explicit`]). The MJCF's actuators stay at zero
+//! control; its contacts, friction, solver, armature and joint friction are its own. Hand
+//! forces go through `xfrc_applied`, moved from the force point to the body's centre of
+//! mass. Applied torques are reported from the law, the same way as rapier's.
+
+use super::settings::{PdForm, PhysicsSettings};
+use super::state::{ExternalForce, PdGains, PhysicsState, ResetState, RootState};
+use super::Physics;
+use crate::robot::RobotModel;
+use mujoco_rs::prelude::*;
+use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The MuJoCo version this build binds ([`mujoco_rs::mujoco_c::mjVERSION_HEADER`]).
+pub const MUJOCO_VERSION: u32 = mujoco_rs::mujoco_c::mjVERSION_HEADER;
+
+/// Why an MJCF cannot simulate the robot.
+#[derive(Debug, thiserror::Error)]
+pub enum MujocoError {
+    /// The MuJoCo library loaded at run time is not the one this build binds.
+    #[error("the MuJoCo library loaded is version {found}, this thorarena was built for {expected} (install the matching wheel: pip install mujoco=={expected_text})", expected_text = version_text(*expected))]
+    Version {
+        /// `mj_version()` of the library.
+        found: i32,
+        /// What the bindings expect.
+        expected: u32,
+    },
+    /// MuJoCo could not load the file.
+    #[error("loading the MJCF {path}: {message}")]
+    Load {
+        /// The MJCF.
+        path: PathBuf,
+        /// MuJoCo's message.
+        message: String,
+    },
+    /// The MJCF does not describe the robot model.
+    #[error("the MJCF {path} does not fit robot `{robot}`: {reason}")]
+    Mismatch {
+        /// The MJCF.
+        path: PathBuf,
+        /// The robot model.
+        robot: String,
+        /// What is missing or different.
+        reason: String,
+    },
+}
+
+fn version_text(v: u32) -> String {
+    format!("{}.{}.{}", v / 1_000_000, (v / 1000) % 1000, v % 1000)
+}
+
+/// Where each of the robot's joints and bodies lives in the MuJoCo model.
+struct Indices {
+    /// Per robot joint: (qpos address, dof address).
+    joints: Vec<(usize, usize)>,
+    /// Per robot body: MuJoCo body id.
+    bodies: Vec<usize>,
+    /// qpos / dof address of the free joint of the root (None: fixed base).
+    free: Option<(usize, usize)>,
+}
+
+/// The robot simulated by MuJoCo.
+pub struct MujocoPhysics {
+    model: Arc<RobotModel>,
+    settings: PhysicsSettings,
+    gains: PdGains,
+    targets: Vec<f64>,
+    external: Vec<ExternalForce>,
+    applied_torque_nm: Vec<f64>,
+    data: MjData<Box<MjModel>>,
+    idx: Indices,
+    mjcf: PathBuf,
+}
+
+// SAFETY: `MjData<Box<MjModel>>` owns both the model and the data, and is `Send` by the
+// bindings' own bound; the rest are plain values.
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<MjData<Box<MjModel>>>();
+};
+
+impl MujocoPhysics {
+    /// Loads `mjcf` for `robot`: every robot joint must be a hinge of the same name, every
+    /// robot body a body of the same name, and the root body must carry a free joint unless
+    /// `settings.fixed_base`. `settings.dt_s` and `settings.gravity` replace the file's.
+    pub fn from_mjcf(
+        mjcf: &Path,
+        model: Arc<RobotModel>,
+        settings: PhysicsSettings,
+        gains: PdGains,
+    ) -> Result<Self, MujocoError> {
+        // SAFETY: a plain C call without arguments.
+        let found = unsafe { mujoco_rs::mujoco_c::mj_version() };
+        if found != MUJOCO_VERSION as i32 {
+            return Err(MujocoError::Version {
+                found,
+                expected: MUJOCO_VERSION,
+            });
+        }
+        let mismatch = |reason: String| MujocoError::Mismatch {
+            path: mjcf.to_path_buf(),
+            robot: model.name.clone(),
+            reason,
+        };
+        let mut mj = MjModel::from_xml(mjcf).map_err(|e| MujocoError::Load {
+            path: mjcf.to_path_buf(),
+            message: format!("{e:?}"),
+        })?;
+        let n = model.n_joints();
+        let mut joints = Vec::with_capacity(n);
+        for j in &model.joints {
+            let id = mj
+                .name_to_id(MjtObjBase::mjOBJ_JOINT, &j.name)
+                .ok_or_else(|| mismatch(format!("no joint `{}`", j.name)))?;
+            joints.push((mj.jnt_qposadr()[id] as usize, mj.jnt_dofadr()[id] as usize));
+        }
+        let mut bodies = Vec::with_capacity(model.bodies.len());
+        for b in &model.bodies {
+            bodies.push(
+                mj.name_to_id(MjtObjBase::mjOBJ_BODY, &b.name)
+                    .ok_or_else(|| mismatch(format!("no body `{}`", b.name)))?,
+            );
+        }
+        let root = bodies[0];
+        let free = if settings.fixed_base {
+            None
+        } else {
+            let jnt = mj.body_jntadr()[root];
+            let is_free = jnt >= 0 && mj.jnt_type()[jnt as usize] == MjtJoint::mjJNT_FREE;
+            if !is_free {
+                return Err(mismatch(format!(
+                    "the root body `{}` has no free joint",
+                    model.bodies[0].name
+                )));
+            }
+            Some((
+                mj.jnt_qposadr()[jnt as usize] as usize,
+                mj.jnt_dofadr()[jnt as usize] as usize,
+            ))
+        };
+        {
+            let opt = mj.opt_mut();
+            opt.timestep = settings.dt_s;
+            opt.gravity = settings.gravity;
+        }
+        let data = MjData::new(Box::new(mj));
+        let mut physics = Self {
+            targets: model.default_pose(),
+            applied_torque_nm: vec![0.0; n],
+            external: Vec::new(),
+            model,
+            settings,
+            gains: gains.clone(),
+            data,
+            idx: Indices {
+                joints,
+                bodies,
+                free,
+            },
+            mjcf: mjcf.to_path_buf(),
+        };
+        physics.set_gains(&gains);
+        let state = super::rapier::standing_default_pose(&physics.model);
+        physics.reset(&state);
+        Ok(physics)
+    }
+
+    /// The MJCF simulated.
+    pub fn mjcf(&self) -> &Path {
+        &self.mjcf
+    }
+
+    fn root_state(&self) -> RootState {
+        let root = self.idx.bodies[0];
+        let pose = body_pose(&self.data, root);
+        match self.idx.free {
+            None => RootState::at_rest(pose),
+            Some((_, dof)) => {
+                let v = self.data.qvel();
+                // A free joint's velocity: linear in the world frame, angular in the body's.
+                let lin = Vector3::new(v[dof], v[dof + 1], v[dof + 2]);
+                let ang_b = Vector3::new(v[dof + 3], v[dof + 4], v[dof + 5]);
+                RootState {
+                    world_from_root: pose,
+                    lin_vel_w: lin,
+                    ang_vel_w: pose.rotation * ang_b,
+                }
+            }
+        }
+    }
+}
+
+fn body_pose(data: &MjData<Box<MjModel>>, body: usize) -> Isometry3<f64> {
+    let p = data.xpos()[body];
+    let q = data.xquat()[body];
+    Isometry3::from_parts(
+        Translation3::new(p[0], p[1], p[2]),
+        UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3])),
+    )
+}
+
+impl Physics for MujocoPhysics {
+    fn model(&self) -> &RobotModel {
+        &self.model
+    }
+
+    fn settings(&self) -> &PhysicsSettings {
+        &self.settings
+    }
+
+    fn reset(&mut self, state: &ResetState) {
+        let n = self.model.n_joints();
+        assert_eq!(state.q.len(), n, "reset q length");
+        assert_eq!(state.qd.len(), n, "reset qd length");
+        // mj_resetData: nothing of the previous episode (warm starts, contacts) survives.
+        self.data.reset();
+        {
+            let qpos = self.data.qpos_mut();
+            for (j, &(adr, _)) in self.idx.joints.iter().enumerate() {
+                qpos[adr] = state.q[j];
+            }
+            if let Some((adr, _)) = self.idx.free {
+                let t = state.root.world_from_root.translation.vector;
+                let r = state.root.world_from_root.rotation;
+                qpos[adr..adr + 7].copy_from_slice(&[t.x, t.y, t.z, r.w, r.i, r.j, r.k]);
+            }
+        }
+        {
+            let qvel = self.data.qvel_mut();
+            for (j, &(_, dof)) in self.idx.joints.iter().enumerate() {
+                qvel[dof] = state.qd[j];
+            }
+            if let Some((_, dof)) = self.idx.free {
+                let v = state.root.lin_vel_w;
+                let w_b = state
+                    .root
+                    .world_from_root
+                    .rotation
+                    .inverse_transform_vector(&state.root.ang_vel_w);
+                qvel[dof..dof + 6].copy_from_slice(&[v.x, v.y, v.z, w_b.x, w_b.y, w_b.z]);
+            }
+        }
+        self.data.forward();
+        self.external.clear();
+        self.applied_torque_nm.fill(0.0);
+    }
+
+    fn set_gains(&mut self, gains: &PdGains) {
+        let n = self.model.n_joints();
+        assert!(gains.kp.len() == n && gains.kd.len() == n && gains.effort_limit_nm.len() == n);
+        self.gains = gains.clone();
+        let hybrid = self.settings.pd_form == PdForm::Hybrid;
+        // SAFETY: only the damping values change, no size or structure of the model, so
+        // the data allocated for it stays valid.
+        let mj = unsafe { self.data.model_mut() };
+        let damping = mj.dof_damping_mut();
+        for (j, &(_, dof)) in self.idx.joints.iter().enumerate() {
+            damping[dof] = if hybrid { gains.kd[j] } else { 0.0 };
+        }
+    }
+
+    fn set_targets(&mut self, q_target: &[f64]) {
+        assert_eq!(q_target.len(), self.targets.len(), "target length");
+        self.targets.copy_from_slice(q_target);
+    }
+
+    fn set_external_force(&mut self, force: ExternalForce) {
+        assert!(force.body < self.model.bodies.len(), "body index");
+        match self
+            .external
+            .iter_mut()
+            .find(|f| f.body == force.body && f.point_b == force.point_b)
+        {
+            Some(f) => *f = force,
+            None => self.external.push(force),
+        }
+    }
+
+    fn clear_external_forces(&mut self) {
+        self.external.clear();
+    }
+
+    fn step(&mut self) {
+        let explicit = self.settings.pd_form == PdForm::Explicit;
+        let (q, qd): (Vec<f64>, Vec<f64>) = {
+            let (qpos, qvel) = (self.data.qpos(), self.data.qvel());
+            self.idx
+                .joints
+                .iter()
+                .map(|&(a, d)| (qpos[a], qvel[d]))
+                .unzip()
+        };
+        {
+            let qfrc = self.data.qfrc_applied_mut();
+            qfrc.fill(0.0);
+            for (j, &(_, dof)) in self.idx.joints.iter().enumerate() {
+                let (kp, kd, limit) = (
+                    self.gains.kp[j],
+                    self.gains.kd[j],
+                    self.gains.effort_limit_nm[j],
+                );
+                let spring = kp * (self.targets[j] - q[j]);
+                let tau = if explicit {
+                    (spring - kd * qd[j]).clamp(-limit, limit)
+                } else {
+                    spring.clamp(-limit, limit)
+                };
+                self.applied_torque_nm[j] = if explicit { tau } else { tau - kd * qd[j] };
+                qfrc[dof] = tau;
+            }
+        }
+        // A force at a point of a body is that force at the body's centre of mass plus the
+        // torque of the offset.
+        let forces: Vec<(usize, [f64; 6])> = self
+            .external
+            .iter()
+            .map(|f| {
+                let body = self.idx.bodies[f.body];
+                let point_w: Point3<f64> = body_pose(&self.data, body) * f.point_b;
+                let c = self.data.xipos()[body];
+                let r = point_w.coords - Vector3::new(c[0], c[1], c[2]);
+                let t = r.cross(&f.force_w);
+                (body, [f.force_w.x, f.force_w.y, f.force_w.z, t.x, t.y, t.z])
+            })
+            .collect();
+        let xfrc = self.data.xfrc_applied_mut();
+        for row in xfrc.iter_mut() {
+            *row = [0.0; 6];
+        }
+        for (body, w) in forces {
+            for k in 0..6 {
+                xfrc[body][k] += w[k];
+            }
+        }
+        self.data.step();
+        // mj_step leaves body poses as they were before its integration: bring them (and
+        // the centres of mass the hand forces act around) up to the new qpos.
+        self.data.kinematics();
+        self.data.com_pos();
+    }
+
+    fn read_state(&self, out: &mut PhysicsState) {
+        out.time_s = self.data.ffi().time;
+        out.root = Some(self.root_state());
+        let (qpos, qvel) = (self.data.qpos(), self.data.qvel());
+        out.q.clear();
+        out.qd.clear();
+        for &(a, d) in &self.idx.joints {
+            out.q.push(qpos[a]);
+            out.qd.push(qvel[d]);
+        }
+        out.world_from_body.clear();
+        for &b in &self.idx.bodies {
+            out.world_from_body.push(body_pose(&self.data, b));
+        }
+        out.applied_torque_nm.clone_from(&self.applied_torque_nm);
+    }
+
+    fn time_s(&self) -> f64 {
+        self.data.ffi().time
+    }
+
+    fn contact_count(&self) -> usize {
+        self.data.ffi().ncon.max(0) as usize
+    }
+}
