@@ -257,7 +257,7 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
     shard.shard = Some((0, 2));
     let mut other_engine = header("f");
     other_engine.engine = thorarena::physics::Engine::Mujoco {
-        mjcf: "g1.xml".into(),
+        mjcf: Some("g1.xml".into()),
     };
     other_engine.physics_dt_s = 0.001;
     let cases = [

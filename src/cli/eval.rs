@@ -84,8 +84,10 @@ pub struct RunArgs {
     /// feature) on the MJCF given by --mjcf.
     #[arg(long, value_enum, default_value = "rapier")]
     pub engine: super::choices::EngineArg,
-    /// The robot's MJCF for `--engine mujoco`: joints and bodies named as in the robot
-    /// model (e.g. TWIST2's `g1/g1_sim2sim_29dof.xml` of the reference artifacts).
+    /// A user's MJCF of the robot for `--engine mujoco`, joints and bodies named as in the
+    /// robot model (e.g. TWIST2's `g1/g1_sim2sim_29dof.xml` of the reference artifacts);
+    /// without it, MuJoCo simulates an MJCF generated from the robot model
+    /// (`thorarena robot mjcf` prints it).
     #[arg(long)]
     pub mjcf: Option<PathBuf>,
     /// Physics step, s, instead of the profile's (a whole fraction of its control step).
@@ -153,12 +155,9 @@ impl EvalContext {
             (super::choices::EngineArg::Rapier, Some(_)) => {
                 bail!("--mjcf is for --engine mujoco (rapier simulates the robot model itself)")
             }
-            (super::choices::EngineArg::Mujoco, Some(mjcf)) => thorarena::physics::Engine::Mujoco {
-                mjcf: mjcf.clone(),
-            },
-            (super::choices::EngineArg::Mujoco, None) => bail!(
-                "--engine mujoco needs --mjcf FILE: the robot's MJCF (e.g. $THORARENA_REFERENCE/g1/g1_sim2sim_29dof.xml); a model generated from the robot is not available yet"
-            ),
+            (super::choices::EngineArg::Mujoco, mjcf) => {
+                thorarena::physics::Engine::Mujoco { mjcf: mjcf.clone() }
+            }
         };
         // The engine is checked here, once, so that the run's workers cannot fail to make it.
         thorarena::physics::make_physics(

@@ -86,6 +86,8 @@ pub enum Command {
 pub enum RobotCommand {
     /// Print joints (order, limits, effort, armature), bodies with masses, keypoints, hands.
     Info(robot_info::Args),
+    /// Print the robot as an MJCF: what `eval --engine mujoco` simulates without --mjcf.
+    Mjcf(robot_info::MjcfArgs),
 }
 
 /// `thorarena sim …`
@@ -119,6 +121,7 @@ pub fn run() -> anyhow::Result<()> {
     logging::init();
     match cli.command {
         Command::Robot(RobotCommand::Info(args)) => robot_info::run(&args),
+        Command::Robot(RobotCommand::Mjcf(args)) => robot_info::mjcf(&args),
         Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),

@@ -14,10 +14,11 @@ pub enum Engine {
     /// rapier3d multibody on the robot model (the default).
     #[default]
     Rapier,
-    /// MuJoCo on an MJCF of the same robot (cargo feature `mujoco`).
+    /// MuJoCo (cargo feature `mujoco`) on an MJCF of the same robot.
     Mujoco {
-        /// The MJCF, joints and bodies named as in the robot model.
-        mjcf: PathBuf,
+        /// A user's MJCF, joints and bodies named as in the robot model; `None`: the one
+        /// generated from the robot model ([`super::mjcf_of`]).
+        mjcf: Option<PathBuf>,
     },
 }
 
@@ -53,8 +54,11 @@ pub fn make_physics(
     match engine {
         Engine::Rapier => Ok(Box::new(RapierPhysics::new(model, settings, gains))),
         #[cfg(feature = "mujoco")]
-        Engine::Mujoco { mjcf } => Ok(Box::new(super::mujoco::MujocoPhysics::from_mjcf(
-            mjcf, model, settings, gains,
+        Engine::Mujoco { mjcf } => Ok(Box::new(super::mujoco::MujocoPhysics::new(
+            mjcf.as_deref(),
+            model,
+            settings,
+            gains,
         )?)),
         #[cfg(not(feature = "mujoco"))]
         Engine::Mujoco { .. } => {

@@ -6,6 +6,7 @@
 
 mod engine;
 mod gains;
+mod mjcf;
 #[cfg(feature = "mujoco")]
 mod mujoco;
 mod rapier;
@@ -14,6 +15,7 @@ mod state;
 
 pub use engine::{make_physics, Engine, EngineError};
 pub use gains::{armature_derived_gains, legged_gym_gains, standing_gains};
+pub use mjcf::mjcf_of;
 #[cfg(feature = "mujoco")]
 pub use mujoco::{MujocoError, MujocoPhysics, MUJOCO_VERSION};
 pub use rapier::{standing_default_pose, RapierPhysics};

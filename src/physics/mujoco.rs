@@ -1,7 +1,7 @@
 //! The MuJoCo backend (cargo feature `mujoco`; `mujoco-rs` 7.0.0 bound to MuJoCo 3.17.0):
-//! the same robot behind the same [`Physics`] trait, on an MJCF of the robot — a user's
-//! (`--mjcf`, e.g. TWIST2's `g1_sim2sim_29dof.xml`) with joints and bodies matched to the
-//! robot model by name.
+//! the same robot behind the same [`Physics`] trait, on an MJCF of the robot — generated
+//! from the robot model ([`super::mjcf_of`]), or a user's (`--mjcf`, e.g. TWIST2's
+//! `g1_sim2sim_29dof.xml`) with joints and bodies matched to the robot model by name.
 //!
 //! The benchmark's PD law, as in rapier: `clamp(kp·(q* − q), ±effort)` as an explicit joint
 //! torque (`qfrc_applied`) plus `kd` as joint damping (`dof_damping`, which MuJoCo's Euler
@@ -89,11 +89,13 @@ const _: fn() = || {
 };
 
 impl MujocoPhysics {
-    /// Loads `mjcf` for `robot`: every robot joint must be a hinge of the same name, every
-    /// robot body a body of the same name, and the root body must carry a free joint unless
-    /// `settings.fixed_base`. `settings.dt_s` and `settings.gravity` replace the file's.
-    pub fn from_mjcf(
-        mjcf: &Path,
+    /// Loads `mjcf` for `robot` (`None`: the MJCF generated from the robot model): every
+    /// robot joint must be a joint of the same name, every robot body a body of the same
+    /// name, and the root body must carry a free joint; a fixed base (`settings.fixed_base`)
+    /// is supported on the generated MJCF only, the root then welded where `reset` puts it.
+    /// `settings.dt_s` and `settings.gravity` replace the file's.
+    pub fn new(
+        mjcf: Option<&Path>,
         model: Arc<RobotModel>,
         settings: PhysicsSettings,
         gains: PdGains,
@@ -106,13 +108,26 @@ impl MujocoPhysics {
                 expected: MUJOCO_VERSION,
             });
         }
+        let label = mjcf.map_or_else(
+            || PathBuf::from(format!("<generated from {}>", model.name)),
+            Path::to_path_buf,
+        );
         let mismatch = |reason: String| MujocoError::Mismatch {
-            path: mjcf.to_path_buf(),
+            path: label.clone(),
             robot: model.name.clone(),
             reason,
         };
-        let mut mj = MjModel::from_xml(mjcf).map_err(|e| MujocoError::Load {
-            path: mjcf.to_path_buf(),
+        if settings.fixed_base && mjcf.is_some() {
+            return Err(mismatch(
+                "a fixed base is supported on the generated MJCF only".into(),
+            ));
+        }
+        let loaded = match mjcf {
+            Some(path) => MjModel::from_xml(path),
+            None => MjModel::from_xml_string(&super::mjcf_of(&model, &settings)),
+        };
+        let mut mj = loaded.map_err(|e| MujocoError::Load {
+            path: label.clone(),
             message: format!("{e:?}"),
         })?;
         let n = model.n_joints();
@@ -166,7 +181,7 @@ impl MujocoPhysics {
                 bodies,
                 free,
             },
-            mjcf: mjcf.to_path_buf(),
+            mjcf: label,
         };
         physics.set_gains(&gains);
         let state = super::rapier::standing_default_pose(&physics.model);
@@ -174,7 +189,7 @@ impl MujocoPhysics {
         Ok(physics)
     }
 
-    /// The MJCF simulated.
+    /// The MJCF simulated (`<generated from …>` for the generated one).
     pub fn mjcf(&self) -> &Path {
         &self.mjcf
     }
@@ -223,6 +238,16 @@ impl Physics for MujocoPhysics {
         assert_eq!(state.qd.len(), n, "reset qd length");
         // mj_resetData: nothing of the previous episode (warm starts, contacts) survives.
         self.data.reset();
+        if self.idx.free.is_none() {
+            // A fixed base: the root body is welded where the state puts it.
+            let root = self.idx.bodies[0];
+            let t = state.root.world_from_root.translation.vector;
+            let r = state.root.world_from_root.rotation;
+            // SAFETY: only the root body's offset values change, no size or structure.
+            let mj = unsafe { self.data.model_mut() };
+            mj.body_pos_mut()[root] = [t.x, t.y, t.z];
+            mj.body_quat_mut()[root] = [r.w, r.i, r.j, r.k];
+        }
         {
             let qpos = self.data.qpos_mut();
             for (j, &(adr, _)) in self.idx.joints.iter().enumerate() {
@@ -371,5 +396,65 @@ impl Physics for MujocoPhysics {
 
     fn contact_count(&self) -> usize {
         self.data.ffi().ncon.max(0) as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The generated MJCF, compiled by MuJoCo, is the robot model: every body's mass,
+    /// centre of mass and principal moments of inertia, every joint's limits and armature.
+    #[test]
+    fn the_compiled_generated_mjcf_is_the_robot_model() {
+        let g1 = crate::robot::load_bundled("g1_29dof").unwrap();
+        let settings = PhysicsSettings::default();
+        let mj = MjModel::from_xml_string(&super::super::mjcf_of(&g1, &settings)).unwrap();
+        for b in &g1.bodies {
+            let id = mj.name_to_id(MjtObjBase::mjOBJ_BODY, &b.name).unwrap();
+            assert!(
+                (mj.body_mass()[id] - b.mass_kg).abs() < 1e-9,
+                "{} mass",
+                b.name
+            );
+            let c = mj.body_ipos()[id];
+            let dc = (Vector3::new(c[0], c[1], c[2]) - b.com_b).norm();
+            assert!(dc < 1e-9, "{} centre of mass off by {dc} m", b.name);
+            let mut ours: Vec<f64> = b
+                .inertia_kgm2
+                .symmetric_eigenvalues()
+                .iter()
+                .copied()
+                .collect();
+            let mut theirs = mj.body_inertia()[id].to_vec();
+            ours.sort_by(f64::total_cmp);
+            theirs.sort_by(f64::total_cmp);
+            for (a, t) in ours.iter().zip(&theirs) {
+                assert!(
+                    (a - t).abs() < 1e-9 + 1e-6 * a.abs(),
+                    "{} inertia {ours:?} vs {theirs:?}",
+                    b.name
+                );
+            }
+        }
+        for j in &g1.joints {
+            let id = mj.name_to_id(MjtObjBase::mjOBJ_JOINT, &j.name).unwrap();
+            assert_eq!(
+                mj.jnt_range()[id],
+                [j.lower_rad, j.upper_rad],
+                "{} range",
+                j.name
+            );
+            let dof = mj.jnt_dofadr()[id] as usize;
+            assert_eq!(
+                mj.dof_armature()[dof],
+                j.armature_kgm2,
+                "{} armature",
+                j.name
+            );
+            assert_eq!(mj.dof_damping()[dof], 0.0, "{} damping", j.name);
+        }
+        let total: f64 = mj.body_mass().iter().sum();
+        assert!((total - g1.total_mass_kg()).abs() < 1e-9);
     }
 }
