@@ -133,8 +133,11 @@ pub struct EpisodeSetup<'a> {
     pub termination: TerminationRule,
     /// Force replay coefficient (1 = force setting, 0 = no force).
     pub force_coefficient: f64,
-    /// Constant world-frame push on each hand (+x), N (see `ForceReplay::push_w`).
+    /// Constant push on each hand, N (see `ForceReplay::push_w`): along world +x, or …
     pub push_n: f64,
+    /// … at this angle, degrees counter-clockwise about z, from the reference's initial
+    /// heading (90: towards the robot's left, i.e. a push from its right).
+    pub push_heading_deg: Option<f64>,
     /// Reference offsets the policy asked for, s.
     pub reference_offsets_s: Vec<f64>,
 }
@@ -196,11 +199,8 @@ impl<'a> Episode<'a> {
         physics.read_state(&mut state);
         Self {
             setup,
-            replay: ForceReplay::new(robot, seq, setup.force_coefficient).with_push(Vector3::new(
-                setup.push_n,
-                0.0,
-                0.0,
-            )),
+            replay: ForceReplay::new(robot, seq, setup.force_coefficient)
+                .with_push(push_direction(setup, &reference) * setup.push_n),
             torso_frame: robot.frame_index("torso_link").unwrap_or(0),
             reference,
             step: 0,
@@ -454,6 +454,17 @@ impl<'a> Episode<'a> {
     pub fn finish(self) -> (EpisodeSeries, Option<Termination>) {
         (self.series, self.termination)
     }
+}
+
+/// The unit direction of a setup's push: world +x, or its angle from the reference's
+/// heading at t = 0 (the yaw of the root's x axis).
+fn push_direction(setup: &EpisodeSetup, reference: &Reference) -> Vector3<f64> {
+    let Some(deg) = setup.push_heading_deg else {
+        return Vector3::x();
+    };
+    let x = reference.sample(0.0).world_from_root.rotation * Vector3::x();
+    let yaw = x.y.atan2(x.x) + deg.to_radians();
+    Vector3::new(yaw.cos(), yaw.sin(), 0.0)
 }
 
 /// Control steps of a reference of `duration_s` at `control_dt_s` (`T_ref`): the steps

@@ -47,6 +47,7 @@ fn run(
         termination: TerminationRule::default(),
         force_coefficient: 1.0,
         push_n: 0.0,
+        push_heading_deg: None,
         reference_offsets_s: policy.reference_offsets_s(),
     };
     let settings = PhysicsSettings {
@@ -223,6 +224,7 @@ fn a_diverging_simulation_ends_the_episode_as_physics_diverged_without_nan() {
         termination: TerminationRule::default(),
         force_coefficient: 1.0,
         push_n: 0.0,
+        push_heading_deg: None,
         reference_offsets_s: vec![0.0],
     };
     let settings = PhysicsSettings {
@@ -258,4 +260,57 @@ fn a_diverging_simulation_ends_the_episode_as_physics_diverged_without_nan() {
     }
     let json = serde_json::to_string(&Some(Termination::PhysicsDiverged)).unwrap();
     assert_eq!(json, "\"physics_diverged\"");
+}
+
+#[test]
+fn a_push_with_a_direction_turns_with_the_references_initial_heading() {
+    // The standing reference turned to face world +y (yaw 90°): `push:10@0` pushes along
+    // its heading (+y), `push:10@90` towards its left (−x), `push:10` along world +x.
+    let robot = Arc::new(g1());
+    let profile = default_profile(&robot);
+    let mut seq = standing_sequence(&robot);
+    let half = std::f64::consts::FRAC_PI_4;
+    seq.root_quat_wxyz = vec![[half.cos(), 0.0, 0.0, half.sin()]; seq.root_pos.len()];
+    let hand_force = |heading: Option<f64>| {
+        let setup = EpisodeSetup {
+            robot: &robot,
+            profile: &profile,
+            keypoints: robot.keypoint_set("default").unwrap(),
+            termination: TerminationRule::default(),
+            force_coefficient: 0.0,
+            push_n: 10.0,
+            push_heading_deg: heading,
+            reference_offsets_s: vec![0.0],
+        };
+        let settings = PhysicsSettings {
+            dt_s: profile.physics_dt_s,
+            ..Default::default()
+        };
+        let mut physics = RapierPhysics::new(robot.clone(), settings, profile.gains.clone());
+        let mut ep = Episode::start(&setup, &seq, &mut physics);
+        ep.record_trace();
+        let hold = vec![0.0; robot.n_joints()];
+        for _ in 0..60 {
+            ep.advance(&mut physics, &hold); // 1.2 s: past the 1 s ramp
+        }
+        let last = ep.take_trace().unwrap().pop().unwrap();
+        last.hand_force_w[0]
+    };
+    let close = |f: [f64; 3], want: [f64; 3]| {
+        assert!(
+            f.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-9),
+            "{f:?} vs {want:?}"
+        );
+    };
+    close(hand_force(None), [10.0, 0.0, 0.0]);
+    close(hand_force(Some(0.0)), [0.0, 10.0, 0.0]);
+    close(hand_force(Some(90.0)), [-10.0, 0.0, 0.0]);
+    let s = thorarena::runner::Setting::parse("push:20@90").unwrap();
+    assert_eq!(
+        (s.name.as_str(), s.push_n, s.push_heading_deg),
+        ("push-20@90", 20.0, Some(90.0))
+    );
+    for bad in ["push:20@400", "push:20@x", "push:20@", "push:2000@0"] {
+        assert!(thorarena::runner::Setting::parse(bad).is_none(), "{bad}");
+    }
 }

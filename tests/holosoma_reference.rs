@@ -275,6 +275,7 @@ fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
         termination: TerminationRule::default(),
         force_coefficient: 0.0,
         push_n: 0.0,
+        push_heading_deg: None,
         reference_offsets_s: offsets.clone(),
     };
     let settings = PhysicsSettings {

@@ -45,6 +45,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         termination: TerminationRule::default(),
         force_coefficient: args.coefficient,
         push_n: 0.0,
+        push_heading_deg: None,
         reference_offsets_s: policy.reference_offsets_s(),
     };
     let settings = PhysicsSettings {

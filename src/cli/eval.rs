@@ -48,7 +48,9 @@ pub struct RunArgs {
     pub profile: String,
     /// Settings, comma separated: `force`, `no-force`, a replay coefficient, or
     /// `push:<N>` (no replay; a constant world +x push of N newtons on each hand, ramped
-    /// in over 1 s — the sensitivity probe of FACTS.md §8).
+    /// in over 1 s — the sensitivity probe of FACTS.md §8), or `push:<N>@<deg>` with the
+    /// push turned by deg from the reference's initial heading (`push:20@90`: from the
+    /// robot's right).
     #[arg(long, value_delimiter = ',', default_value = "force,no-force")]
     pub settings: Vec<String>,
     /// Worker threads (default: all cores).
@@ -182,7 +184,7 @@ impl EvalContext {
             .map(|s| {
                 Setting::parse(s).with_context(|| {
                     format!(
-                        "--settings: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N> with |N| ≤ {}",
+                        "--settings: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
                         Setting::MAX_COEFFICIENT,
                         Setting::MAX_PUSH_N
                     )

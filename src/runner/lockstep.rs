@@ -104,6 +104,7 @@ pub fn run_eval(
             termination: plan.termination,
             force_coefficient: setting.coefficient,
             push_n: setting.push_n,
+            push_heading_deg: setting.push_heading_deg,
             reference_offsets_s: offsets.clone(),
         })
         .collect();

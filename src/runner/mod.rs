@@ -30,7 +30,7 @@ use std::collections::BTreeMap;
 /// A force setting: a name, the replay coefficient, and an optional constant push.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
-    /// `force`, `no-force`, `coef-<x>` or `push-<N>`.
+    /// `force`, `no-force`, `coef-<x>`, `push-<N>` or `push-<N>@<deg>`.
     pub name: String,
     /// Replay coefficient.
     pub coefficient: f64,
@@ -39,6 +39,10 @@ pub struct Setting {
     /// forces are not replayed with it).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub push_n: f64,
+    /// The push's direction, degrees counter-clockwise from the reference's initial
+    /// heading (`push:<N>@<deg>`; 90: from the robot's right); `None`: world +x.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub push_heading_deg: Option<f64>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -54,26 +58,44 @@ impl Setting {
     pub const MAX_PUSH_N: f64 = 1000.0;
 
     /// Parses `force`, `no-force`, a replay coefficient (|c| ≤ [`Self::MAX_COEFFICIENT`]),
-    /// or `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]).
+    /// or `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]) with an optional `@<deg>` direction from
+    /// the reference's initial heading (−360 ≤ deg ≤ 360).
     pub fn parse(s: &str) -> Option<Self> {
         let plain = |name: String, coefficient: f64| Self {
             name,
             coefficient,
             push_n: 0.0,
+            push_heading_deg: None,
         };
         match s {
             "force" => Some(plain("force".into(), 1.0)),
             "no-force" => Some(plain("no-force".into(), 0.0)),
             other => {
-                if let Some(n) = other.strip_prefix("push:") {
+                if let Some(spec) = other.strip_prefix("push:") {
+                    let (n, deg) = match spec.split_once('@') {
+                        Some((n, deg)) => (n, Some(deg)),
+                        None => (spec, None),
+                    };
                     let n: f64 = n
                         .parse()
                         .ok()
                         .filter(|n: &f64| n.is_finite() && n.abs() <= Self::MAX_PUSH_N)?;
+                    let deg: Option<f64> = match deg {
+                        Some(d) => Some(
+                            d.parse()
+                                .ok()
+                                .filter(|d: &f64| d.is_finite() && d.abs() <= 360.0)?,
+                        ),
+                        None => None,
+                    };
                     return Some(Self {
-                        name: format!("push-{n}"),
+                        name: match deg {
+                            Some(d) => format!("push-{n}@{d}"),
+                            None => format!("push-{n}"),
+                        },
                         coefficient: 0.0,
                         push_n: n,
+                        push_heading_deg: deg,
                     });
                 }
                 other
