@@ -241,3 +241,39 @@ fn an_mjcf_that_is_not_the_robot_is_a_clear_error() {
     );
     assert!(!dir.path().join("run/run.json").exists());
 }
+
+#[test]
+fn bench_physics_times_both_engines_in_one_run() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::bench_physics",
+            "built without the `mujoco` feature",
+        );
+    }
+    let o = run(&[
+        "bench",
+        "physics",
+        "--steps",
+        "50",
+        "--repeats",
+        "1",
+        "--dt",
+        "0.001,0.005",
+        "--no-mujoco",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{out}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    for line in [
+        "rapier  @ 1.0 ms",
+        "mujoco  @ 1.0 ms",
+        "rapier  @ 5.0 ms",
+        "mujoco  @ 5.0 ms",
+    ] {
+        assert!(out.contains(line), "no `{line}` in {out}");
+    }
+    assert_eq!(out.matches("× rapier's cost").count(), 2, "{out}");
+}

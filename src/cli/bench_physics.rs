@@ -1,11 +1,15 @@
-//! `thorarena bench physics`: cost of one physics step of the standing G1, and MuJoCo's
-//! cost on the reference model measured in the same run when the `mujoco` Python package
-//! is installed.
+//! `thorarena bench physics`: cost of one physics step of the standing G1 on each engine of
+//! this build (rapier; MuJoCo on the MJCF generated from the robot model, with the `mujoco`
+//! feature) at each step size, timed in the same run, with the ratio to rapier at the same
+//! step; and MuJoCo's cost on the reference MJCF through its Python package, when
+//! installed.
 
 use anyhow::Context;
 use std::sync::Arc;
 use std::time::Instant;
-use thorarena::physics::{standing_default_pose, Physics, PhysicsSettings, RapierPhysics};
+use thorarena::physics::{
+    make_physics, standing_default_pose, Engine, Physics, PhysicsSettings, PhysicsState,
+};
 
 /// Arguments of `bench physics`.
 #[derive(Debug, clap::Args)]
@@ -13,10 +17,10 @@ pub struct Args {
     /// Bundled robot name or robot directory.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
-    /// Physics time step, s.
-    #[arg(long, default_value_t = PhysicsSettings::default().dt_s)]
-    pub dt: f64,
-    /// Solver iterations per physics step.
+    /// Physics time steps, s, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "0.001,0.005")]
+    pub dt: Vec<f64>,
+    /// Solver iterations per physics step (rapier).
     #[arg(long, default_value_t = PhysicsSettings::default().solver_iterations)]
     pub iterations: usize,
     /// Timed physics steps per repeat (after a 1 s settle that is not timed).
@@ -25,17 +29,59 @@ pub struct Args {
     /// Repeats; the median is reported.
     #[arg(long, default_value_t = 5)]
     pub repeats: usize,
-    /// Skip the MuJoCo baseline even if it is available.
+    /// Skip the Python MuJoCo baseline even if it is available.
     #[arg(long)]
     pub no_mujoco: bool,
     /// Python interpreter for the MuJoCo baseline.
     #[arg(long, default_value = "python3")]
     pub python: String,
-    /// The reference MJCF for the MuJoCo baseline [default:
+    /// The reference MJCF for the Python MuJoCo baseline [default:
     /// $THORARENA_REFERENCE/g1/g1_sim2sim_29dof.xml, THORARENA_REFERENCE defaulting to
     /// ../shared/reference beside the checkout].
     #[arg(long)]
     pub mjcf: Option<String>,
+}
+
+/// One engine at one step: median µs per step, the repeats, pelvis height and contacts at
+/// the end of the last repeat.
+struct Timing {
+    median_us: f64,
+    repeats_us: Vec<f64>,
+    z_end: f64,
+    contacts: usize,
+}
+
+fn time_physics(physics: &mut dyn Physics, dt: f64, args: &Args) -> Timing {
+    let model = physics.model().clone();
+    let start = standing_default_pose(&model);
+    let mut repeats_us = Vec::new();
+    let (mut z_end, mut contacts) = (0.0, 0);
+    for _ in 0..args.repeats {
+        physics.reset(&start);
+        physics.set_targets(&start.q);
+        for _ in 0..(1.0 / dt).round() as usize {
+            physics.step();
+        }
+        let t0 = Instant::now();
+        for _ in 0..args.steps {
+            physics.step();
+        }
+        repeats_us.push(t0.elapsed().as_secs_f64() * 1e6 / args.steps as f64);
+        let mut state = PhysicsState::default();
+        physics.read_state(&mut state);
+        z_end = state
+            .root
+            .as_ref()
+            .map_or(0.0, |r| r.world_from_root.translation.z);
+        contacts = physics.contact_count();
+    }
+    let mut sorted = repeats_us.clone();
+    Timing {
+        median_us: median(&mut sorted),
+        repeats_us,
+        z_end,
+        contacts,
+    }
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -44,78 +90,69 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         "--steps and --repeats must be positive"
     );
     anyhow::ensure!(
-        args.dt > 0.0 && args.dt <= 0.05,
+        !args.dt.is_empty() && args.dt.iter().all(|&dt| dt > 0.0 && dt <= 0.05),
         "--dt must be in (0, 0.05] s"
     );
     let model = Arc::new(super::load_robot(&args.robot)?);
-    let settings = PhysicsSettings {
-        dt_s: args.dt,
-        solver_iterations: args.iterations,
-        ..Default::default()
-    };
     let gains = thorarena::physics::standing_gains(&model);
-    let gains_for_mujoco = gains.clone();
-    let mut physics = RapierPhysics::new(model.clone(), settings, gains);
-    let start = standing_default_pose(&model);
-    let mut per_repeat_us = Vec::new();
-    let mut z_end = 0.0;
-    let mut contacts = 0;
-    for _ in 0..args.repeats {
-        physics.reset(&start);
-        physics.set_targets(&start.q);
-        let settle = (1.0 / args.dt).round() as usize;
-        for _ in 0..settle {
-            physics.step();
-        }
-        let t0 = Instant::now();
-        for _ in 0..args.steps {
-            physics.step();
-        }
-        per_repeat_us.push(t0.elapsed().as_secs_f64() * 1e6 / args.steps as f64);
-        let mut state = thorarena::physics::PhysicsState::default();
-        physics.read_state(&mut state);
-        z_end = state
-            .root
-            .as_ref()
-            .map_or(0.0, |r| r.world_from_root.translation.z);
-        contacts = physics.contact_count();
+    let mut engines = vec![Engine::Rapier];
+    if cfg!(feature = "mujoco") {
+        engines.push(Engine::Mujoco { mjcf: None });
+    } else {
+        println!("(this build has no MuJoCo backend: `--features mujoco` adds it to the table)");
     }
-    let ours_us = median(&mut per_repeat_us);
-    let ours_rtf = args.dt / (ours_us * 1e-6);
-    println!(
-        "rapier  : {ours_us:8.1} µs per {:.1} ms step (median of {} × {} steps; repeats {:?} µs)",
-        args.dt * 1e3,
-        args.repeats,
-        args.steps,
-        per_repeat_us
-            .iter()
-            .map(|x| (x * 10.0).round() / 10.0)
-            .collect::<Vec<_>>()
-    );
-    println!("          {} solver iteration(s), {contacts} active contacts, pelvis z at end {z_end:.3} m, {ours_rtf:.1}× real time per core",
-        args.iterations);
+    for &dt in &args.dt {
+        let settings = PhysicsSettings {
+            dt_s: dt,
+            solver_iterations: args.iterations,
+            ..Default::default()
+        };
+        let mut rapier_us = None;
+        for engine in &engines {
+            let mut physics = make_physics(engine, model.clone(), settings.clone(), gains.clone())?;
+            let t = time_physics(physics.as_mut(), dt, args);
+            let ratio = match rapier_us {
+                None => {
+                    rapier_us = Some(t.median_us);
+                    String::new()
+                }
+                Some(r) => format!(", {:.2}× rapier's cost", t.median_us / r),
+            };
+            println!(
+                "{:<7} @ {:.1} ms: {:8.1} µs per step, {:.1}× real time per core{ratio} (median of {} × {} steps; repeats {:?} µs); {} contacts, pelvis z at end {:.3} m",
+                engine.name(),
+                dt * 1e3,
+                t.median_us,
+                dt / (t.median_us * 1e-6),
+                args.repeats,
+                args.steps,
+                t.repeats_us.iter().map(|x| (x * 10.0).round() / 10.0).collect::<Vec<_>>(),
+                t.contacts,
+                t.z_end,
+            );
+        }
+    }
     if args.no_mujoco {
         return Ok(());
     }
     let gains_json = serde_json::json!({
         "joint_names": model.joints.iter().map(|j| j.name.as_str()).collect::<Vec<_>>(),
-        "kp": gains_for_mujoco.kp,
-        "kd": gains_for_mujoco.kd,
+        "kp": gains.kp,
+        "kd": gains.kd,
     })
     .to_string();
     match mujoco_baseline(args, &gains_json) {
         Ok(Some((mj_us, mj_dt, mj_z))) => {
-            let mj_rtf = mj_dt / (mj_us * 1e-6);
             println!(
-                "mujoco  : {mj_us:8.1} µs per {:.1} ms step (reference MJCF at its own dt, same gains), pelvis z at end {mj_z:.3} m, {mj_rtf:.1}× real time per core",
-                mj_dt * 1e3
+                "python mujoco on the reference MJCF: {mj_us:8.1} µs per {:.1} ms step (its own dt, same gains), pelvis z at end {mj_z:.3} m, {:.1}× real time per core",
+                mj_dt * 1e3,
+                mj_dt / (mj_us * 1e-6)
             );
-            println!("ratio   : rapier simulates {:.2}× as many seconds per wall second as MuJoCo (goal ≥ 2)", ours_rtf / mj_rtf);
         }
         Ok(None) => println!(
-            "mujoco  : skipped (python package `mujoco` or the reference MJCF not available)"
+            "python mujoco: skipped (python package `mujoco` or the reference MJCF not available)"
         ),
-        Err(e) => println!("mujoco  : failed: {e:#}"),
+        Err(e) => println!("python mujoco: failed: {e:#}"),
     }
     Ok(())
 }
