@@ -277,3 +277,63 @@ fn bench_physics_times_both_engines_in_one_run() {
     }
     assert_eq!(out.matches("× rapier's cost").count(), 2, "{out}");
 }
+
+#[test]
+fn a_sweep_with_an_engine_axis_plans_one_cell_per_engine() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::sweep_engine_axis",
+            "built without the `mujoco` feature",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
+    let spec = dir.path().join("spec.toml");
+    std::fs::write(
+        &spec,
+        format!(
+            r#"datasets = ["{}"]
+settings = ["no-force"]
+
+[[policy]]
+policy = "hold"
+
+[[engine]]
+engine = "rapier"
+
+[[engine]]
+engine = "mujoco"
+physics_dt_s = 0.001
+"#,
+            sample.display()
+        ),
+    )
+    .unwrap();
+    let out = dir.path().join("sweep");
+    let o = run(&[
+        "sweep",
+        "plan",
+        spec.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
+    let cells = plan["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 2);
+    assert_eq!(cells[0]["engine"]["name"], "rapier");
+    assert_eq!(cells[1]["engine"]["name"], "mujoco@1ms");
+    let args = |t: usize| -> Vec<String> {
+        serde_json::from_value(plan["tasks"][t]["eval_args"].clone()).unwrap()
+    };
+    assert!(
+        !args(0).iter().any(|a| a == "--engine"),
+        "rapier cells keep eval's defaults"
+    );
+    let mj = args(1).join(" ");
+    assert!(
+        mj.contains("--engine mujoco") && mj.contains("--physics-dt 0.001"),
+        "{mj}"
+    );
+}

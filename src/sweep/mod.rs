@@ -25,9 +25,10 @@ mod status;
 
 pub use array::compact_ranges;
 pub use plan::{
-    diff_plans, Cell, DatasetInfo, LatencyRule, Plan, PolicyAxis, Task, PLAN_FILE, PLAN_FORMAT,
+    diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, Task, PLAN_FILE,
+    PLAN_FORMAT,
 };
-pub use spec::{LatencySpec, PolicySpec, SweepSpec};
+pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{task_state, DoneRecord, FailedRecord, TaskState};
 
 use std::path::PathBuf;

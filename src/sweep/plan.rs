@@ -46,6 +46,9 @@ pub struct Cell {
     pub setting: String,
     /// Latency rule.
     pub latency: LatencyRule,
+    /// Physics engine (plans written before engines were an axis read as rapier).
+    #[serde(default)]
+    pub engine: EngineAxis,
     /// Shards (tasks) of this cell.
     pub shards: usize,
     /// Episodes of the cell (one per sequence).
@@ -69,6 +72,30 @@ pub struct PolicyAxis {
     pub keypoints: String,
     /// Seconds a launched policy has to connect.
     pub connect_timeout_s: f64,
+}
+
+/// A physics engine as planned.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EngineAxis {
+    /// Label in results.
+    pub name: String,
+    /// `--engine`.
+    pub engine: String,
+    /// `--mjcf`, absolute.
+    pub mjcf: Option<PathBuf>,
+    /// `--physics-dt`, s.
+    pub physics_dt_s: Option<f64>,
+}
+
+impl Default for EngineAxis {
+    fn default() -> Self {
+        Self {
+            name: "rapier".into(),
+            engine: "rapier".into(),
+            mjcf: None,
+            physics_dt_s: None,
+        }
+    }
 }
 
 /// A latency rule as planned.
@@ -141,42 +168,51 @@ impl Plan {
                 keypoints: p.keypoints.clone(),
                 connect_timeout_s: p.connect_timeout_s,
             };
-            for ds in datasets {
-                for l in spec.latency_rules() {
-                    let latency = LatencyRule {
-                        name: l.label(),
-                        budget: l.budget.clone(),
-                        mode: l.mode.clone(),
-                        miss_rule: l.miss_rule.clone(),
-                    };
-                    for setting in &spec.settings {
-                        let cell = Cell {
-                            index: cells.len(),
-                            policy: policy.clone(),
-                            dataset: ds.dir.clone(),
-                            dataset_sha256: ds.sha256.clone(),
-                            setting: setting.clone(),
-                            latency: latency.clone(),
-                            shards: spec.shards,
-                            episodes: ds.durations_s.len(),
-                            simulated_s: ds.durations_s.iter().sum(),
+            for e in spec.engine_axis() {
+                let engine = EngineAxis {
+                    name: e.label(),
+                    engine: e.engine.clone(),
+                    mjcf: e.mjcf.as_deref().map(|m| resolve(&workdir, m)),
+                    physics_dt_s: e.physics_dt_s,
+                };
+                for ds in datasets {
+                    for l in spec.latency_rules() {
+                        let latency = LatencyRule {
+                            name: l.label(),
+                            budget: l.budget.clone(),
+                            mode: l.mode.clone(),
+                            miss_rule: l.miss_rule.clone(),
                         };
-                        for i in 0..spec.shards {
-                            let shard = (i, spec.shards);
-                            let episodes = if spec.shards == 1 {
-                                cell.episodes
-                            } else {
-                                schedule(cell.episodes, 1, Some(shard)).len()
+                        for setting in &spec.settings {
+                            let cell = Cell {
+                                index: cells.len(),
+                                policy: policy.clone(),
+                                dataset: ds.dir.clone(),
+                                dataset_sha256: ds.sha256.clone(),
+                                setting: setting.clone(),
+                                latency: latency.clone(),
+                                engine: engine.clone(),
+                                shards: spec.shards,
+                                episodes: ds.durations_s.len(),
+                                simulated_s: ds.durations_s.iter().sum(),
                             };
-                            tasks.push(Task {
-                                index: tasks.len(),
-                                cell: cell.index,
-                                shard,
-                                episodes,
-                                eval_args: eval_args(&spec.robot, &cell, shard),
-                            });
+                            for i in 0..spec.shards {
+                                let shard = (i, spec.shards);
+                                let episodes = if spec.shards == 1 {
+                                    cell.episodes
+                                } else {
+                                    schedule(cell.episodes, 1, Some(shard)).len()
+                                };
+                                tasks.push(Task {
+                                    index: tasks.len(),
+                                    cell: cell.index,
+                                    shard,
+                                    episodes,
+                                    eval_args: eval_args(&spec.robot, &cell, shard),
+                                });
+                            }
+                            cells.push(cell);
                         }
-                        cells.push(cell);
                     }
                 }
             }
@@ -264,6 +300,15 @@ fn eval_args(robot: &str, cell: &Cell, shard: (usize, usize)) -> Vec<String> {
     .iter()
     .map(|s| s.to_string())
     .collect();
+    if cell.engine != EngineAxis::default() {
+        a.extend(["--engine".into(), cell.engine.engine.clone()]);
+        if let Some(m) = &cell.engine.mjcf {
+            a.extend(["--mjcf".into(), m.display().to_string()]);
+        }
+        if let Some(dt) = cell.engine.physics_dt_s {
+            a.extend(["--physics-dt".into(), dt.to_string()]);
+        }
+    }
     if shard.1 > 1 {
         a.extend(["--shard".into(), format!("{}/{}", shard.0, shard.1)]);
     }
@@ -304,6 +349,8 @@ pub fn diff_plans(old: &Plan, new: &Plan) -> Option<String> {
                 format!("setting `{}` → `{}`", a.setting, b.setting)
             } else if a.latency != b.latency {
                 format!("latency `{}` → `{}`", a.latency.name, b.latency.name)
+            } else if a.engine != b.engine {
+                format!("engine `{}` → `{}`", a.engine.name, b.engine.name)
             } else {
                 "shards or episodes".to_string()
             };

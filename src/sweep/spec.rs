@@ -27,6 +27,44 @@ pub struct SweepSpec {
     /// Latency rules (`[[latency]]` tables); none given means one lock-step rule.
     #[serde(rename = "latency", default)]
     pub latency: Vec<LatencySpec>,
+    /// Physics engines (`[[engine]]` tables); none given means rapier at the profile's
+    /// step.
+    #[serde(rename = "engine", default)]
+    pub engines: Vec<EngineSpec>,
+}
+
+/// One physics engine of a sweep: `eval`'s `--engine`, `--mjcf` and `--physics-dt`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EngineSpec {
+    /// Label in results (default: the engine, with the MJCF's file stem and the step).
+    pub name: Option<String>,
+    /// `rapier` or `mujoco`.
+    pub engine: String,
+    /// A user's MJCF for `mujoco` (default: the one generated from the robot model).
+    pub mjcf: Option<String>,
+    /// Physics step, s (default: the profile's).
+    pub physics_dt_s: Option<f64>,
+}
+
+impl EngineSpec {
+    /// The engine's label in results.
+    pub fn label(&self) -> String {
+        if let Some(n) = &self.name {
+            return n.clone();
+        }
+        let mut l = self.engine.clone();
+        if let Some(m) = &self.mjcf {
+            let stem = Path::new(m)
+                .file_stem()
+                .map_or(m.clone(), |s| s.to_string_lossy().into_owned());
+            l += &format!(":{stem}");
+        }
+        if let Some(dt) = self.physics_dt_s {
+            l += &format!("@{}ms", dt * 1e3);
+        }
+        l
+    }
 }
 
 /// One policy of a sweep: in process (`policy`) or a process the task launches
@@ -172,6 +210,20 @@ impl SweepSpec {
             }
         }
         Ok(())
+    }
+
+    /// The engines, rapier at the profile's step when none is given.
+    pub fn engine_axis(&self) -> Vec<EngineSpec> {
+        if self.engines.is_empty() {
+            vec![EngineSpec {
+                name: None,
+                engine: "rapier".into(),
+                mjcf: None,
+                physics_dt_s: None,
+            }]
+        } else {
+            self.engines.clone()
+        }
     }
 
     /// The latency rules, the default lock-step one when none is given.

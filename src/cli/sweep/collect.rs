@@ -120,7 +120,7 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
 }
 
 /// Columns of `results.csv`, one row per cell (a cell has one setting).
-pub(super) const CSV_COLUMNS: [&str; 31] = [
+pub(super) const CSV_COLUMNS: [&str; 33] = [
     "cell",
     "policy",
     "dataset",
@@ -152,6 +152,8 @@ pub(super) const CSV_COLUMNS: [&str; 31] = [
     "deadline_misses",
     "invalid_actions",
     "policy_failures",
+    "engine",
+    "physics_dt_s",
 ];
 
 pub(super) fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String {
@@ -203,6 +205,8 @@ pub(super) fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String
                 .map_or(String::new(), |r| r.faults[1].to_string()),
             r.as_ref()
                 .map_or(String::new(), |r| r.faults[2].to_string()),
+            cell.engine.name.clone(),
+            num(r.as_ref().map(|r| r.summary.header.physics_dt_s)),
         ];
         w.write_record(&row).expect("in memory");
     }
@@ -232,9 +236,13 @@ pub(super) fn sweep_charts(
     };
     let many_datasets = varies(&|c| c.dataset.display().to_string());
     let many_latency = varies(&|c| c.latency.name.clone());
+    let many_engines = varies(&|c| c.engine.name.clone());
     let many_settings = varies(&|c| c.setting.clone());
     let label = |c: &thorarena::sweep::Cell, with_latency: bool, with_setting: bool| {
         let mut l = c.policy.name.clone();
+        if many_engines {
+            l += &format!(" · {}", c.engine.name);
+        }
         if many_datasets {
             l += &format!(
                 " · {}",
