@@ -337,3 +337,80 @@ physics_dt_s = 0.001
         "{mj}"
     );
 }
+
+#[test]
+fn crosscheck_compares_the_same_episodes_on_both_engines() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::crosscheck",
+            "built without the `mujoco` feature",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
+    let out = dir.path().join("xc");
+    let o = run(&[
+        "crosscheck",
+        "--policy",
+        "hold",
+        "--dataset",
+        sample.to_str().unwrap(),
+        "--settings",
+        "no-force,push:30",
+        "--bootstrap",
+        "500",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("| mujoco − rapier [95 % CI] |"), "{stdout}");
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("crosscheck.json")).unwrap())
+            .unwrap();
+    let settings = j["settings"].as_array().unwrap();
+    assert_eq!(settings.len(), 2);
+    let episodes = j["episodes"].as_array().unwrap();
+    assert_eq!(
+        episodes.len(),
+        24,
+        "12 sequences × 2 settings, each on both engines"
+    );
+    for s in settings {
+        assert_eq!(s["episodes"], 12);
+        for metric in ["survival", "kp_mm", "score"] {
+            let c = &s[metric];
+            let (a, b, d) = (
+                c["a"].as_f64().unwrap(),
+                c["b"].as_f64().unwrap(),
+                c["diff"].as_f64().unwrap(),
+            );
+            assert!(
+                (d - (b - a)).abs() < 1e-9,
+                "{metric}: the mean difference is b − a"
+            );
+            let ci = [
+                c["ci95"][0].as_f64().unwrap(),
+                c["ci95"][1].as_f64().unwrap(),
+            ];
+            assert!(
+                ci[0] <= d + 1e-12 && d <= ci[1] + 1e-12,
+                "{metric}: {d} outside {ci:?}"
+            );
+        }
+    }
+    // The per-episode numbers are those of the two run directories.
+    let csv = std::fs::read_to_string(out.join("crosscheck.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 25);
+    for engine in ["rapier", "mujoco"] {
+        let h: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(engine).join("run.json")).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(h["engine"]["name"], engine);
+    }
+    // Pushed at 30 N, standing still is not safe: survival falls on both engines.
+    let pushed = &settings[1];
+    assert!(pushed["survival"]["a"].as_f64().unwrap() < 1.0);
+    assert!(pushed["survival"]["b"].as_f64().unwrap() < 1.0);
+}

@@ -38,7 +38,7 @@ pub struct Args {
 }
 
 /// What an evaluation needs besides the policy and where results go (shared with `serve`).
-#[derive(Debug, clap::Args)]
+#[derive(Debug, Clone, clap::Args)]
 pub struct RunArgs {
     /// Dataset directory (canonical format) [default: the bundled data/sample].
     #[arg(long)]

@@ -7,6 +7,7 @@ mod bench_socket;
 mod bench_sweep;
 mod choices;
 mod client;
+mod crosscheck;
 mod data;
 mod data_synth;
 mod eval;
@@ -59,6 +60,9 @@ pub enum Command {
     Client(client::Args),
     /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
     Merge(merge::Args),
+    /// Run the same episodes on rapier and on MuJoCo and compare them (survival, keypoint
+    /// error, score; means with bootstrap confidence intervals).
+    Crosscheck(crosscheck::Args),
     /// Compare runs in one self-contained HTML report with plots (+ Markdown and CSV tables).
     Report(report_html::Args),
     /// Replay one episode's trace (`eval --trace`) in 3D in a self-contained HTML page.
@@ -131,6 +135,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Report(args) => report_html::run(&args),
         Command::View(args) => view::run(&args),
         Command::Serve(args) => serve::run(&args),

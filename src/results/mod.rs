@@ -21,6 +21,7 @@
 //! rather than guess at their meaning.
 
 mod coverage;
+pub mod crosscheck;
 mod episodes;
 mod header;
 mod record;

@@ -1,0 +1,212 @@
+//! The same episodes on two engines, compared (`thorarena crosscheck`): per episode the
+//! survival, mean keypoint error and score on each and their differences; per setting the
+//! means and the mean paired difference with a bootstrap confidence interval — survival
+//! under force is chaotic per episode, so only means over many episodes say anything.
+
+use super::EpisodeRecord;
+use crate::metrics::{score_episode, RegimeThresholds};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// One episode's numbers on one engine.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct EngineNumbers {
+    /// Survival `s_i`.
+    pub survival: f64,
+    /// Mean keypoint error over the steps survived, mm (NaN without a step).
+    pub kp_mm: f64,
+    /// Episode score `S_i`.
+    pub score: f64,
+}
+
+impl EngineNumbers {
+    fn of(r: &EpisodeRecord, thresholds: &RegimeThresholds) -> Self {
+        let s = score_episode(&r.series, thresholds);
+        let e = &r.series.kp_err_m;
+        Self {
+            survival: s.survival,
+            kp_mm: if e.is_empty() {
+                f64::NAN
+            } else {
+                1e3 * e.iter().sum::<f64>() / e.len() as f64
+            },
+            score: s.score,
+        }
+    }
+}
+
+/// One episode on both engines.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EpisodePair {
+    /// Task.
+    pub task: String,
+    /// Sequence id.
+    pub sequence_id: String,
+    /// Setting.
+    pub setting: String,
+    /// The first engine's numbers (the baseline).
+    pub a: EngineNumbers,
+    /// The second engine's.
+    pub b: EngineNumbers,
+}
+
+/// A mean over episodes, on each engine, and the mean paired difference `b − a` with its
+/// bootstrap 95 % confidence interval.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Compared {
+    /// Mean on the first engine.
+    pub a: f64,
+    /// Mean on the second engine.
+    pub b: f64,
+    /// Mean of `b − a` over the episodes.
+    pub diff: f64,
+    /// 2.5th and 97.5th percentiles of the bootstrap means of `b − a`.
+    pub ci95: [f64; 2],
+}
+
+/// One setting's comparison.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SettingComparison {
+    /// Setting name.
+    pub setting: String,
+    /// Episodes compared.
+    pub episodes: usize,
+    /// Survival.
+    pub survival: Compared,
+    /// Mean keypoint error, mm (episodes with a step on both engines).
+    pub kp_mm: Compared,
+    /// Episode score (FATS is its mean over a task's episodes, then over tasks; here the
+    /// plain mean over episodes).
+    pub score: Compared,
+}
+
+/// Pairs the records of two runs of the same episodes (by task, sequence and setting);
+/// `thresholds` are the runs' regime thresholds per task. Episodes in only one run are
+/// left out and returned by key.
+pub fn pair_episodes(
+    a: &[EpisodeRecord],
+    b: &[EpisodeRecord],
+    thresholds: &BTreeMap<String, RegimeThresholds>,
+) -> (Vec<EpisodePair>, Vec<(String, String, String)>) {
+    let none = RegimeThresholds {
+        p33_n: 0.0,
+        p66_n: 0.0,
+    };
+    let by_key: BTreeMap<_, _> = b.iter().map(|r| (r.key(), r)).collect();
+    let mut unpaired: Vec<_> = Vec::new();
+    let mut pairs = Vec::new();
+    for r in a {
+        let th = thresholds.get(&r.task).unwrap_or(&none);
+        match by_key.get(&r.key()) {
+            Some(o) => pairs.push(EpisodePair {
+                task: r.task.clone(),
+                sequence_id: r.sequence_id.clone(),
+                setting: r.setting.clone(),
+                a: EngineNumbers::of(r, th),
+                b: EngineNumbers::of(o, th),
+            }),
+            None => unpaired.push(r.key()),
+        }
+    }
+    let a_keys: std::collections::BTreeSet<_> = a.iter().map(EpisodeRecord::key).collect();
+    unpaired.extend(
+        b.iter()
+            .map(EpisodeRecord::key)
+            .filter(|k| !a_keys.contains(k)),
+    );
+    (pairs, unpaired)
+}
+
+/// Means and the paired difference of `values` (`(a, b)` per episode; pairs with a NaN
+/// are left out), with `resamples` bootstrap resamples from `seed`.
+pub fn compare(values: &[(f64, f64)], resamples: usize, seed: u64) -> Compared {
+    let v: Vec<(f64, f64)> = values
+        .iter()
+        .copied()
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .collect();
+    if v.is_empty() {
+        return Compared {
+            a: f64::NAN,
+            b: f64::NAN,
+            diff: f64::NAN,
+            ci95: [f64::NAN; 2],
+        };
+    }
+    let n = v.len() as f64;
+    let mean = |f: &dyn Fn(&(f64, f64)) -> f64| v.iter().map(f).sum::<f64>() / n;
+    let diffs: Vec<f64> = v.iter().map(|(a, b)| b - a).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut means: Vec<f64> = (0..resamples.max(1))
+        .map(|_| {
+            (0..v.len())
+                .map(|_| diffs[rng.random_range(0..v.len())])
+                .sum::<f64>()
+                / n
+        })
+        .collect();
+    means.sort_by(f64::total_cmp);
+    let pct =
+        |p: f64| means[((p * (means.len() - 1) as f64).round() as usize).min(means.len() - 1)];
+    Compared {
+        a: mean(&|p| p.0),
+        b: mean(&|p| p.1),
+        diff: diffs.iter().sum::<f64>() / n,
+        ci95: [pct(0.025), pct(0.975)],
+    }
+}
+
+/// Per setting (in the order first seen), the comparison of `pairs`.
+pub fn compare_settings(
+    pairs: &[EpisodePair],
+    resamples: usize,
+    seed: u64,
+) -> Vec<SettingComparison> {
+    let mut order: Vec<&str> = Vec::new();
+    for p in pairs {
+        if !order.contains(&p.setting.as_str()) {
+            order.push(&p.setting);
+        }
+    }
+    order
+        .into_iter()
+        .map(|setting| {
+            let ps: Vec<&EpisodePair> = pairs.iter().filter(|p| p.setting == setting).collect();
+            let col = |f: &dyn Fn(&EngineNumbers) -> f64| -> Vec<(f64, f64)> {
+                ps.iter().map(|p| (f(&p.a), f(&p.b))).collect()
+            };
+            SettingComparison {
+                setting: setting.to_string(),
+                episodes: ps.len(),
+                survival: compare(&col(&|e| e.survival), resamples, seed),
+                kp_mm: compare(&col(&|e| e.kp_mm), resamples, seed),
+                score: compare(&col(&|e| e.score), resamples, seed),
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_constant_difference_has_a_zero_width_interval_and_noise_a_wider_one() {
+        let same: Vec<(f64, f64)> = (0..50).map(|i| (i as f64, i as f64 + 2.0)).collect();
+        let c = compare(&same, 500, 1);
+        assert_eq!(c.diff, 2.0);
+        assert_eq!(c.ci95, [2.0, 2.0]);
+        let noisy: Vec<(f64, f64)> = (0..50)
+            .map(|i| (0.0, if i % 2 == 0 { 1.0 } else { -1.0 }))
+            .collect();
+        let c = compare(&noisy, 2000, 1);
+        assert!(c.diff.abs() < 1e-12);
+        assert!(c.ci95[0] < -0.1 && c.ci95[1] > 0.1, "{:?}", c.ci95);
+        // ±1 over 50 episodes: the 95 % interval of the mean is about ±2·(1/√50) = ±0.28.
+        assert!(c.ci95[0] > -0.4 && c.ci95[1] < 0.4, "{:?}", c.ci95);
+        let with_nan = [(1.0, f64::NAN), (1.0, 2.0)];
+        assert_eq!(compare(&with_nan, 10, 1).diff, 1.0);
+    }
+}
