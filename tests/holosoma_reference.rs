@@ -16,6 +16,8 @@ use std::process::Command;
 mod dump;
 mod prereq;
 mod readme;
+#[path = "common/walks.rs"]
+mod walks;
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
@@ -23,13 +25,6 @@ const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 /// the policy on its whole motion in MuJoCo, holosoma's MJCF at dt 2 ms:
 /// `python3 tools/holosoma_mujoco.py --json` → `keypoint_error_rms_mm`.
 const MUJOCO_KP_RMS_MM: f64 = 49.39;
-
-/// The walks TWIST2 publishes (README's TWIST2 section).
-const WALKS: [&str; 3] = [
-    "0807_yanjie_walk_001",
-    "0807_yanjie_walk_002",
-    "0807_yanjie_walk_003",
-];
 
 const SETTINGS: &str = "no-force,push:10,push:20,push:30";
 
@@ -117,25 +112,7 @@ fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
 
     // TWIST2 on the released walks under the same pushes, same keypoints.
     let walks = dir.path().join("walks");
-    let mut import = vec!["data", "import", "--format", "twist-pkl"];
-    let files: Vec<String> = WALKS
-        .iter()
-        .map(|w| {
-            reference
-                .join(format!("twist2/motions/{w}.pkl"))
-                .display()
-                .to_string()
-        })
-        .collect();
-    import.extend(files.iter().map(String::as_str));
-    import.extend([
-        "--out",
-        walks.to_str().unwrap(),
-        "--task",
-        "walk",
-        "--ground-correct",
-    ]);
-    run(&import);
+    walks::import_walks(&reference.join("twist2"), &walks);
     let twist2_run = dir.path().join("twist2");
     let twist2_onnx = reference.join("twist2/twist2_1017_25k.onnx");
     run(&[
@@ -238,8 +215,7 @@ fn the_motion_in_the_network_is_imported_and_a_network_without_one_is_refused() 
 #[test]
 fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
     use std::sync::Arc;
-    use thorarena::episode::{Episode, EpisodeSetup, TerminationRule};
-    use thorarena::physics::{PhysicsSettings, RapierPhysics};
+    use thorarena::episode::{EpisodeSetup, TerminationRule};
     use thorarena::policy::{BeyondMimicPolicy, Policy};
     const TEST: &str = "holosoma_reference::python_adapter";
     let Some(onnx) = onnx(TEST) else {
@@ -252,7 +228,6 @@ fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
     ) {
         return;
     }
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let robot = Arc::new(thorarena::robot::load_bundled("g1_29dof").unwrap());
     let profile = thorarena::profile::load_profile(
         &thorarena::profile::bundled_profile_path("holosoma-wbt"),
@@ -278,45 +253,14 @@ fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
         push_heading_deg: None,
         reference_offsets_s: offsets.clone(),
     };
-    let settings = PhysicsSettings {
-        dt_s: profile.physics_dt_s,
-        ..Default::default()
-    };
-    let mut physics = RapierPhysics::new(robot.clone(), settings, profile.gains.clone());
-    let mut ep = Episode::start(&setup, &seq, &mut physics);
-    let mut steps = Vec::new();
-    let mut actions = vec![vec![0.0; 29]];
-    while !ep.is_done() && steps.len() < 150 {
-        let obs = ep.observation();
-        policy.act(std::slice::from_ref(&obs), &mut actions);
-        steps.push(serde_json::json!({
-            "env": dump::wire_json(&obs, &offsets),
-            "obs": policy.last_inputs()[0],
-            "action": actions[0],
-        }));
-        ep.advance(&mut physics, &actions[0]);
-    }
-    assert_eq!(steps.len(), 150, "the episode ended early");
-    let dump = serde_json::json!({
-        "action_offset_rad": profile.action_offset_rad,
-        "action_scale": profile.action_scale,
-        "steps": steps,
-    });
-    let path = dir.path().join("holosoma-dump.json");
-    std::fs::write(&path, dump.to_string()).unwrap();
-    let out = Command::new("python3")
-        .arg(root.join("adapters/python/examples/check_against_dump.py"))
-        .args(["--adapter", "beyondmimic", "--dump"])
-        .arg(&path)
-        .arg("--onnx")
-        .arg(&onnx)
-        .env("PYTHONPATH", root.join("adapters/python"))
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&out.stdout);
-    eprintln!("{report}{}", String::from_utf8_lossy(&out.stderr));
-    assert!(
-        out.status.success(),
-        "Python and Rust BeyondMimic disagree: {report}"
+    let steps = dump::record_episode(
+        &mut policy,
+        |p| p.last_inputs()[0].clone(),
+        &setup,
+        &seq,
+        150,
     );
+    assert_eq!(steps.len(), 150, "the episode ended early");
+    let (agrees, report) = dump::python_agrees("beyondmimic", &onnx, &setup, steps, dir.path());
+    assert!(agrees, "Python and Rust BeyondMimic disagree: {report}");
 }

@@ -11,15 +11,11 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 mod prereq;
+#[path = "common/walks.rs"]
+mod walks;
+use walks::{import_walks, MUJOCO_TWIST9_MM};
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
-
-/// MuJoCo's mean TWIST9 keypoint error per walk in TWIST2's harness, mm (FACTS.md §8).
-const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
-    ("0807_yanjie_walk_001", 28.0),
-    ("0807_yanjie_walk_002", 31.1),
-    ("0807_yanjie_walk_003", 33.5),
-];
 
 /// The MJCF, or `None` after a recorded skip (no feature, or no reference artifacts).
 fn twist2_mjcf(test: &str) -> Option<PathBuf> {
@@ -124,26 +120,7 @@ fn twist2_walks_in_mujoco_as_in_twist2s_own_harness() {
     let reference = thorarena::reference_dir().join("twist2");
     let dir = tempfile::tempdir().unwrap();
     let walks = dir.path().join("walks");
-    let files: Vec<String> = MUJOCO_TWIST9_MM
-        .iter()
-        .map(|(w, _)| {
-            reference
-                .join(format!("motions/{w}.pkl"))
-                .display()
-                .to_string()
-        })
-        .collect();
-    let mut import = vec!["data", "import", "--format", "twist-pkl"];
-    import.extend(files.iter().map(String::as_str));
-    import.extend([
-        "--out",
-        walks.to_str().unwrap(),
-        "--task",
-        "walk",
-        "--ground-correct",
-    ]);
-    let o = run(&import);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    import_walks(&reference, &walks);
     let out = dir.path().join("run");
     let policy = format!(
         "twist2:{}",

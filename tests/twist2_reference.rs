@@ -12,17 +12,13 @@ use std::process::Command;
 
 #[path = "common/dump.rs"]
 mod dump;
+#[path = "common/walks.rs"]
+mod walks;
+use walks::{import_walks, MUJOCO_TWIST9_MM};
 mod prereq;
 mod readme;
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
-
-/// MuJoCo's mean TWIST9 keypoint error per walk, mm (FACTS.md §8).
-const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
-    ("0807_yanjie_walk_001", 28.0),
-    ("0807_yanjie_walk_002", 31.1),
-    ("0807_yanjie_walk_003", 33.5),
-];
 
 /// The published TWIST2 artifacts, or `None` after a recorded skip.
 fn reference_dir(test: &str) -> Option<PathBuf> {
@@ -38,29 +34,6 @@ fn run(args: &[&str]) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-/// Imports the three walks as TWIST2's harness prepares them (feet onto the ground).
-fn import_walks(reference: &Path, out: &Path) {
-    let mut args = vec!["data", "import", "--format", "twist-pkl"];
-    let files: Vec<String> = MUJOCO_TWIST9_MM
-        .iter()
-        .map(|(w, _)| {
-            reference
-                .join(format!("motions/{w}.pkl"))
-                .display()
-                .to_string()
-        })
-        .collect();
-    args.extend(files.iter().map(String::as_str));
-    args.extend([
-        "--out",
-        out.to_str().unwrap(),
-        "--task",
-        "walk",
-        "--ground-correct",
-    ]);
-    run(&args);
 }
 
 /// Per walk: (survival, mean TWIST9 keypoint error in mm) of one setting.
@@ -168,9 +141,7 @@ fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
 
 #[test]
 fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
-    use std::sync::Arc;
-    use thorarena::episode::{Episode, EpisodeSetup, TerminationRule};
-    use thorarena::physics::{PhysicsSettings, RapierPhysics};
+    use thorarena::episode::{EpisodeSetup, TerminationRule};
     use thorarena::policy::{Policy, Twist2Policy};
     const TEST: &str = "twist2_reference::python_adapter";
     let Some(reference) = reference_dir(TEST) else {
@@ -210,47 +181,15 @@ fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
         push_heading_deg: None,
         reference_offsets_s: offsets.clone(),
     };
-    let settings = PhysicsSettings {
-        dt_s: profile.physics_dt_s,
-        ..Default::default()
-    };
-    let mut physics = RapierPhysics::new(Arc::new(robot.clone()), settings, profile.gains.clone());
-    let mut ep = Episode::start(&setup, &seq, &mut physics);
-    let mut steps = Vec::new();
-    let mut actions = vec![vec![0.0; 29]];
-    while !ep.is_done() && steps.len() < 150 {
-        let obs = ep.observation();
-        policy.act(std::slice::from_ref(&obs), &mut actions);
-        steps.push(serde_json::json!({
-            "env": dump::wire_json(&obs, &offsets),
-            "obs": policy.last_inputs()[0],
-            "action": actions[0],
-        }));
-        ep.advance(&mut physics, &actions[0]);
-    }
-    assert!(steps.len() >= 100, "the episode ran {} steps", steps.len());
-    let dump = serde_json::json!({
-        "action_offset_rad": profile.action_offset_rad,
-        "action_scale": profile.action_scale,
-        "steps": steps,
-    });
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("twist2-dump.json");
-    std::fs::write(&path, dump.to_string()).unwrap();
-    let out = Command::new("python3")
-        .arg(root.join("adapters/python/examples/check_against_dump.py"))
-        .args(["--adapter", "twist2"])
-        .arg("--dump")
-        .arg(&path)
-        .arg("--onnx")
-        .arg(&onnx)
-        .env("PYTHONPATH", root.join("adapters/python"))
-        .output()
-        .unwrap();
-    let report = String::from_utf8_lossy(&out.stdout);
-    eprintln!("{report}{}", String::from_utf8_lossy(&out.stderr));
-    assert!(
-        out.status.success(),
-        "Python and Rust TWIST2 disagree: {report}"
+    let steps = dump::record_episode(
+        &mut policy,
+        |p| p.last_inputs()[0].clone(),
+        &setup,
+        &seq,
+        150,
     );
+    assert!(steps.len() >= 100, "the episode ran {} steps", steps.len());
+    let dir = tempfile::tempdir().unwrap();
+    let (agrees, report) = dump::python_agrees("twist2", &onnx, &setup, steps, dir.path());
+    assert!(agrees, "Python and Rust TWIST2 disagree: {report}");
 }

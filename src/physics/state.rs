@@ -95,3 +95,17 @@ pub struct ExternalForce {
     /// Application point in the body frame, m (it moves with the body).
     pub point_b: Point3<f64>,
 }
+
+impl ExternalForce {
+    /// Holds `force` in `held`, replacing a force at the same point of the same body (the
+    /// rule of [`super::Physics::set_external_force`], shared by the backends).
+    pub(crate) fn hold(held: &mut Vec<ExternalForce>, force: ExternalForce) {
+        match held
+            .iter_mut()
+            .find(|f| f.body == force.body && f.point_b == force.point_b)
+        {
+            Some(f) => *f = force,
+            None => held.push(force),
+        }
+    }
+}

@@ -1,5 +1,78 @@
 //! Episode dumps for the Python adapters' cross-checks: one environment's observation as
-//! the wire carries it, field by field, in the JSON `thorarena.adapters.dump` reads.
+//! the wire carries it, field by field, in the JSON `thorarena.adapters.dump` reads; an
+//! in-process policy's episode recorded step by step; and the Python check run on it.
+#![allow(dead_code)]
+
+use std::path::Path;
+use thorarena::episode::{Episode, EpisodeSetup};
+use thorarena::motion::Sequence;
+use thorarena::physics::{PhysicsSettings, RapierPhysics};
+use thorarena::policy::Policy;
+
+/// Runs `policy` on `seq` in rapier for at most `max_steps` control steps and records each
+/// step as the dump format wants it: the wire block, the network input (`last_input`
+/// reads it from the policy after `act`) and the action.
+pub fn record_episode<P: Policy>(
+    policy: &mut P,
+    last_input: impl Fn(&P) -> Vec<f32>,
+    setup: &EpisodeSetup,
+    seq: &Sequence,
+    max_steps: usize,
+) -> Vec<serde_json::Value> {
+    let settings = PhysicsSettings {
+        dt_s: setup.profile.physics_dt_s,
+        ..Default::default()
+    };
+    let robot = std::sync::Arc::new(setup.robot.clone());
+    let mut physics = RapierPhysics::new(robot, settings, setup.profile.gains.clone());
+    let mut ep = Episode::start(setup, seq, &mut physics);
+    let offsets = &setup.reference_offsets_s;
+    let mut steps = Vec::new();
+    let mut actions = vec![vec![0.0; setup.robot.n_joints()]];
+    while !ep.is_done() && steps.len() < max_steps {
+        let obs = ep.observation();
+        policy.act(std::slice::from_ref(&obs), &mut actions);
+        steps.push(serde_json::json!({
+            "env": wire_json(&obs, offsets),
+            "obs": last_input(policy),
+            "action": actions[0],
+        }));
+        ep.advance(&mut physics, &actions[0]);
+    }
+    steps
+}
+
+/// Writes the dump of `steps` (under `setup`'s action mapping) into `dir` and runs
+/// `adapters/python/examples/check_against_dump.py --adapter ADAPTER` on it with `onnx`;
+/// returns whether the Python adapter agreed, and its report.
+pub fn python_agrees(
+    adapter: &str,
+    onnx: &Path,
+    setup: &EpisodeSetup,
+    steps: Vec<serde_json::Value>,
+    dir: &Path,
+) -> (bool, String) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dump = serde_json::json!({
+        "action_offset_rad": setup.profile.action_offset_rad,
+        "action_scale": setup.profile.action_scale,
+        "steps": steps,
+    });
+    let path = dir.join(format!("{adapter}-dump.json"));
+    std::fs::write(&path, dump.to_string()).unwrap();
+    let out = std::process::Command::new("python3")
+        .arg(root.join("adapters/python/examples/check_against_dump.py"))
+        .args(["--adapter", adapter, "--dump"])
+        .arg(&path)
+        .arg("--onnx")
+        .arg(onnx)
+        .env("PYTHONPATH", root.join("adapters/python"))
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&out.stdout).into_owned();
+    eprintln!("{report}{}", String::from_utf8_lossy(&out.stderr));
+    (out.status.success(), report)
+}
 
 /// One environment's wire block as JSON, field by field (what the Python adapter reads).
 pub fn wire_json(obs: &thorarena::policy::Observation, offsets: &[f64]) -> serde_json::Value {

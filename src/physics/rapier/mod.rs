@@ -142,14 +142,7 @@ impl Physics for RapierPhysics {
 
     fn set_external_force(&mut self, force: ExternalForce) {
         assert!(force.body < self.model.bodies.len(), "body index");
-        match self
-            .external
-            .iter_mut()
-            .find(|f| f.body == force.body && f.point_b == force.point_b)
-        {
-            Some(f) => *f = force,
-            None => self.external.push(force),
-        }
+        ExternalForce::hold(&mut self.external, force);
     }
 
     fn clear_external_forces(&mut self) {
