@@ -160,6 +160,8 @@ pub struct Episode<'a> {
     physics_wall: std::time::Duration,
     /// Rollout trace, when asked for.
     trace: Option<Vec<TraceStep>>,
+    /// Steps ending later than this (s since the start) are left out of the trace.
+    trace_until_s: f64,
     /// Hand forces of the last physics step, world frame.
     last_hand_force_w: [Vector3<f64>; 2],
     /// Body poses of the reference at the current step (set by `record`).
@@ -219,6 +221,7 @@ impl<'a> Episode<'a> {
             reference_poses: poses,
             physics_wall: std::time::Duration::ZERO,
             trace: None,
+            trace_until_s: f64::INFINITY,
             last_hand_force_w: [Vector3::zeros(); 2],
             faults: PolicyFaults::default(),
             next_targets: Vec::new(),
@@ -372,12 +375,13 @@ impl<'a> Episode<'a> {
         self.series.power_w.push(power_w);
         let d = root.world_from_root.translation.vector - frame.world_from_root.translation.vector;
         self.series.root_drift_m.push(d.xy().norm());
-        if let Some(trace) = &mut self.trace {
+        let time_s = self.step as f64 * self.setup.profile.control_dt_s;
+        if let Some(trace) = self.trace.as_mut().filter(|_| time_s <= self.trace_until_s) {
             let p = root.world_from_root.translation.vector;
             let r = root.world_from_root.rotation;
             let xyz = |v: &Point3<f64>| [v.x, v.y, v.z];
             trace.push(TraceStep {
-                time_s: self.step as f64 * self.setup.profile.control_dt_s,
+                time_s,
                 root_pos: [p.x, p.y, p.z],
                 root_quat_wxyz: [r.w, r.i, r.j, r.k],
                 q: self.state.q.clone(),
@@ -404,6 +408,14 @@ impl<'a> Episode<'a> {
     /// Records a rollout trace from now on (see [`TraceStep`]).
     pub fn record_trace(&mut self) {
         self.trace.get_or_insert_with(Vec::new);
+        self.trace_until_s = f64::INFINITY;
+    }
+
+    /// Records the trace of the steps ending within `seconds` of the episode's start only
+    /// (a cross-engine comparison of the first second needs no more).
+    pub fn record_trace_for(&mut self, seconds: f64) {
+        self.trace.get_or_insert_with(Vec::new);
+        self.trace_until_s = seconds + 1e-9;
     }
 
     /// The trace recorded so far, if tracing was on.

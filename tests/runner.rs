@@ -49,6 +49,7 @@ fn results_are_identical_for_any_number_of_workers() {
             envs,
             io: PolicyIoRules::default(),
             trace: Vec::new(),
+            trace_first_s: None,
             engine: Default::default(),
         };
         let mut streamed = 0;
@@ -90,6 +91,7 @@ fn force_and_no_force_differ_only_by_the_replay() {
         envs: 2,
         io: PolicyIoRules::default(),
         trace: Vec::new(),
+        trace_first_s: None,
         engine: Default::default(),
     };
     let jobs = schedule(seqs.len(), plan.settings.len(), None);
@@ -155,6 +157,7 @@ fn the_balance_baseline_keeps_the_standing_sample_tasks_upright_without_force() 
         envs: 3,
         io: PolicyIoRules::default(),
         trace: Vec::new(),
+        trace_first_s: None,
         engine: Default::default(),
     };
     let pose = profile.action_offset_rad.clone();

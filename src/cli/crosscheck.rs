@@ -3,13 +3,20 @@
 //! score on each engine and their differences, means with a bootstrap 95 % confidence
 //! interval. Both runs are ordinary run directories (`<out>/rapier`, `<out>/mujoco`).
 
-use super::eval::{check_out, evaluate, EvalContext, RunArgs};
+use super::eval::{check_out, evaluate, EvalContext, FirstSeconds, RunArgs};
 use super::policy_arg::make_policy;
 use anyhow::{bail, Context};
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
-use thorarena::results::crosscheck::{compare_settings, pair_episodes, Compared};
+use thorarena::results::crosscheck::{
+    compare_settings, joint_divergence, pair_episodes, Compared, MeanCi,
+};
 use thorarena::results::{read_header, read_summary, EpisodeLog, EPISODES_FILE};
+
+/// The joint angles (per control step, rad) of each episode's first seconds, by
+/// (task, sequence id, setting).
+type FirstJoints = BTreeMap<(String, String, String), Vec<Vec<f64>>>;
 
 /// Arguments of `crosscheck`.
 #[derive(Debug, clap::Args)]
@@ -24,8 +31,17 @@ pub struct Args {
     /// Bootstrap resamples of the confidence intervals.
     #[arg(long, default_value_t = 2000)]
     pub bootstrap: usize,
-    /// Everything else of the runs (`--engine` is ignored: both engines run; `--mjcf`
-    /// and `--physics-dt` apply to MuJoCo and rapier as for `eval`).
+    /// The joint angles of both engines are compared over this many seconds from each
+    /// episode's start (closed loop: each engine's policy sees its own state).
+    #[arg(long, default_value_t = 1.0)]
+    pub divergence_seconds: f64,
+    /// MuJoCo's physics step, s, when it differs from rapier's (e.g. 0.001 with
+    /// `--mjcf` of TWIST2's model, the step it was validated at, while rapier runs the
+    /// profile's 5 ms); default: `--physics-dt`, else the profile's.
+    #[arg(long)]
+    pub mujoco_physics_dt: Option<f64>,
+    /// Everything else of the runs (`--engine` is refused: both engines run; `--mjcf`
+    /// applies to MuJoCo, `--physics-dt` to both unless `--mujoco-physics-dt` is given).
     #[command(flatten)]
     pub run: RunArgs,
 }
@@ -53,6 +69,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     rapier_args.mjcf = None;
     let mut mujoco_args = args.run.clone();
     mujoco_args.engine = super::choices::EngineArg::Mujoco;
+    if let Some(dt) = args.mujoco_physics_dt {
+        mujoco_args.physics_dt = Some(dt);
+    }
     // Both contexts first: a missing MuJoCo fails before anything runs.
     let rapier_ctx = EvalContext::load(&rapier_args)?;
     let mujoco_ctx = EvalContext::load(&mujoco_args)?;
@@ -68,13 +87,20 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             PathBuf::from("results").join(name)
         }
     };
+    if !(args.divergence_seconds.is_finite() && args.divergence_seconds > 0.0) {
+        bail!("--divergence-seconds must be a positive number of seconds");
+    }
     let dirs = [out.join("rapier"), out.join("mujoco")];
     for d in &dirs {
         check_out(d, &args.run)?;
     }
-    for ((run_args, ctx), dir) in [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
-        .into_iter()
-        .zip(&dirs)
+    // Per engine, the joint angles of each episode's first seconds, by episode key.
+    let mut first_q: [FirstJoints; 2] = Default::default();
+    for (((run_args, ctx), dir), joints) in
+        [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
+            .into_iter()
+            .zip(&dirs)
+            .zip(first_q.iter_mut())
     {
         eprintln!("== {} → {}", ctx.engine.name(), dir.display());
         let mut policy = make_policy(
@@ -84,7 +110,21 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             &run_args.io,
             ctx.envs,
         )?;
-        evaluate(run_args, ctx, policy.as_mut(), dir)?;
+        let seconds = args.divergence_seconds;
+        let mut sink = |r: &thorarena::results::EpisodeRecord,
+                        steps: &[thorarena::episode::TraceStep]| {
+            let q = steps
+                .iter()
+                .take_while(|s| s.time_s <= seconds + 1e-9)
+                .map(|s| s.q.clone())
+                .collect();
+            joints.insert(r.key(), q);
+        };
+        let first = FirstSeconds {
+            seconds,
+            sink: &mut sink,
+        };
+        evaluate(run_args, ctx, policy.as_mut(), dir, Some(first))?;
     }
     let read = |dir: &PathBuf| -> anyhow::Result<_> {
         let header = read_header(dir)?;
@@ -93,13 +133,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     };
     let (a, thresholds) = read(&dirs[0])?;
     let (b, _) = read(&dirs[1])?;
-    let (pairs, unpaired) = pair_episodes(&a, &b, &thresholds);
+    let (mut pairs, unpaired) = pair_episodes(&a, &b, &thresholds);
     if !unpaired.is_empty() {
         bail!(
             "{} episodes ran on one engine only (e.g. {:?})",
             unpaired.len(),
             unpaired[0]
         );
+    }
+    for p in &mut pairs {
+        let key = (p.task.clone(), p.sequence_id.clone(), p.setting.clone());
+        if let (Some(qa), Some(qb)) = (first_q[0].get(&key), first_q[1].get(&key)) {
+            p.joint_divergence = joint_divergence(qa, qb);
+        }
     }
     let settings = compare_settings(&pairs, args.bootstrap, 0);
     let mut table = String::from(
@@ -121,9 +167,27 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
     }
     println!("{table}");
+    let mut divergence = format!(
+        "| setting | episodes | RMS joint-angle divergence over the first {} s, rad [95 % CI] |\n|---|---:|---|\n",
+        args.divergence_seconds
+    );
+    for s in &settings {
+        let MeanCi {
+            episodes,
+            mean,
+            ci95,
+        } = s.joint_divergence_rad;
+        let _ = writeln!(
+            divergence,
+            "| {} | {episodes} | {mean:.4} [{:.4}, {:.4}] |",
+            s.setting, ci95[0], ci95[1]
+        );
+    }
+    println!("{divergence}");
     let json = serde_json::json!({
         "runs": {"rapier": dirs[0], "mujoco": dirs[1]},
         "bootstrap_resamples": args.bootstrap,
+        "divergence_seconds": args.divergence_seconds,
         "settings": settings,
         "episodes": pairs,
     });
@@ -141,6 +205,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         "kp_mm_mujoco",
         "score_rapier",
         "score_mujoco",
+        "joint_divergence_steps",
+        "joint_divergence_rms_rad",
+        "joint_divergence_max_rad",
     ])?;
     let num = |v: f64| {
         if v.is_finite() {
@@ -160,6 +227,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             num(p.b.kp_mm),
             num(p.a.score),
             num(p.b.score),
+            p.joint_divergence
+                .map_or(String::new(), |d| d.steps.to_string()),
+            num(p.joint_divergence.map_or(f64::NAN, |d| d.rms_rad)),
+            num(p.joint_divergence.map_or(f64::NAN, |d| d.max_rad)),
         ])?;
     }
     let csv_path = out.join("crosscheck.csv");

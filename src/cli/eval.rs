@@ -7,13 +7,13 @@ use anyhow::{bail, Context};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::PathBuf;
-use thorarena::episode::{Termination, TerminationRule};
+use thorarena::episode::{Termination, TerminationRule, TraceStep};
 use thorarena::motion::{Dataset, Sequence};
 use thorarena::policy::Policy;
 use thorarena::profile::{bundled_profile_path, load_profile, Profile};
 use thorarena::results::{
     read_header, sort_records, write_header, write_record, write_results, EpisodeLog,
-    PlannedSequence, PolicyIoReport, RunHeader, RESULTS_VERSION,
+    EpisodeRecord, PlannedSequence, PolicyIoReport, RunHeader, RESULTS_VERSION,
 };
 use thorarena::robot::RobotModel;
 use thorarena::runner::{run_eval, task_thresholds, EvalPlan, Setting};
@@ -277,7 +277,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             out
         }
     };
-    evaluate(&args.run, &ctx, policy.as_mut(), &out)
+    evaluate(&args.run, &ctx, policy.as_mut(), &out, None)
 }
 
 /// Refuses to replace a finished or started run unless `--resume` or `--overwrite` says
@@ -296,12 +296,21 @@ pub(super) fn check_out(out: &std::path::Path, args: &RunArgs) -> anyhow::Result
     Ok(())
 }
 
+/// Hands the trace of every episode's first seconds to a caller (`crosscheck`).
+pub(super) struct FirstSeconds<'a> {
+    /// How many seconds of each episode.
+    pub seconds: f64,
+    /// Called once per episode run, with its record and those steps.
+    pub sink: &'a mut dyn FnMut(&EpisodeRecord, &[TraceStep]),
+}
+
 /// Runs the benchmark for one connected policy into `out`.
 pub(super) fn evaluate(
     args: &RunArgs,
     ctx: &EvalContext,
     policy: &mut dyn Policy,
     out: &std::path::Path,
+    mut first_seconds: Option<FirstSeconds>,
 ) -> anyhow::Result<()> {
     let sequences = &ctx.sequences;
     let header = RunHeader {
@@ -392,6 +401,7 @@ pub(super) fn evaluate(
         envs: ctx.envs,
         io: header.io,
         trace: args.trace.clone(),
+        trace_first_s: first_seconds.as_ref().map(|f| f.seconds),
         engine: ctx.engine.clone(),
     };
     let traces_dir = out.join("traces");
@@ -423,7 +433,13 @@ pub(super) fn evaluate(
         if let Err(e) = write_record(&mut writer, r) {
             write_error.get_or_insert(e);
         }
-        if let Some(trace) = trace {
+        if let (Some(trace), Some(f)) = (trace, first_seconds.as_mut()) {
+            (f.sink)(r, trace);
+        }
+        let traced = args
+            .trace
+            .contains(&format!("{}/{}", r.task, r.sequence_id));
+        if let Some(trace) = trace.filter(|_| traced) {
             let path = traces_dir.join(format!("{}-{}-{}.json", r.task, r.sequence_id, r.setting));
             let written = serde_json::to_vec(trace)
                 .map_err(std::io::Error::other)

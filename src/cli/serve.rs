@@ -52,7 +52,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             })
             .find(|dir| !dir.exists())
             .expect("some number is free");
-        let result = evaluate(&args.run, &ctx, &mut policy as &mut dyn Policy, &out);
+        let result = evaluate(&args.run, &ctx, &mut policy as &mut dyn Policy, &out, None);
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {
             eprintln!("run {n} ended with an error: {e:#}");

@@ -37,6 +37,88 @@ impl EngineNumbers {
     }
 }
 
+/// How far the joint angles of one episode drift apart between two engines over its
+/// first control steps (the closed loop: each engine's policy sees its own state).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct JointDivergence {
+    /// Control steps compared (both engines ran them).
+    pub steps: usize,
+    /// Root mean square over those steps and all joints of `q_b − q_a`, rad.
+    pub rms_rad: f64,
+    /// Largest `|q_b − q_a|` over those steps and joints, rad.
+    pub max_rad: f64,
+    /// Root mean square over joints at the last step compared, rad.
+    pub final_rms_rad: f64,
+}
+
+/// The divergence of two joint-angle series (per control step, then per joint), over
+/// the steps both have; `None` without a common step or with unequal joint counts.
+pub fn joint_divergence(a: &[Vec<f64>], b: &[Vec<f64>]) -> Option<JointDivergence> {
+    let steps = a.len().min(b.len());
+    let joints = a.first()?.len();
+    if steps == 0
+        || joints == 0
+        || a[..steps]
+            .iter()
+            .chain(&b[..steps])
+            .any(|q| q.len() != joints)
+    {
+        return None;
+    }
+    let (mut sum_sq, mut max_rad, mut last_sq) = (0.0, 0.0_f64, 0.0);
+    for (qa, qb) in a[..steps].iter().zip(&b[..steps]) {
+        last_sq = 0.0;
+        for (x, y) in qa.iter().zip(qb) {
+            let d = y - x;
+            last_sq += d * d;
+            max_rad = max_rad.max(d.abs());
+        }
+        sum_sq += last_sq;
+    }
+    Some(JointDivergence {
+        steps,
+        rms_rad: (sum_sq / (steps * joints) as f64).sqrt(),
+        max_rad,
+        final_rms_rad: (last_sq / joints as f64).sqrt(),
+    })
+}
+
+/// A mean over episodes with its bootstrap 95 % confidence interval.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct MeanCi {
+    /// Episodes in the mean.
+    pub episodes: usize,
+    /// The mean.
+    pub mean: f64,
+    /// 2.5th and 97.5th percentiles of the bootstrap means.
+    pub ci95: [f64; 2],
+}
+
+/// The mean of `values` and its bootstrap interval from `resamples` resamples (NaN
+/// without a value).
+pub fn mean_ci(values: &[f64], resamples: usize, seed: u64) -> MeanCi {
+    let n = values.len();
+    if n == 0 {
+        return MeanCi {
+            episodes: 0,
+            mean: f64::NAN,
+            ci95: [f64::NAN; 2],
+        };
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut means: Vec<f64> = (0..resamples.max(1))
+        .map(|_| (0..n).map(|_| values[rng.random_range(0..n)]).sum::<f64>() / n as f64)
+        .collect();
+    means.sort_by(f64::total_cmp);
+    let pct =
+        |p: f64| means[((p * (means.len() - 1) as f64).round() as usize).min(means.len() - 1)];
+    MeanCi {
+        episodes: n,
+        mean: values.iter().sum::<f64>() / n as f64,
+        ci95: [pct(0.025), pct(0.975)],
+    }
+}
+
 /// One episode on both engines.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EpisodePair {
@@ -50,6 +132,9 @@ pub struct EpisodePair {
     pub a: EngineNumbers,
     /// The second engine's.
     pub b: EngineNumbers,
+    /// Joint-angle divergence over the first second, when both runs recorded it (an
+    /// episode carried over by `--resume` did not).
+    pub joint_divergence: Option<JointDivergence>,
 }
 
 /// A mean over episodes, on each engine, and the mean paired difference `b − a` with its
@@ -80,6 +165,8 @@ pub struct SettingComparison {
     /// Episode score (FATS is its mean over a task's episodes, then over tasks; here the
     /// plain mean over episodes).
     pub score: Compared,
+    /// RMS joint-angle divergence over the first second, rad (episodes that have it).
+    pub joint_divergence_rad: MeanCi,
 }
 
 /// Pairs the records of two runs of the same episodes (by task, sequence and setting);
@@ -106,6 +193,7 @@ pub fn pair_episodes(
                 setting: r.setting.clone(),
                 a: EngineNumbers::of(r, th),
                 b: EngineNumbers::of(o, th),
+                joint_divergence: None,
             }),
             None => unpaired.push(r.key()),
         }
@@ -138,23 +226,12 @@ pub fn compare(values: &[(f64, f64)], resamples: usize, seed: u64) -> Compared {
     let n = v.len() as f64;
     let mean = |f: &dyn Fn(&(f64, f64)) -> f64| v.iter().map(f).sum::<f64>() / n;
     let diffs: Vec<f64> = v.iter().map(|(a, b)| b - a).collect();
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut means: Vec<f64> = (0..resamples.max(1))
-        .map(|_| {
-            (0..v.len())
-                .map(|_| diffs[rng.random_range(0..v.len())])
-                .sum::<f64>()
-                / n
-        })
-        .collect();
-    means.sort_by(f64::total_cmp);
-    let pct =
-        |p: f64| means[((p * (means.len() - 1) as f64).round() as usize).min(means.len() - 1)];
+    let d = mean_ci(&diffs, resamples, seed);
     Compared {
         a: mean(&|p| p.0),
         b: mean(&|p| p.1),
-        diff: diffs.iter().sum::<f64>() / n,
-        ci95: [pct(0.025), pct(0.975)],
+        diff: d.mean,
+        ci95: d.ci95,
     }
 }
 
@@ -183,6 +260,13 @@ pub fn compare_settings(
                 survival: compare(&col(&|e| e.survival), resamples, seed),
                 kp_mm: compare(&col(&|e| e.kp_mm), resamples, seed),
                 score: compare(&col(&|e| e.score), resamples, seed),
+                joint_divergence_rad: mean_ci(
+                    &ps.iter()
+                        .filter_map(|p| p.joint_divergence.map(|d| d.rms_rad))
+                        .collect::<Vec<_>>(),
+                    resamples,
+                    seed,
+                ),
             }
         })
         .collect()
@@ -208,5 +292,21 @@ mod tests {
         assert!(c.ci95[0] > -0.4 && c.ci95[1] < 0.4, "{:?}", c.ci95);
         let with_nan = [(1.0, f64::NAN), (1.0, 2.0)];
         assert_eq!(compare(&with_nan, 10, 1).diff, 1.0);
+    }
+
+    #[test]
+    fn joint_divergence_is_taken_over_the_common_steps() {
+        let a = vec![vec![0.0, 0.0]; 4];
+        let mut b = vec![vec![0.0, 0.0]; 3];
+        b[2] = vec![0.3, -0.4];
+        let d = joint_divergence(&a, &b).expect("common steps");
+        assert_eq!(d.steps, 3);
+        assert!((d.max_rad - 0.4).abs() < 1e-12);
+        // One step of (0.3, −0.4): 0.25 over 3 steps × 2 joints.
+        assert!((d.rms_rad - (0.25_f64 / 6.0).sqrt()).abs() < 1e-12);
+        assert!((d.final_rms_rad - (0.25_f64 / 2.0).sqrt()).abs() < 1e-12);
+        assert_eq!(joint_divergence(&a, &a).map(|d| d.max_rad), Some(0.0));
+        assert!(joint_divergence(&a, &[]).is_none());
+        assert!(joint_divergence(&a, &[vec![0.0]]).is_none());
     }
 }

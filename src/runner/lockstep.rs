@@ -325,6 +325,8 @@ fn worker(
                     .contains(&format!("{}/{}", seq.task, seq.sequence_id))
                 {
                     ep.record_trace();
+                } else if let Some(seconds) = plan.trace_first_s {
+                    ep.record_trace_for(seconds);
                 }
                 if ep.is_done() {
                     finished.push(finish(shared, j, ep)); // a reference shorter than one step

@@ -128,6 +128,9 @@ pub struct EvalPlan<'a> {
     pub io: PolicyIoRules,
     /// Record rollout traces of the sequences with these `task/sequence_id` names.
     pub trace: Vec<String>,
+    /// Record the trace of every other episode too, over its first this many seconds
+    /// (`crosscheck` compares the engines' joint angles there).
+    pub trace_first_s: Option<f64>,
     /// The physics engine (checked by the caller: [`crate::physics::make_physics`] must
     /// succeed for it before the run).
     pub engine: crate::physics::Engine,
