@@ -338,7 +338,7 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
         "--dataset",
         sample.to_str().unwrap(),
         "--settings",
-        "no-force,push:30",
+        "no-force,push:30@0,push:30@180",
         "--bootstrap",
         "500",
         "--out",
@@ -351,12 +351,12 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
         serde_json::from_str(&std::fs::read_to_string(out.join("crosscheck.json")).unwrap())
             .unwrap();
     let settings = j["settings"].as_array().unwrap();
-    assert_eq!(settings.len(), 2);
+    assert_eq!(settings.len(), 3);
     let episodes = j["episodes"].as_array().unwrap();
     assert_eq!(
         episodes.len(),
-        24,
-        "12 sequences × 2 settings, each on both engines"
+        36,
+        "12 sequences × 3 settings, each on both engines"
     );
     for s in settings {
         assert_eq!(s["episodes"], 12);
@@ -383,7 +383,7 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
     }
     // The per-episode numbers are those of the two run directories.
     let csv = std::fs::read_to_string(out.join("crosscheck.csv")).unwrap();
-    assert_eq!(csv.lines().count(), 25);
+    assert_eq!(csv.lines().count(), 37);
     for engine in ["rapier", "mujoco"] {
         let h: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(out.join(engine).join("run.json")).unwrap(),
@@ -395,6 +395,20 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
     let pushed = &settings[1];
     assert!(pushed["survival"]["a"].as_f64().unwrap() < 1.0);
     assert!(pushed["survival"]["b"].as_f64().unwrap() < 1.0);
+
+    // Per push force, its two directions pooled.
+    assert!(stdout.contains("| push per hand | episodes |"), "{stdout}");
+    let levels = j["push_levels"].as_array().unwrap();
+    let names: Vec<&str> = levels
+        .iter()
+        .map(|l| l["setting"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["0 N (1 setting)", "30 N (2 settings)"]);
+    assert_eq!(levels[1]["episodes"], 24);
+    let pooled = (settings[1]["survival"]["b"].as_f64().unwrap()
+        + settings[2]["survival"]["b"].as_f64().unwrap())
+        / 2.0;
+    assert!((levels[1]["survival"]["b"].as_f64().unwrap() - pooled).abs() < 1e-12);
 
     // Joint-angle divergence over the first second, per episode and per setting.
     assert!(

@@ -10,7 +10,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use thorarena::results::crosscheck::{
-    compare_settings, joint_divergence, pair_episodes, Compared, MeanCi,
+    compare_push_levels, compare_settings, joint_divergence, pair_episodes, Compared, MeanCi,
+    SettingComparison,
 };
 use thorarena::results::{read_header, read_summary, EpisodeLog, EPISODES_FILE};
 
@@ -56,6 +57,45 @@ fn fmt(c: &Compared, decimals: usize) -> String {
         c.ci95[1],
         d = decimals
     )
+}
+
+/// The comparison table of `rows` and the table of their joint-angle divergence.
+fn tables(first_column: &str, rows: &[SettingComparison], divergence_seconds: f64) -> String {
+    let mut table = format!(
+        "| {first_column} | episodes | metric | rapier | mujoco | mujoco − rapier [95 % CI] |\n|---|---:|---|---:|---:|---|\n",
+    );
+    for s in rows {
+        for (metric, c, d) in [
+            ("survival", &s.survival, 3),
+            ("keypoint error (mm)", &s.kp_mm, 1),
+            ("episode score", &s.score, 2),
+        ] {
+            let _ = writeln!(
+                table,
+                "| {} | {} | {metric} | {} |",
+                s.setting,
+                s.episodes,
+                fmt(c, d)
+            );
+        }
+    }
+    let _ = write!(
+        table,
+        "\n| {first_column} | episodes | RMS joint-angle divergence over the first {divergence_seconds} s, rad [95 % CI] |\n|---|---:|---|\n",
+    );
+    for s in rows {
+        let MeanCi {
+            episodes,
+            mean,
+            ci95,
+        } = s.joint_divergence_rad;
+        let _ = writeln!(
+            table,
+            "| {} | {episodes} | {mean:.4} [{:.4}, {:.4}] |",
+            s.setting, ci95[0], ci95[1]
+        );
+    }
+    table
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -148,47 +188,22 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
     }
     let settings = compare_settings(&pairs, args.bootstrap, 0);
-    let mut table = String::from(
-        "| setting | episodes | metric | rapier | mujoco | mujoco − rapier [95 % CI] |\n|---|---:|---|---:|---:|---|\n",
-    );
-    for s in &settings {
-        for (metric, c, d) in [
-            ("survival", &s.survival, 3),
-            ("keypoint error (mm)", &s.kp_mm, 1),
-            ("episode score", &s.score, 2),
-        ] {
-            let _ = writeln!(
-                table,
-                "| {} | {} | {metric} | {} |",
-                s.setting,
-                s.episodes,
-                fmt(c, d)
-            );
-        }
-    }
-    println!("{table}");
-    let mut divergence = format!(
-        "| setting | episodes | RMS joint-angle divergence over the first {} s, rad [95 % CI] |\n|---|---:|---|\n",
-        args.divergence_seconds
-    );
-    for s in &settings {
-        let MeanCi {
-            episodes,
-            mean,
-            ci95,
-        } = s.joint_divergence_rad;
-        let _ = writeln!(
-            divergence,
-            "| {} | {episodes} | {mean:.4} [{:.4}, {:.4}] |",
-            s.setting, ci95[0], ci95[1]
+    println!("{}", tables("setting", &settings, args.divergence_seconds));
+    let header = read_header(&dirs[0])?;
+    let levels = compare_push_levels(&pairs, &header.settings, args.bootstrap, 0);
+    if levels.len() < settings.len() {
+        println!("Per push force, over its directions:\n");
+        println!(
+            "{}",
+            tables("push per hand", &levels, args.divergence_seconds)
         );
     }
-    println!("{divergence}");
     let json = serde_json::json!({
         "runs": {"rapier": dirs[0], "mujoco": dirs[1]},
         "bootstrap_resamples": args.bootstrap,
         "divergence_seconds": args.divergence_seconds,
         "settings": settings,
+        "push_levels": levels,
         "episodes": pairs,
     });
     let json_path = out.join("crosscheck.json");

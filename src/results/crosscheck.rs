@@ -5,6 +5,7 @@
 
 use super::EpisodeRecord;
 use crate::metrics::{score_episode, RegimeThresholds};
+use crate::runner::Setting;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -272,6 +273,48 @@ pub fn compare_settings(
         .collect()
 }
 
+/// Per push force (N per hand, over all its directions; `no-force` is 0 N), the comparison
+/// of `pairs`, in increasing force; settings with a replay coefficient are left out. A
+/// force response is a curve over force levels: averaging a level's directions gives it
+/// enough episodes for a useful interval.
+pub fn compare_push_levels(
+    pairs: &[EpisodePair],
+    settings: &[Setting],
+    resamples: usize,
+    seed: u64,
+) -> Vec<SettingComparison> {
+    let level_of = |name: &str| -> Option<f64> {
+        let s = settings.iter().find(|s| s.name == name)?;
+        (s.coefficient == 0.0).then_some(s.push_n.abs())
+    };
+    let mut levels: Vec<f64> = pairs.iter().filter_map(|p| level_of(&p.setting)).collect();
+    levels.sort_by(f64::total_cmp);
+    levels.dedup();
+    let label = |n: f64| {
+        let directions = settings
+            .iter()
+            .filter(|s| s.coefficient == 0.0 && s.push_n.abs() == n)
+            .count();
+        format!(
+            "{n} N ({directions} setting{})",
+            if directions == 1 { "" } else { "s" }
+        )
+    };
+    let relabelled: Vec<EpisodePair> = levels
+        .iter()
+        .flat_map(|&n| {
+            pairs
+                .iter()
+                .filter(move |p| level_of(&p.setting) == Some(n))
+                .map(move |p| EpisodePair {
+                    setting: label(n),
+                    ..p.clone()
+                })
+        })
+        .collect();
+    compare_settings(&relabelled, resamples, seed)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -292,6 +335,41 @@ mod tests {
         assert!(c.ci95[0] > -0.4 && c.ci95[1] < 0.4, "{:?}", c.ci95);
         let with_nan = [(1.0, f64::NAN), (1.0, 2.0)];
         assert_eq!(compare(&with_nan, 10, 1).diff, 1.0);
+    }
+
+    #[test]
+    fn push_levels_pool_their_directions_and_leave_replays_out() {
+        let settings: Vec<Setting> = ["no-force", "push:20@0", "push:20@180", "push:10", "force"]
+            .iter()
+            .map(|s| Setting::parse(s).expect("valid"))
+            .collect();
+        let numbers = |survival| EngineNumbers {
+            survival,
+            kp_mm: 10.0,
+            score: 50.0,
+        };
+        let pairs: Vec<EpisodePair> = settings
+            .iter()
+            .enumerate()
+            .map(|(i, s)| EpisodePair {
+                task: "t".into(),
+                sequence_id: "q".into(),
+                setting: s.name.clone(),
+                a: numbers(1.0),
+                b: numbers(i as f64 / 10.0),
+                joint_divergence: None,
+            })
+            .collect();
+        let levels = compare_push_levels(&pairs, &settings, 100, 0);
+        let names: Vec<&str> = levels.iter().map(|l| l.setting.as_str()).collect();
+        assert_eq!(
+            names,
+            ["0 N (1 setting)", "10 N (1 setting)", "20 N (2 settings)"]
+        );
+        assert_eq!(levels[2].episodes, 2);
+        // The two 20 N directions had b-survival 0.1 and 0.2.
+        assert!((levels[2].survival.b - 0.15).abs() < 1e-12);
+        assert!((levels[1].survival.b - 0.3).abs() < 1e-12);
     }
 
     #[test]
