@@ -360,7 +360,7 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
     );
     for s in settings {
         assert_eq!(s["episodes"], 12);
-        for metric in ["survival", "kp_mm", "score"] {
+        for metric in ["survival", "kp_mm", "score", "fats"] {
             let c = &s[metric];
             let (a, b, d) = (
                 c["a"].as_f64().unwrap(),
@@ -395,6 +395,25 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
     let pushed = &settings[1];
     assert!(pushed["survival"]["a"].as_f64().unwrap() < 1.0);
     assert!(pushed["survival"]["b"].as_f64().unwrap() < 1.0);
+
+    // FATS is `eval`'s: each run's summary says the same per setting.
+    for (engine, side) in [("rapier", "a"), ("mujoco", "b")] {
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(engine).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        for s in settings {
+            let name = s["setting"].as_str().unwrap();
+            let fats = summary["settings"][name]["average"]["fats"]
+                .as_f64()
+                .unwrap();
+            let ours = s["fats"][side].as_f64().unwrap();
+            assert!(
+                (fats - ours).abs() < 1e-9,
+                "{engine} {name}: {ours} vs {fats}"
+            );
+        }
+    }
 
     // Per push force, its two directions pooled.
     assert!(stdout.contains("| push per hand | episodes |"), "{stdout}");

@@ -68,7 +68,7 @@ fn tables(first_column: &str, rows: &[SettingComparison], divergence_seconds: f6
         for (metric, c, d) in [
             ("survival", &s.survival, 3),
             ("keypoint error (mm)", &s.kp_mm, 1),
-            ("episode score", &s.score, 2),
+            ("FATS", &s.fats, 2),
         ] {
             let _ = writeln!(
                 table,

@@ -163,9 +163,11 @@ pub struct SettingComparison {
     pub survival: Compared,
     /// Mean keypoint error, mm (episodes with a step on both engines).
     pub kp_mm: Compared,
-    /// Episode score (FATS is its mean over a task's episodes, then over tasks; here the
-    /// plain mean over episodes).
+    /// Episode score `S_i`, the plain mean over episodes.
     pub score: Compared,
+    /// FATS: the mean over tasks of each task's mean episode score, as `eval` reports it
+    /// (the bootstrap resamples episodes within each task).
+    pub fats: Compared,
     /// RMS joint-angle divergence over the first second, rad (episodes that have it).
     pub joint_divergence_rad: MeanCi,
 }
@@ -236,6 +238,65 @@ pub fn compare(values: &[(f64, f64)], resamples: usize, seed: u64) -> Compared {
     }
 }
 
+/// FATS on each engine over `pairs` (the mean over tasks of the mean episode score) and
+/// the difference, with a stratified bootstrap: each resample draws every task's episodes
+/// with replacement from that task, so each task keeps its weight.
+pub fn compare_fats(pairs: &[&EpisodePair], resamples: usize, seed: u64) -> Compared {
+    let mut by_task: BTreeMap<&str, Vec<(f64, f64)>> = BTreeMap::new();
+    for p in pairs {
+        if p.a.score.is_finite() && p.b.score.is_finite() {
+            by_task
+                .entry(p.task.as_str())
+                .or_default()
+                .push((p.a.score, p.b.score));
+        }
+    }
+    if by_task.is_empty() {
+        return Compared {
+            a: f64::NAN,
+            b: f64::NAN,
+            diff: f64::NAN,
+            ci95: [f64::NAN; 2],
+        };
+    }
+    let tasks = by_task.len() as f64;
+    let fats = |pick: &dyn Fn(&(f64, f64)) -> f64| {
+        by_task
+            .values()
+            .map(|v| v.iter().map(pick).sum::<f64>() / v.len() as f64)
+            .sum::<f64>()
+            / tasks
+    };
+    let (a, b) = (fats(&|p| p.0), fats(&|p| p.1));
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut diffs: Vec<f64> = (0..resamples.max(1))
+        .map(|_| {
+            by_task
+                .values()
+                .map(|v| {
+                    (0..v.len())
+                        .map(|_| {
+                            let (x, y) = v[rng.random_range(0..v.len())];
+                            y - x
+                        })
+                        .sum::<f64>()
+                        / v.len() as f64
+                })
+                .sum::<f64>()
+                / tasks
+        })
+        .collect();
+    diffs.sort_by(f64::total_cmp);
+    let pct =
+        |p: f64| diffs[((p * (diffs.len() - 1) as f64).round() as usize).min(diffs.len() - 1)];
+    Compared {
+        a,
+        b,
+        diff: b - a,
+        ci95: [pct(0.025), pct(0.975)],
+    }
+}
+
 /// Per setting (in the order first seen), the comparison of `pairs`.
 pub fn compare_settings(
     pairs: &[EpisodePair],
@@ -261,6 +322,7 @@ pub fn compare_settings(
                 survival: compare(&col(&|e| e.survival), resamples, seed),
                 kp_mm: compare(&col(&|e| e.kp_mm), resamples, seed),
                 score: compare(&col(&|e| e.score), resamples, seed),
+                fats: compare_fats(&ps, resamples, seed),
                 joint_divergence_rad: mean_ci(
                     &ps.iter()
                         .filter_map(|p| p.joint_divergence.map(|d| d.rms_rad))
@@ -370,6 +432,42 @@ mod tests {
         // The two 20 N directions had b-survival 0.1 and 0.2.
         assert!((levels[2].survival.b - 0.15).abs() < 1e-12);
         assert!((levels[1].survival.b - 0.3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn fats_weighs_tasks_equally_however_many_episodes_each_has() {
+        let pair = |task: &str, a: f64, b: f64| EpisodePair {
+            task: task.into(),
+            sequence_id: format!("{task}-{a}-{b}"),
+            setting: "s".into(),
+            a: EngineNumbers {
+                survival: 1.0,
+                kp_mm: 1.0,
+                score: a,
+            },
+            b: EngineNumbers {
+                survival: 1.0,
+                kp_mm: 1.0,
+                score: b,
+            },
+            joint_divergence: None,
+        };
+        // Task x: three episodes, 10 → 20 each; task y: one episode, 50 → 50.
+        let pairs = [
+            pair("x", 10.0, 20.0),
+            pair("x", 10.0, 20.0),
+            pair("x", 10.0, 20.0),
+            pair("y", 50.0, 50.0),
+        ];
+        let refs: Vec<&EpisodePair> = pairs.iter().collect();
+        let f = compare_fats(&refs, 200, 3);
+        assert_eq!((f.a, f.b, f.diff), (30.0, 35.0, 5.0));
+        // Within-task resampling cannot change a task made of equal episodes.
+        assert_eq!(f.ci95, [5.0, 5.0]);
+        // The plain episode mean would have said +7.5.
+        let plain = compare_settings(&pairs, 200, 3);
+        assert_eq!(plain[0].score.diff, 7.5);
+        assert_eq!(plain[0].fats.diff, 5.0);
     }
 
     #[test]
