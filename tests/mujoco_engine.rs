@@ -468,3 +468,38 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
         "{still}"
     );
 }
+
+#[test]
+fn crosscheck_refuses_bad_arguments_before_running_anything() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::crosscheck_bad_arguments",
+            "built without the `mujoco` feature",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (args, expected) in [
+        (
+            vec!["--mujoco-physics-dt", "0.003"],
+            "the MuJoCo run (--mujoco-physics-dt 0.003): --physics-dt 0.003: must be > 0 and divide",
+        ),
+        (
+            vec!["--divergence-seconds", "0"],
+            "--divergence-seconds must be a positive number",
+        ),
+        (vec!["--policy", "ipc:somewhere"], "runs the policy twice in process"),
+        (vec!["--engine", "mujoco"], "leave out --engine"),
+    ] {
+        let out = dir.path().join("xc");
+        let mut full = vec!["crosscheck", "--out", out.to_str().unwrap()];
+        if !args.contains(&"--policy") {
+            full.extend(["--policy", "hold"]);
+        }
+        full.extend(args.iter().copied());
+        let o = run(&full);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+        assert!(!out.join("rapier").exists(), "{args:?}: nothing may run");
+    }
+}

@@ -105,6 +105,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.run.engine != super::choices::EngineArg::Rapier {
         bail!("crosscheck runs both engines: leave out --engine");
     }
+    if !(args.divergence_seconds.is_finite() && args.divergence_seconds > 0.0) {
+        bail!("--divergence-seconds must be a positive number of seconds");
+    }
     let mut rapier_args = args.run.clone();
     rapier_args.mjcf = None;
     let mut mujoco_args = args.run.clone();
@@ -114,7 +117,11 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     // Both contexts first: a missing MuJoCo fails before anything runs.
     let rapier_ctx = EvalContext::load(&rapier_args)?;
-    let mujoco_ctx = EvalContext::load(&mujoco_args)?;
+    let mujoco_ctx =
+        EvalContext::load(&mujoco_args).with_context(|| match args.mujoco_physics_dt {
+            Some(dt) => format!("the MuJoCo run (--mujoco-physics-dt {dt})"),
+            None => "the MuJoCo run".to_string(),
+        })?;
     let out = match &args.out {
         Some(o) => o.clone(),
         None => {
@@ -127,9 +134,6 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             PathBuf::from("results").join(name)
         }
     };
-    if !(args.divergence_seconds.is_finite() && args.divergence_seconds > 0.0) {
-        bail!("--divergence-seconds must be a positive number of seconds");
-    }
     let dirs = [out.join("rapier"), out.join("mujoco")];
     for d in &dirs {
         check_out(d, &args.run)?;

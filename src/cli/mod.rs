@@ -61,7 +61,8 @@ pub enum Command {
     /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
     Merge(merge::Args),
     /// Run the same episodes on rapier and on MuJoCo and compare them (survival, keypoint
-    /// error, score; means with bootstrap confidence intervals).
+    /// error, FATS per setting and per push force, with bootstrap confidence intervals;
+    /// joint-angle divergence over the first second).
     Crosscheck(crosscheck::Args),
     /// Compare runs in one self-contained HTML report with plots (+ Markdown and CSV tables).
     Report(report_html::Args),
