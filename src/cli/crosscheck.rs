@@ -173,10 +173,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let read = |dir: &PathBuf| -> anyhow::Result<_> {
         let header = read_header(dir)?;
         let log = EpisodeLog::read(&dir.join(EPISODES_FILE), &header)?;
-        Ok((log.records, read_summary(dir)?.thresholds))
+        Ok((header, log.records, read_summary(dir)?.thresholds))
     };
-    let (a, thresholds) = read(&dirs[0])?;
-    let (b, _) = read(&dirs[1])?;
+    let (header, a, thresholds) = read(&dirs[0])?;
+    let (_, b, _) = read(&dirs[1])?;
     let (mut pairs, unpaired) = pair_episodes(&a, &b, &thresholds);
     if !unpaired.is_empty() {
         bail!(
@@ -193,7 +193,6 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     let settings = compare_settings(&pairs, args.bootstrap, 0);
     println!("{}", tables("setting", &settings, args.divergence_seconds));
-    let header = read_header(&dirs[0])?;
     let levels = compare_push_levels(&pairs, &header.settings, args.bootstrap, 0);
     if levels.len() < settings.len() {
         println!("Per push force, over its directions:\n");

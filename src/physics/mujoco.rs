@@ -76,6 +76,8 @@ pub struct MujocoPhysics {
     targets: Vec<f64>,
     external: Vec<ExternalForce>,
     applied_torque_nm: Vec<f64>,
+    /// The PD torques applied through `qfrc_applied` in the current step.
+    explicit_torque_nm: Vec<f64>,
     data: MjData<Box<MjModel>>,
     idx: Indices,
     mjcf: PathBuf,
@@ -171,6 +173,7 @@ impl MujocoPhysics {
         let mut physics = Self {
             targets: model.default_pose(),
             applied_torque_nm: vec![0.0; n],
+            explicit_torque_nm: vec![0.0; n],
             external: Vec::new(),
             model,
             settings,
@@ -308,55 +311,43 @@ impl Physics for MujocoPhysics {
     }
 
     fn step(&mut self) {
-        let explicit = self.settings.pd_form == PdForm::Explicit;
-        let (q, qd): (Vec<f64>, Vec<f64>) = {
-            let (qpos, qvel) = (self.data.qpos(), self.data.qvel());
-            self.idx
-                .joints
-                .iter()
-                .map(|&(a, d)| (qpos[a], qvel[d]))
-                .unzip()
-        };
+        // The PD torques first (reading the state), then written into `qfrc_applied`; the
+        // reported torques' buffer holds them in between, so a step allocates nothing.
         {
-            let qfrc = self.data.qfrc_applied_mut();
-            qfrc.fill(0.0);
-            for (j, &(_, dof)) in self.idx.joints.iter().enumerate() {
-                let (kp, kd, limit) = (
-                    self.gains.kp[j],
-                    self.gains.kd[j],
-                    self.gains.effort_limit_nm[j],
+            let (qpos, qvel) = (self.data.qpos(), self.data.qvel());
+            for (j, &(a, d)) in self.idx.joints.iter().enumerate() {
+                let (tau, reported) = self.gains.torque_nm(
+                    self.settings.pd_form,
+                    j,
+                    self.targets[j],
+                    qpos[a],
+                    qvel[d],
                 );
-                let spring = kp * (self.targets[j] - q[j]);
-                let tau = if explicit {
-                    (spring - kd * qd[j]).clamp(-limit, limit)
-                } else {
-                    spring.clamp(-limit, limit)
-                };
-                self.applied_torque_nm[j] = if explicit { tau } else { tau - kd * qd[j] };
-                qfrc[dof] = tau;
+                self.applied_torque_nm[j] = reported;
+                self.explicit_torque_nm[j] = tau;
             }
         }
-        // A force at a point of a body is that force at the body's centre of mass plus the
-        // torque of the offset.
-        let forces: Vec<(usize, [f64; 6])> = self
-            .external
-            .iter()
-            .map(|f| {
-                let body = self.idx.bodies[f.body];
-                let point_w: Point3<f64> = body_pose(&self.data, body) * f.point_b;
-                let c = self.data.xipos()[body];
-                let r = point_w.coords - Vector3::new(c[0], c[1], c[2]);
-                let t = r.cross(&f.force_w);
-                (body, [f.force_w.x, f.force_w.y, f.force_w.z, t.x, t.y, t.z])
-            })
-            .collect();
+        let qfrc = self.data.qfrc_applied_mut();
+        qfrc.fill(0.0);
+        for (&tau, &(_, dof)) in self.explicit_torque_nm.iter().zip(&self.idx.joints) {
+            qfrc[dof] = tau;
+        }
         let xfrc = self.data.xfrc_applied_mut();
         for row in xfrc.iter_mut() {
             *row = [0.0; 6];
         }
-        for (body, w) in forces {
+        // A force at a point of a body is that force at the body's centre of mass plus the
+        // torque of the offset (poses and centres of mass are current: see below).
+        for f in &self.external {
+            let body = self.idx.bodies[f.body];
+            let point_w: Point3<f64> = body_pose(&self.data, body) * f.point_b;
+            let c = self.data.xipos()[body];
+            let r = point_w.coords - Vector3::new(c[0], c[1], c[2]);
+            let t = r.cross(&f.force_w);
+            let w = [f.force_w.x, f.force_w.y, f.force_w.z, t.x, t.y, t.z];
+            let row = &mut self.data.xfrc_applied_mut()[body];
             for k in 0..6 {
-                xfrc[body][k] += w[k];
+                row[k] += w[k];
             }
         }
         self.data.step();

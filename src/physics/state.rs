@@ -1,5 +1,6 @@
 //! Plain data exchanged with a physics backend.
 
+use super::settings::PdForm;
 use nalgebra::{Isometry3, Point3, Vector3};
 
 /// Pose and velocity of the root body (the pelvis frame, not its centre of mass).
@@ -65,6 +66,34 @@ pub struct PdGains {
     pub kd: Vec<f64>,
     /// Torque limit applied to the PD torque, N·m.
     pub effort_limit_nm: Vec<f64>,
+}
+
+impl PdGains {
+    /// The benchmark's PD law for joint `j`, the same on every backend: returns the torque
+    /// the engine must apply explicitly and the PD torque to report, N·m. With
+    /// [`PdForm::Hybrid`] the clamped spring is explicit and `kd` is the engine's implicit
+    /// joint damping, reported here all the same.
+    pub(super) fn torque_nm(
+        &self,
+        form: PdForm,
+        j: usize,
+        target: f64,
+        q: f64,
+        qd: f64,
+    ) -> (f64, f64) {
+        let (kp, kd, limit) = (self.kp[j], self.kd[j], self.effort_limit_nm[j]);
+        let spring = kp * (target - q);
+        match form {
+            PdForm::Explicit => {
+                let tau = (spring - kd * qd).clamp(-limit, limit);
+                (tau, tau)
+            }
+            PdForm::Hybrid => {
+                let tau = spring.clamp(-limit, limit);
+                (tau, tau - kd * qd)
+            }
+        }
+    }
 }
 
 /// Everything a backend reports after a step.

@@ -107,17 +107,22 @@ pub fn mean_ci(values: &[f64], resamples: usize, seed: u64) -> MeanCi {
         };
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut means: Vec<f64> = (0..resamples.max(1))
+    let means: Vec<f64> = (0..resamples.max(1))
         .map(|_| (0..n).map(|_| values[rng.random_range(0..n)]).sum::<f64>() / n as f64)
         .collect();
-    means.sort_by(f64::total_cmp);
-    let pct =
-        |p: f64| means[((p * (means.len() - 1) as f64).round() as usize).min(means.len() - 1)];
     MeanCi {
         episodes: n,
         mean: values.iter().sum::<f64>() / n as f64,
-        ci95: [pct(0.025), pct(0.975)],
+        ci95: central_95(means),
     }
+}
+
+/// The 2.5th and 97.5th percentiles of bootstrap estimates (not empty).
+fn central_95(mut estimates: Vec<f64>) -> [f64; 2] {
+    estimates.sort_by(f64::total_cmp);
+    let last = estimates.len() - 1;
+    let pct = |p: f64| estimates[((p * last as f64).round() as usize).min(last)];
+    [pct(0.025), pct(0.975)]
 }
 
 /// One episode on both engines.
@@ -269,7 +274,7 @@ pub fn compare_fats(pairs: &[&EpisodePair], resamples: usize, seed: u64) -> Comp
     };
     let (a, b) = (fats(&|p| p.0), fats(&|p| p.1));
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut diffs: Vec<f64> = (0..resamples.max(1))
+    let diffs: Vec<f64> = (0..resamples.max(1))
         .map(|_| {
             by_task
                 .values()
@@ -286,14 +291,11 @@ pub fn compare_fats(pairs: &[&EpisodePair], resamples: usize, seed: u64) -> Comp
                 / tasks
         })
         .collect();
-    diffs.sort_by(f64::total_cmp);
-    let pct =
-        |p: f64| diffs[((p * (diffs.len() - 1) as f64).round() as usize).min(diffs.len() - 1)];
     Compared {
         a,
         b,
         diff: b - a,
-        ci95: [pct(0.025), pct(0.975)],
+        ci95: central_95(diffs),
     }
 }
 

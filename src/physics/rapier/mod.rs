@@ -168,24 +168,13 @@ impl Physics for RapierPhysics {
             .get_multibody(*multibody)
             .expect("robot multibody");
         let gv = mb.generalized_velocity();
-        let explicit = self.settings.pd_form == PdForm::Explicit;
         for (j, joint) in self.model.joints.iter().enumerate() {
             let (link_id, dof) = links[j];
             let q = mb.link(link_id).expect("link").joint().coords()[3] as f64;
-            let qd = gv[dof] as f64;
-            let (kp, kd, limit) = (
-                self.gains.kp[j],
-                self.gains.kd[j],
-                self.gains.effort_limit_nm[j],
-            );
-            let spring = kp * (self.targets[j] - q);
-            // Hybrid: kd is implicit joint damping inside rapier; report it all the same.
-            let tau = if explicit {
-                (spring - kd * qd).clamp(-limit, limit)
-            } else {
-                spring.clamp(-limit, limit)
-            };
-            self.applied_torque_nm[j] = if explicit { tau } else { tau - kd * qd };
+            let (tau, reported) =
+                self.gains
+                    .torque_nm(self.settings.pd_form, j, self.targets[j], q, gv[dof] as f64);
+            self.applied_torque_nm[j] = reported;
             if tau == 0.0 {
                 continue;
             }
