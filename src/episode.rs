@@ -2,6 +2,7 @@
 //! frame), observe, advance one control step (action delay, force replay and PD at the
 //! physics rate, metrics, termination), finish.
 
+use crate::feet::{FeetMeter, FootContact};
 use crate::metrics::{keypoint_error_m, reanchor, EpisodeSeries};
 use crate::motion::{Reference, ReferenceFrame, Sequence};
 use crate::physics::{Physics, PhysicsState, ResetState, RootState};
@@ -119,6 +120,20 @@ pub struct TraceStep {
     /// Reference joint angles at this step, rad.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_q: Option<Vec<f64>>,
+    /// The feet on the ground over this step: forces, centre of pressure, slip.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feet: Option<Vec<FootContact>>,
+}
+
+/// What an episode recorded while tracing was on: the trace proper, and the feet's
+/// slip over the whole episode (kept even where the trace stops, for `crosscheck`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EpisodeTrace {
+    /// Steps of the trace (all, or the first seconds: see [`Episode::record_trace_for`]).
+    pub steps: Vec<TraceStep>,
+    /// Per control step of the whole episode, each foot's slip accumulated since the
+    /// start (feet in robot-model order), m.
+    pub foot_slip_m: Vec<Vec<f64>>,
 }
 
 /// Everything fixed across the episodes of a run.
@@ -162,6 +177,13 @@ pub struct Episode<'a> {
     trace: Option<Vec<TraceStep>>,
     /// Steps ending later than this (s since the start) are left out of the trace.
     trace_until_s: f64,
+    /// The feet's contacts, metered while a trace is recorded.
+    feet: FeetMeter,
+    /// Body poses at the start of the physics step (for the feet's slip).
+    poses_before_step: Vec<Isometry3<f64>>,
+    /// The feet's accumulated slip per control step, whole episode, while a trace is
+    /// recorded (also past `trace_until_s`), m.
+    foot_slip_m: Option<Vec<Vec<f64>>>,
     /// Hand forces of the last physics step, world frame.
     last_hand_force_w: [Vector3<f64>; 2],
     /// Body poses of the reference at the current step (set by `record`).
@@ -222,6 +244,9 @@ impl<'a> Episode<'a> {
             physics_wall: std::time::Duration::ZERO,
             trace: None,
             trace_until_s: f64::INFINITY,
+            feet: FeetMeter::new(robot),
+            poses_before_step: Vec::new(),
+            foot_slip_m: None,
             last_hand_force_w: [Vector3::zeros(); 2],
             faults: PolicyFaults::default(),
             next_targets: Vec::new(),
@@ -303,10 +328,23 @@ impl<'a> Episode<'a> {
             self.last_hand_force_w =
                 self.replay
                     .apply(physics, &self.reference, &self.state.world_from_body);
+            let metering = self.foot_slip_m.is_some();
+            if metering {
+                self.poses_before_step
+                    .clone_from(&self.state.world_from_body);
+            }
             let started = std::time::Instant::now();
             physics.step();
             self.physics_wall += started.elapsed();
             physics.read_state(&mut self.state);
+            if metering {
+                self.feet.after_step(
+                    physics,
+                    &self.poses_before_step,
+                    &self.state.world_from_body,
+                    physics.settings().dt_s,
+                );
+            }
             power += self
                 .state
                 .applied_torque_nm
@@ -376,6 +414,11 @@ impl<'a> Episode<'a> {
         let d = root.world_from_root.translation.vector - frame.world_from_root.translation.vector;
         self.series.root_drift_m.push(d.xy().norm());
         let time_s = self.step as f64 * self.setup.profile.control_dt_s;
+        let feet = self.foot_slip_m.as_mut().map(|slip| {
+            let feet = self.feet.finish_step(self.setup.profile.control_dt_s);
+            slip.push(feet.iter().map(|f| f.slip_m).collect());
+            feet
+        });
         if let Some(trace) = self.trace.as_mut().filter(|_| time_s <= self.trace_until_s) {
             let p = root.world_from_root.translation.vector;
             let r = root.world_from_root.rotation;
@@ -396,6 +439,7 @@ impl<'a> Episode<'a> {
                     [r.w, r.i, r.j, r.k]
                 }),
                 reference_q: Some(frame.joint_pos.clone()),
+                feet,
             });
         }
     }
@@ -408,19 +452,27 @@ impl<'a> Episode<'a> {
     /// Records a rollout trace from now on (see [`TraceStep`]).
     pub fn record_trace(&mut self) {
         self.trace.get_or_insert_with(Vec::new);
+        self.foot_slip_m.get_or_insert_with(Vec::new);
         self.trace_until_s = f64::INFINITY;
     }
 
     /// Records the trace of the steps ending within `seconds` of the episode's start only
     /// (a cross-engine comparison of the first second needs no more).
+    /// The feet's slip is metered over the whole episode all the same
+    /// ([`EpisodeTrace::foot_slip_m`]).
     pub fn record_trace_for(&mut self, seconds: f64) {
         self.trace.get_or_insert_with(Vec::new);
+        self.foot_slip_m.get_or_insert_with(Vec::new);
         self.trace_until_s = seconds + 1e-9;
     }
 
     /// The trace recorded so far, if tracing was on.
-    pub fn take_trace(&mut self) -> Option<Vec<TraceStep>> {
-        self.trace.take()
+    pub fn take_trace(&mut self) -> Option<EpisodeTrace> {
+        let steps = self.trace.take()?;
+        Some(EpisodeTrace {
+            steps,
+            foot_slip_m: self.foot_slip_m.take().unwrap_or_default(),
+        })
     }
 
     /// Compares the robot's torso with the reference's (poses from `record`).

@@ -11,6 +11,7 @@
 
 pub mod embedded_data;
 pub mod episode;
+pub mod feet;
 pub mod metrics;
 pub mod motion;
 pub mod names;

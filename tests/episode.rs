@@ -210,6 +210,10 @@ impl thorarena::physics::Physics for DivergingPhysics {
     fn contact_count(&self) -> usize {
         self.inner.contact_count()
     }
+
+    fn ground_contacts(&self, out: &mut Vec<thorarena::physics::GroundContact>) {
+        self.inner.ground_contacts(out);
+    }
 }
 
 #[test]
@@ -293,7 +297,7 @@ fn a_push_with_a_direction_turns_with_the_references_initial_heading() {
         for _ in 0..60 {
             ep.advance(&mut physics, &hold); // 1.2 s: past the 1 s ramp
         }
-        let last = ep.take_trace().unwrap().pop().unwrap();
+        let last = ep.take_trace().unwrap().steps.pop().unwrap();
         last.hand_force_w[0]
     };
     let close = |f: [f64; 3], want: [f64; 3]| {

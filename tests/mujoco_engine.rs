@@ -458,6 +458,28 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
         let mean = per_episode.iter().sum::<f64>() / 12.0;
         assert!((agg["mean"].as_f64().unwrap() - mean).abs() < 1e-12);
     }
+    // The feet's slip over each whole episode, on both engines: holding the first pose,
+    // the feet barely move (a few millimetres to 3 cm while the reference's first frame
+    // settles), and the engines' slip never parts by more than the 2 cm margin.
+    assert!(stdout.contains("feet's slip parts by > 2 cm"), "{stdout}");
+    for e in episodes {
+        let f = &e["foot_slip"];
+        for side in 0..2 {
+            let total = f["total_m"][side].as_f64().unwrap();
+            assert!((0.0..0.05).contains(&total), "{e}");
+        }
+        assert!(f["parts_at_s"].is_null(), "{e}");
+    }
+    for s in settings {
+        assert_eq!(s["slip_parted"], 0);
+        let slip = &s["foot_slip_m"];
+        assert!(slip["a"].as_f64().unwrap() > 0.0 && slip["b"].as_f64().unwrap() > 0.0);
+    }
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .ends_with("foot_slip_m_rapier,foot_slip_m_mujoco,foot_slip_parts_at_s"));
     // Without force, holding the first pose, the engines' joints stay within a few
     // hundredths of a radian of each other over the first second.
     let still = settings[0]["joint_divergence_rad"]["mean"]
@@ -501,5 +523,78 @@ fn crosscheck_refuses_bad_arguments_before_running_anything() {
         assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
         assert!(stderr.contains(expected), "{args:?}: {stderr}");
         assert!(!out.join("rapier").exists(), "{args:?}: nothing may run");
+    }
+}
+
+#[test]
+fn traces_carry_the_feet_on_both_engines() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::traces_carry_the_feet",
+            "built without the `mujoco` feature",
+        );
+    }
+    // The same episode traced on each engine: both feet every step, their normal forces
+    // carrying the robot's weight on average, slip accumulating and never decreasing.
+    let g1 = thorarena::robot::load_bundled("g1_29dof").unwrap();
+    let weight_n = g1.total_mass_kg() * 9.81;
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
+    let dir = tempfile::tempdir().unwrap();
+    for engine in ["rapier", "mujoco"] {
+        let out = dir.path().join(engine);
+        let o = run(&[
+            "eval",
+            "--policy",
+            "hold",
+            "--dataset",
+            sample.to_str().unwrap(),
+            "--settings",
+            "no-force",
+            "--engine",
+            engine,
+            "--trace",
+            "clean_table/clean_table_000",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let trace: Vec<thorarena::episode::TraceStep> = serde_json::from_str(
+            &std::fs::read_to_string(out.join("traces/clean_table-clean_table_000-no-force.json"))
+                .unwrap(),
+        )
+        .unwrap();
+        assert!(trace.len() > 50);
+        let mut load = 0.0;
+        let mut last_slip = [0.0; 2];
+        for s in &trace {
+            let feet = s.feet.as_ref().expect("every step has the feet");
+            let names: Vec<&str> = feet.iter().map(|f| f.body.as_str()).collect();
+            assert_eq!(names, ["left_ankle_roll_link", "right_ankle_roll_link"]);
+            for (k, f) in feet.iter().enumerate() {
+                assert!(
+                    f.normal_n >= 0.0 && f.slip_m >= last_slip[k],
+                    "{engine}: {f:?}"
+                );
+                assert_eq!(f.soles.len(), 4);
+                if f.normal_n > 0.0 {
+                    let r = f.friction_ratio.unwrap();
+                    assert!(
+                        (0.0..=1.0 + 1e-6).contains(&r),
+                        "{engine}: ratio {r} above μ"
+                    );
+                    assert!(
+                        f.cop_w.unwrap()[2].abs() < 0.01,
+                        "{engine}: CoP on the ground"
+                    );
+                }
+                last_slip[k] = f.slip_m;
+            }
+            load += feet.iter().map(|f| f.normal_n).sum::<f64>();
+        }
+        let mean = load / trace.len() as f64;
+        assert!(
+            (mean - weight_n).abs() < 0.05 * weight_n,
+            "{engine}: mean ground load {mean:.1} N, weight {weight_n:.1} N"
+        );
     }
 }

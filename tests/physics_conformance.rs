@@ -17,6 +17,9 @@ use thorarena::robot::{self, RobotModel};
 mod rapier {
     use super::*;
 
+    /// Which engine this module tests (for the known differences of `friction.rs`).
+    const ENGINE: &str = "rapier";
+
     /// The backend under test.
     fn backend(
         model: &Arc<RobotModel>,
@@ -31,11 +34,15 @@ mod rapier {
     }
 
     include!("physics_conformance/suite.rs");
+    include!("physics_conformance/friction.rs");
 }
 
 #[cfg(feature = "mujoco")]
 mod mujoco {
     use super::*;
+
+    /// Which engine this module tests (for the known differences of `friction.rs`).
+    const ENGINE: &str = "mujoco";
 
     /// The backend under test: MuJoCo on the MJCF generated from the robot model.
     fn backend(
@@ -53,4 +60,5 @@ mod mujoco {
     }
 
     include!("physics_conformance/suite.rs");
+    include!("physics_conformance/friction.rs");
 }

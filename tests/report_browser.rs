@@ -307,6 +307,31 @@ fn report_and_viewer_render_in_headless_chromium() {
         v["plot"]["painted_pixels"].as_u64().unwrap_or(0) > 2000,
         "{context}"
     );
+    // The feet: both of the G1's, their slip speed and load plotted over the whole trace.
+    assert_eq!(
+        v["feet"], 2,
+        "the trace carries both feet's contacts; {context}"
+    );
+    assert!(
+        v["foot_plot"]["painted_pixels"].as_u64().unwrap_or(0) > 2000,
+        "the foot slip plot is blank; {context}"
+    );
+    let datasets = v["foot_plot_datasets"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    assert_eq!(datasets.len(), 4, "slip and load per foot; {context}");
+    let steps = v["steps"].as_u64().unwrap();
+    for d in &datasets {
+        assert_eq!(d["points"].as_u64(), Some(steps), "{d}; {context}");
+    }
+    assert!(
+        datasets
+            .iter()
+            .any(|d| d["label"].as_str().unwrap().contains("normal force")
+                && d["max"].as_f64().unwrap_or(0.0) > 100.0),
+        "a foot carried the robot's weight: {datasets:?}; {context}"
+    );
     for png in [
         "report.png",
         "view-start.png",

@@ -343,6 +343,7 @@ fn trace(with_reference: bool) -> Vec<TraceStep> {
             reference_root_pos: with_reference.then_some([0.0, 0.5, 0.78]),
             reference_root_quat_wxyz: with_reference.then_some([1.0, 0.0, 0.0, 0.0]),
             reference_q: with_reference.then(|| q.clone()),
+            feet: None,
         })
         .collect()
 }

@@ -10,8 +10,8 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use thorarena::results::crosscheck::{
-    compare_push_levels, compare_settings, joint_divergence, pair_episodes, Compared, MeanCi,
-    SettingComparison,
+    compare_push_levels, compare_settings, foot_slip_pair, joint_divergence, pair_episodes,
+    Compared, MeanCi, SettingComparison, SLIP_PARTING_M,
 };
 use thorarena::results::{read_header, read_summary, EpisodeLog, EPISODES_FILE};
 
@@ -69,6 +69,7 @@ fn tables(first_column: &str, rows: &[SettingComparison], divergence_seconds: f6
             ("survival", &s.survival, 3),
             ("keypoint error (mm)", &s.kp_mm, 1),
             ("FATS", &s.fats, 2),
+            ("foot slip per episode (m)", &s.foot_slip_m, 3),
         ] {
             let _ = writeln!(
                 table,
@@ -81,7 +82,8 @@ fn tables(first_column: &str, rows: &[SettingComparison], divergence_seconds: f6
     }
     let _ = write!(
         table,
-        "\n| {first_column} | episodes | RMS joint-angle divergence over the first {divergence_seconds} s, rad [95 % CI] |\n|---|---:|---|\n",
+        "\n| {first_column} | episodes | RMS joint-angle divergence over the first {divergence_seconds} s, rad [95 % CI] | feet's slip parts by > {parting_cm} cm: episodes, at (s) [95 % CI] |\n|---|---:|---|---|\n",
+        parting_cm = SLIP_PARTING_M * 100.0,
     );
     for s in rows {
         let MeanCi {
@@ -89,10 +91,19 @@ fn tables(first_column: &str, rows: &[SettingComparison], divergence_seconds: f6
             mean,
             ci95,
         } = s.joint_divergence_rad;
+        let parts = &s.slip_parts_at_s;
+        let when = if s.slip_parted == 0 {
+            "—".to_string()
+        } else {
+            format!(
+                "{:.2} [{:.2}, {:.2}]",
+                parts.mean, parts.ci95[0], parts.ci95[1]
+            )
+        };
         let _ = writeln!(
             table,
-            "| {} | {episodes} | {mean:.4} [{:.4}, {:.4}] |",
-            s.setting, ci95[0], ci95[1]
+            "| {} | {episodes} | {mean:.4} [{:.4}, {:.4}] | {} of {}, {when} |",
+            s.setting, ci95[0], ci95[1], s.slip_parted, s.episodes,
         );
     }
     table
@@ -140,11 +151,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     // Per engine, the joint angles of each episode's first seconds, by episode key.
     let mut first_q: [FirstJoints; 2] = Default::default();
-    for (((run_args, ctx), dir), joints) in
+    // Per engine, the feet's accumulated slip per control step of each whole episode.
+    let mut slips: [FirstJoints; 2] = Default::default();
+    for ((((run_args, ctx), dir), joints), slip) in
         [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
             .into_iter()
             .zip(&dirs)
             .zip(first_q.iter_mut())
+            .zip(slips.iter_mut())
     {
         eprintln!("== {} → {}", ctx.engine.name(), dir.display());
         let mut policy = make_policy(
@@ -156,13 +170,15 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         )?;
         let seconds = args.divergence_seconds;
         let mut sink = |r: &thorarena::results::EpisodeRecord,
-                        steps: &[thorarena::episode::TraceStep]| {
-            let q = steps
+                        trace: &thorarena::episode::EpisodeTrace| {
+            let q = trace
+                .steps
                 .iter()
                 .take_while(|s| s.time_s <= seconds + 1e-9)
                 .map(|s| s.q.clone())
                 .collect();
             joints.insert(r.key(), q);
+            slip.insert(r.key(), trace.foot_slip_m.clone());
         };
         let first = FirstSeconds {
             seconds,
@@ -189,6 +205,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         let key = (p.task.clone(), p.sequence_id.clone(), p.setting.clone());
         if let (Some(qa), Some(qb)) = (first_q[0].get(&key), first_q[1].get(&key)) {
             p.joint_divergence = joint_divergence(qa, qb);
+        }
+        if let (Some(sa), Some(sb)) = (slips[0].get(&key), slips[1].get(&key)) {
+            p.foot_slip = foot_slip_pair(sa, sb, header.control_dt_s);
         }
     }
     let settings = compare_settings(&pairs, args.bootstrap, 0);
@@ -226,6 +245,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         "joint_divergence_steps",
         "joint_divergence_rms_rad",
         "joint_divergence_max_rad",
+        "foot_slip_m_rapier",
+        "foot_slip_m_mujoco",
+        "foot_slip_parts_at_s",
     ])?;
     let num = |v: f64| {
         if v.is_finite() {
@@ -249,6 +271,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
                 .map_or(String::new(), |d| d.steps.to_string()),
             num(p.joint_divergence.map_or(f64::NAN, |d| d.rms_rad)),
             num(p.joint_divergence.map_or(f64::NAN, |d| d.max_rad)),
+            num(p.foot_slip.map_or(f64::NAN, |f| f.total_m[0])),
+            num(p.foot_slip.map_or(f64::NAN, |f| f.total_m[1])),
+            num(p.foot_slip.and_then(|f| f.parts_at_s).unwrap_or(f64::NAN)),
         ])?;
     }
     let csv_path = out.join("crosscheck.csv");

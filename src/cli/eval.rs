@@ -7,7 +7,7 @@ use anyhow::{bail, Context};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::PathBuf;
-use thorarena::episode::{Termination, TerminationRule, TraceStep};
+use thorarena::episode::{EpisodeTrace, Termination, TerminationRule};
 use thorarena::motion::{Dataset, Sequence};
 use thorarena::policy::Policy;
 use thorarena::profile::{bundled_profile_path, load_profile, Profile};
@@ -300,8 +300,9 @@ pub(super) fn check_out(out: &std::path::Path, args: &RunArgs) -> anyhow::Result
 pub(super) struct FirstSeconds<'a> {
     /// How many seconds of each episode.
     pub seconds: f64,
-    /// Called once per episode run, with its record and those steps.
-    pub sink: &'a mut dyn FnMut(&EpisodeRecord, &[TraceStep]),
+    /// Called once per episode run, with its record, those steps and the feet's slip
+    /// over the whole episode.
+    pub sink: &'a mut dyn FnMut(&EpisodeRecord, &EpisodeTrace),
 }
 
 /// Runs the benchmark for one connected policy into `out`.
@@ -441,7 +442,7 @@ pub(super) fn evaluate(
             .contains(&format!("{}/{}", r.task, r.sequence_id));
         if let Some(trace) = trace.filter(|_| traced) {
             let path = traces_dir.join(format!("{}-{}-{}.json", r.task, r.sequence_id, r.setting));
-            let written = serde_json::to_vec(trace)
+            let written = serde_json::to_vec(&trace.steps)
                 .map_err(std::io::Error::other)
                 .and_then(|b| std::fs::write(&path, b));
             if let Err(e) = written {

@@ -20,7 +20,7 @@ pub use mjcf::mjcf_of;
 pub use mujoco::{MujocoError, MujocoPhysics, MUJOCO_VERSION};
 pub use rapier::{standing_default_pose, RapierPhysics};
 pub use settings::{ContactMode, PdForm, PhysicsSettings};
-pub use state::{ExternalForce, PdGains, PhysicsState, ResetState, RootState};
+pub use state::{ExternalForce, GroundContact, PdGains, PhysicsState, ResetState, RootState};
 
 use crate::robot::RobotModel;
 
@@ -63,4 +63,8 @@ pub trait Physics {
 
     /// Number of active contact points in the last step (for diagnostics and benchmarks).
     fn contact_count(&self) -> usize;
+
+    /// Writes into `out` (cleared first) every robot–ground contact that carried force in
+    /// the last step, with the ground's normal and friction force on the robot.
+    fn ground_contacts(&self, out: &mut Vec<GroundContact>);
 }

@@ -12,7 +12,7 @@
 //! mass. Applied torques are reported from the law, the same way as rapier's.
 
 use super::settings::{PdForm, PhysicsSettings};
-use super::state::{ExternalForce, PdGains, PhysicsState, ResetState, RootState};
+use super::state::{ExternalForce, GroundContact, PdGains, PhysicsState, ResetState, RootState};
 use super::Physics;
 use crate::robot::RobotModel;
 use mujoco_rs::prelude::*;
@@ -66,6 +66,8 @@ struct Indices {
     bodies: Vec<usize>,
     /// qpos / dof address of the free joint of the root (None: fixed base).
     free: Option<(usize, usize)>,
+    /// Per MuJoCo body id: the robot body it is, if any.
+    robot_body_of: Vec<Option<usize>>,
 }
 
 /// The robot simulated by MuJoCo.
@@ -147,6 +149,10 @@ impl MujocoPhysics {
                     .ok_or_else(|| mismatch(format!("no body `{}`", b.name)))?,
             );
         }
+        let mut robot_body_of = vec![None; mj.ffi().nbody.max(0) as usize];
+        for (i, &b) in bodies.iter().enumerate() {
+            robot_body_of[b] = Some(i);
+        }
         let root = bodies[0];
         let free = if settings.fixed_base {
             None
@@ -183,6 +189,7 @@ impl MujocoPhysics {
                 joints,
                 bodies,
                 free,
+                robot_body_of,
             },
             mjcf: label,
         };
@@ -380,6 +387,43 @@ impl Physics for MujocoPhysics {
 
     fn contact_count(&self) -> usize {
         self.data.ffi().ncon.max(0) as usize
+    }
+
+    fn ground_contacts(&self, out: &mut Vec<GroundContact>) {
+        out.clear();
+        let geom_body = self.data.model().geom_bodyid();
+        for (i, con) in self.data.contact().iter().enumerate() {
+            // Robot against the world body (the ground); robot self-contacts are not ground.
+            let side = |g: i32| -> Option<usize> {
+                let b = *geom_body.get(usize::try_from(g).ok()?)?;
+                *self.idx.robot_body_of.get(usize::try_from(b).ok()?)?
+            };
+            let world = |g: i32| usize::try_from(g).is_ok_and(|g| geom_body[g] == 0);
+            let (body, sign) = match (side(con.geom[0]), side(con.geom[1])) {
+                (None, Some(b)) if world(con.geom[0]) => (b, 1.0),
+                (Some(b), None) if world(con.geom[1]) => (b, -1.0),
+                _ => continue,
+            };
+            // The force of geom 1 on geom 2 in the contact frame (normal from 1 to 2, then
+            // the two tangents), as the constraint solver found it in the last step.
+            let f = self.data.contact_force(i);
+            let frame = |k: usize| {
+                Vector3::new(con.frame[3 * k], con.frame[3 * k + 1], con.frame[3 * k + 2])
+            };
+            let normal_n = f[0].abs();
+            if normal_n <= 0.0 {
+                continue;
+            }
+            let friction_w = (frame(1) * f[1] + frame(2) * f[2]) * sign;
+            let pos = Point3::new(con.pos[0], con.pos[1], con.pos[2]);
+            let world_from_body = body_pose(&self.data, self.idx.bodies[body]);
+            out.push(GroundContact {
+                body,
+                point_b: world_from_body.inverse_transform_point(&pos),
+                normal_n,
+                friction_w,
+            });
+        }
     }
 }
 

@@ -114,6 +114,23 @@ pub struct PhysicsState {
     pub applied_torque_nm: Vec<f64>,
 }
 
+/// One point where the ground pushed on the robot during the last physics step.
+///
+/// Both backends report the same quantities, so traces of one episode on two engines can be
+/// laid side by side: where the point is on the body (to follow its slip from the body's
+/// motion), and the ground's reaction split into its normal and frictional parts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GroundContact {
+    /// Robot body touching the ground (index in the robot model).
+    pub body: usize,
+    /// Contact point in that body's frame, m.
+    pub point_b: Point3<f64>,
+    /// Normal force of the ground on the body, N (≥ 0).
+    pub normal_n: f64,
+    /// Friction force of the ground on the body, world frame, N (in the ground plane).
+    pub friction_w: Vector3<f64>,
+}
+
 /// A force held on a body until changed or cleared.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ExternalForce {

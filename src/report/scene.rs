@@ -68,6 +68,84 @@ pub struct ViewScene {
     pub reference_keypoints_w: Vec<Vec<[f64; 3]>>,
     /// Per step: keypoint error, mm.
     pub kp_err_mm: Vec<f64>,
+    /// The feet on the ground, when the trace has them.
+    pub feet: Option<FeetView>,
+}
+
+/// The feet's ground contact, step by step (see [`crate::feet::FootContact`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FeetView {
+    /// The feet's body names.
+    pub names: Vec<String>,
+    /// Per step, per foot: load-weighted sliding speed of its sole points, m/s.
+    pub slip_speed_mps: Vec<Vec<f64>>,
+    /// Per step, per foot: slip accumulated since the start, m.
+    pub slip_m: Vec<Vec<f64>>,
+    /// Per step, per foot: normal force, N.
+    pub normal_n: Vec<Vec<f64>>,
+    /// Per step, per foot: the ground's whole reaction (normal + friction), world, N.
+    pub reaction_w: Vec<Vec<[f64; 3]>>,
+    /// Per step, per foot: centre of pressure, world, m (`None` without load).
+    pub cop_w: Vec<Vec<Option<[f64; 3]>>>,
+}
+
+/// The feet's view of a trace whose every step has the same feet; `None` otherwise.
+fn feet_view(trace: &[TraceStep]) -> Option<FeetView> {
+    let first = trace.first()?.feet.as_ref()?;
+    let names: Vec<String> = first.iter().map(|f| f.body.clone()).collect();
+    let same = |s: &TraceStep| {
+        s.feet.as_ref().is_some_and(|f| {
+            f.len() == names.len() && f.iter().zip(&names).all(|(f, n)| &f.body == n)
+        })
+    };
+    if names.is_empty() || !trace.iter().all(same) {
+        return None;
+    }
+    let per = |f: &dyn Fn(&crate::feet::FootContact) -> f64| -> Vec<Vec<f64>> {
+        trace
+            .iter()
+            .map(|s| {
+                s.feet
+                    .iter()
+                    .flatten()
+                    .map(|c| (f(c) * 1e4).round() / 1e4)
+                    .collect()
+            })
+            .collect()
+    };
+    Some(FeetView {
+        slip_speed_mps: per(&|c| c.slip_speed_mps),
+        slip_m: per(&|c| c.slip_m),
+        normal_n: per(&|c| c.normal_n),
+        reaction_w: trace
+            .iter()
+            .map(|s| {
+                s.feet
+                    .iter()
+                    .flatten()
+                    .map(|c| {
+                        [
+                            c.friction_w[0],
+                            c.friction_w[1],
+                            c.friction_w[2] + c.normal_n,
+                        ]
+                        .map(r4)
+                    })
+                    .collect()
+            })
+            .collect(),
+        cop_w: trace
+            .iter()
+            .map(|s| {
+                s.feet
+                    .iter()
+                    .flatten()
+                    .map(|c| c.cop_w.map(|p| p.map(r4)))
+                    .collect()
+            })
+            .collect(),
+        names,
+    })
 }
 
 /// What the run directory around a trace says about its episode (when the trace sits in
@@ -286,5 +364,6 @@ pub fn view_scene(
             .iter()
             .map(|s| (s.kp_err_m * 1e5).round() / 1e2)
             .collect(),
+        feet: feet_view(trace),
     })
 }

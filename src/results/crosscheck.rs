@@ -84,6 +84,35 @@ pub fn joint_divergence(a: &[Vec<f64>], b: &[Vec<f64>]) -> Option<JointDivergenc
     })
 }
 
+/// The engines' accumulated foot slip (all feet) differing by more than this means their
+/// feet no longer move alike on the ground, m.
+pub const SLIP_PARTING_M: f64 = 0.02;
+
+/// The feet's slip over one episode on both engines.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FootSlipPair {
+    /// Slip of all feet over the whole episode (to its end or fall) on each engine, m.
+    pub total_m: [f64; 2],
+    /// First time since the start at which the engines' accumulated slip differs by
+    /// more than [`SLIP_PARTING_M`], s; `None` if it never does over the steps both ran.
+    pub parts_at_s: Option<f64>,
+}
+
+/// Compares two engines' per-step accumulated slip (per control step, per foot, as
+/// [`crate::episode::EpisodeTrace::foot_slip_m`]); `None` if either is empty.
+pub fn foot_slip_pair(a: &[Vec<f64>], b: &[Vec<f64>], control_dt_s: f64) -> Option<FootSlipPair> {
+    let total = |s: &[f64]| s.iter().sum::<f64>();
+    let (last_a, last_b) = (a.last()?, b.last()?);
+    let parts = a
+        .iter()
+        .zip(b)
+        .position(|(x, y)| (total(x) - total(y)).abs() > SLIP_PARTING_M);
+    Some(FootSlipPair {
+        total_m: [total(last_a), total(last_b)],
+        parts_at_s: parts.map(|k| (k + 1) as f64 * control_dt_s),
+    })
+}
+
 /// A mean over episodes with its bootstrap 95 % confidence interval.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct MeanCi {
@@ -141,6 +170,8 @@ pub struct EpisodePair {
     /// Joint-angle divergence over the first second, when both runs recorded it (an
     /// episode carried over by `--resume` did not).
     pub joint_divergence: Option<JointDivergence>,
+    /// The feet's slip on both engines, when both runs recorded it.
+    pub foot_slip: Option<FootSlipPair>,
 }
 
 /// A mean over episodes, on each engine, and the mean paired difference `b − a` with its
@@ -175,6 +206,12 @@ pub struct SettingComparison {
     pub fats: Compared,
     /// RMS joint-angle divergence over the first second, rad (episodes that have it).
     pub joint_divergence_rad: MeanCi,
+    /// Slip of all feet over an episode, m (episodes that have it).
+    pub foot_slip_m: Compared,
+    /// Episodes whose engines' slip parted (of those that have it).
+    pub slip_parted: usize,
+    /// When the slip parted, s since the start (over the episodes where it did).
+    pub slip_parts_at_s: MeanCi,
 }
 
 /// Pairs the records of two runs of the same episodes (by task, sequence and setting);
@@ -202,6 +239,7 @@ pub fn pair_episodes(
                 a: EngineNumbers::of(r, th),
                 b: EngineNumbers::of(o, th),
                 joint_divergence: None,
+                foot_slip: None,
             }),
             None => unpaired.push(r.key()),
         }
@@ -332,6 +370,24 @@ pub fn compare_settings(
                     resamples,
                     seed,
                 ),
+                foot_slip_m: compare(
+                    &ps.iter()
+                        .filter_map(|p| p.foot_slip.map(|f| (f.total_m[0], f.total_m[1])))
+                        .collect::<Vec<_>>(),
+                    resamples,
+                    seed,
+                ),
+                slip_parted: ps
+                    .iter()
+                    .filter(|p| p.foot_slip.is_some_and(|f| f.parts_at_s.is_some()))
+                    .count(),
+                slip_parts_at_s: mean_ci(
+                    &ps.iter()
+                        .filter_map(|p| p.foot_slip.and_then(|f| f.parts_at_s))
+                        .collect::<Vec<_>>(),
+                    resamples,
+                    seed,
+                ),
             }
         })
         .collect()
@@ -422,6 +478,7 @@ mod tests {
                 a: numbers(1.0),
                 b: numbers(i as f64 / 10.0),
                 joint_divergence: None,
+                foot_slip: None,
             })
             .collect();
         let levels = compare_push_levels(&pairs, &settings, 100, 0);
@@ -453,6 +510,7 @@ mod tests {
                 score: b,
             },
             joint_divergence: None,
+            foot_slip: None,
         };
         // Task x: three episodes, 10 → 20 each; task y: one episode, 50 → 50.
         let pairs = [
@@ -486,5 +544,19 @@ mod tests {
         assert_eq!(joint_divergence(&a, &a).map(|d| d.max_rad), Some(0.0));
         assert!(joint_divergence(&a, &[]).is_none());
         assert!(joint_divergence(&a, &[vec![0.0]]).is_none());
+    }
+
+    #[test]
+    fn foot_slip_parts_at_the_first_step_the_totals_differ_by_more_than_the_margin() {
+        // Two feet; engine b slides 3 cm more from the third step on.
+        let a: Vec<Vec<f64>> = (0..5).map(|k| vec![0.01 * k as f64, 0.0]).collect();
+        let b: Vec<Vec<f64>> = (0..5)
+            .map(|k| vec![0.01 * k as f64, if k >= 2 { 0.03 } else { 0.0 }])
+            .collect();
+        let p = foot_slip_pair(&a, &b, 0.02).unwrap();
+        assert_eq!(p.parts_at_s, Some(0.06));
+        assert!((p.total_m[0] - 0.04).abs() < 1e-12 && (p.total_m[1] - 0.07).abs() < 1e-12);
+        assert_eq!(foot_slip_pair(&a, &a, 0.02).unwrap().parts_at_s, None);
+        assert!(foot_slip_pair(&a, &[], 0.02).is_none());
     }
 }

@@ -10,7 +10,7 @@
 
 use super::latency::LatencyRecorder;
 use super::{EvalPlan, LatencySummary};
-use crate::episode::{Episode, EpisodeSetup, PolicyFault, Termination, TraceStep};
+use crate::episode::{Episode, EpisodeSetup, EpisodeTrace, PolicyFault, Termination};
 use crate::motion::Sequence;
 use crate::physics::{make_physics, Physics, PhysicsSettings};
 use crate::policy::{ActOutcome, LatencyMode, MissRule, Observation, Policy, TransportStats};
@@ -54,7 +54,7 @@ enum SlotCommand {
 struct Finished {
     job: usize,
     record: EpisodeRecord,
-    trace: Option<Vec<TraceStep>>,
+    trace: Option<EpisodeTrace>,
 }
 
 /// A slot's state after its command: the finished episode(s) and the next observation.
@@ -84,7 +84,7 @@ pub fn run_eval(
     sequences: &[Sequence],
     jobs: &[(usize, usize)],
     policy: &mut dyn Policy,
-    on_record: &mut dyn FnMut(&EpisodeRecord, Option<&[TraceStep]>),
+    on_record: &mut dyn FnMut(&EpisodeRecord, Option<&EpisodeTrace>),
 ) -> RunOutcome {
     let n_slots = plan.envs.max(1);
     let n_workers = plan.workers.clamp(1, n_slots);
@@ -161,7 +161,7 @@ pub fn run_eval(
                         shared.retry.lock().expect("retry queue").push(f.job);
                         continue;
                     }
-                    on_record(&f.record, f.trace.as_deref());
+                    on_record(&f.record, f.trace.as_ref());
                     results[f.job] = Some(f.record);
                 }
                 observations.extend(report.observation);

@@ -1,7 +1,9 @@
 // The 3D replay of `thorarena view`. The Rust side computed every body's world pose per
 // step (forward kinematics of the trace) and the shapes of each body; this script builds
 // one three.js mesh per collision shape, moves the bodies to the poses of the step the
-// timeline points at, and plots the keypoint error with a cursor at that step.
+// timeline points at, and plots the keypoint error with a cursor at that step; when the
+// trace has the feet's contacts, it draws the ground's reaction at each foot's centre of
+// pressure and plots the feet's slip speed and load under the error plot.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
@@ -31,7 +33,9 @@ const COLORS = {
   keypoint: 0x0072b2,
   refKeypoint: 0x2fbf71,
   force: [0xd55e00, 0xcc79a7], // left, right
+  foot: [0x009e73, 0x56b4e9], // first, second foot
 };
+const FOOT_CSS = ["#009e73", "#56b4e9"];
 
 // --- renderer, camera, lights, ground -----------------------------------------------
 const viewport = $("viewport");
@@ -164,6 +168,13 @@ const arrows = COLORS.force.map((color) => {
   return arrow;
 });
 
+const feet = scene.feet;
+const footArrows = (feet ? feet.names : []).map((_, k) => {
+  const arrow = new THREE.ArrowHelper(new THREE.Vector3(0, 0, 1), new THREE.Vector3(), 0.1, COLORS.foot[k % 2]);
+  world.add(arrow);
+  return arrow;
+});
+
 // --- state -----------------------------------------------------------------------------
 let current = 0;
 const layers = {
@@ -171,11 +182,19 @@ const layers = {
   reference: $("show-reference"),
   anchored: $("anchor-reference"),
   forces: $("show-forces"),
+  feet: $("show-feet"),
   keypoints: $("show-keypoints"),
   follow: $("follow"),
 };
 if (!scene.reference_poses) {
   layers.anchored.disabled = true;
+}
+if (!feet) {
+  layers.feet.disabled = true;
+  layers.feet.checked = false;
+  $("feet-plot").classList.add("hidden");
+} else {
+  $("layout").classList.add("with-feet");
 }
 
 function placeBodies(groups, flat) {
@@ -197,6 +216,23 @@ function placeArrows(i) {
     if (!arrow.visible) return;
     const length = n * scale;
     arrow.position.fromArray(scene.hand_points_w[i][side]);
+    arrow.setDirection(scratch.divideScalar(n));
+    arrow.setLength(length, Math.min(0.06, 0.35 * length), Math.min(0.035, 0.2 * length));
+  });
+}
+
+// The ground's reaction on each foot, at its centre of pressure, at the hand arrows' scale
+// divided by ten (a foot carries the robot's weight, ten times a hand's usual force).
+function placeFootArrows(i) {
+  const scale = Math.max(0, Number($("force-scale").value) || 0) / 10000; // m per N
+  footArrows.forEach((arrow, k) => {
+    const cop = feet.cop_w[i][k];
+    scratch.fromArray(feet.reaction_w[i][k]);
+    const n = scratch.length();
+    arrow.visible = layers.feet.checked && cop !== null && n * scale > 1e-3;
+    if (!arrow.visible) return;
+    const length = n * scale;
+    arrow.position.fromArray(cop);
     arrow.setDirection(scratch.divideScalar(n));
     arrow.setLength(length, Math.min(0.06, 0.35 * length), Math.min(0.035, 0.2 * length));
   });
@@ -238,6 +274,7 @@ function setStep(i) {
   robotMarkers.visible = showMarkers && layers.keypoints.checked;
   refMarkers.visible = showMarkers && layers.reference.checked;
   placeArrows(step);
+  if (feet) placeFootArrows(step);
   if (layers.follow.checked) {
     // Keep the view relative to the robot: move camera and target by the root's motion.
     const delta = rootOf(step).sub(previousRoot);
@@ -248,6 +285,7 @@ function setStep(i) {
   $("timeline").value = String(step);
   $("time-label").textContent = `${scene.time_s[step].toFixed(2)} s · ${scene.kp_err_mm[step].toFixed(1)} mm`;
   plot.update("none");
+  if (footPlot) footPlot.update("none");
   requestRender();
 }
 
@@ -334,6 +372,48 @@ const plot = new Chart($("kp-error-plot"), {
   plugins: [cursor],
 });
 
+// The feet: slip speed of each (load-weighted over its sole points) and its normal force.
+const footPlot = feet
+  ? new Chart($("foot-slip-plot"), {
+      type: "line",
+      data: {
+        datasets: feet.names.flatMap((name, k) => [
+          {
+            label: `${name}: slip speed (m/s)`,
+            data: scene.time_s.map((t, i) => ({ x: t, y: feet.slip_speed_mps[i][k] })),
+            borderColor: FOOT_CSS[k % 2],
+            yAxisID: "y",
+          },
+          {
+            label: `${name}: normal force (N)`,
+            data: scene.time_s.map((t, i) => ({ x: t, y: feet.normal_n[i][k] })),
+            borderColor: FOOT_CSS[k % 2],
+            borderDash: [4, 3],
+            borderWidth: 1,
+            yAxisID: "force",
+          },
+        ]),
+      },
+      options: {
+        parsing: false,
+        normalized: true,
+        elements: { point: { radius: 0 }, line: { borderWidth: 1.5 } },
+        interaction: { mode: "nearest", axis: "x", intersect: false },
+        scales: {
+          x: { type: "linear", min: scene.time_s[0], max: scene.time_s[steps - 1], title: { display: true, text: "time (s)" } },
+          y: { beginAtZero: true, title: { display: true, text: "foot slip speed (m/s)" } },
+          force: { position: "right", beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: "normal force (N)" } },
+        },
+        plugins: { legend: { position: "top", align: "end" } },
+        onClick: (event, _elements, chart) => {
+          const t = chart.scales.x.getValueForPixel(event.x);
+          setStep(nearestStep(t));
+        },
+      },
+      plugins: [cursor],
+    })
+  : null;
+
 function nearestStep(t) {
   let lo = 0;
   let hi = steps - 1;
@@ -400,6 +480,10 @@ window.thorarenaView = {
   bodies: scene.bodies.length,
   shapes: scene.bodies.reduce((n, b) => n + b.shapes.length, 0),
   ghost: Boolean(scene.reference_poses),
+  feet: feet ? feet.names.length : 0,
+  footPlot: footPlot
+    ? footPlot.data.datasets.map((d) => ({ label: d.label, points: d.data.length, max: Math.max(...d.data.map((p) => p.y)) }))
+    : null,
   get step() {
     return current;
   },

@@ -182,6 +182,9 @@ if (args["sweep-report"]) result.sweep_report = await checkReport(args["sweep-re
     view.robot_start_vs_later = await differingPixels(page, robotStart, robotLater);
     view.full_vs_empty = await differingPixels(page, empty, full);
     view.plot = (await canvases(page, ["kp-error-plot"]))[0];
+    view.foot_plot = (await canvases(page, ["foot-slip-plot"]))[0];
+    view.feet = await page.evaluate(() => window.thorarenaView.feet);
+    view.foot_plot_datasets = await page.evaluate(() => window.thorarenaView.footPlot);
     // Play runs the timeline by itself.
     await page.locator("#timeline").fill("0");
     await page.locator("#play").click();

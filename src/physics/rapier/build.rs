@@ -19,6 +19,10 @@ pub(super) struct World {
     /// Root centre of mass in the root frame: the rapier root body frame sits there
     /// (see [`build_world`]).
     pub root_com_b: Vector3<f64>,
+    /// The ground's collider.
+    pub ground: ColliderHandle,
+    /// Every robot collider: its model body and its pose in that body's (model) frame.
+    pub robot_colliders: Vec<(ColliderHandle, usize, Isometry3<f64>)>,
 }
 
 /// Builds a world with the robot in `state`.
@@ -47,12 +51,13 @@ pub(super) fn build_world(
     world.integration_parameters.num_solver_iterations = settings.solver_iterations.max(1);
 
     // Ground: the top face of a large box at z = 0.
-    let ground =
+    let ground_body =
         world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.0, -0.5)));
-    world.insert_collider(
+    let ground = world.insert_collider(
         ColliderBuilder::cuboid(100.0, 100.0, 0.5).friction(settings.friction as f32),
-        Some(ground),
+        Some(ground_body),
     );
+    let mut robot_colliders = Vec::new();
 
     let mut world_from_body = Vec::new();
     forward_kinematics(
@@ -114,13 +119,13 @@ pub(super) fn build_world(
                 continue;
             }
             let (collider, shape_from_collider) = collider_of(&shape.geometry);
+            let body_from_collider = shape.body_from_shape * shape_from_collider;
             let collider = collider
-                .position(pose_to_rapier(
-                    &(body_shift * shape.body_from_shape * shape_from_collider),
-                ))
+                .position(pose_to_rapier(&(body_shift * body_from_collider)))
                 .density(0.0)
                 .friction(settings.friction as f32);
-            world.insert_collider(collider, Some(handle));
+            let c = world.insert_collider(collider, Some(handle));
+            robot_colliders.push((c, i, body_from_collider));
         }
         bodies.push(handle);
     }
@@ -214,6 +219,8 @@ pub(super) fn build_world(
         multibody,
         links,
         root_com_b,
+        ground,
+        robot_colliders,
     }
 }
 

@@ -5,12 +5,12 @@ mod build;
 mod convert;
 
 use super::settings::{PdForm, PhysicsSettings};
-use super::state::{ExternalForce, PdGains, PhysicsState, ResetState, RootState};
+use super::state::{ExternalForce, GroundContact, PdGains, PhysicsState, ResetState, RootState};
 use super::Physics;
 use crate::robot::RobotModel;
 use build::{build_world, World};
 use convert::{point_to_rapier, pose_from_rapier, vec_to_rapier};
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use std::sync::Arc;
 
 /// The robot simulated by rapier3d as one multibody.
@@ -156,6 +156,7 @@ impl Physics for RapierPhysics {
             multibody,
             links,
             root_com_b,
+            ..
         } = &mut self.world;
         // User forces and torques persist across rapier steps: clear them every step.
         for &h in bodies.iter() {
@@ -241,5 +242,46 @@ impl Physics for RapierPhysics {
             .flat_map(|p| p.manifolds().iter())
             .map(|m| m.points.iter().filter(|p| p.data.impulse != 0.0).count())
             .sum()
+    }
+
+    fn ground_contacts(&self, out: &mut Vec<GroundContact>) {
+        out.clear();
+        let w = &self.world;
+        // Impulses over the step, divided by the step: the mean force of the step.
+        let inv_dt = 1.0 / self.settings.dt_s;
+        for pair in w.world.contact_pairs_with(w.ground) {
+            // The robot's side of the pair; the impulses are those on collider 1's body.
+            let (robot, sign) = if pair.collider1 == w.ground {
+                (pair.collider2, -1.0)
+            } else {
+                (pair.collider1, 1.0)
+            };
+            let Some(&(_, body, body_from_collider)) =
+                w.robot_colliders.iter().find(|(c, _, _)| *c == robot)
+            else {
+                continue;
+            };
+            for manifold in pair.solver_manifolds() {
+                for point in &manifold.points {
+                    let normal_impulse = point.data.impulse as f64;
+                    if normal_impulse <= 0.0 {
+                        continue;
+                    }
+                    let local = if sign > 0.0 {
+                        point.local_p1
+                    } else {
+                        point.local_p2
+                    };
+                    out.push(GroundContact {
+                        body,
+                        point_b: body_from_collider
+                            * Point3::new(local.x as f64, local.y as f64, local.z as f64),
+                        normal_n: normal_impulse * inv_dt,
+                        friction_w: convert::vec_from_rapier(point.data.warmstart_tangent_world)
+                            * (sign * inv_dt),
+                    });
+                }
+            }
+        }
     }
 }
