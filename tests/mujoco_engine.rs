@@ -318,6 +318,92 @@ physics_dt_s = 0.001
         mj.contains("--engine mujoco") && mj.contains("--physics-dt 0.001"),
         "{mj}"
     );
+
+    // Collecting puts two engines' scores side by side only when asked.
+    let o = run(&["sweep", "run", out.to_str().unwrap(), "--jobs", "2"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&["sweep", "collect", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "collected two engines unasked");
+    assert!(
+        err.contains("different physics engines (mujoco, rapier)")
+            && err.contains("--mixed-engines"),
+        "{err}"
+    );
+    assert!(
+        !out.join("results.csv").exists(),
+        "a refused collect writes nothing"
+    );
+    let o = run(&["sweep", "collect", out.to_str().unwrap(), "--mixed-engines"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(
+        csv.contains(",rapier,") && csv.contains(",mujoco@1ms,"),
+        "{csv}"
+    );
+}
+
+#[test]
+fn report_refuses_runs_of_two_engines_unless_asked() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::report_mixed_engines",
+            "built without the `mujoco` feature",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
+    let mut runs = Vec::new();
+    for engine in ["rapier", "mujoco"] {
+        let out = dir.path().join(engine);
+        let o = run(&[
+            "eval",
+            "--policy",
+            "hold",
+            "--dataset",
+            sample.to_str().unwrap(),
+            "--settings",
+            "no-force",
+            "--engine",
+            engine,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        // The run's own tables name the engine that produced them.
+        let tables = std::fs::read_to_string(out.join("tables.md")).unwrap();
+        assert!(tables.contains(&format!("engine {engine}")), "{tables}");
+        runs.push(out);
+    }
+    let html = dir.path().join("r.html");
+    let base = [
+        "report",
+        runs[0].to_str().unwrap(),
+        runs[1].to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+    ];
+    let o = run(&base);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && !html.exists(),
+        "reported two engines unasked"
+    );
+    assert!(
+        err.contains("different physics engines") && err.contains("--mixed-engines"),
+        "{err}"
+    );
+    let mut asked = base.to_vec();
+    asked.push("--mixed-engines");
+    let o = run(&asked);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let md = std::fs::read_to_string(dir.path().join("r.md")).unwrap();
+    assert!(
+        md.contains("hold (rapier) [rapier]") && md.contains("hold (mujoco) [mujoco]"),
+        "{md}"
+    );
+    let page = std::fs::read_to_string(&html).unwrap();
+    assert!(page.contains("<th>engine</th>") && page.contains("mujoco (generated MJCF) at 5 ms"));
 }
 
 #[test]

@@ -5,8 +5,8 @@
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use thorarena::report::{
-    comparison_warnings, diagnostics_multi_table, fats_table, load_runs, report_html, Page,
-    WebBundle,
+    comparison_warnings, diagnostics_multi_table, fats_table, label_engines, load_runs,
+    mixed_engines, report_html, Page, WebBundle,
 };
 
 /// Arguments of `report`.
@@ -19,6 +19,12 @@ pub struct Args {
     /// written next to it.
     #[arg(long, default_value = "report.html")]
     pub out: PathBuf,
+    /// Compare runs simulated by different physics engines (rapier, MuJoCo). Refused
+    /// without it: under force the engines' scores differ by up to 30 FATS points on the
+    /// same policy (README, "Force response: rapier against MuJoCo"). With it, every run's
+    /// label names its engine.
+    #[arg(long)]
+    pub mixed_engines: bool,
 }
 
 /// `dir/stem.html` → `dir/stem<suffix>`.
@@ -44,7 +50,15 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             bundle.describe()
         );
     }
-    let runs = load_runs(&args.runs)?;
+    let mut runs = load_runs(&args.runs)?;
+    if let Some(groups) = mixed_engines(&runs) {
+        if !args.mixed_engines {
+            anyhow::bail!(
+                "these runs were simulated by different physics engines ({groups}); under force the engines' scores differ by up to 30 FATS points for the same policy (README, \"Force response: rapier against MuJoCo\"): compare runs of one engine, or pass --mixed-engines to compare them anyway (each label then names its engine)"
+            );
+        }
+        label_engines(&mut runs);
+    }
     if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("creating {}", parent.display()))?;
@@ -58,11 +72,12 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let mut md = String::from("# ThorArena report\n\n");
     for r in &runs {
         md += &format!(
-            "- **{}**: `{}` — policy `{}`, profile `{}`, dataset {} (sha256 {}), keypoints `{}`\n",
+            "- **{}**: `{}` — policy `{}`, profile `{}`, engine {}, dataset {} (sha256 {}), keypoints `{}`\n",
             r.label,
             r.dir.display(),
             r.header.policy,
             r.header.profile,
+            r.header.engine_label(),
             r.header.dataset,
             &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(16)],
             r.header.keypoints

@@ -463,15 +463,16 @@ fn report_body(runs: &[Run], data: &ReportData) -> String {
         }
         s += "</div></section>";
     }
-    s += "<section id=\"runs\"><h2>Runs</h2><table id=\"runs-table\"><thead><tr><th>run</th><th>policy</th><th>profile</th><th>dataset</th><th>keypoints</th><th>termination</th><th>settings</th><th>episodes</th><th>directory</th></tr></thead><tbody>";
+    s += "<section id=\"runs\"><h2>Runs</h2><table id=\"runs-table\"><thead><tr><th>run</th><th>policy</th><th>profile</th><th>engine</th><th>dataset</th><th>keypoints</th><th>termination</th><th>settings</th><th>episodes</th><th>directory</th></tr></thead><tbody>";
     for r in runs {
         let h = &r.header;
         let _ = write!(
             s,
-            "<tr><th>{}</th><td>{}</td><td>{}</td><td>{} <code>{}</code></td><td>{}</td><td>height &gt; {} m or tilt &gt; {} rad</td><td>{}</td><td>{}</td><td><code>{}</code></td></tr>",
+            "<tr><th>{}</th><td>{}</td><td>{}</td><td>{}</td><td>{} <code>{}</code></td><td>{}</td><td>height &gt; {} m or tilt &gt; {} rad</td><td>{}</td><td>{}</td><td><code>{}</code></td></tr>",
             escape(&r.label),
             escape(&h.policy),
             escape(&h.profile),
+            escape(&h.engine_label()),
             escape(&h.dataset),
             escape(&h.dataset_sha256[..h.dataset_sha256.len().min(12)]),
             escape(&h.keypoints),

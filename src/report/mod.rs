@@ -19,11 +19,11 @@ pub use html::{
     WEB_DIST_ENV,
 };
 pub use runs::{
-    comparison_warnings, label_runs, load_run, load_runs, ComparisonWarning, EpisodePoint, Run,
-    WarningKind,
+    comparison_warnings, label_engines, label_runs, load_run, load_runs, mixed_engines,
+    ComparisonWarning, EpisodePoint, Run, WarningKind,
 };
 pub use scene::{
-    load_trace, trace_context, view_scene, BodyShapes, ShapeView, TraceContext, ViewScene,
+    load_trace, trace_context, view_scene, BodyShapes, FeetView, ShapeView, TraceContext, ViewScene,
 };
 pub use tables::{
     all_tasks, columns, diagnostics_multi_table, diagnostics_table, fats_table, task_fats_table,

@@ -193,6 +193,25 @@ pub fn label_runs(runs: &mut [Run]) {
     }
 }
 
+/// When the runs were simulated by more than one physics engine: the runs grouped by
+/// engine (`a, b: rapier; c: mujoco`); `None` when one engine ran them all. Under force the
+/// engines' scores differ (README, "Force response: rapier against MuJoCo"), so the
+/// commands that compare runs refuse such a set unless asked (`--mixed-engines`).
+pub fn mixed_engines(runs: &[Run]) -> Option<String> {
+    grouped(
+        runs.iter()
+            .map(|r| (r.label.as_str(), r.header.engine.name().to_string())),
+    )
+}
+
+/// Appends each run's engine to its label (`twist2 [mujoco]`), for a comparison that
+/// mixes engines on purpose.
+pub fn label_engines(runs: &mut [Run]) {
+    for r in runs {
+        r.label = format!("{} [{}]", r.label, r.header.engine.name());
+    }
+}
+
 /// What makes two runs' numbers incomparable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]

@@ -298,6 +298,7 @@ pub fn view_scene(
     if let Some(h) = &context.header {
         info.push(("policy".to_string(), h.policy.clone()));
         info.push(("profile".to_string(), h.profile.clone()));
+        info.push(("engine".to_string(), h.engine_label()));
         info.push(("dataset".to_string(), h.dataset.clone()));
     }
     if let Some(r) = &context.record {

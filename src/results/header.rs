@@ -71,6 +71,29 @@ pub struct RunHeader {
 }
 
 impl RunHeader {
+    /// The engine that simulated the run, its model and step, as every score names it:
+    /// `rapier at 5 ms`, `mujoco (generated MJCF) at 5 ms`, `mujoco (g1.xml) at 1 ms`.
+    /// Under force the engines' scores differ (README, "Force response: rapier against
+    /// MuJoCo"), so a score without its engine is not a result.
+    pub fn engine_label(&self) -> String {
+        let model = match &self.engine {
+            crate::physics::Engine::Rapier => String::new(),
+            crate::physics::Engine::Mujoco { mjcf: None } => " (generated MJCF)".into(),
+            crate::physics::Engine::Mujoco { mjcf: Some(path) } => format!(
+                " ({})",
+                path.file_name().map_or_else(
+                    || path.display().to_string(),
+                    |n| n.to_string_lossy().into()
+                )
+            ),
+        };
+        format!(
+            "{}{model} at {} ms",
+            self.engine.name(),
+            self.physics_dt_s * 1e3
+        )
+    }
+
     /// The episodes this run (or shard) plans, as (sequence index, setting index), in
     /// schedule order.
     pub fn planned_jobs(&self) -> Vec<(usize, usize)> {

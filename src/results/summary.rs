@@ -138,10 +138,11 @@ pub fn write_results(
         None => String::new(),
     };
     let title = format!(
-        "ThorArena {} — policy `{}`, profile `{}`, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{shard_note}{partial_note}",
+        "ThorArena {} — policy `{}`, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{shard_note}{partial_note}",
         header.version,
         header.policy,
         header.profile,
+        header.engine_label(),
         header.dataset,
         &header.dataset_sha256[..header.dataset_sha256.len().min(16)],
         header.keypoints,

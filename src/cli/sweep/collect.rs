@@ -37,6 +37,17 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             compact_ranges(&c.not_done())
         );
     }
+    let engines: std::collections::BTreeSet<&str> = plan
+        .cells
+        .iter()
+        .map(|c| c.engine.engine.as_str())
+        .collect();
+    if engines.len() > 1 && !args.mixed_engines {
+        bail!(
+            "this sweep's cells were simulated by different physics engines ({}); under force the engines' scores differ by up to 30 FATS points for the same policy (README, \"Force response: rapier against MuJoCo\"): collect with --mixed-engines to put them in one table and one set of curves (rows and labels then name their engine)",
+            engines.into_iter().collect::<Vec<_>>().join(", ")
+        );
+    }
     let robot = crate::cli::load_robot(&plan_robot(&plan.tasks[0]))?;
     let mut results: Vec<Option<CellResult>> = Vec::new();
     // Loaded once per dataset, however many cells share it.

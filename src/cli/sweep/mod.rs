@@ -155,6 +155,11 @@ pub struct CollectArgs {
     /// they hold.
     #[arg(long)]
     pub partial: bool,
+    /// Put cells simulated by different physics engines into one table and one set of
+    /// curves (an `[[engine]]` axis). Refused without it: under force the engines' scores
+    /// differ (README, "Force response: rapier against MuJoCo").
+    #[arg(long)]
+    pub mixed_engines: bool,
 }
 
 /// Runs a sweep subcommand.
