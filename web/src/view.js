@@ -332,86 +332,79 @@ const cursor = {
   },
 };
 const totalForce = scene.hand_force_w.map((pair) => pair.reduce((s, f) => s + Math.hypot(f[0], f[1], f[2]), 0));
-const plot = new Chart($("kp-error-plot"), {
-  type: "line",
-  data: {
-    datasets: [
-      {
-        label: "keypoint error (mm)",
-        data: scene.time_s.map((t, i) => ({ x: t, y: scene.kp_err_mm[i] })),
-        borderColor: "#0072b2",
-        backgroundColor: "rgba(0, 114, 178, 0.12)",
-        fill: true,
-        yAxisID: "y",
+// A line chart over the episode's time with a left axis, a right "force" axis, the step
+// cursor, and a click that moves the timeline.
+function timeChart(canvasId, datasets, leftTitle, rightTitle) {
+  return new Chart($(canvasId), {
+    type: "line",
+    data: { datasets },
+    options: {
+      parsing: false,
+      normalized: true,
+      elements: { point: { radius: 0 }, line: { borderWidth: 1.5 } },
+      interaction: { mode: "nearest", axis: "x", intersect: false },
+      scales: {
+        x: { type: "linear", min: scene.time_s[0], max: scene.time_s[steps - 1], title: { display: true, text: "time (s)" } },
+        y: { beginAtZero: true, title: { display: true, text: leftTitle } },
+        force: { position: "right", beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: rightTitle } },
       },
-      {
-        label: "replayed hand force |F_L| + |F_R| (N)",
-        data: scene.time_s.map((t, i) => ({ x: t, y: totalForce[i] })),
-        borderColor: "#cc79a7",
-        borderDash: [4, 3],
-        yAxisID: "force",
+      plugins: { legend: { position: "top", align: "end" } },
+      onClick: (event, _elements, chart) => {
+        const t = chart.scales.x.getValueForPixel(event.x);
+        setStep(nearestStep(t));
       },
-    ],
-  },
-  options: {
-    parsing: false,
-    normalized: true,
-    elements: { point: { radius: 0 }, line: { borderWidth: 1.5 } },
-    interaction: { mode: "nearest", axis: "x", intersect: false },
-    scales: {
-      x: { type: "linear", min: scene.time_s[0], max: scene.time_s[steps - 1], title: { display: true, text: "time (s)" } },
-      y: { beginAtZero: true, title: { display: true, text: "keypoint error (mm)" } },
-      force: { position: "right", beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: "force (N)" } },
     },
-    plugins: { legend: { position: "top", align: "end" } },
-    onClick: (event, _elements, chart) => {
-      const t = chart.scales.x.getValueForPixel(event.x);
-      setStep(nearestStep(t));
+    plugins: [cursor],
+  });
+}
+const series = (values) => scene.time_s.map((t, i) => ({ x: t, y: values(i) }));
+
+const plot = timeChart(
+  "kp-error-plot",
+  [
+    {
+      label: "keypoint error (mm)",
+      data: series((i) => scene.kp_err_mm[i]),
+      borderColor: "#0072b2",
+      backgroundColor: "rgba(0, 114, 178, 0.12)",
+      fill: true,
+      yAxisID: "y",
     },
-  },
-  plugins: [cursor],
-});
+    {
+      label: "replayed hand force |F_L| + |F_R| (N)",
+      data: series((i) => totalForce[i]),
+      borderColor: "#cc79a7",
+      borderDash: [4, 3],
+      yAxisID: "force",
+    },
+  ],
+  "keypoint error (mm)",
+  "force (N)",
+);
 
 // The feet: slip speed of each (load-weighted over its sole points) and its normal force.
 const footPlot = feet
-  ? new Chart($("foot-slip-plot"), {
-      type: "line",
-      data: {
-        datasets: feet.names.flatMap((name, k) => [
-          {
-            label: `${name}: slip speed (m/s)`,
-            data: scene.time_s.map((t, i) => ({ x: t, y: feet.slip_speed_mps[i][k] })),
-            borderColor: FOOT_CSS[k % 2],
-            yAxisID: "y",
-          },
-          {
-            label: `${name}: normal force (N)`,
-            data: scene.time_s.map((t, i) => ({ x: t, y: feet.normal_n[i][k] })),
-            borderColor: FOOT_CSS[k % 2],
-            borderDash: [4, 3],
-            borderWidth: 1,
-            yAxisID: "force",
-          },
-        ]),
-      },
-      options: {
-        parsing: false,
-        normalized: true,
-        elements: { point: { radius: 0 }, line: { borderWidth: 1.5 } },
-        interaction: { mode: "nearest", axis: "x", intersect: false },
-        scales: {
-          x: { type: "linear", min: scene.time_s[0], max: scene.time_s[steps - 1], title: { display: true, text: "time (s)" } },
-          y: { beginAtZero: true, title: { display: true, text: "foot slip speed (m/s)" } },
-          force: { position: "right", beginAtZero: true, grid: { drawOnChartArea: false }, title: { display: true, text: "normal force (N)" } },
+  ? timeChart(
+      "foot-slip-plot",
+      feet.names.flatMap((name, k) => [
+        {
+          label: `${name}: slip speed (m/s)`,
+          data: series((i) => feet.slip_speed_mps[i][k]),
+          borderColor: FOOT_CSS[k % 2],
+          yAxisID: "y",
         },
-        plugins: { legend: { position: "top", align: "end" } },
-        onClick: (event, _elements, chart) => {
-          const t = chart.scales.x.getValueForPixel(event.x);
-          setStep(nearestStep(t));
+        {
+          label: `${name}: normal force (N)`,
+          data: series((i) => feet.normal_n[i][k]),
+          borderColor: FOOT_CSS[k % 2],
+          borderDash: [4, 3],
+          borderWidth: 1,
+          yAxisID: "force",
         },
-      },
-      plugins: [cursor],
-    })
+      ]),
+      "foot slip speed (m/s)",
+      "normal force (N)",
+    )
   : null;
 
 function nearestStep(t) {
