@@ -474,3 +474,61 @@ fn a_deeply_nested_pickle_is_an_error_not_a_stack_overflow() {
     );
     assert!(!tmp.path().join("ds").exists(), "nothing written");
 }
+
+#[test]
+fn absurd_durations_and_steps_are_errors_not_panics_or_endless_runs() {
+    // Issue 22: `--connect-timeout 1e20` aborted eval and client ("cannot convert float
+    // seconds to Duration"); `--physics-dt 1e-9` ran 2·10⁷ physics steps per control step.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("r");
+    let out = out.to_str().unwrap();
+    for (args, expected) in [
+        (
+            vec![
+                "eval",
+                "--policy",
+                "ipc:absurd-timeout",
+                "--connect-timeout",
+                "1e20",
+                "--out",
+                out,
+            ],
+            "s: too long to wait",
+        ),
+        (
+            vec![
+                "client",
+                "--session",
+                "absurd-timeout",
+                "--policy",
+                "hold",
+                "--connect-timeout",
+                "1e20",
+            ],
+            "s: too long to wait",
+        ),
+        (
+            vec![
+                "eval",
+                "--policy",
+                "hold",
+                "--dataset",
+                SAMPLE,
+                "--physics-dt",
+                "1e-9",
+                "--out",
+                out,
+            ],
+            "20000000 physics steps per control step of 0.02 s; at most 1000",
+        ),
+    ] {
+        let started = std::time::Instant::now();
+        let e = failure(&thorarena(dir.path(), &args));
+        assert!(e.contains(expected), "{args:?}: {e}");
+        assert!(
+            started.elapsed() < Duration::from_secs(30),
+            "{args:?} took {:?}",
+            started.elapsed()
+        );
+    }
+}

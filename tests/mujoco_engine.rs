@@ -604,6 +604,10 @@ fn crosscheck_refuses_bad_arguments_before_running_anything() {
         ),
         (vec!["--policy", "ipc:somewhere"], "runs the policy twice in process"),
         (vec!["--engine", "mujoco"], "leave out --engine"),
+        // A confidence interval from no resample printed "-0.0 [+0.0, +0.0]"; 2⁶⁴ − 1
+        // resamples overflowed an allocation — both only after both evaluations had run.
+        (vec!["--bootstrap", "0"], "--bootstrap 0: the confidence intervals need between 1 and 1000000 resamples"),
+        (vec!["--bootstrap", "18446744073709551615"], "--bootstrap 18446744073709551615: the confidence intervals need"),
     ] {
         let out = dir.path().join("xc");
         let mut full = vec!["crosscheck", "--out", out.to_str().unwrap()];

@@ -66,7 +66,13 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if !(args.connect_timeout.is_finite() && args.connect_timeout > 0.0) {
         bail!("--connect-timeout must be > 0 s");
     }
-    let mut client = PolicyClient::connect(&config, Duration::from_secs_f64(args.connect_timeout))
+    let timeout = Duration::try_from_secs_f64(args.connect_timeout).map_err(|_| {
+        anyhow::anyhow!(
+            "--connect-timeout {} s: too long to wait (give seconds that fit a duration)",
+            args.connect_timeout
+        )
+    })?;
+    let mut client = PolicyClient::connect(&config, timeout)
         .with_context(|| format!("joining session `{}`", args.session))?;
     let info = client.info().clone();
     let offset = info.action_offset_rad.clone();

@@ -109,6 +109,10 @@ fn tables(first_column: &str, rows: &[SettingComparison], divergence_seconds: f6
     table
 }
 
+/// The most bootstrap resamples `--bootstrap` takes (10⁶ already pins a 95 % interval's
+/// ends to a fraction of a per cent of its width).
+const MAX_BOOTSTRAP: usize = 1_000_000;
+
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.policy.starts_with("ipc:") {
         bail!("crosscheck runs the policy twice in process: use a built-in, twist2: or beyondmimic: policy");
@@ -118,6 +122,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     if !(args.divergence_seconds.is_finite() && args.divergence_seconds > 0.0) {
         bail!("--divergence-seconds must be a positive number of seconds");
+    }
+    // Checked before the two evaluations run: a confidence interval needs resamples, and
+    // each resample holds one mean per episode in memory.
+    if !(1..=MAX_BOOTSTRAP).contains(&args.bootstrap) {
+        bail!(
+            "--bootstrap {}: the confidence intervals need between 1 and {MAX_BOOTSTRAP} resamples",
+            args.bootstrap
+        );
     }
     let mut rapier_args = args.run.clone();
     rapier_args.mjcf = None;

@@ -149,6 +149,14 @@ impl EvalContext {
                     profile.control_dt_s
                 );
             }
+            if ratio.round() > MAX_SUBSTEPS as f64 {
+                bail!(
+                    "--physics-dt {dt}: {} physics steps per control step of {} s; at most {MAX_SUBSTEPS} (a step of {} s)",
+                    ratio.round(),
+                    profile.control_dt_s,
+                    profile.control_dt_s / MAX_SUBSTEPS as f64
+                );
+            }
             profile.physics_dt_s = dt;
             profile.substeps = ratio.round() as usize;
         }
@@ -295,6 +303,10 @@ pub(super) fn check_out(out: &std::path::Path, args: &RunArgs) -> anyhow::Result
     let _ = std::fs::remove_file(probe);
     Ok(())
 }
+
+/// The most physics steps per control step `--physics-dt` may ask for (0.02 ms at 50 Hz
+/// control: far finer than any engine's validated step; 10⁻⁹ s asked for 2·10⁷).
+const MAX_SUBSTEPS: usize = 1000;
 
 /// Hands the trace of every episode's first seconds to a caller (`crosscheck`).
 pub(super) struct FirstSeconds<'a> {

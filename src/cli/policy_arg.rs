@@ -190,7 +190,14 @@ pub fn connect_remote(
             },
         },
         connect_timeout: (io.connect_timeout > 0.0)
-            .then(|| Duration::from_secs_f64(io.connect_timeout)),
+            .then(|| Duration::try_from_secs_f64(io.connect_timeout))
+            .transpose()
+            .map_err(|_| {
+                anyhow::anyhow!(
+                    "--connect-timeout {} s: too long to wait (give seconds that fit a duration, or 0 to wait forever)",
+                    io.connect_timeout
+                )
+            })?,
         reconnect: io.on_policy_failure == OnPolicyFailure::Wait,
     };
     eprintln!(
