@@ -76,6 +76,9 @@ struct FootSums {
     cop_moment_ns: Vector3<f64>,
     /// Load-weighted slip of the control step so far, m.
     slid_m: f64,
+    /// Within one physics step: Σ normal·slid (N·m) and Σ normal (N) of its contacts.
+    step_moment_nm: f64,
+    step_load_n: f64,
     slip_total_m: f64,
     soles: Vec<SoleSums>,
 }
@@ -129,16 +132,6 @@ impl FeetMeter {
         }
     }
 
-    /// Forgets everything (a new episode).
-    pub fn reset(&mut self) {
-        for (s, f) in self.sums.iter_mut().zip(&self.feet) {
-            *s = FootSums {
-                soles: vec![SoleSums::default(); f.soles_b.len()],
-                ..Default::default()
-            };
-        }
-    }
-
     /// Takes in the physics step just done: `before` and `after` are the bodies' poses at
     /// its start and end.
     pub fn after_step(
@@ -149,8 +142,6 @@ impl FeetMeter {
         dt_s: f64,
     ) {
         physics.ground_contacts(&mut self.contacts);
-        // Per foot, this step: Σ normal·slid and Σ normal (the load-weighted slip).
-        let mut weighted = vec![(0.0, 0.0); self.feet.len()];
         for c in &self.contacts {
             let Some(k) = self.feet.iter().position(|f| f.body == c.body) else {
                 continue;
@@ -179,13 +170,16 @@ impl FeetMeter {
             sole.friction_ns += c.friction_w.norm() * dt_s;
             sole.slid_m += slid;
             sole.total_slid_m += slid;
-            weighted[k].0 += c.normal_n * slid;
-            weighted[k].1 += c.normal_n;
+            sums.step_moment_nm += c.normal_n * slid;
+            sums.step_load_n += c.normal_n;
         }
-        for (sums, (moment, load)) in self.sums.iter_mut().zip(weighted) {
-            if load > 0.0 {
-                sums.slid_m += moment / load;
+        // Each foot's slip over this step: its contacts' slides weighted by their load.
+        for sums in &mut self.sums {
+            if sums.step_load_n > 0.0 {
+                sums.slid_m += sums.step_moment_nm / sums.step_load_n;
             }
+            sums.step_moment_nm = 0.0;
+            sums.step_load_n = 0.0;
         }
     }
 

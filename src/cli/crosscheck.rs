@@ -15,9 +15,9 @@ use thorarena::results::crosscheck::{
 };
 use thorarena::results::{read_header, read_summary, EpisodeLog, EPISODES_FILE};
 
-/// The joint angles (per control step, rad) of each episode's first seconds, by
-/// (task, sequence id, setting).
-type FirstJoints = BTreeMap<(String, String, String), Vec<Vec<f64>>>;
+/// A per-control-step series of vectors for each episode, by (task, sequence id,
+/// setting): the joint angles of its first seconds (rad), or its feet's accumulated slip (m).
+type SeriesByEpisode = BTreeMap<(String, String, String), Vec<Vec<f64>>>;
 
 /// Arguments of `crosscheck`.
 #[derive(Debug, clap::Args)]
@@ -162,9 +162,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         check_out(d, &args.run)?;
     }
     // Per engine, the joint angles of each episode's first seconds, by episode key.
-    let mut first_q: [FirstJoints; 2] = Default::default();
+    let mut first_q: [SeriesByEpisode; 2] = Default::default();
     // Per engine, the feet's accumulated slip per control step of each whole episode.
-    let mut slips: [FirstJoints; 2] = Default::default();
+    let mut slips: [SeriesByEpisode; 2] = Default::default();
     for ((((run_args, ctx), dir), joints), slip) in
         [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
             .into_iter()

@@ -6,7 +6,7 @@ use anyhow::Context;
 use std::path::{Path, PathBuf};
 use thorarena::report::{
     comparison_warnings, diagnostics_multi_table, fats_table, label_engines, load_runs,
-    mixed_engines, report_html, Page, WebBundle,
+    mixed_engines, report_html, Page, WebBundle, MIXED_ENGINES_WHY,
 };
 
 /// Arguments of `report`.
@@ -54,7 +54,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(groups) = mixed_engines(&runs) {
         if !args.mixed_engines {
             anyhow::bail!(
-                "these runs were simulated by different physics engines ({groups}); under force the engines' scores differ by up to 30 FATS points for the same policy (README, \"Force response: rapier against MuJoCo\"): compare runs of one engine, or pass --mixed-engines to compare them anyway (each label then names its engine)"
+                "these runs were simulated by different physics engines ({groups}); {MIXED_ENGINES_WHY}: compare runs of one engine, or pass --mixed-engines to compare them anyway (each label then names its engine)"
             );
         }
         label_engines(&mut runs);

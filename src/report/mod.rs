@@ -20,7 +20,7 @@ pub use html::{
 };
 pub use runs::{
     comparison_warnings, label_engines, label_runs, load_run, load_runs, mixed_engines,
-    ComparisonWarning, EpisodePoint, Run, WarningKind,
+    ComparisonWarning, EpisodePoint, Run, WarningKind, MIXED_ENGINES_WHY,
 };
 pub use scene::{
     load_trace, trace_context, view_scene, BodyShapes, FeetView, ShapeView, TraceContext, ViewScene,

@@ -44,8 +44,9 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         .collect();
     if engines.len() > 1 && !args.mixed_engines {
         bail!(
-            "this sweep's cells were simulated by different physics engines ({}); under force the engines' scores differ by up to 30 FATS points for the same policy (README, \"Force response: rapier against MuJoCo\"): collect with --mixed-engines to put them in one table and one set of curves (rows and labels then name their engine)",
-            engines.into_iter().collect::<Vec<_>>().join(", ")
+            "this sweep's cells were simulated by different physics engines ({}); {}: collect with --mixed-engines to put them in one table and one set of curves (rows and labels then name their engine)",
+            engines.into_iter().collect::<Vec<_>>().join(", "),
+            thorarena::report::MIXED_ENGINES_WHY
         );
     }
     let robot = crate::cli::load_robot(&plan_robot(&plan.tasks[0]))?;

@@ -247,7 +247,10 @@ impl Physics for RapierPhysics {
     fn ground_contacts(&self, out: &mut Vec<GroundContact>) {
         out.clear();
         let w = &self.world;
-        // Impulses over the step, divided by the step: the mean force of the step.
+        // Impulses over the step, divided by the step: the mean force of the step. Rapier
+        // keeps the friction impulse in world axes for the last substep only: with N solver
+        // iterations (substeps) the friction read here is 1/N of the step's; the benchmark
+        // runs one.
         let inv_dt = 1.0 / self.settings.dt_s;
         for pair in w.world.contact_pairs_with(w.ground) {
             // The robot's side of the pair; the impulses are those on collider 1's body.
