@@ -418,3 +418,72 @@ fn a_run_told_to_wait_goes_on_with_a_policy_that_reconnects() {
     assert_eq!(summary["policy_io"]["transport"]["policy_failures"], 1);
     assert_eq!(summary["policy_io"]["transport"]["reconnections"], 1);
 }
+
+/// Waits for `child` at most `limit`; kills it (by its pid, which we started) and fails
+/// the test if it is still running: before liveness came from the policy's node, these
+/// runs waited forever.
+fn wait_at_most(mut child: Child, limit: std::time::Duration, what: &str) -> Output {
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let out = child.wait_with_output().unwrap();
+            panic!(
+                "{what} still running after {limit:?}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[test]
+fn a_policy_that_lies_about_its_pid_and_dies_fails_the_run_instead_of_hanging_it() {
+    let dir = tempfile::tempdir().unwrap();
+    // Pid 1 is what a policy in a container sees for itself; 0 once meant "always alive".
+    // Lock-step, and with a budget (where the dead policy once "missed" every deadline).
+    for (pid, extra) in [("1", &[][..]), ("0", &["--budget", "20ms"][..])] {
+        let s = session(&format!("liar-{pid}"));
+        let out = dir.path().join(&s);
+        let run = eval_cmd(&format!("ipc:{s}"), &out, extra).spawn().unwrap();
+        let liar = rust_client(
+            &s,
+            "hold",
+            &["--announce-pid", pid, "--die-after-steps", "50"],
+        );
+        let run = wait_at_most(run, std::time::Duration::from_secs(120), "eval");
+        let _ = liar.wait_with_output();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            !run.status.success(),
+            "pid {pid}: the run must fail: {stderr}"
+        );
+        assert!(stderr.contains("ended `policy_failed`"), "{stderr}");
+        let records = episodes(&out);
+        assert!(records.contains("policy_failed"), "{records}");
+    }
+}
+
+#[test]
+fn eval_exits_non_zero_when_every_episode_was_in_flight_as_its_policy_died() {
+    // Every episode of the sample fits the environment slots: all are in flight when the
+    // policy dies, so none is left "not run" — the run still failed.
+    let dir = tempfile::tempdir().unwrap();
+    let s = session("all-in-flight");
+    let out = dir.path().join(&s);
+    let run = eval_cmd(&format!("ipc:{s}"), &out, &["--envs", "64"])
+        .spawn()
+        .unwrap();
+    let dying = rust_client(&s, "hold", &["--die-after-steps", "30"]);
+    let run = wait_at_most(run, std::time::Duration::from_secs(120), "eval");
+    let _ = dying.wait_with_output();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "{stderr}");
+    assert!(stderr.contains("0 did not run"), "{stderr}");
+    let records = episodes(&out);
+    assert!(
+        records.lines().all(|l| l.contains("policy_failed")),
+        "{records}"
+    );
+}

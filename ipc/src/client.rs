@@ -11,7 +11,8 @@ use crate::handshake::{
 };
 use crate::layout::{ActionBatchMut, Layout, ObsBatch, COMMAND_END};
 use crate::session::{
-    create_node, process_alive, service_names, transport, wait_for, IpcError, WaitPolicy, Waited,
+    create_node, service_names, transport, wait_for, IpcError, PeerNode, WaitPolicy, Waited,
+    NODE_CHECK_EVERY,
 };
 use crate::PROTOCOL_VERSION;
 use iceoryx2::active_request::ActiveRequest;
@@ -41,6 +42,9 @@ pub struct PolicyConfig {
     pub wait: WaitPolicy,
     /// Protocol version to announce (tests set a wrong one on purpose).
     pub protocol_version: u32,
+    /// Process id to announce: this process's (tests announce another on purpose; the
+    /// simulator logs it and never trusts it).
+    pub announced_pid: u32,
 }
 
 impl PolicyConfig {
@@ -58,6 +62,7 @@ impl PolicyConfig {
             reference_offsets_s,
             wait: WaitPolicy::default(),
             protocol_version: PROTOCOL_VERSION,
+            announced_pid: std::process::id(),
         }
     }
 }
@@ -71,7 +76,8 @@ pub struct SessionInfo {
     pub control_dt_s: f64,
     /// Latency budget per step (`None`: lock-step).
     pub budget: Option<Duration>,
-    /// The simulator's process id.
+    /// The process id the simulator reported (for logs; liveness is watched through its
+    /// iceoryx2 node).
     pub simulator_pid: u32,
     /// How an action becomes a PD target: target = offset + scale · action, rad.
     pub action_offset_rad: Vec<f64>,
@@ -96,6 +102,8 @@ pub struct PolicyClient {
     obs_ready: Listener<ipc::Service>,
     action_ready: Notifier<ipc::Service>,
     wait: WaitPolicy,
+    /// The simulator's iceoryx2 node: whether it lives.
+    simulator: PeerNode,
     // Declared last: ports above drop before their node.
     _node: Node<ipc::Service>,
 }
@@ -166,7 +174,7 @@ impl PolicyClient {
             protocol_version: config.protocol_version,
             n_joints: config.joint_names.len() as u32,
             joint_names_hash: joint_names_hash(&config.joint_names),
-            pid: std::process::id(),
+            pid: config.announced_pid,
             n_refs: config.reference_offsets_s.len() as u32,
             reference_offsets_s: offsets,
             name: to_fixed(&config.name),
@@ -199,6 +207,13 @@ impl PolicyClient {
             n_joints: welcome.n_joints as usize,
             n_refs: welcome.n_refs as usize,
         };
+        // The simulator's node: the one serving `hello` (it welcomed us).
+        let mut simulator_node = None;
+        hello_service.dynamic_config().list_servers(|s| {
+            simulator_node = Some(s.node_id);
+            CallbackProgression::Stop
+        });
+        let simulator_node = simulator_node.ok_or(IpcError::PeerGone("simulator"))?;
         let server = step
             .server_builder()
             .initial_max_slice_len(layout.action_words())
@@ -219,6 +234,7 @@ impl PolicyClient {
             obs_ready,
             action_ready,
             wait: config.wait,
+            simulator: PeerNode::new(simulator_node, node.config(), NODE_CHECK_EVERY),
             _node: node,
         })
     }
@@ -236,7 +252,7 @@ impl PolicyClient {
             &self.obs_ready,
             self.wait,
             deadline,
-            self.info.simulator_pid,
+            &self.simulator,
             || true,
             || self.server.has_requests().unwrap_or(true),
         )?;
@@ -285,7 +301,7 @@ impl PolicyClient {
                 }
                 Next::End => return Ok(steps),
                 Next::Timeout => {
-                    if !process_alive(self.info.simulator_pid) {
+                    if !self.simulator.alive() {
                         return Err(IpcError::PeerGone("simulator"));
                     }
                 }

@@ -1,8 +1,12 @@
 //! What both sides share: service names per session, node creation, errors, and the
 //! spin-then-block wait.
 
+use iceoryx2::config::Config;
+use iceoryx2::identifiers::UniqueNodeId;
+use iceoryx2::node::NodeState;
 use iceoryx2::port::listener::{Listener, ListenerWaitError};
 use iceoryx2::prelude::*;
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 /// Every way the transport can fail, for both sides.
@@ -91,6 +95,10 @@ pub(crate) fn create_node(name: &str) -> Result<Node<ipc::Service>, IpcError> {
 }
 
 /// True while process `pid` exists and is not a zombie. `0` means unknown (always alive).
+///
+/// For a process this one started (its own pid, not one it was told): a pid a peer reports
+/// about itself proves nothing — it may name any live process, and inside a container it
+/// names a process of another pid namespace. Peers are watched through [`PeerNode`].
 pub fn process_alive(pid: u32) -> bool {
     if pid == 0 {
         return true;
@@ -104,6 +112,57 @@ pub fn process_alive(pid: u32) -> bool {
         Err(_) => false,
     }
 }
+
+/// The other side's iceoryx2 node, watched for liveness.
+///
+/// iceoryx2 keeps a lock for each node that the kernel releases when the node's process
+/// dies, however it dies, and removes the node's files when it closes cleanly; a peer can
+/// neither hold that lock for a process that is gone nor choose which node the service's
+/// ports say it created. So this, not a pid the peer reports about itself, decides whether
+/// the peer lives — the same in a container that shares the iceoryx2 directories, where a
+/// reported pid names a process of another pid namespace.
+pub(crate) struct PeerNode {
+    id: UniqueNodeId,
+    config: Config,
+    /// Looking a node up lists the node directory: do it at most this often.
+    every: Duration,
+    last: Cell<Option<(Instant, bool)>>,
+}
+
+impl PeerNode {
+    /// Looks the node up at most every `every` (cached in between).
+    pub(crate) fn new(id: UniqueNodeId, config: &Config, every: Duration) -> Self {
+        Self {
+            id,
+            config: config.clone(),
+            every,
+            last: Cell::new(None),
+        }
+    }
+
+    /// True while the node's process lives (or its state cannot be read: another user's
+    /// node, or one being created, is not declared dead).
+    pub(crate) fn alive(&self) -> bool {
+        let now = Instant::now();
+        if let Some((at, alive)) = self.last.get() {
+            if !alive || now.duration_since(at) < self.every {
+                return alive;
+            }
+        }
+        let alive = match Node::<ipc::Service>::state_of(&self.config, self.id) {
+            Ok(Some(NodeState::Alive(_))) => true,
+            // Dead: its process is gone. None: it closed and removed itself.
+            Ok(Some(NodeState::Dead(_))) | Ok(None) => false,
+            Ok(Some(NodeState::Inaccessible(_) | NodeState::Undefined(_))) | Err(_) => true,
+        };
+        self.last.set(Some((now, alive)));
+        alive
+    }
+}
+
+/// How often a blocked side looks up its peer's node at most (a directory listing; the
+/// cheaper "did it leave the session" check runs every `WaitPolicy::liveness_every`).
+pub(crate) const NODE_CHECK_EVERY: Duration = Duration::from_millis(10);
 
 /// How a side waits for the other: busy-poll for `spin`, then block on the event
 /// listener; check the peer's liveness every `liveness_every` of blocking.
@@ -131,14 +190,14 @@ pub(crate) enum Waited {
     PeerGone,
 }
 
-/// Waits until `ready()` holds, the deadline passes, or the peer is gone: its process died
-/// (`peer_pid`), or it left the session while alive (`peer_present()` false). Drains the
+/// Waits until `ready()` holds, the deadline passes, or the peer is gone: its node died
+/// (`peer`), or it left the session while alive (`peer_present()` false). Drains the
 /// listener after each wake-up (a WaitSet-free loop cannot spin on stale events).
 pub(crate) fn wait_for(
     listener: &Listener<ipc::Service>,
     policy: WaitPolicy,
     deadline: Option<Instant>,
-    peer_pid: u32,
+    peer: &PeerNode,
     peer_present: impl Fn() -> bool,
     mut ready: impl FnMut() -> bool,
 ) -> Result<Waited, IpcError> {
@@ -168,7 +227,7 @@ pub(crate) fn wait_for(
             Err(ListenerWaitError::InterruptSignal) => 0,
             Err(e) => return Err(transport("waiting on the event listener")(e)),
         };
-        if n == 0 && !ready() && (!process_alive(peer_pid) || !peer_present()) {
+        if n == 0 && !ready() && (!peer_present() || !peer.alive()) {
             return Ok(Waited::PeerGone);
         }
     }

@@ -9,9 +9,11 @@ use crate::handshake::{from_fixed, joint_names_hash, to_fixed, Hello, Status, We
 use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
 use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
 use crate::session::{
-    create_node, process_alive, service_names, transport, wait_for, IpcError, WaitPolicy, Waited,
+    create_node, service_names, transport, wait_for, IpcError, PeerNode, WaitPolicy, Waited,
+    NODE_CHECK_EVERY,
 };
 use crate::PROTOCOL_VERSION;
+use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
 use iceoryx2::port::listener::Listener;
@@ -24,6 +26,11 @@ use std::time::{Duration, Instant};
 type StepFactory = RrFactory<ipc::Service, [u64], (), [u64], ()>;
 type StepClient = Client<ipc::Service, [u64], (), [u64], ()>;
 type StepPending = PendingResponse<ipc::Service, [u64], (), [u64], ()>;
+type HelloFactory = RrFactory<ipc::Service, Hello, (), Welcome, ()>;
+
+/// A welcomed policy has this long to create its step server (its client library does so
+/// right after the welcome); one that does not is dropped and the next one accepted.
+const STEP_SERVER_WITHIN: Duration = Duration::from_secs(10);
 
 /// What the simulator offers.
 #[derive(Debug, Clone)]
@@ -51,7 +58,8 @@ pub struct SimConfig {
 pub struct PolicyInfo {
     /// Its name.
     pub name: String,
-    /// Its process id.
+    /// The process id it reported: for logs only, never for liveness (it may name any
+    /// process, or one of another pid namespace).
     pub pid: u32,
     /// The reference offsets it asked for, s.
     pub reference_offsets_s: Vec<f64>,
@@ -70,6 +78,8 @@ pub enum StepOutcome {
 
 struct Connection {
     info: PolicyInfo,
+    /// The policy's iceoryx2 node: whether it lives.
+    peer: PeerNode,
     layout: Layout,
     client: StepClient,
     seq: u64,
@@ -89,6 +99,7 @@ pub struct SimSession {
     joint_hash: u64,
     node: Node<ipc::Service>,
     hello: Server<ipc::Service, Hello, (), Welcome, ()>,
+    hello_service: HelloFactory,
     step: StepFactory,
     obs_ready: Notifier<ipc::Service>,
     action_ready: Listener<ipc::Service>,
@@ -161,14 +172,15 @@ impl SimSession {
             .create()
             .map_err(transport("action_ready listener"))?;
         // Last: a policy that finds `hello` finds the other three.
-        let hello = node
+        let hello_service = node
             .service_builder(&names.hello)
             .request_response::<Hello, Welcome>()
             .max_servers(1)
             .max_clients(8)
             .max_active_requests_per_client(1)
             .create()
-            .map_err(|e| in_use(&e))?
+            .map_err(|e| in_use(&e))?;
+        let hello = hello_service
             .server_builder()
             .create()
             .map_err(transport("hello server"))?;
@@ -177,6 +189,7 @@ impl SimSession {
             config,
             node,
             hello,
+            hello_service,
             step,
             obs_ready,
             action_ready,
@@ -212,7 +225,9 @@ impl SimSession {
     }
 
     /// Waits for a policy to say hello; refuses mismatched ones (each refusal is passed to
-    /// `on_refused` and sent back to that policy) and keeps waiting for a good one.
+    /// `on_refused` and sent back to that policy) and keeps waiting for a good one. A
+    /// policy that dies or stalls between its hello and its step server is reported to
+    /// `on_refused` too, and the wait goes on.
     pub fn accept(
         &mut self,
         timeout: Option<Duration>,
@@ -221,6 +236,10 @@ impl SimSession {
         self.connection = None;
         self.node.try_cleanup_dead_nodes();
         let start = Instant::now();
+        let timed_out = |what| match timeout {
+            Some(t) if start.elapsed() > t => Err(IpcError::Timeout(t, what)),
+            _ => Ok(()),
+        };
         loop {
             while let Some(request) = self.hello.receive().map_err(transport("hello receive"))? {
                 let hello = *request.payload();
@@ -250,6 +269,12 @@ impl SimSession {
                     pid: hello.pid,
                     reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
                 };
+                // The node that sent this hello, as iceoryx2 registered its port.
+                let Some(peer_id) = client_node(&self.hello_service, request.origin()) else {
+                    on_refused(&format!("policy `{}` left before its welcome", info.name));
+                    continue;
+                };
+                let peer = PeerNode::new(peer_id, self.node.config(), NODE_CHECK_EVERY);
                 let layout = Layout {
                     n_envs: self.config.n_envs,
                     n_joints: self.config.joint_names.len(),
@@ -263,37 +288,51 @@ impl SimSession {
                     .create()
                     .map_err(transport("step client"))?;
                 welcome.status = Status::Ok as u32;
-                request
-                    .send_copy(welcome)
-                    .map_err(transport("sending welcome"))?;
+                if request.send_copy(welcome).is_err() {
+                    on_refused(&format!("policy `{}` left before its welcome", info.name));
+                    continue;
+                }
+                drop(request);
+                // The policy creates its step server after the welcome; wait for that
+                // node's server (not any server: a stale one of another node is not it).
+                let welcomed = Instant::now();
+                let served = loop {
+                    if has_server_of(&self.step, peer_id) {
+                        break true;
+                    }
+                    if !peer.alive() {
+                        on_refused(&format!(
+                            "policy `{}` died after its hello, before serving steps",
+                            info.name
+                        ));
+                        break false;
+                    }
+                    if welcomed.elapsed() > STEP_SERVER_WITHIN {
+                        on_refused(&format!(
+                            "policy `{}` did not serve steps within {STEP_SERVER_WITHIN:?} of its welcome",
+                            info.name
+                        ));
+                        break false;
+                    }
+                    timed_out("the policy's step server")?;
+                    std::thread::sleep(Duration::from_micros(200));
+                };
+                if !served {
+                    drop(client);
+                    self.node.try_cleanup_dead_nodes();
+                    continue;
+                }
                 self.connection = Some(Connection {
                     info: info.clone(),
+                    peer,
                     layout,
                     client,
                     seq: 0,
                     overdue: None,
                 });
-                // The policy creates its step server after the welcome; wait for it.
-                while self.step.dynamic_config().number_of_servers() == 0 {
-                    if !process_alive(info.pid) {
-                        self.connection = None;
-                        return Err(IpcError::PeerGone("policy"));
-                    }
-                    if timeout.is_some_and(|t| start.elapsed() > t) {
-                        return Err(IpcError::Timeout(
-                            start.elapsed(),
-                            "the policy's step server",
-                        ));
-                    }
-                    std::thread::sleep(Duration::from_micros(200));
-                }
                 return Ok(info);
             }
-            if let Some(t) = timeout {
-                if start.elapsed() > t {
-                    return Err(IpcError::Timeout(t, "a policy to connect"));
-                }
-            }
+            timed_out("a policy to connect")?;
             std::thread::sleep(Duration::from_millis(1));
         }
     }
@@ -380,7 +419,7 @@ impl SimSession {
             &self.action_ready,
             self.config.wait,
             deadline,
-            conn.info.pid,
+            &conn.peer,
             // A policy that closed its session but lives on has no step server any more.
             || step_service.dynamic_config().number_of_servers() > 0,
             || {
@@ -421,7 +460,7 @@ impl SimSession {
                 Ok(StepOutcome::Answered)
             }
             Waited::Deadline => {
-                if process_alive(conn.info.pid) {
+                if conn.peer.alive() {
                     conn.overdue = Some(pending);
                     Ok(StepOutcome::Missed)
                 } else {
@@ -457,10 +496,7 @@ impl SimSession {
                     let _ = self.obs_ready.notify();
                     // Give the policy a moment to see it before the services go away.
                     let until = Instant::now() + Duration::from_millis(200);
-                    while pending.is_connected()
-                        && Instant::now() < until
-                        && process_alive(conn.info.pid)
-                    {
+                    while pending.is_connected() && Instant::now() < until && conn.peer.alive() {
                         std::thread::sleep(Duration::from_micros(200));
                     }
                 }
@@ -468,6 +504,36 @@ impl SimSession {
         }
         self.connection = None;
     }
+}
+
+/// The node that created client port `client` of the hello service.
+fn client_node(
+    hello: &HelloFactory,
+    client: iceoryx2::identifiers::UniqueClientId,
+) -> Option<UniqueNodeId> {
+    let mut node = None;
+    hello.dynamic_config().list_clients(|c| {
+        if c.client_id == client {
+            node = Some(c.node_id);
+            return CallbackProgression::Stop;
+        }
+        CallbackProgression::Continue
+    });
+    node
+}
+
+/// True when node `node` has created the step service's server.
+fn has_server_of(step: &StepFactory, node: UniqueNodeId) -> bool {
+    let mut found = false;
+    step.dynamic_config().list_servers(|s| {
+        found = s.node_id == node;
+        if found {
+            CallbackProgression::Stop
+        } else {
+            CallbackProgression::Continue
+        }
+    });
+    found
 }
 
 fn fixed_joints(v: &[f64]) -> [f64; MAX_JOINTS] {

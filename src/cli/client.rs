@@ -44,6 +44,10 @@ pub struct Args {
     /// Testing aid: the step (counted from 1) that `--delay-ms` delays; 0 delays every step.
     #[arg(long, default_value_t = 0)]
     pub delay_at_step: u64,
+    /// Testing aid: announce this process id in the hello instead of ours (the simulator
+    /// must not believe it).
+    #[arg(long, hide = true)]
+    pub announce_pid: Option<u32>,
     /// Testing aid: answer NaN for every joint of every environment at this step (counted
     /// from 1).
     #[arg(long)]
@@ -59,6 +63,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         joint_names,
         vec![0.0],
     );
+    if let Some(pid) = args.announce_pid {
+        config.announced_pid = pid;
+    }
     config.wait = WaitPolicy {
         spin: Duration::from_micros(args.spin_us),
         ..WaitPolicy::default()

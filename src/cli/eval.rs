@@ -494,9 +494,16 @@ pub(super) fn evaluate(
         "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md}}",
         out.display()
     );
-    if not_run > 0 {
+    // A run whose policy failed is not a result, even when every episode has a record:
+    // the records of episodes it cut short say `policy_failed`, and the exit status must
+    // say it too (sweeps and scripts go by it).
+    let cut_short = records
+        .iter()
+        .filter(|r| r.termination == Some(Termination::PolicyFailed))
+        .count();
+    if not_run > 0 || cut_short > 0 {
         bail!(
-            "the policy failed and did not come back: {not_run} episodes did not run (finished ones are in {}; `--resume` with a working policy runs the rest)",
+            "the policy failed: {cut_short} episodes ended `policy_failed`, {not_run} did not run (finished ones are in {}; `--resume` with a working policy runs both again)",
             out.display()
         );
     }
