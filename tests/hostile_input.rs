@@ -234,6 +234,80 @@ fn runs_are_never_silently_replaced_double_counted_or_empty() {
 }
 
 #[test]
+fn no_command_writes_over_a_run_or_its_own_inputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    dataset_with_manifest(&ds, |_| {});
+    let d = ds.to_str().unwrap();
+    for (out, policy) in [("a", "hold"), ("b", "replay")] {
+        let o = thorarena(
+            tmp.path(),
+            &["eval", "--dataset", d, "--policy", policy, "--out", out],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let run_files = |run: &str| -> Vec<Vec<u8>> {
+        ["run.json", "episodes.jsonl", "summary.json", "tables.md"]
+            .iter()
+            .map(|f| std::fs::read(tmp.path().join(run).join(f)).unwrap())
+            .collect()
+    };
+    let (a, b) = (run_files("a"), run_files("b"));
+    let unchanged = || {
+        assert_eq!(run_files("a"), a, "run a changed");
+        assert_eq!(run_files("b"), b, "run b changed");
+    };
+
+    // `merge --out` onto another run: refused without --overwrite.
+    let e = failure(&thorarena(tmp.path(), &["merge", "a", "--out", "b"]));
+    assert!(
+        e.contains("already holds a run") && e.contains("--overwrite"),
+        "{e}"
+    );
+    unchanged();
+    // ... onto its own input: refused even with it.
+    let e = failure(&thorarena(
+        tmp.path(),
+        &["merge", "a", "--out", "a", "--overwrite"],
+    ));
+    assert!(e.contains("input"), "{e}");
+    unchanged();
+    // `report` over a run's own data, or over another run's files.
+    for (args, why) in [
+        (
+            &["report", "a", "--out", "a/episodes.jsonl", "--overwrite"][..],
+            "input",
+        ),
+        (
+            &["report", "a", "--out", "a/tables.html", "--overwrite"][..],
+            "input",
+        ),
+        (
+            &["report", "a", "--out", "b/tables.html"][..],
+            "--overwrite",
+        ),
+    ] {
+        let e = failure(&thorarena(tmp.path(), args));
+        assert!(e.contains(why), "{args:?}: {e}");
+        unchanged();
+    }
+    // `data export` into the dataset it exports, or into a run.
+    let e = failure(&thorarena(
+        tmp.path(),
+        &["data", "export", d, "--out", d, "--overwrite"],
+    ));
+    assert!(e.contains("input"), "{e}");
+    let e = failure(&thorarena(tmp.path(), &["data", "export", d, "--out", "a"]));
+    assert!(e.contains("already holds a run"), "{e}");
+    unchanged();
+    // What stays allowed: a new report next to a run, replaced on the next call.
+    for _ in 0..2 {
+        let o = thorarena(tmp.path(), &["report", "a", "b", "--out", "cmp.html"]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+}
+
+#[test]
 fn data_info_lists_each_task_once_however_the_manifest_is_ordered() {
     let tmp = tempfile::tempdir().unwrap();
     let ds = tmp.path().join("ds");

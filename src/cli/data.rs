@@ -45,6 +45,9 @@ pub struct ExportArgs {
     /// Robot of the dataset.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
+    /// Write into a directory holding a run or a dataset (never the dataset exported).
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 /// Input formats of `data import`.
@@ -143,7 +146,7 @@ pub struct SynthArgs {
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
     /// Replace a dataset already in `--out` (its manifest and the files it lists).
-    #[arg(long)]
+    #[arg(long, visible_alias = "overwrite")]
     pub force: bool,
 }
 
@@ -295,6 +298,11 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
 }
 
 fn export(args: &ExportArgs) -> anyhow::Result<()> {
+    super::overwrite::check_dir(
+        &args.out,
+        args.overwrite,
+        std::slice::from_ref(&args.dataset),
+    )?;
     let robot = super::load_robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let ExportFormat::Npz = args.format;

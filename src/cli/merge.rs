@@ -63,9 +63,13 @@ pub struct Args {
     /// Robot.
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
+    /// Replace a run already in `--out` (never one of the shards).
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    super::overwrite::check_dir(&args.out, args.overwrite, &args.runs)?;
     let robot = super::load_robot(&args.robot)?;
     let (mut header, by_key) = read_shards(&args.runs)?;
     header.shard = None;

@@ -13,6 +13,7 @@ mod data_synth;
 mod eval;
 mod logging;
 mod merge;
+mod overwrite;
 mod policy_arg;
 mod report_html;
 mod robot_info;

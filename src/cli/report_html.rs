@@ -25,6 +25,9 @@ pub struct Args {
     /// label names its engine.
     #[arg(long)]
     pub mixed_engines: bool,
+    /// Replace files of a run or a dataset with the report's (never the runs reported).
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 /// `dir/stem.html` → `dir/stem<suffix>`.
@@ -58,6 +61,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             );
         }
         label_engines(&mut runs);
+    }
+    for path in [
+        args.out.clone(),
+        sibling(&args.out, ".md"),
+        sibling(&args.out, "-fats.csv"),
+        sibling(&args.out, "-diagnostics.csv"),
+    ] {
+        super::overwrite::check_file(&path, args.overwrite, &args.runs)?;
     }
     if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)

@@ -17,9 +17,13 @@ pub struct Args {
     /// Robot the trace was recorded on (a bundled name or a robot directory).
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
+    /// Replace a file of a run or a dataset with the page (never the trace shown).
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    super::overwrite::check_file(&args.out, args.overwrite, std::slice::from_ref(&args.trace))?;
     let bundle = WebBundle::locate()?;
     for stale in bundle.stale_sources() {
         eprintln!(

@@ -1,0 +1,117 @@
+//! One rule for every command that writes results: it never replaces a run or a dataset
+//! without `--overwrite`, and never writes over its own inputs, with or without it (the
+//! probe found `merge --out` replacing a run, and `report R --out R/episodes.jsonl`
+//! writing HTML over the run it read).
+//!
+//! A run is a directory holding `run.json`; a dataset one holding `manifest.json`. Other
+//! existing files — a previous `report.html` — are replaced as before.
+
+use anyhow::bail;
+use std::path::{Path, PathBuf};
+use thorarena::motion::MANIFEST;
+
+/// `path` made absolute with symbolic links and `..` resolved, as far as it exists (the
+/// output may not exist yet: its nearest existing ancestor is resolved).
+fn resolved(path: &Path) -> PathBuf {
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut missing = Vec::new();
+    let mut base = absolute.as_path();
+    loop {
+        if let Ok(real) = base.canonicalize() {
+            return missing.iter().rev().fold(real, |p, leaf| p.join(leaf));
+        }
+        match (base.parent(), base.file_name()) {
+            (Some(parent), Some(leaf)) => {
+                missing.push(leaf.to_owned());
+                base = parent;
+            }
+            _ => return absolute,
+        }
+    }
+}
+
+/// What a run directory consists of (`eval` writes them; `report`, `merge`, `view` and
+/// `--resume` read them back).
+const RUN_FILES: [&str; 5] = [
+    "run.json",
+    "episodes.jsonl",
+    "summary.json",
+    "tables.md",
+    "traces",
+];
+
+/// What a directory holds that must not be replaced silently.
+fn holds(dir: &Path) -> Option<&'static str> {
+    if dir.join("run.json").is_file() {
+        Some("a run")
+    } else if dir.join(MANIFEST).is_file() {
+        Some("a dataset")
+    } else {
+        None
+    }
+}
+
+/// Refuses output directory `out` when it is one of `inputs`, lies in one or holds one
+/// (always), or already holds a run or a dataset (unless `overwrite`).
+pub fn check_dir(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> anyhow::Result<()> {
+    let target = resolved(out);
+    for input in inputs {
+        let input = resolved(input);
+        if target.starts_with(&input) || input.starts_with(&target) {
+            bail!(
+                "--out {} would write over this command's input {}: choose another --out",
+                out.display(),
+                input.display()
+            );
+        }
+    }
+    if let Some(what) = holds(out) {
+        if !overwrite {
+            bail!(
+                "{} already holds {what}: choose another --out, or pass --overwrite to replace it",
+                out.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Refuses output file `out` when it exists inside one of `inputs` (always), or inside a
+/// run or a dataset (unless `overwrite`).
+pub fn check_file(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> anyhow::Result<()> {
+    if !out.exists() {
+        return Ok(());
+    }
+    if out.is_dir() {
+        bail!("--out {} is a directory: give a file name", out.display());
+    }
+    let target = resolved(out);
+    for input in inputs {
+        let input = resolved(input);
+        let of_input = match target.strip_prefix(&input) {
+            // The input itself (a file), or what a run consists of.
+            Ok(rest) => {
+                rest.as_os_str().is_empty() || RUN_FILES.iter().any(|f| rest.starts_with(f))
+            }
+            Err(_) => false,
+        };
+        if of_input {
+            bail!(
+                "--out {} is part of this command's input {}: choose another --out",
+                out.display(),
+                input.display()
+            );
+        }
+    }
+    let parent = target.parent().unwrap_or(Path::new("/"));
+    if let Some(what) = holds(parent) {
+        if !overwrite {
+            bail!(
+                "--out {} is a file of {what} ({}): choose another --out, or pass --overwrite to replace it",
+                out.display(),
+                parent.display()
+            );
+        }
+    }
+    Ok(())
+}
