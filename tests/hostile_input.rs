@@ -308,6 +308,62 @@ fn no_command_writes_over_a_run_or_its_own_inputs() {
 }
 
 #[test]
+fn an_edited_or_planted_data_cache_is_never_used() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    dataset_with_manifest(&ds, |_| {});
+    let cache = tmp.path().join("cache");
+    let eval = |out: &str| {
+        let o = Command::new(BIN)
+            .current_dir(tmp.path())
+            .env("XDG_CACHE_HOME", &cache)
+            .env_remove("THORARENA_DATA_DIR")
+            .args([
+                "eval",
+                "--dataset",
+                ds.to_str().unwrap(),
+                "--policy",
+                "balance",
+            ])
+            .args(["--settings", "force", "--out", out])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let summary: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(tmp.path().join(out).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        // The scores (the latency of the in-process policy varies run to run).
+        let scores = summary["settings"].clone();
+        (scores, String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (honest, _) = eval("honest");
+    // The knee gain in the cached default profile, 600 → 60 (FATS 95 → 65 on balance).
+    let copies: Vec<_> = std::fs::read_dir(cache.join("thorarena"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("data-")
+        })
+        .collect();
+    assert_eq!(copies.len(), 1, "{copies:?}");
+    let profile = copies[0].join("profiles/default.toml");
+    let text = std::fs::read_to_string(&profile).unwrap();
+    assert!(text.contains("knee = 600.0"), "{text}");
+    std::fs::write(&profile, text.replace("knee = 600.0", "knee = 60.0")).unwrap();
+    let (after_edit, stderr) = eval("after-edit");
+    assert_eq!(after_edit, honest, "the edited cache was used");
+    assert!(
+        stderr.contains("differs from this binary's data"),
+        "{stderr}"
+    );
+    assert_eq!(std::fs::read_to_string(&profile).unwrap(), text);
+}
+
+#[test]
 fn data_info_lists_each_task_once_however_the_manifest_is_ordered() {
     let tmp = tempfile::tempdir().unwrap();
     let ds = tmp.path().join("ds");
