@@ -501,7 +501,7 @@ fn scripted_stepping_under_a_backward_pull_falls_alike_on_both_engines() {
     for pull in [0.0, 20.0, 40.0] {
         let rapier = scripted_march_falls_at_s(&thorarena::physics::Engine::Rapier, pull);
         let mujoco =
-            scripted_march_falls_at_s(&thorarena::physics::Engine::Mujoco { mjcf: None }, pull);
+            scripted_march_falls_at_s(&thorarena::physics::Engine::mujoco_on(None).unwrap(), pull);
         eprintln!("{pull} N per hand: falls at {rapier:.3} s (rapier), {mujoco:.3} s (MuJoCo)");
         assert!(rapier < 4.0 && mujoco < 4.0, "an open-loop march falls");
         assert!(

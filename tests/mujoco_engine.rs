@@ -16,6 +16,7 @@ mod walks;
 use walks::{import_walks, MUJOCO_TWIST9_MM};
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+const SAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
 
 /// The MJCF, or `None` after a recorded skip (no feature, or no reference artifacts).
 fn twist2_mjcf(test: &str) -> Option<PathBuf> {
@@ -46,7 +47,7 @@ fn mujoco_bodies_are_where_the_robot_models_kinematics_puts_them() {
     };
     let m = Arc::new(thorarena::robot::load_bundled("g1_29dof").unwrap());
     let mut p = thorarena::physics::make_physics(
-        &Engine::Mujoco { mjcf: Some(mjcf) },
+        &Engine::mujoco_on(Some(mjcf)).unwrap(),
         m.clone(),
         PhysicsSettings::default(),
         standing_gains(&m),
@@ -182,7 +183,7 @@ fn an_mjcf_that_is_not_the_robot_is_a_clear_error() {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
-    // A pelvis with a free joint and nothing else: no joint of the G1.
+    // A pelvis with a free joint and nothing else: no body or joint of the G1.
     let mjcf = dir.path().join("box.xml");
     std::fs::write(
         &mjcf,
@@ -207,16 +208,141 @@ fn an_mjcf_that_is_not_the_robot_is_a_clear_error() {
     };
     let e = attempt(&mjcf);
     assert!(
-        e.contains("does not fit robot `g1_29dof`")
-            && e.contains("no joint `left_hip_pitch_joint`"),
+        e.contains("does not fit robot `g1_29dof`") && e.contains("no body `left_hip_pitch_link`"),
         "{e}"
     );
-    let e = attempt(&dir.path().join("absent.xml"));
-    assert!(
-        e.contains("loading the MJCF") && e.contains("absent.xml"),
-        "{e}"
-    );
+    for not_a_file in ["absent.xml", "."] {
+        let e = attempt(&dir.path().join(not_a_file));
+        assert!(e.contains("not a file") && e.contains(not_a_file), "{e}");
+    }
     assert!(!dir.path().join("run/run.json").exists());
+}
+
+/// The generated MJCF of the G1 (`thorarena robot mjcf`), the base of hand-edited ones.
+fn generated_mjcf() -> String {
+    let o = run(&["robot", "mjcf"]);
+    assert!(o.status.success());
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// The generated MJCF with the knee's `<joint …/>` element replaced by `joint`.
+fn with_left_knee(mjcf: &str, joint: &str) -> String {
+    let start = mjcf.find("<joint name=\"left_knee_joint\"").unwrap();
+    let end = start + mjcf[start..].find("/>").unwrap() + 2;
+    format!("{}{joint}{}", &mjcf[..start], &mjcf[end..])
+}
+
+#[test]
+fn an_mjcf_joint_of_the_right_name_but_wrong_kind_or_axis_is_refused() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::joint_kinds",
+            "built without the `mujoco` feature",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let base = generated_mjcf();
+    for (joint, why) in [
+        (
+            r#"<joint name="left_knee_joint" type="ball"/>"#,
+            "not a hinge",
+        ),
+        (
+            r#"<joint name="left_knee_joint" type="slide" axis="0 1 0"/>"#,
+            "not a hinge",
+        ),
+        (
+            r#"<joint name="left_knee_joint" type="hinge" axis="1 0 0"/>"#,
+            "turns about",
+        ),
+        (
+            r#"<joint name="left_knee_joint" type="hinge" axis="0 -1 0"/>"#,
+            "turns about",
+        ),
+    ] {
+        let mjcf = dir.path().join("edited.xml");
+        std::fs::write(&mjcf, with_left_knee(&base, joint)).unwrap();
+        let o = run(&[
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--policy",
+            "hold",
+            "--engine",
+            "mujoco",
+            "--mjcf",
+            mjcf.to_str().unwrap(),
+            "--out",
+            dir.path().join("run").to_str().unwrap(),
+        ]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && !e.contains("panicked"),
+            "{joint}: {e}"
+        );
+        assert!(
+            e.contains("does not fit robot `g1_29dof`")
+                && e.contains("left_knee_joint")
+                && e.contains(why),
+            "{joint}: {e}"
+        );
+        assert!(!dir.path().join("run/run.json").exists());
+    }
+}
+
+#[test]
+fn a_run_names_its_mjcf_by_content_so_an_edited_file_is_not_mixed_in() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "mujoco_engine::mjcf_hash",
+            "built without the `mujoco` feature",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let mjcf = dir.path().join("g1.xml");
+    std::fs::write(&mjcf, generated_mjcf()).unwrap();
+    let out = dir.path().join("run");
+    let eval = |extra: &[&str]| {
+        let mut a = vec![
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--policy",
+            "hold",
+            "--settings",
+            "no-force",
+            "--engine",
+            "mujoco",
+            "--mjcf",
+            mjcf.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--shard",
+            "0/4",
+        ];
+        a.extend(extra);
+        run(&a)
+    };
+    let o = eval(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let header: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(
+        header["engine"]["mjcf_sha256"].as_str().map(str::len),
+        Some(64),
+        "{header}"
+    );
+    // The same path, another model: resuming would mix the two.
+    let edited = generated_mjcf().replace("friction=\"1 ", "friction=\"0.3 ");
+    assert_ne!(edited, generated_mjcf(), "the edit changes the file");
+    std::fs::write(&mjcf, edited).unwrap();
+    let o = eval(&["--resume"]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{e}");
+    assert!(
+        e.contains("another configuration") && e.contains("engine"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -51,7 +51,7 @@ mod mujoco {
         gains: PdGains,
     ) -> Box<dyn Physics> {
         thorarena::physics::make_physics(
-            &thorarena::physics::Engine::Mujoco { mjcf: None },
+            &thorarena::physics::Engine::mujoco_on(None).unwrap(),
             model.clone(),
             settings,
             gains,

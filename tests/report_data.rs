@@ -258,6 +258,7 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
     let mut other_engine = header("f");
     other_engine.engine = thorarena::physics::Engine::Mujoco {
         mjcf: Some("g1.xml".into()),
+        mjcf_sha256: None,
     };
     other_engine.physics_dt_s = 0.001;
     let cases = [

@@ -97,7 +97,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let gains = thorarena::physics::standing_gains(&model);
     let mut engines = vec![Engine::Rapier];
     if cfg!(feature = "mujoco") {
-        engines.push(Engine::Mujoco { mjcf: None });
+        engines.push(Engine::mujoco_on(None)?);
     } else {
         println!("(this build has no MuJoCo backend: `--features mujoco` adds it to the table)");
     }

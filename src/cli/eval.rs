@@ -166,7 +166,7 @@ impl EvalContext {
                 bail!("--mjcf is for --engine mujoco (rapier simulates the robot model itself)")
             }
             (super::choices::EngineArg::Mujoco, mjcf) => {
-                thorarena::physics::Engine::Mujoco { mjcf: mjcf.clone() }
+                thorarena::physics::Engine::mujoco_on(mjcf.clone())?
             }
         };
         // The engine is checked here, once, so that the run's workers cannot fail to make it.

@@ -19,10 +19,43 @@ pub enum Engine {
         /// A user's MJCF, joints and bodies named as in the robot model; `None`: the one
         /// generated from the robot model ([`super::mjcf_of`]).
         mjcf: Option<PathBuf>,
+        /// SHA-256 of the user's MJCF file ([`Engine::mujoco_on`]): a run is identified by
+        /// the model's content, not its path — `--resume`, `merge` and sweeps then refuse
+        /// to mix episodes simulated on two versions of one file. (Files the MJCF includes
+        /// or meshes it loads are not covered.)
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mjcf_sha256: Option<String>,
     },
 }
 
 impl Engine {
+    /// MuJoCo on the generated MJCF (`None`) or on the user's MJCF file at `path`, read
+    /// once here for its content hash.
+    pub fn mujoco_on(path: Option<PathBuf>) -> Result<Self, EngineError> {
+        let Some(path) = path else {
+            return Ok(Self::Mujoco {
+                mjcf: None,
+                mjcf_sha256: None,
+            });
+        };
+        if !path.is_file() {
+            return Err(EngineError::MjcfNotAFile(path));
+        }
+        let bytes = std::fs::read(&path).map_err(|source| EngineError::MjcfUnreadable {
+            path: path.clone(),
+            source,
+        })?;
+        use sha2::{Digest, Sha256};
+        let hash = Sha256::digest(&bytes)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        Ok(Self::Mujoco {
+            mjcf: Some(path),
+            mjcf_sha256: Some(hash),
+        })
+    }
+
     /// `rapier` or `mujoco`.
     pub fn name(&self) -> &'static str {
         match self {
@@ -35,6 +68,17 @@ impl Engine {
 /// Why a physics could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum EngineError {
+    /// `--mjcf` names no file (a directory, or nothing).
+    #[error("MJCF {0}: not a file")]
+    MjcfNotAFile(PathBuf),
+    /// The MJCF could not be read.
+    #[error("MJCF {path}: {source}")]
+    MjcfUnreadable {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
     /// This build has no MuJoCo.
     #[error("this thorarena was built without MuJoCo: build it with `--features mujoco` against the libmujoco.so of the PyPI wheel mujoco==3.17.0 (README, \"MuJoCo backend\")")]
     NotBuilt,
@@ -54,7 +98,7 @@ pub fn make_physics(
     match engine {
         Engine::Rapier => Ok(Box::new(RapierPhysics::new(model, settings, gains))),
         #[cfg(feature = "mujoco")]
-        Engine::Mujoco { mjcf } => Ok(Box::new(super::mujoco::MujocoPhysics::new(
+        Engine::Mujoco { mjcf, .. } => Ok(Box::new(super::mujoco::MujocoPhysics::new(
             mjcf.as_deref(),
             model,
             settings,

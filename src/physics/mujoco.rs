@@ -135,19 +135,51 @@ impl MujocoPhysics {
             message: format!("{e:?}"),
         })?;
         let n = model.n_joints();
-        let mut joints = Vec::with_capacity(n);
-        for j in &model.joints {
-            let id = mj
-                .name_to_id(MjtObjBase::mjOBJ_JOINT, &j.name)
-                .ok_or_else(|| mismatch(format!("no joint `{}`", j.name)))?;
-            joints.push((mj.jnt_qposadr()[id] as usize, mj.jnt_dofadr()[id] as usize));
-        }
         let mut bodies = Vec::with_capacity(model.bodies.len());
         for b in &model.bodies {
             bodies.push(
                 mj.name_to_id(MjtObjBase::mjOBJ_BODY, &b.name)
                     .ok_or_else(|| mismatch(format!("no body `{}`", b.name)))?,
             );
+        }
+        // Each robot joint: a hinge of the same name, on the body of the same name, about
+        // the same axis (a ball or slide joint of the right name was once scored).
+        let mut joints = vec![(0, 0); n];
+        let mut found = vec![false; n];
+        for (b, body) in model.bodies.iter().enumerate() {
+            let Some(j) = body.joint else { continue };
+            let name = &model.joints[j].name;
+            let id = mj
+                .name_to_id(MjtObjBase::mjOBJ_JOINT, name)
+                .ok_or_else(|| mismatch(format!("no joint `{name}`")))?;
+            let kind = mj.jnt_type()[id];
+            if kind != MjtJoint::mjJNT_HINGE {
+                return Err(mismatch(format!(
+                    "joint `{name}` is a {kind:?} joint, not a hinge"
+                )));
+            }
+            if mj.jnt_bodyid()[id] as usize != bodies[b] {
+                return Err(mismatch(format!(
+                    "joint `{name}` moves another body than `{}`",
+                    body.name
+                )));
+            }
+            let axis = nalgebra::Vector3::from(mj.jnt_axis()[id]);
+            let want = body.axis.normalize();
+            if axis.norm() < 1e-9 || axis.normalize().dot(&want) < 0.999 {
+                return Err(mismatch(format!(
+                    "joint `{name}` turns about ({:.3} {:.3} {:.3}) in its body's frame, the robot's about ({:.3} {:.3} {:.3})",
+                    axis.x, axis.y, axis.z, want.x, want.y, want.z
+                )));
+            }
+            joints[j] = (mj.jnt_qposadr()[id] as usize, mj.jnt_dofadr()[id] as usize);
+            found[j] = true;
+        }
+        if let Some(j) = found.iter().position(|f| !f) {
+            return Err(mismatch(format!(
+                "joint `{}` moves no body of the robot model",
+                model.joints[j].name
+            )));
         }
         let mut robot_body_of = vec![None; mj.ffi().nbody.max(0) as usize];
         for (i, &b) in bodies.iter().enumerate() {

@@ -296,10 +296,12 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
     flag(WarningKind::Physics, "Physics engines or steps", &|r| {
         let model = match &r.header.engine {
             crate::physics::Engine::Rapier => String::new(),
-            crate::physics::Engine::Mujoco { mjcf: Some(mjcf) } => {
+            crate::physics::Engine::Mujoco {
+                mjcf: Some(mjcf), ..
+            } => {
                 format!(" on {}", mjcf.display())
             }
-            crate::physics::Engine::Mujoco { mjcf: None } => " on the generated MJCF".into(),
+            crate::physics::Engine::Mujoco { mjcf: None, .. } => " on the generated MJCF".into(),
         };
         format!(
             "{}{model} at {} ms",

@@ -78,8 +78,10 @@ impl RunHeader {
     pub fn engine_label(&self) -> String {
         let model = match &self.engine {
             crate::physics::Engine::Rapier => String::new(),
-            crate::physics::Engine::Mujoco { mjcf: None } => " (generated MJCF)".into(),
-            crate::physics::Engine::Mujoco { mjcf: Some(path) } => format!(
+            crate::physics::Engine::Mujoco { mjcf: None, .. } => " (generated MJCF)".into(),
+            crate::physics::Engine::Mujoco {
+                mjcf: Some(path), ..
+            } => format!(
                 " ({})",
                 path.file_name().map_or_else(
                     || path.display().to_string(),
