@@ -30,6 +30,10 @@ pub const END_CONFIRM_STEPS: usize = 250;
 /// settle is an error rather than a hang.
 pub const MAX_STEPS: usize = 360_000;
 
+/// Most values an input other than the time step may declare (observations are a few
+/// hundred; this is 4 MB of zeros).
+pub const MAX_INPUT_VALUES: usize = 1 << 20;
+
 /// The motion outputs a network must have.
 pub const MOTION_OUTPUTS: [&str; 4] = ["joint_pos", "joint_vel", "ref_pos_xyz", "ref_quat_xyzw"];
 
@@ -120,6 +124,13 @@ pub fn read_onnx_motion(
             })
             .collect();
         let dims = dims.ok_or_else(|| format_err(format!("input `{name}` has no fixed shape")))?;
+        // Zeros are allocated for it: a declared shape is not trusted with memory.
+        let values = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
+        if values.is_none_or(|n| n > MAX_INPUT_VALUES) {
+            return Err(format_err(format!(
+                "input `{name}` declares shape {dims:?}, more than {MAX_INPUT_VALUES} values: not a policy's observation"
+            )));
+        }
         model = model
             .with_input_fact(i, f32::fact(dims.clone()).into())
             .map_err(tract_err)?;
@@ -165,6 +176,12 @@ pub fn read_onnx_motion(
             )));
         }
         let f = eval(step)?;
+        if let Some(k) = f.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
+            return Err(format_err(format!(
+                "output `{}` is not finite at step {step}",
+                MOTION_OUTPUTS[k]
+            )));
+        }
         if frames.last() == Some(&f) {
             unchanged += 1;
             if unchanged >= END_CONFIRM_STEPS {

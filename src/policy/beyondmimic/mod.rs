@@ -180,6 +180,14 @@ impl BeyondMimicPolicy {
                 })
             })
             .collect::<Result<Vec<usize>, _>>()?;
+        let mut seen = vec![false; n];
+        for (&c, name) in to_canonical.iter().zip(&joint_names) {
+            if std::mem::replace(&mut seen[c], true) {
+                return Err(unusable(format!(
+                    "joint `{name}` is named twice in the file's joint order"
+                )));
+            }
+        }
         let policy_order = |canonical: &[f64]| -> Vec<f64> {
             to_canonical.iter().map(|&c| canonical[c]).collect()
         };
@@ -202,6 +210,22 @@ impl BeyondMimicPolicy {
             meta.action_scale.clone(),
             policy_order(&profile.action_scale),
         )?;
+        // A zero scale ignores the network (and the `actions` term divides by it).
+        if let Some(i) = action_scale
+            .iter()
+            .position(|a| !a.is_finite() || *a == 0.0)
+        {
+            return Err(unusable(format!(
+                "action scale {} for joint `{}`: it must be finite and non-zero",
+                action_scale[i], joint_names[i]
+            )));
+        }
+        if let Some(i) = default_pos.iter().position(|a| !a.is_finite()) {
+            return Err(unusable(format!(
+                "default_joint_pos {} for joint `{}` is not finite",
+                default_pos[i], joint_names[i]
+            )));
+        }
 
         // What the file says against what the profile applies, canonical order.
         let canonical = |policy: &[f64]| {
@@ -285,10 +309,23 @@ impl BeyondMimicPolicy {
                 .with_input_fact(t, f32::fact([1, 1]).into())
                 .map_err(load_err)?;
         }
-        let plan = model
-            .into_optimized()
-            .and_then(|m| m.into_runnable())
-            .map_err(load_err)?;
+        let typed = model.into_optimized().map_err(load_err)?;
+        // One action per joint, or every step fails (a wrong width once scored as a
+        // network answering zeros).
+        let action_width = typed
+            .output_fact(actions_output)
+            .ok()
+            .and_then(|f| f.shape.as_concrete().map(|s| s.to_vec()));
+        if action_width.as_deref().and_then(|s| s.last()) != Some(&n)
+            || action_width
+                .as_deref()
+                .is_some_and(|s| s.iter().product::<usize>() != n)
+        {
+            return Err(unusable(format!(
+                "the `actions` output has shape {action_width:?}, not one value per joint ({n})"
+            )));
+        }
+        let plan = typed.into_runnable().map_err(load_err)?;
         for d in &disagreements {
             log::warn!("{}: {d}", path.display());
         }

@@ -1,0 +1,169 @@
+//! Networks that lie (issue 22): a BeyondMimic policy whose `actions` output has the wrong
+//! width, whose joint order names a joint twice, or whose action scale is zero is refused
+//! at load, naming the file — not scored as a network answering zeros; an onnx-motion file
+//! declaring a huge observation input is refused before any allocation, and one whose
+//! motion outputs are not finite says so. The networks are written by the test
+//! (`common/onnx_model.rs`).
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+#[path = "common/onnx_model.rs"]
+mod onnx_model;
+use onnx_model::Network;
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+const SAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+
+fn thorarena(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+fn error_of(o: &Output) -> String {
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success(), "expected an error: {e}");
+    assert!(!e.contains("panicked"), "a panic: {e}");
+    e
+}
+
+/// The G1's 29 joints in canonical order (`thorarena robot info`'s).
+fn g1_joints() -> Vec<String> {
+    let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
+    robot.joints.iter().map(|j| j.name.clone()).collect()
+}
+
+/// A BeyondMimic-style policy: 160 observations (the known layout for 29 joints),
+/// `actions` of `width`, metadata as given.
+fn beyondmimic(dir: &Path, name: &str, width: i64, metadata: Vec<(&str, String)>) -> String {
+    let path = dir.join(name);
+    let net = Network {
+        inputs: vec![("obs", vec![1, 160])],
+        outputs: vec![("actions", "obs", width, 0.0)],
+        metadata,
+    };
+    std::fs::write(&path, net.bytes()).unwrap();
+    format!("beyondmimic:{}", path.display())
+}
+
+fn eval(dir: &Path, policy: &str) -> Output {
+    thorarena(&[
+        "eval",
+        "--dataset",
+        SAMPLE,
+        "--policy",
+        policy,
+        "--profile",
+        "beyondmimic",
+        "--settings",
+        "no-force",
+        "--shard",
+        "0/6",
+        "--out",
+        dir.join("run").to_str().unwrap(),
+        "--overwrite",
+    ])
+}
+
+#[test]
+fn a_beyondmimic_network_that_cannot_act_is_refused_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = g1_joints();
+    let quoted = |v: &[String]| {
+        format!(
+            "[{}]",
+            v.iter()
+                .map(|n| format!("\"{n}\""))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    // The fixture is sound: the right width loads and runs.
+    let good = beyondmimic(
+        dir.path(),
+        "good.onnx",
+        29,
+        vec![("dof_names", quoted(&names))],
+    );
+    let o = eval(dir.path(), &good);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let mut twice = names.clone();
+    twice[1] = twice[0].clone();
+    for (file, width, metadata, why) in [
+        ("narrow.onnx", 28, vec![], "the `actions` output has shape"),
+        ("wide.onnx", 30, vec![], "the `actions` output has shape"),
+        (
+            "twice.onnx",
+            29,
+            vec![("dof_names", quoted(&twice))],
+            "named twice",
+        ),
+        (
+            "zero.onnx",
+            29,
+            vec![("action_scale", "0".to_string())],
+            "must be finite and non-zero",
+        ),
+    ] {
+        let policy = beyondmimic(dir.path(), file, width, metadata);
+        let e = error_of(&eval(dir.path(), &policy));
+        assert!(e.contains(file) && e.contains(why), "{file}: {e}");
+    }
+}
+
+/// An onnx-motion network: `time_step` [1, 1] and `obs` of `obs_dims`; the four motion
+/// outputs from the time step, weights `fill`.
+fn onnx_motion(dir: &Path, name: &str, obs_dims: Vec<i64>, fill: f32) -> std::path::PathBuf {
+    let path = dir.join(name);
+    let net = Network {
+        inputs: vec![("time_step", vec![1, 1]), ("obs", obs_dims)],
+        outputs: vec![
+            ("joint_pos", "time_step", 29, fill),
+            ("joint_vel", "time_step", 29, fill),
+            ("ref_pos_xyz", "time_step", 3, fill),
+            ("ref_quat_xyzw", "time_step", 4, fill),
+        ],
+        metadata: vec![],
+    };
+    std::fs::write(&path, net.bytes()).unwrap();
+    path
+}
+
+fn import(dir: &Path, file: &Path) -> Output {
+    thorarena(&[
+        "data",
+        "import",
+        "--format",
+        "onnx-motion",
+        file.to_str().unwrap(),
+        "--task",
+        "dance",
+        "--out",
+        dir.join("ds").to_str().unwrap(),
+    ])
+}
+
+#[test]
+fn an_onnx_motion_file_with_a_huge_input_or_non_finite_motion_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for dims in [vec![100_000, 100_000], vec![i64::from(i32::MAX), 4, 4]] {
+        let huge = onnx_motion(dir.path(), "huge.onnx", dims.clone(), 0.0);
+        let start = std::time::Instant::now();
+        let e = error_of(&import(dir.path(), &huge));
+        assert!(
+            e.contains("huge.onnx") && e.contains("not a policy's observation"),
+            "{dims:?}: {e}"
+        );
+        assert!(
+            start.elapsed().as_secs() < 30,
+            "it took {:?}",
+            start.elapsed()
+        );
+    }
+    let nan = onnx_motion(dir.path(), "nan.onnx", vec![1, 8], f32::NAN);
+    let e = error_of(&import(dir.path(), &nan));
+    assert!(
+        e.contains("nan.onnx") && e.contains("is not finite at step 0"),
+        "{e}"
+    );
+}
