@@ -209,6 +209,11 @@ fn runs_are_never_silently_replaced_double_counted_or_empty() {
 
     let e = failure(&eval(&["--settings", "force,force", "--overwrite"]));
     assert!(e.contains("`force` twice"), "{e}");
+    // Two spellings of one load: each episode would run twice under two names.
+    for pair in ["1,force", "push:0,no-force", "push:50@-90,push:50@270"] {
+        let e = failure(&eval(&["--settings", pair, "--overwrite"]));
+        assert!(e.contains("the same load on the robot"), "{pair}: {e}");
+    }
     for absurd in ["1e308", "push:1e300", "50", "push:-5000"] {
         let e = failure(&eval(&["--settings", absurd, "--overwrite"]));
         assert!(

@@ -199,12 +199,23 @@ impl EvalContext {
                 })
             })
             .collect::<anyhow::Result<_>>()?;
-        let mut seen = HashSet::new();
-        if let Some(dup) = settings.iter().find(|s| !seen.insert(s.name.clone())) {
-            bail!(
-                "--settings lists `{}` twice: every episode would run and count twice",
-                dup.name
-            );
+        for (i, a) in settings.iter().enumerate() {
+            if let Some((j, _)) = settings[..i]
+                .iter()
+                .enumerate()
+                .find(|(_, b)| b.same_load(a))
+            {
+                let (first, second) = (&args.settings[j], &args.settings[i]);
+                if first == second || settings[j].name == a.name {
+                    bail!(
+                        "--settings lists `{}` twice: every episode would run and count twice",
+                        a.name
+                    );
+                }
+                bail!(
+                    "--settings lists `{first}` and `{second}`, which are the same load on the robot: every episode would run and count twice under two names"
+                );
+            }
         }
         for (flag, v) in [
             ("--max-torso-height-error", args.max_torso_height_error),

@@ -50,6 +50,21 @@ fn is_zero(v: &f64) -> bool {
 }
 
 impl Setting {
+    /// True when both settings load the robot the same way, however spelled (`force` and
+    /// `1`; `no-force` and `push:0`; a zero push in any direction).
+    pub fn same_load(&self, other: &Self) -> bool {
+        let heading = |s: &Self| {
+            if s.push_n == 0.0 {
+                None
+            } else {
+                Some(s.push_heading_deg.unwrap_or(0.0).rem_euclid(360.0))
+            }
+        };
+        self.coefficient == other.coefficient
+            && self.push_n == other.push_n
+            && heading(self) == heading(other)
+    }
+
     /// Largest |replay coefficient| accepted: ten times the recorded forces is already
     /// far beyond any interaction; larger values only make the physics diverge.
     pub const MAX_COEFFICIENT: f64 = 10.0;
