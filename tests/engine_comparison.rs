@@ -264,6 +264,63 @@ fn crosscheck_compares_the_same_episodes_on_both_engines() {
 }
 
 #[test]
+fn a_resumed_crosscheck_keeps_the_divergence_of_episodes_finished_before() {
+    if !cfg!(feature = "mujoco") {
+        return prereq::skip(
+            "engine_comparison::crosscheck_resume",
+            "built without the `mujoco` feature",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
+    let out = dir.path().join("xc");
+    let crosscheck = |extra: &[&str]| {
+        let mut a = vec![
+            "crosscheck",
+            "--policy",
+            "hold",
+            "--dataset",
+            sample.to_str().unwrap(),
+            "--settings",
+            "no-force",
+            "--bootstrap",
+            "100",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        a.extend(extra);
+        let o = run(&a);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("crosscheck.json")).unwrap())
+                .unwrap();
+        (
+            j["episodes"].clone(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let (whole, _) = crosscheck(&[]);
+    assert_eq!(whole.as_array().unwrap().len(), 12);
+    // As if killed during MuJoCo's run: its last four episodes never finished.
+    let log = out.join("mujoco/episodes.jsonl");
+    let lines: Vec<String> = std::fs::read_to_string(&log)
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    std::fs::write(&log, lines[..8].join("\n") + "\n").unwrap();
+    let (resumed, stderr) = crosscheck(&["--resume"]);
+    assert!(!stderr.contains("no joint divergence"), "{stderr}");
+    let resumed = resumed.as_array().unwrap();
+    assert_eq!(resumed.len(), 12);
+    for e in resumed {
+        assert!(!e["joint_divergence"].is_null(), "{e}");
+        assert!(!e["foot_slip"].is_null(), "{e}");
+    }
+    assert_eq!(&whole, &serde_json::Value::from(resumed.clone()));
+}
+
+#[test]
 fn crosscheck_refuses_bad_arguments_before_running_anything() {
     if !cfg!(feature = "mujoco") {
         return prereq::skip(

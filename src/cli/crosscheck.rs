@@ -3,10 +3,10 @@
 //! score on each engine and their differences, means with a bootstrap 95 % confidence
 //! interval. Both runs are ordinary run directories (`<out>/rapier`, `<out>/mujoco`).
 
+use super::crosscheck_series::{SeriesLog, SERIES_FILE};
 use super::eval::{check_out, evaluate, EvalContext, FirstSeconds, RunArgs};
 use super::policy_arg::make_policy;
 use anyhow::{bail, Context};
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use thorarena::results::crosscheck::{
@@ -17,7 +17,6 @@ use thorarena::results::{read_header, read_summary, EpisodeLog, EPISODES_FILE};
 
 /// A per-control-step series of vectors for each episode, by (task, sequence id,
 /// setting): the joint angles of its first seconds (rad), or its feet's accumulated slip (m).
-type SeriesByEpisode = BTreeMap<(String, String, String), Vec<Vec<f64>>>;
 
 /// Arguments of `crosscheck`.
 #[derive(Debug, clap::Args)]
@@ -161,18 +160,15 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     for d in &dirs {
         check_out(d, &args.run)?;
     }
-    // Per engine, the joint angles of each episode's first seconds, by episode key.
-    let mut first_q: [SeriesByEpisode; 2] = Default::default();
-    // Per engine, the feet's accumulated slip per control step of each whole episode.
-    let mut slips: [SeriesByEpisode; 2] = Default::default();
-    for ((((run_args, ctx), dir), joints), slip) in
-        [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
-            .into_iter()
-            .zip(&dirs)
-            .zip(first_q.iter_mut())
-            .zip(slips.iter_mut())
+    // Per engine, each episode's joint angles of the first seconds and the feet's
+    // accumulated slip, kept on disk as episodes finish (a resume keeps them).
+    let mut series = Vec::new();
+    for ((run_args, ctx), dir) in [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
+        .into_iter()
+        .zip(&dirs)
     {
         eprintln!("== {} → {}", ctx.engine.name(), dir.display());
+        let mut log = SeriesLog::open(dir, run_args.resume)?;
         let mut policy = make_policy(
             &args.policy,
             &ctx.robot,
@@ -181,6 +177,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             ctx.envs,
         )?;
         let seconds = args.divergence_seconds;
+        let mut write_error = None;
         let mut sink = |r: &thorarena::results::EpisodeRecord,
                         trace: &thorarena::episode::EpisodeTrace| {
             let q = trace
@@ -189,14 +186,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
                 .take_while(|s| s.time_s <= seconds + 1e-9)
                 .map(|s| s.q.clone())
                 .collect();
-            joints.insert(r.key(), q);
-            slip.insert(r.key(), trace.foot_slip_m.clone());
+            if let Err(e) = log.append(r.key(), q, trace.foot_slip_m.clone()) {
+                write_error.get_or_insert(e);
+            }
         };
         let first = FirstSeconds {
             seconds,
             sink: &mut sink,
         };
         evaluate(run_args, ctx, policy.as_mut(), dir, Some(first))?;
+        if let Some(e) = write_error {
+            return Err(e);
+        }
+        series.push(log);
     }
     let read = |dir: &PathBuf| -> anyhow::Result<_> {
         let header = read_header(dir)?;
@@ -213,14 +215,25 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             unpaired[0]
         );
     }
+    let mut without_series = 0;
     for p in &mut pairs {
         let key = (p.task.clone(), p.sequence_id.clone(), p.setting.clone());
-        if let (Some(qa), Some(qb)) = (first_q[0].get(&key), first_q[1].get(&key)) {
+        let (a, b) = (&series[0], &series[1]);
+        if let (Some(qa), Some(qb)) = (a.first_q.get(&key), b.first_q.get(&key)) {
             p.joint_divergence = joint_divergence(qa, qb);
+        } else {
+            without_series += 1;
         }
-        if let (Some(sa), Some(sb)) = (slips[0].get(&key), slips[1].get(&key)) {
+        if let (Some(sa), Some(sb)) = (a.foot_slip_m.get(&key), b.foot_slip_m.get(&key)) {
             p.foot_slip = foot_slip_pair(sa, sb, header.control_dt_s);
         }
+    }
+    if without_series > 0 {
+        eprintln!(
+            "warning: {without_series} of {} episodes have no joint divergence or foot slip: their series are not in {} (a run resumed from an older crosscheck?); --overwrite runs them again",
+            pairs.len(),
+            SERIES_FILE
+        );
     }
     let settings = compare_settings(&pairs, args.bootstrap, 0);
     println!("{}", tables("setting", &settings, args.divergence_seconds));

@@ -1,0 +1,108 @@
+//! The per-episode series `crosscheck` compares beyond the records (joint angles of the
+//! first seconds, the feet's accumulated slip), kept next to each engine's run as episodes
+//! finish (`crosscheck-series.jsonl`, one line per episode, flushed) so that a resumed
+//! crosscheck still compares the episodes finished before it was killed — they once came
+//! back with blank divergence columns and no warning.
+
+use anyhow::Context;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::io::{BufRead, Write};
+use std::path::{Path, PathBuf};
+
+/// File name, in each engine's run directory.
+pub const SERIES_FILE: &str = "crosscheck-series.jsonl";
+
+/// An episode: (task, sequence id, setting).
+pub type EpisodeKey = (String, String, String);
+
+/// Per episode, a series of vectors (per control step).
+pub type SeriesByEpisode = BTreeMap<EpisodeKey, Vec<Vec<f64>>>;
+
+#[derive(Serialize, Deserialize)]
+struct Line {
+    task: String,
+    sequence_id: String,
+    setting: String,
+    /// Joint angles of the first seconds, rad, per control step.
+    first_q: Vec<Vec<f64>>,
+    /// Accumulated slip per foot, m, per control step.
+    foot_slip_m: Vec<Vec<f64>>,
+}
+
+/// The series of one engine's run: those kept by an earlier attempt, and the file new
+/// ones are appended to.
+pub struct SeriesLog {
+    path: PathBuf,
+    file: std::fs::File,
+    /// Joint angles of the first seconds, by episode.
+    pub first_q: SeriesByEpisode,
+    /// Accumulated foot slip, by episode.
+    pub foot_slip_m: SeriesByEpisode,
+}
+
+impl SeriesLog {
+    /// Opens `dir`'s series: read back and appended to when `resume`, else started afresh.
+    /// A last line cut short by a kill is dropped (its episode runs again).
+    pub fn open(dir: &Path, resume: bool) -> anyhow::Result<Self> {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let path = dir.join(SERIES_FILE);
+        let mut first_q = SeriesByEpisode::new();
+        let mut foot_slip_m = SeriesByEpisode::new();
+        let mut kept = Vec::new();
+        if resume && path.exists() {
+            let file = std::fs::File::open(&path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
+                let line = line.with_context(|| format!("reading {}", path.display()))?;
+                match serde_json::from_str::<Line>(&line) {
+                    Ok(l) => {
+                        let key = (l.task, l.sequence_id, l.setting);
+                        first_q.insert(key.clone(), l.first_q);
+                        foot_slip_m.insert(key, l.foot_slip_m);
+                        kept.push(line);
+                    }
+                    Err(e) => eprintln!(
+                        "--resume: {} line {} is unreadable ({e}); its episode's series is dropped",
+                        path.display(),
+                        i + 1
+                    ),
+                }
+            }
+        }
+        // Rewrite what was kept, without a torn last line, then append.
+        let mut file =
+            std::fs::File::create(&path).with_context(|| format!("creating {}", path.display()))?;
+        for line in &kept {
+            writeln!(file, "{line}").with_context(|| format!("writing {}", path.display()))?;
+        }
+        Ok(Self {
+            path,
+            file,
+            first_q,
+            foot_slip_m,
+        })
+    }
+
+    /// Keeps one finished episode's series (written through at once: a kill loses none).
+    pub fn append(
+        &mut self,
+        key: EpisodeKey,
+        first_q: Vec<Vec<f64>>,
+        foot_slip_m: Vec<Vec<f64>>,
+    ) -> anyhow::Result<()> {
+        let (task, sequence_id, setting) = key.clone();
+        let line = Line {
+            task,
+            sequence_id,
+            setting,
+            first_q,
+            foot_slip_m,
+        };
+        writeln!(self.file, "{}", serde_json::to_string(&line)?)
+            .with_context(|| format!("writing {}", self.path.display()))?;
+        self.first_q.insert(key.clone(), line.first_q);
+        self.foot_slip_m.insert(key, line.foot_slip_m);
+        Ok(())
+    }
+}
