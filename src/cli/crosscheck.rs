@@ -15,9 +15,6 @@ use thorarena::results::crosscheck::{
 };
 use thorarena::results::{read_header, read_summary, EpisodeLog, EPISODES_FILE};
 
-/// A per-control-step series of vectors for each episode, by (task, sequence id,
-/// setting): the joint angles of its first seconds (rad), or its feet's accumulated slip (m).
-
 /// Arguments of `crosscheck`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
