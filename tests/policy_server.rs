@@ -487,3 +487,36 @@ fn eval_exits_non_zero_when_every_episode_was_in_flight_as_its_policy_died() {
         "{records}"
     );
 }
+
+#[test]
+fn a_policy_refused_by_the_run_is_told_why_not_that_the_run_is_over() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = session("refused-resume");
+    let out = dir.path().join(&s);
+    let run = eval_cmd(&format!("ipc:{s}"), &out, &["--shard", "0/6"])
+        .spawn()
+        .unwrap();
+    let client = rust_client(&s, "hold", &[]);
+    finished(run, "first eval");
+    finished(client, "hold");
+    // Resuming that run with another policy: the policy hears it in its handshake.
+    let resumed = Command::new(BIN)
+        .args(["eval", "--dataset", &format!("{ROOT}/data/sample")])
+        .args(["--policy", &format!("ipc:{s}"), "--settings", "force"])
+        .args(["--shard", "0/6", "--resume", "--connect-timeout", "5"])
+        .args(["--out", out.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let other = rust_client(&s, "replay", &["--name", "other"]);
+    let told = other.wait_with_output().unwrap();
+    let told_err = String::from_utf8_lossy(&told.stderr);
+    assert!(!told.status.success(), "{told_err}");
+    assert!(
+        told_err.contains("refused") && told_err.contains("is a run of policy `hold`, not `other`"),
+        "{told_err}"
+    );
+    let run = wait_at_most(resumed, std::time::Duration::from_secs(60), "eval");
+    assert!(!run.status.success());
+}

@@ -108,6 +108,11 @@ typedef enum ThorarenaStatus {
    */
   THORARENA_STATUS_REFUSED_BUSY = 5,
   /**
+   * Refused: the run refused this policy (its name, or a resumed run that was another
+   * policy's); the message says why.
+   */
+  THORARENA_STATUS_REFUSED_BY_RUN = 6,
+  /**
    * The run is over: leave the loop and close the client.
    */
   THORARENA_STATUS_END = 10,
@@ -386,7 +391,7 @@ typedef struct ThorarenaActionHeader {
 /**
  * Every status, in declaration order.
  */
-#define ThorarenaStatus_ALL { ThorarenaStatus_Ok, ThorarenaStatus_RefusedProtocolVersion, ThorarenaStatus_RefusedJointCount, ThorarenaStatus_RefusedJointNames, ThorarenaStatus_RefusedReferenceOffsets, ThorarenaStatus_RefusedBusy, ThorarenaStatus_End, ThorarenaStatus_Timeout, ThorarenaStatus_NoSession, ThorarenaStatus_SessionName, ThorarenaStatus_SessionInUse, ThorarenaStatus_Config, ThorarenaStatus_SimulatorGone, ThorarenaStatus_Layout, ThorarenaStatus_Transport, ThorarenaStatus_InvalidArgument, ThorarenaStatus_CallOrder, ThorarenaStatus_WrongThread, ThorarenaStatus_Panic, }
+#define ThorarenaStatus_ALL { ThorarenaStatus_Ok, ThorarenaStatus_RefusedProtocolVersion, ThorarenaStatus_RefusedJointCount, ThorarenaStatus_RefusedJointNames, ThorarenaStatus_RefusedReferenceOffsets, ThorarenaStatus_RefusedBusy, ThorarenaStatus_RefusedByRun, ThorarenaStatus_End, ThorarenaStatus_Timeout, ThorarenaStatus_NoSession, ThorarenaStatus_SessionName, ThorarenaStatus_SessionInUse, ThorarenaStatus_Config, ThorarenaStatus_SimulatorGone, ThorarenaStatus_Layout, ThorarenaStatus_Transport, ThorarenaStatus_InvalidArgument, ThorarenaStatus_CallOrder, ThorarenaStatus_WrongThread, ThorarenaStatus_Panic, }
 
 #ifdef __cplusplus
 extern "C" {

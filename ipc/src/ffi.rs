@@ -56,6 +56,9 @@ pub enum ThorarenaStatus {
     RefusedReferenceOffsets = 4,
     /// Refused: another policy is connected.
     RefusedBusy = 5,
+    /// Refused: the run refused this policy (its name, or a resumed run that was another
+    /// policy's); the message says why.
+    RefusedByRun = 6,
     /// The run is over: leave the loop and close the client.
     End = 10,
     /// Nothing arrived within the timeout (waiting for a step, or for the welcome).
@@ -96,6 +99,7 @@ impl ThorarenaStatus {
             Status::JointNames => Self::RefusedJointNames,
             Status::ReferenceOffsets => Self::RefusedReferenceOffsets,
             Status::Busy => Self::RefusedBusy,
+            Status::Rejected => Self::RefusedByRun,
         }
     }
 
@@ -115,13 +119,14 @@ impl ThorarenaStatus {
     }
 
     /// Every status, in declaration order.
-    pub const ALL: [Self; 19] = [
+    pub const ALL: [Self; 20] = [
         Self::Ok,
         Self::RefusedProtocolVersion,
         Self::RefusedJointCount,
         Self::RefusedJointNames,
         Self::RefusedReferenceOffsets,
         Self::RefusedBusy,
+        Self::RefusedByRun,
         Self::End,
         Self::Timeout,
         Self::NoSession,
@@ -146,6 +151,7 @@ impl ThorarenaStatus {
             Self::RefusedJointNames => c"THORARENA_STATUS_REFUSED_JOINT_NAMES",
             Self::RefusedReferenceOffsets => c"THORARENA_STATUS_REFUSED_REFERENCE_OFFSETS",
             Self::RefusedBusy => c"THORARENA_STATUS_REFUSED_BUSY",
+            Self::RefusedByRun => c"THORARENA_STATUS_REFUSED_BY_RUN",
             Self::End => c"THORARENA_STATUS_END",
             Self::Timeout => c"THORARENA_STATUS_TIMEOUT",
             Self::NoSession => c"THORARENA_STATUS_NO_SESSION",

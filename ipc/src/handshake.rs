@@ -52,6 +52,9 @@ pub enum Status {
     ReferenceOffsets = 4,
     /// Another policy is already connected.
     Busy = 5,
+    /// The run refused this policy (its name, or a resumed run that was another
+    /// policy's); the message says why.
+    Rejected = 6,
 }
 
 impl Status {
@@ -64,6 +67,7 @@ impl Status {
             Self::JointNames,
             Self::ReferenceOffsets,
             Self::Busy,
+            Self::Rejected,
         ]
         .into_iter()
         .find(|s| *s as u32 == v)

@@ -231,6 +231,19 @@ impl SimSession {
     pub fn accept(
         &mut self,
         timeout: Option<Duration>,
+        on_refused: impl FnMut(&str),
+    ) -> Result<PolicyInfo, IpcError> {
+        self.accept_vetted(timeout, |_| Ok(()), on_refused)
+    }
+
+    /// [`Self::accept`], and a policy the protocol accepts is also put to `vet` (the run's
+    /// own conditions: a name it can use, the policy a resumed run was made with): a
+    /// policy it refuses is told so in its welcome ([`Status::Rejected`] and the reason),
+    /// rather than welcomed and then sent away as if the run were over.
+    pub fn accept_vetted(
+        &mut self,
+        timeout: Option<Duration>,
+        mut vet: impl FnMut(&PolicyInfo) -> Result<(), String>,
         mut on_refused: impl FnMut(&str),
     ) -> Result<PolicyInfo, IpcError> {
         self.connection = None;
@@ -269,6 +282,13 @@ impl SimSession {
                     pid: hello.pid,
                     reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
                 };
+                if let Err(why) = vet(&info) {
+                    on_refused(&why);
+                    welcome.status = Status::Rejected as u32;
+                    welcome.message = to_fixed(&why);
+                    let _ = request.send_copy(welcome);
+                    continue;
+                }
                 // The node that sent this hello, as iceoryx2 registered its port.
                 let Some(peer_id) = client_node(&self.hello_service, request.origin()) else {
                     on_refused(&format!("policy `{}` left before its welcome", info.name));

@@ -2,7 +2,7 @@
 //! scored with FATS and the diagnostics; results streamed to a run directory that can be
 //! resumed after a crash, or sharded across machines and merged.
 
-use super::policy_arg::{make_policy, PolicyIoArgs};
+use super::policy_arg::{make_policy_vetted, PolicyIoArgs};
 use anyhow::{bail, Context};
 use std::collections::HashSet;
 use std::io::Write;
@@ -279,12 +279,36 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if let Some(out) = &args.out {
         check_out(out, &args.run)?;
     }
-    let mut policy = make_policy(
+    // What the run requires of a policy process's name, asked in its handshake: a free
+    // default output directory, and the policy a resumed run was made with.
+    let mut vet = |name: &str| -> Result<(), String> {
+        let out = match &args.out {
+            Some(out) => out.clone(),
+            None => {
+                let out = PathBuf::from("results").join(format!("{name}-{}", ctx.dataset_name()));
+                check_out(&out, &args.run).map_err(|e| format!("{e:#}"))?;
+                out
+            }
+        };
+        if args.run.resume && out.join("run.json").exists() {
+            let previous = read_header(&out).map_err(|e| format!("{e:#}"))?;
+            if previous.policy != name {
+                return Err(format!(
+                    "--resume: {} is a run of policy `{}`, not `{name}`",
+                    out.display(),
+                    previous.policy
+                ));
+            }
+        }
+        Ok(())
+    };
+    let mut policy = make_policy_vetted(
         &args.policy,
         &ctx.robot,
         &ctx.profile,
         &args.run.io,
         ctx.envs,
+        &mut vet,
     )?;
     let out = match &args.out {
         Some(out) => out.clone(),

@@ -127,6 +127,19 @@ pub fn make_policy(
     io: &PolicyIoArgs,
     envs: usize,
 ) -> anyhow::Result<Box<dyn Policy>> {
+    make_policy_vetted(spec, robot, profile, io, envs, &mut |_| Ok(()))
+}
+
+/// [`make_policy`], and a policy process (`ipc:`) must also pass `vet` in its handshake
+/// (besides a usable name): what the run requires of it, told to it if it fails.
+pub fn make_policy_vetted(
+    spec: &str,
+    robot: &RobotModel,
+    profile: &Profile,
+    io: &PolicyIoArgs,
+    envs: usize,
+    vet: &mut dyn FnMut(&str) -> Result<(), String>,
+) -> anyhow::Result<Box<dyn Policy>> {
     let default_pose = profile.action_offset_rad.clone();
     Ok(match spec {
         "hold" => Box::new(HoldPolicy),
@@ -159,7 +172,7 @@ pub fn make_policy(
             let Some(session) = ipc_session(other) else {
                 bail!("unknown policy `{other}` (built-in: hold, replay, balance; twist2:<file.onnx>; beyondmimic:<file.onnx>; or ipc:<session> for a policy process)");
             };
-            Box::new(connect_remote(session, robot, profile, io, envs)?)
+            Box::new(connect_remote(session, robot, profile, io, envs, vet)?)
         }
     })
 }
@@ -171,6 +184,7 @@ pub fn connect_remote(
     profile: &Profile,
     io: &PolicyIoArgs,
     envs: usize,
+    vet: &mut dyn FnMut(&str) -> Result<(), String>,
 ) -> anyhow::Result<RemotePolicy> {
     if !(io.connect_timeout.is_finite() && io.connect_timeout >= 0.0) {
         bail!("--connect-timeout must be >= 0 s");
@@ -206,8 +220,16 @@ pub fn connect_remote(
             .0
             .map_or("none (lock-step)".to_string(), |b| format!("{b:?}"))
     );
-    let remote = RemotePolicy::connect(config, &mut |m| eprintln!("refused a policy: {m}"))
-        .with_context(|| format!("serving session `{session}`"))?;
+    // The name a policy process declares becomes part of paths: a name the run cannot use
+    // is refused in the handshake, so the policy hears why.
+    let mut vet_name = |info: &thorarena_ipc::PolicyInfo| {
+        thorarena::names::check_name("policy name", &info.name).map_err(|e| e.to_string())?;
+        vet(&info.name)
+    };
+    let remote = RemotePolicy::connect(config, &mut vet_name, &mut |m| {
+        eprintln!("refused a policy: {m}")
+    })
+    .with_context(|| format!("serving session `{session}`"))?;
     eprintln!(
         "policy `{}` (pid {}) connected, reference offsets {:?} s",
         remote.name(),

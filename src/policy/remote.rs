@@ -5,7 +5,9 @@
 use super::wire::write_observation;
 use super::{ActOutcome, Observation, Policy};
 use std::time::Duration;
-use thorarena_ipc::{IpcError, SimConfig, SimSession, StepOutcome, FLAG_PREVIOUS_TERMINATED};
+use thorarena_ipc::{
+    IpcError, PolicyInfo, SimConfig, SimSession, StepOutcome, FLAG_PREVIOUS_TERMINATED,
+};
 
 /// How to serve a session: the session itself, and what to do about connections.
 #[derive(Debug, Clone)]
@@ -54,13 +56,16 @@ pub struct RemotePolicy {
 
 impl RemotePolicy {
     /// Creates the session and waits for a policy to connect; refused handshakes (wrong
-    /// protocol version, joint count or order) are passed to `on_refused` and the wait goes on.
+    /// protocol version, joint count or order, or a policy `vet` refuses: the run's own
+    /// conditions on its name) are passed to `on_refused`, told to the policy, and the
+    /// wait goes on.
     pub fn connect(
         config: RemoteConfig,
+        vet: &mut dyn FnMut(&PolicyInfo) -> Result<(), String>,
         on_refused: &mut dyn FnMut(&str),
     ) -> Result<Self, RemoteError> {
         let mut session = SimSession::create(config.session.clone())?;
-        let info = session.accept(config.connect_timeout, |m| on_refused(m))?;
+        let info = session.accept_vetted(config.connect_timeout, vet, |m| on_refused(m))?;
         Ok(Self {
             session,
             name: info.name,
@@ -171,29 +176,33 @@ impl Policy for RemotePolicy {
             "waiting for a policy to reconnect to session `{}` (it must ask for the same reference offsets {:?})",
             self.config.session.session, self.offsets_s
         );
-        loop {
-            let info = match self.session.accept(self.config.connect_timeout, |m| {
+        let offsets = self.offsets_s.clone();
+        let same_offsets = |info: &PolicyInfo| {
+            if info.reference_offsets_s == offsets {
+                Ok(())
+            } else {
+                Err(format!(
+                    "policy `{}` asks for reference offsets {:?}, the run uses {:?}",
+                    info.name, info.reference_offsets_s, offsets
+                ))
+            }
+        };
+        let accepted = self
+            .session
+            .accept_vetted(self.config.connect_timeout, same_offsets, |m| {
                 log::warn!("refused a policy: {m}")
-            }) {
-                Ok(info) => info,
-                Err(e) => {
-                    log::warn!("no policy reconnected: {e}");
-                    return false;
-                }
-            };
-            if info.reference_offsets_s == self.offsets_s {
+            });
+        match accepted {
+            Ok(info) => {
                 log::info!("policy `{}` (pid {}) connected", info.name, info.pid);
                 self.stats.reconnections += 1;
                 self.name = info.name;
-                return true;
+                true
             }
-            log::warn!(
-                "refused policy `{}`: it asks for reference offsets {:?}, the run uses {:?}",
-                info.name,
-                info.reference_offsets_s,
-                self.offsets_s
-            );
-            self.session.end();
+            Err(e) => {
+                log::warn!("no policy reconnected: {e}");
+                false
+            }
         }
     }
 

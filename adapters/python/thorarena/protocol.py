@@ -106,6 +106,7 @@ class Status(enum.IntEnum):
     JOINT_NAMES = 3
     REFERENCE_OFFSETS = 4
     BUSY = 5
+    REJECTED = 6
 
 
 class Hello(ctypes.Structure):
