@@ -371,6 +371,43 @@ fn an_edited_or_planted_data_cache_is_never_used() {
 }
 
 #[test]
+fn a_full_disk_is_reported_naming_the_file_once() {
+    // /dev/full (Linux) stands in for a full disk: every write to it fails with ENOSPC.
+    let tmp = tempfile::tempdir().unwrap();
+    for file in ["episodes.jsonl", "summary.json", "tables.md"] {
+        let out = tmp.path().join(file.replace('.', "-"));
+        std::fs::create_dir(&out).unwrap();
+        std::os::unix::fs::symlink("/dev/full", out.join(file)).unwrap();
+        let o = thorarena(
+            tmp.path(),
+            &[
+                "eval",
+                "--dataset",
+                SAMPLE,
+                "--policy",
+                "hold",
+                "--settings",
+                "force",
+                "--shard",
+                "0/6",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+        );
+        let e = failure(&o);
+        assert!(
+            e.contains(file) && e.contains("No space left on device"),
+            "{file}: {e}"
+        );
+        assert_eq!(
+            e.matches("No space left on device").count(),
+            1,
+            "{file}: {e}"
+        );
+    }
+}
+
+#[test]
 fn data_info_lists_each_task_once_however_the_manifest_is_ordered() {
     let tmp = tempfile::tempdir().unwrap();
     let ds = tmp.path().join("ds");

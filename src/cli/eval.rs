@@ -500,7 +500,9 @@ pub(super) fn evaluate(
         bar.inc(1);
     });
     bar.finish_and_clear();
-    writer.flush()?;
+    writer
+        .flush()
+        .with_context(|| format!("writing {}", episodes_path.display()))?;
     if let Some(e) = write_error {
         return Err(e).with_context(|| format!("writing {}", episodes_path.display()));
     }
