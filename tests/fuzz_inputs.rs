@@ -181,6 +181,31 @@ fn seeds() -> &'static Seeds {
     })
 }
 
+/// A TWIST2-style motion pickle written by numpy (`python3` of `./test.sh`'s `.venv`).
+fn numpy_motion_pickle(root: &Path) -> Vec<u8> {
+    const SCRIPT: &str = "import pickle, sys, numpy as np\n\
+        k = np.arange(20)[:, None] * 0.01\n\
+        rot = np.zeros((20, 4)); rot[:, 3] = 1.0\n\
+        d = {'fps': np.float64(30.0), 'root_pos': np.hstack([k, 0 * k, 0.78 + 0 * k]),\n\
+             'root_rot': rot, 'dof_pos': np.zeros((20, 29)) + k}\n\
+        pickle.dump(d, open(sys.argv[1], 'wb'))\n";
+    let path = root.join("numpy-motion.pkl");
+    let out = std::process::Command::new("python3")
+        .args(["-c", SCRIPT])
+        .arg(&path)
+        .output();
+    match out {
+        Ok(o) if o.status.success() => std::fs::read(&path).unwrap(),
+        Ok(o) => panic!(
+            "without the reference artifacts the motion-pickle seed is written by python3 with numpy (./test.sh installs it into .venv): {}",
+            String::from_utf8_lossy(&o.stderr)
+        ),
+        Err(e) => panic!(
+            "without the reference artifacts the motion-pickle seed is written by python3 with numpy (./test.sh installs it into .venv): {e}"
+        ),
+    }
+}
+
 fn write_seeds(root: &Path) {
     let robot = g1();
     // A dataset of two sequences (manifest + safetensors), as `data import` writes it.
@@ -204,28 +229,10 @@ fn write_seeds(root: &Path) {
         String::from_utf8_lossy(&out.stderr)
     );
     // A motion pickle: the real TWIST2 walk when the reference artifacts are here, else
-    // one serde-pickle writes with the same keys.
+    // one numpy pickles with the same keys (numpy arrays, as in real files: a pickle of
+    // plain lists is not a motion file, and damaging an invalid seed tests nothing).
     let walk = thorarena::reference_dir().join("twist2/motions/0807_yanjie_walk_001.pkl");
-    let pickle = std::fs::read(&walk).unwrap_or_else(|_| {
-        use serde_pickle::{HashableValue as K, Value as V};
-        let rows = |n: usize, w: usize| {
-            V::List(
-                (0..n)
-                    .map(|k| V::List(vec![V::F64(k as f64 * 0.01); w]))
-                    .collect(),
-            )
-        };
-        let dict = [
-            ("fps", V::F64(30.0)),
-            ("root_pos", rows(20, 3)),
-            ("root_rot", rows(20, 4)),
-            ("dof_pos", rows(20, 29)),
-        ]
-        .into_iter()
-        .map(|(k, v)| (K::String(k.into()), v))
-        .collect();
-        serde_pickle::value_to_vec(&V::Dict(dict), Default::default()).unwrap()
-    });
+    let pickle = std::fs::read(&walk).unwrap_or_else(|_| numpy_motion_pickle(root));
     std::fs::write(root.join("motion.pkl"), pickle).unwrap();
     // A BeyondMimic npz (npyz's writer) and the two CSVs.
     write_npz(&root.join("motion.npz"));
