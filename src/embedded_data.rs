@@ -81,8 +81,8 @@ fn extract_into(dir: &Path) -> std::io::Result<()> {
         match differs(dir) {
             None => return Ok(()),
             Some(what) => {
-                eprintln!(
-                    "warning: the data cache {} differs from this binary's data ({what}): writing it again",
+                log::warn!(
+                    "the data cache {} differs from this binary's data ({what}): writing it again",
                     dir.display()
                 );
                 std::fs::remove_dir_all(dir)?;
