@@ -286,6 +286,44 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
 }
 
 #[test]
+fn datasets_and_mjcfs_are_compared_by_content_and_a_path_is_only_a_note() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = header("a");
+    // The same dataset content read from another path (the cache copy, a sweep's
+    // absolute path): comparable, said as a note.
+    let mut moved = header("b");
+    moved.dataset = "/elsewhere/sample".into();
+    write_run(&dir.path().join("a"), &base, &standard_records(0.02), false);
+    write_run(
+        &dir.path().join("b"),
+        &moved,
+        &standard_records(0.03),
+        false,
+    );
+    let runs = load_runs(&[dir.path().join("a"), dir.path().join("b")]).unwrap();
+    assert_eq!(comparison_warnings(&runs), []);
+    let notes = thorarena::report::comparison_notes(&runs);
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(notes[0].contains("/elsewhere/sample"), "{notes:?}");
+    let html = report_html(&runs, "");
+    assert!(!html.contains("id=\"comparability-warnings\""));
+    assert!(html.contains("id=\"comparability-notes\""));
+    // One MJCF path, two contents: not comparable.
+    let mujoco = |hash: &str| thorarena::physics::Engine::Mujoco {
+        mjcf: Some("g1.xml".into()),
+        mjcf_sha256: Some(hash.repeat(32)),
+    };
+    let (mut c, mut d) = (header("c"), header("d"));
+    c.engine = mujoco("ab");
+    d.engine = mujoco("cd");
+    write_run(&dir.path().join("c"), &c, &standard_records(0.02), false);
+    write_run(&dir.path().join("d"), &d, &standard_records(0.03), false);
+    let runs = load_runs(&[dir.path().join("c"), dir.path().join("d")]).unwrap();
+    let kinds: Vec<_> = comparison_warnings(&runs).iter().map(|w| w.kind).collect();
+    assert_eq!(kinds, [WarningKind::Physics]);
+}
+
+#[test]
 fn runs_of_the_same_policy_get_distinct_labels() {
     let dir = tempfile::tempdir().unwrap();
     let (x, y) = (dir.path().join("ckpt-1"), dir.path().join("ckpt-2"));

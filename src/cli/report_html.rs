@@ -5,8 +5,8 @@
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use thorarena::report::{
-    comparison_warnings, diagnostics_multi_table, fats_table, label_engines, load_runs,
-    mixed_engines, report_html, Page, WebBundle, MIXED_ENGINES_WHY,
+    comparison_notes, comparison_warnings, diagnostics_multi_table, fats_table, label_engines,
+    load_runs, mixed_engines, report_html, Page, WebBundle, MIXED_ENGINES_WHY,
 };
 
 /// Arguments of `report`.
@@ -78,6 +78,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     for w in &warnings {
         eprintln!("warning: {}", w.message);
     }
+    let notes = comparison_notes(&runs);
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
     let fats = fats_table(&runs);
     let diagnostics = diagnostics_multi_table(&runs);
     let mut md = String::from("# ThorArena report\n\n");
@@ -93,6 +97,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(16)],
             r.header.keypoints
         );
+    }
+    for n in &notes {
+        md += &format!("\nNote: {n}\n");
     }
     if !warnings.is_empty() {
         md += "\n> **Warning: these runs are not comparable as they stand.**\n";

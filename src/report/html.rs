@@ -2,7 +2,7 @@
 //! they are ours and small), the data as inline JSON, and the page script from the
 //! front-end bundle (`web/bundle/`, compiled in as well).
 
-use super::runs::{comparison_warnings, EpisodePoint, Run};
+use super::runs::{comparison_notes, comparison_warnings, EpisodePoint, Run};
 use super::scene::ViewScene;
 use super::tables::{all_tasks, diagnostics_multi_table, fats_table};
 use super::ReportError;
@@ -502,6 +502,14 @@ fn report_body(runs: &[Run], data: &ReportData) -> String {
             );
         }
         s += "</ul><p>Numbers below are shown per run; differences between runs may come from these, not from the policies.</p></section>";
+    }
+    let notes = comparison_notes(runs);
+    if !notes.is_empty() {
+        s += "<section id=\"comparability-notes\"><ul>";
+        for n in &notes {
+            let _ = write!(s, "<li>Note: {}</li>", escape(n));
+        }
+        s += "</ul></section>";
     }
     let _ = write!(
         s,

@@ -19,8 +19,8 @@ pub use html::{
     WEB_DIST_ENV,
 };
 pub use runs::{
-    comparison_warnings, label_engines, label_runs, load_run, load_runs, mixed_engines,
-    ComparisonWarning, EpisodePoint, Run, WarningKind, MIXED_ENGINES_WHY,
+    comparison_notes, comparison_warnings, label_engines, label_runs, load_run, load_runs,
+    mixed_engines, ComparisonWarning, EpisodePoint, Run, WarningKind, MIXED_ENGINES_WHY,
 };
 pub use scene::{
     load_trace, trace_context, view_scene, BodyShapes, FeetView, ShapeView, TraceContext, ViewScene,

@@ -267,6 +267,34 @@ fn grouped<'a>(items: impl IntoIterator<Item = (&'a str, String)>) -> Option<Str
     })
 }
 
+/// The first 12 hex digits of a SHA-256: enough to tell contents apart in a sentence.
+fn short_hash(hash: &str) -> &str {
+    &hash[..hash.len().min(12)]
+}
+
+/// Differences that do not change what was measured, said for information: the same
+/// dataset content read from different paths.
+pub fn comparison_notes(runs: &[Run]) -> Vec<String> {
+    let mut notes = Vec::new();
+    let mut by_hash: Vec<(&str, Vec<(&str, &str)>)> = Vec::new();
+    for r in runs {
+        let h = r.header.dataset_sha256.as_str();
+        match by_hash.iter_mut().find(|(k, _)| *k == h) {
+            Some((_, v)) => v.push((r.label.as_str(), r.header.dataset.as_str())),
+            None => by_hash.push((h, vec![(r.label.as_str(), r.header.dataset.as_str())])),
+        }
+    }
+    for (hash, runs) in by_hash {
+        if let Some(paths) = grouped(runs.iter().map(|(l, p)| (*l, p.to_string()))) {
+            notes.push(format!(
+                "the same dataset (sha256 {}) was read from different paths — {paths}",
+                short_hash(hash)
+            ));
+        }
+    }
+    notes
+}
+
 /// Every way the runs differ in what they measured (dataset, profile, termination rule,
 /// keypoints, policy I/O rules, settings, version) and every partial run. Empty when the
 /// runs are comparable.
@@ -280,12 +308,10 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
             });
         }
     };
+    // Datasets and MJCFs are the same when their content is (a path differs between a
+    // cache copy and a checkout, or between machines: `comparison_notes` says so).
     flag(WarningKind::Dataset, "Datasets", &|r| {
-        format!(
-            "{} (sha256 {})",
-            r.header.dataset,
-            &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(12)]
-        )
+        format!("sha256 {}", short_hash(&r.header.dataset_sha256))
     });
     flag(WarningKind::Profile, "Dynamics profiles", &|r| {
         format!(
@@ -297,10 +323,12 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
         let model = match &r.header.engine {
             crate::physics::Engine::Rapier => String::new(),
             crate::physics::Engine::Mujoco {
-                mjcf: Some(mjcf), ..
-            } => {
-                format!(" on {}", mjcf.display())
-            }
+                mjcf: Some(mjcf),
+                mjcf_sha256,
+            } => match mjcf_sha256 {
+                Some(hash) => format!(" on an MJCF with sha256 {}", short_hash(hash)),
+                None => format!(" on {}", mjcf.display()),
+            },
             crate::physics::Engine::Mujoco { mjcf: None, .. } => " on the generated MJCF".into(),
         };
         format!(
