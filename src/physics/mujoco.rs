@@ -83,6 +83,10 @@ pub struct MujocoPhysics {
     data: MjData<Box<MjModel>>,
     idx: Indices,
     mjcf: PathBuf,
+    /// MuJoCo met an unstable acceleration since the last reset ("Nan, Inf or huge value
+    /// in QACC"): it then resets the state itself, which must not pass for physics — the
+    /// state reads as not finite, so the episode ends as `physics_diverged`.
+    unstable: bool,
 }
 
 // SAFETY: `MjData<Box<MjModel>>` owns both the model and the data, and is `Send` by the
@@ -224,6 +228,7 @@ impl MujocoPhysics {
                 robot_body_of,
             },
             mjcf: label,
+            unstable: false,
         };
         physics.set_gains(&gains);
         let state = super::rapier::standing_default_pose(&physics.model);
@@ -278,8 +283,10 @@ impl Physics for MujocoPhysics {
         let n = self.model.n_joints();
         assert_eq!(state.q.len(), n, "reset q length");
         assert_eq!(state.qd.len(), n, "reset qd length");
-        // mj_resetData: nothing of the previous episode (warm starts, contacts) survives.
+        // mj_resetData: nothing of the previous episode (warm starts, contacts) survives,
+        // and its warning counters start from zero.
         self.data.reset();
+        self.unstable = false;
         if self.idx.free.is_none() {
             // A fixed base: the root body is welded where the state puts it.
             let root = self.idx.bodies[0];
@@ -390,6 +397,7 @@ impl Physics for MujocoPhysics {
             }
         }
         self.data.step();
+        self.unstable |= self.data.ffi().warning[MjtWarning::mjWARN_BADQACC as usize].number > 0;
         // mj_step leaves body poses as they were before its integration: bring them (and
         // the centres of mass the hand forces act around) up to the new qpos.
         self.data.kinematics();
@@ -411,6 +419,9 @@ impl Physics for MujocoPhysics {
             out.world_from_body.push(body_pose(&self.data, b));
         }
         out.applied_torque_nm.clone_from(&self.applied_torque_nm);
+        if self.unstable {
+            out.q.fill(f64::NAN);
+        }
     }
 
     fn time_s(&self) -> f64 {
@@ -462,6 +473,33 @@ impl Physics for MujocoPhysics {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An absurd force makes MuJoCo's acceleration blow up; MuJoCo then resets the state
+    /// itself (its "Nan, Inf or huge value in QACC" warning), which must read as diverged,
+    /// not as a robot standing in its initial pose again. A reset clears it.
+    #[test]
+    fn an_unstable_step_reads_as_diverged_until_the_next_reset() {
+        let g1 = Arc::new(crate::robot::load_bundled("g1_29dof").unwrap());
+        let gains = crate::physics::standing_gains(&g1);
+        let mut p =
+            MujocoPhysics::new(None, g1.clone(), PhysicsSettings::default(), gains).unwrap();
+        let mut state = PhysicsState::default();
+        p.step();
+        p.read_state(&mut state);
+        assert!(state.q.iter().all(|q| q.is_finite()));
+        p.set_external_force(ExternalForce {
+            body: 0,
+            force_w: Vector3::new(1e300, 0.0, 0.0),
+            point_b: Point3::origin(),
+        });
+        p.step();
+        p.read_state(&mut state);
+        assert!(state.q.iter().any(|q| !q.is_finite()), "{:?}", state.q);
+        p.reset(&crate::physics::rapier::standing_default_pose(&g1));
+        p.step();
+        p.read_state(&mut state);
+        assert!(state.q.iter().all(|q| q.is_finite()));
+    }
 
     /// The generated MJCF, compiled by MuJoCo, is the robot model: every body's mass,
     /// centre of mass and principal moments of inertia, every joint's limits and armature.
