@@ -2,8 +2,8 @@
 //! width, whose joint order names a joint twice, or whose action scale is zero is refused
 //! at load, naming the file — not scored as a network answering zeros; an onnx-motion file
 //! declaring a huge observation input is refused before any allocation, and one whose
-//! motion outputs are not finite says so. The networks are written by the test
-//! (`common/onnx_model.rs`).
+//! motion outputs are not finite says so; the profile follows the policy family. The
+//! networks are written by the test (`common/onnx_model.rs`).
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -166,4 +166,68 @@ fn an_onnx_motion_file_with_a_huge_input_or_non_finite_motion_is_refused() {
         e.contains("nan.onnx") && e.contains("is not finite at step 0"),
         "{e}"
     );
+}
+
+#[test]
+fn the_profile_follows_the_policy_family_and_a_contradiction_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let names = g1_joints();
+    let quoted = format!(
+        "[{}]",
+        names
+            .iter()
+            .map(|n| format!("\"{n}\""))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    let policy = beyondmimic(dir.path(), "bm.onnx", 29, vec![("dof_names", quoted)]);
+    let run = dir.path().join("run");
+    let eval = |extra: &[&str]| {
+        let mut a = vec![
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--policy",
+            &policy,
+            "--settings",
+            "no-force",
+            "--shard",
+            "0/6",
+            "--out",
+            run.to_str().unwrap(),
+            "--overwrite",
+        ];
+        a.extend(extra);
+        thorarena(&a)
+    };
+    let header = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("run/run.json")).unwrap())
+            .unwrap()
+    };
+    // No --profile: the family's.
+    let o = eval(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(header()["profile"], "beyondmimic");
+    assert!(header().get("profile_mismatch_ok").is_none());
+    // A profile the family was not trained with: refused, unless asked for (recorded).
+    let e = error_of(&eval(&["--profile", "default"]));
+    assert!(
+        e.contains("is neither") && e.contains("--profile-mismatch-ok"),
+        "{e}"
+    );
+    let o = eval(&["--profile", "default", "--profile-mismatch-ok"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(header()["profile"], "default");
+    assert_eq!(header()["profile_mismatch_ok"], true);
+    // TWIST2 files: the twist2 profile or nothing (the file need not load to be refused).
+    let e = error_of(&thorarena(&[
+        "eval",
+        "--dataset",
+        SAMPLE,
+        "--policy",
+        "twist2:absent.onnx",
+        "--profile",
+        "default",
+    ]));
+    assert!(e.contains("trained for the `twist2` profile"), "{e}");
 }

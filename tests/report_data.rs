@@ -52,6 +52,7 @@ fn header(policy: &str) -> RunHeader {
         version: "0.1.0".into(),
         policy: policy.into(),
         profile: "default".into(),
+        profile_mismatch_ok: false,
         control_dt_s: 0.02,
         physics_dt_s: 0.005,
         engine: thorarena::physics::Engine::Rapier,

@@ -135,11 +135,13 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         mujoco_args.physics_dt = Some(dt);
     }
     // Both contexts first: a missing MuJoCo fails before anything runs.
-    let rapier_ctx = EvalContext::load(&rapier_args)?;
+    let rapier_ctx = EvalContext::load_for(&rapier_args, &args.policy)?;
     let mujoco_ctx =
-        EvalContext::load(&mujoco_args).with_context(|| match args.mujoco_physics_dt {
-            Some(dt) => format!("the MuJoCo run (--mujoco-physics-dt {dt})"),
-            None => "the MuJoCo run".to_string(),
+        EvalContext::load_for(&mujoco_args, &args.policy).with_context(|| {
+            match args.mujoco_physics_dt {
+                Some(dt) => format!("the MuJoCo run (--mujoco-physics-dt {dt})"),
+                None => "the MuJoCo run".to_string(),
+            }
         })?;
     let out = match &args.out {
         Some(o) => o.clone(),

@@ -43,9 +43,15 @@ pub struct RunArgs {
     /// Dataset directory (canonical format) [default: the bundled data/sample].
     #[arg(long)]
     pub dataset: Option<PathBuf>,
-    /// Dynamics profile (a name under data/profiles or a .toml path).
-    #[arg(long, default_value = "default")]
-    pub profile: String,
+    /// Dynamics profile (a name under data/profiles or a .toml path) [default: the one the
+    /// policy family was trained with: `twist2` for twist2:, `beyondmimic` for
+    /// beyondmimic:, else `default`]. One that contradicts the family is an error.
+    #[arg(long)]
+    pub profile: Option<String>,
+    /// Run a policy under a profile its family was not trained with (recorded in
+    /// run.json): a TWIST2 network on the default profile scores 2 instead of 86.
+    #[arg(long)]
+    pub profile_mismatch_ok: bool,
     /// Settings, comma separated: `force`, `no-force`, a replay coefficient, or
     /// `push:<N>` (no replay; a constant world +x push of N newtons on each hand, ramped
     /// in over 1 s — the sensitivity probe of FACTS.md §8), or `push:<N>@<deg>` with the
@@ -123,23 +129,43 @@ pub(super) struct EvalContext {
     pub settings: Vec<Setting>,
     pub workers: usize,
     pub envs: usize,
+    /// The profile contradicts the policy family and `--profile-mismatch-ok` allowed it.
+    pub profile_mismatch: bool,
 }
 
 impl EvalContext {
-    /// Loads and checks everything the arguments name (before any policy connects, so a
-    /// typo fails at once).
+    /// [`Self::load_for`] a policy of no family (a built-in, or a policy process).
     pub fn load(args: &RunArgs) -> anyhow::Result<Self> {
+        Self::load_for(args, "")
+    }
+
+    /// Loads and checks everything the arguments name (before any policy connects, so a
+    /// typo fails at once); the profile follows `policy`'s family unless `--profile`
+    /// names one.
+    pub fn load_for(args: &RunArgs, policy: &str) -> anyhow::Result<Self> {
         let dataset = args
             .dataset
             .clone()
             .unwrap_or_else(|| thorarena::data_dir().join("sample"));
         let robot = super::load_robot(&args.robot)?;
-        let profile_path = if args.profile.ends_with(".toml") {
-            PathBuf::from(&args.profile)
+        let profile_name = args
+            .profile
+            .clone()
+            .unwrap_or_else(|| super::policy_arg::family_profile(policy).to_string());
+        let profile_path = if profile_name.ends_with(".toml") {
+            PathBuf::from(&profile_name)
         } else {
-            bundled_profile_path(&args.profile)
+            bundled_profile_path(&profile_name)
         };
         let mut profile = load_profile(&profile_path, &robot)?;
+        let profile_mismatch = match super::policy_arg::profile_fits(policy, &profile) {
+            Ok(()) => false,
+            Err(why) if args.profile_mismatch_ok => {
+                eprintln!("warning: {why} (--profile-mismatch-ok: run anyway, recorded in run.json)");
+                true
+            }
+            Err(why) => bail!("{why}: leave out --profile to use the family's, or pass --profile-mismatch-ok to run it anyway"),
+        };
         if let Some(dt) = args.physics_dt {
             let ratio = profile.control_dt_s / dt;
             if !(dt.is_finite() && dt > 0.0) || (ratio - ratio.round()).abs() > 1e-6 || ratio < 0.5
@@ -252,6 +278,7 @@ impl EvalContext {
         };
         let envs = args.io.envs(workers)?;
         Ok(Self {
+            profile_mismatch,
             dataset_sha256: ds.content_hash(),
             robot,
             profile,
@@ -274,7 +301,7 @@ impl EvalContext {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let ctx = EvalContext::load(&args.run)?;
+    let ctx = EvalContext::load_for(&args.run, &args.policy)?;
     // An unusable --out is found before a policy process is made to connect.
     if let Some(out) = &args.out {
         check_out(out, &args.run)?;
@@ -366,6 +393,7 @@ pub(super) fn evaluate(
         version: env!("CARGO_PKG_VERSION").into(),
         policy: policy.name().to_string(),
         profile: ctx.profile.name.clone(),
+        profile_mismatch_ok: ctx.profile_mismatch,
         control_dt_s: ctx.profile.control_dt_s,
         physics_dt_s: ctx.profile.physics_dt_s,
         engine: ctx.engine.clone(),

@@ -150,12 +150,6 @@ pub fn make_policy_vetted(
         ),
         other => {
             if let Some(path) = other.strip_prefix("twist2:") {
-                if profile.name != "twist2" {
-                    eprintln!(
-                        "note: TWIST2 was trained for the `twist2` profile; this run uses `{}`",
-                        profile.name
-                    );
-                }
                 return Ok(Box::new(Twist2Policy::load(
                     std::path::Path::new(path),
                     profile.action_offset_rad.clone(),
@@ -175,6 +169,40 @@ pub fn make_policy_vetted(
             Box::new(connect_remote(session, robot, profile, io, envs, vet)?)
         }
     })
+}
+
+/// The profile a policy family was trained with: `twist2` for `twist2:`, `beyondmimic`
+/// for `beyondmimic:`, `default` for the built-ins and policy processes.
+pub fn family_profile(spec: &str) -> &'static str {
+    if spec.starts_with("twist2:") {
+        "twist2"
+    } else if spec.starts_with("beyondmimic:") {
+        "beyondmimic"
+    } else {
+        "default"
+    }
+}
+
+/// Whether `profile` is one `spec`'s family was trained with: TWIST2 networks the
+/// `twist2` profile, BeyondMimic-style ones `beyondmimic` or a profile with a
+/// `[beyondmimic]` section (`holosoma-wbt`); the built-ins and policy processes any.
+pub fn profile_fits(spec: &str, profile: &Profile) -> Result<(), String> {
+    if spec.starts_with("twist2:") && profile.name != "twist2" {
+        return Err(format!(
+            "TWIST2 networks are trained for the `twist2` profile (its gains, action scale and 50 Hz); `{}` contradicts it",
+            profile.name
+        ));
+    }
+    if spec.starts_with("beyondmimic:")
+        && profile.name != "beyondmimic"
+        && profile.beyondmimic.is_none()
+    {
+        return Err(format!(
+            "BeyondMimic-style networks run on `beyondmimic` or a profile with a [beyondmimic] section (holosoma-wbt); `{}` is neither",
+            profile.name
+        ));
+    }
+    Ok(())
 }
 
 /// Serves `session` and waits for a policy process.

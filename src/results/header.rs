@@ -44,6 +44,10 @@ pub struct RunHeader {
     pub policy: String,
     /// Profile name.
     pub profile: String,
+    /// The profile contradicts the policy's family (`--profile-mismatch-ok`): a TWIST2
+    /// network off its `twist2` profile, a BeyondMimic one off a BeyondMimic profile.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub profile_mismatch_ok: bool,
     /// The profile's control step (the clock of the metrics and regime thresholds), s.
     pub control_dt_s: f64,
     /// The physics step, s (the profile's, or `--physics-dt`).
