@@ -19,6 +19,8 @@
 //! ```
 
 mod array;
+mod axes;
+mod check;
 mod plan;
 mod spec;
 mod status;
@@ -26,7 +28,7 @@ mod status;
 pub use array::compact_ranges;
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, Task, PLAN_FILE,
-    PLAN_FORMAT,
+    PLAN_FORMAT, SESSION_POLICY,
 };
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{task_state, DoneRecord, FailedRecord, TaskState};

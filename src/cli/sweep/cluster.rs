@@ -95,9 +95,12 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// `s` as one word of a POSIX shell: bare when it is only safe characters, else in
+/// single quotes (inside which nothing is special but `'` itself).
 pub(super) fn shell_quote(s: &str) -> String {
-    if s.chars()
-        .all(|c| c.is_ascii_alphanumeric() || "/._-+=:,".contains(c))
+    if !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "/._-+=:,".contains(c))
     {
         s.to_string()
     } else {

@@ -49,7 +49,7 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             thorarena::report::MIXED_ENGINES_WHY
         );
     }
-    let robot = crate::cli::load_robot(&plan_robot(&plan.tasks[0]))?;
+    let robot = crate::cli::load_robot(&plan.robot)?;
     let mut results: Vec<Option<CellResult>> = Vec::new();
     // Loaded once per dataset, however many cells share it.
     let mut datasets: BTreeMap<PathBuf, Vec<thorarena::motion::Sequence>> = BTreeMap::new();

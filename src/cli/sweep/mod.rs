@@ -182,9 +182,9 @@ mod pool;
 mod status;
 mod task;
 
-use cluster::{k8s, slurm};
+use cluster::{k8s, shell_quote, slurm};
 use collect::collect;
 use plan::plan;
 use pool::run_all;
 use status::{census, status};
-use task::{cores, plan_robot, run_task, task, write_atomic, Outcome};
+use task::{cores, run_task, task, write_atomic, Outcome};

@@ -25,7 +25,7 @@ pub(super) fn run_task(
         .tasks
         .get(index)
         .with_context(|| format!("task {index}: the plan has tasks 0..{}", plan.tasks.len()))?;
-    let cell = &plan.cells[task.cell];
+    let cell = &plan.cells[task.cell]; // in range: the plan was checked when loaded
     let tdir = Plan::task_dir(dir, index);
     std::fs::create_dir_all(&tdir).with_context(|| format!("creating {}", tdir.display()))?;
     // One copy at a time; a second one waits, then finds the task done.
@@ -57,7 +57,7 @@ pub(super) fn run_task(
     };
 
     // The dataset must be the one planned.
-    let robot = crate::cli::load_robot(&plan_robot(task))?;
+    let robot = crate::cli::load_robot(&plan.robot)?;
     let ds = match Dataset::open(&cell.dataset, &robot) {
         Ok(ds) => ds,
         Err(e) => return fail(format!("dataset {}: {e}", cell.dataset.display()), &[]),
@@ -77,11 +77,7 @@ pub(super) fn run_task(
     let eval_log = File::create(tdir.join("eval.log"))?;
     let mut eval_cmd = Command::new(std::env::current_exe()?);
     eval_cmd
-        .args(
-            task.eval_args
-                .iter()
-                .map(|a| a.replace("{session}", &session)),
-        )
+        .args(task.eval_argv(&session))
         .arg("--out")
         .arg(&run_dir)
         .args(["--resume", "--workers", &workers.to_string()])
@@ -92,10 +88,7 @@ pub(super) fn run_task(
 
     let mut policy: Option<Child> = None;
     if let Some(command) = &cell.policy.command {
-        let exe = std::env::current_exe()?;
-        let line = command
-            .replace("{session}", &session)
-            .replace("{thorarena}", &exe.display().to_string());
+        let line = policy_command_line(command, &session)?;
         let log = File::create(tdir.join("policy.log"))?;
         let mut c = Command::new("sh");
         c.args(["-c", &line])
@@ -168,14 +161,20 @@ pub(super) fn run_task(
     Ok(Outcome::Done)
 }
 
-/// The robot named in a task's arguments.
-pub(super) fn plan_robot(task: &Task) -> String {
-    task.eval_args
-        .iter()
-        .position(|a| a == "--robot")
-        .and_then(|i| task.eval_args.get(i + 1))
-        .cloned()
-        .unwrap_or_else(|| "g1_29dof".into())
+/// A policy command with its placeholders filled in as single shell words: the binary's
+/// path and the session are data, whatever characters they hold (`$(…)` in a directory
+/// name is not run).
+pub(super) fn policy_command_line(command: &str, session: &str) -> anyhow::Result<String> {
+    let exe = std::env::current_exe()?;
+    let exe = exe.to_str().with_context(|| {
+        format!(
+            "{}: not UTF-8, which `{{thorarena}}` cannot name",
+            exe.display()
+        )
+    })?;
+    Ok(command
+        .replace("{session}", &shell_quote(session))
+        .replace("{thorarena}", &shell_quote(exe)))
 }
 
 /// How an evaluation ended.
