@@ -88,6 +88,28 @@ fn copy_dir(from: &Path, to: &Path) {
     }
 }
 
+/// A copy of the sample holding only its first `n` sequences.
+fn small_dataset(tmp: &Path, n: usize) -> PathBuf {
+    let ds = tmp.join(format!("sample-{n}"));
+    copy_dir(Path::new(SAMPLE), &ds);
+    let manifest = ds.join("manifest.json");
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    m["sequences"].as_array_mut().unwrap().truncate(n);
+    std::fs::write(&manifest, serde_json::to_string(&m).unwrap()).unwrap();
+    ds
+}
+
+/// Files directly in `dir`.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
 // ---------------------------------------------------------------- B: placeholders
 
 #[test]
@@ -139,7 +161,86 @@ fn the_binary_path_and_dataset_path_are_data_not_shell_or_placeholders() {
     );
 }
 
+// ---------------------------------------------------------------- C: a dead policy
+
+#[test]
+fn a_policy_that_dies_mid_run_fails_its_task_and_collect_will_not_score_it() {
+    // Two episodes, both in flight when the policy dies: `eval` itself may end well.
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = small_dataset(tmp.path(), 2);
+    let spec_path = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{}\"]\nsettings = [\"no-force\"]\n[[policy]]\nname = \"dies\"\ncommand = \"{{thorarena}} client --session {{session}} --policy hold --die-after-steps 100\"\nconnect_timeout_s = 30\n",
+            ds.display()
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    let o = thorarena(&["sweep", "run", s(&dir), "--jobs", "1"]);
+    let e = err(&o);
+    assert!(e.contains("policy_failed"), "{e}");
+    assert!(!dir.join("tasks/000000/done.json").exists());
+    let status = out(&ok(thorarena(&["sweep", "status", s(&dir)])));
+    assert!(status.contains("0 done, 1 failed"), "{status}");
+    assert!(status.contains("not done (--array): 0"), "{status}");
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("unfinished"), "{e}");
+    ok(thorarena(&["sweep", "collect", s(&dir), "--partial"]));
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let row = csv.lines().nth(1).unwrap();
+    assert!(row.contains(",false,"), "the cell is marked partial: {csv}");
+}
+
+#[test]
+fn collect_refuses_a_done_task_whose_run_holds_policy_failed_episodes() {
+    // The record written by a ThorArena that trusted the count: done.json beside a run
+    // whose episodes a dead policy cut short.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("sweep");
+    plan(&four_tasks(tmp.path()), &dir);
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    let episodes = dir.join("tasks/000001/run/episodes.jsonl");
+    let text = std::fs::read_to_string(&episodes).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut r: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
+    r["termination"] = serde_json::json!("policy_failed");
+    lines[0] = serde_json::to_string(&r).unwrap();
+    std::fs::write(&episodes, lines.join("\n") + "\n").unwrap();
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("policy_failed") && e.contains("task 1"), "{e}");
+    ok(thorarena(&["sweep", "collect", s(&dir), "--partial"]));
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(rows[1].contains(",false,"), "{csv}");
+    assert!(rows[2].contains(",true,"), "{csv}");
+}
+
 // ---------------------------------------------------------------- D: runs and plan entries
+
+#[test]
+fn collect_refuses_a_task_run_that_is_not_its_cells() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec_path = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\n[[policy]]\npolicy = \"hold\"\n[[policy]]\npolicy = \"balance\"\n"
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    ok(thorarena(&["sweep", "collect", s(&dir)]));
+    // Task 0 (hold) now holds task 1's run (balance).
+    let (a, b) = (dir.join("tasks/000000/run"), dir.join("tasks/000001/run"));
+    std::fs::remove_dir_all(&a).unwrap();
+    copy_dir(&b, &a);
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(
+        e.contains("tasks/000000/run") && e.contains("policy") && e.contains("balance"),
+        "{e}"
+    );
+}
 
 /// Loads plan.json as JSON, lets `edit` change it, writes it back.
 fn edit_plan(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
@@ -205,6 +306,101 @@ fn a_tampered_plan_is_an_error_naming_plan_json_never_a_panic() {
             assert!(e.contains("plan.json"), "{what}, {args:?}: {e}");
         }
     }
+}
+
+// ---------------------------------------------------------------- E: task records
+
+#[test]
+fn a_task_record_counts_for_the_directory_it_lies_in() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("sweep");
+    plan(&four_tasks(tmp.path()), &dir);
+    let t0 = dir.join("tasks/000000");
+    std::fs::create_dir_all(&t0).unwrap();
+    for task in [1, 99999] {
+        std::fs::write(
+            t0.join("failed.json"),
+            format!("{{\"task\": {task}, \"reason\": \"x\", \"log_tail\": []}}"),
+        )
+        .unwrap();
+        let o = thorarena(&["sweep", "status", s(&dir)]);
+        if o.status.success() {
+            // Location decides: task 0 is the failed one.
+            let status = out(&o);
+            assert!(
+                status.contains("failed: task 0") && status.contains("not done (--array): 0-3"),
+                "{status}"
+            );
+        } else {
+            let e = err(&o);
+            assert!(e.contains("tasks/000000/failed.json"), "{e}");
+        }
+    }
+}
+
+#[test]
+fn policy_output_in_task_records_is_bounded_and_cannot_drive_the_terminal() {
+    let tmp = tempfile::tempdir().unwrap();
+    let body = r#"
+datasets = ["SAMPLE"]
+settings = ["no-force"]
+[[policy]]
+name = "huge"
+command = '''echo {session} >/dev/null; head -c 30000000 /dev/zero | tr '\0' a; echo; exit 3'''
+connect_timeout_s = 20
+[[policy]]
+name = "escapes"
+command = '''echo {session} >/dev/null; printf '\033]0;pwned\007\033[2J\033[31mred\n' >&2; exit 3'''
+connect_timeout_s = 20
+"#;
+    let spec_path = spec(tmp.path(), &body.replace("SAMPLE", SAMPLE));
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    let o = thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]);
+    let e = err(&o);
+    assert!(!e.contains('\u{1b}'), "raw escapes in sweep run's output");
+    let failed = dir.join("tasks/000000/failed.json");
+    let size = std::fs::metadata(&failed).unwrap().len();
+    assert!(size < 20_000, "{}: {size} bytes", failed.display());
+    let o = ok(thorarena(&["sweep", "status", s(&dir)]));
+    let status = out(&o);
+    assert!(status.contains("2 failed"), "{status}");
+    assert!(
+        !status.contains('\u{1b}') && !status.contains('\u{7}'),
+        "{status:?}"
+    );
+    assert!(
+        status.contains("pwned"),
+        "the text itself is kept: {status}"
+    );
+    assert!(status.len() < 40_000, "{} bytes of status", status.len());
+}
+
+// ---------------------------------------------------------------- F: the dataset
+
+#[test]
+fn collect_refuses_a_dataset_changed_since_the_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("dataset");
+    copy_dir(Path::new(SAMPLE), &ds);
+    let spec_path = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{}\"]\nsettings = [\"no-force\"]\n[[policy]]\npolicy = \"hold\"\n",
+            ds.display()
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    ok(thorarena(&["sweep", "run", s(&dir)]));
+    let manifest = ds.join("manifest.json");
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    m["sequences"].as_array_mut().unwrap().pop();
+    std::fs::write(&manifest, serde_json::to_string(&m).unwrap()).unwrap();
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("changed") && e.contains(s(&ds)), "{e}");
+    assert!(!dir.join("results.csv").exists());
 }
 
 // ---------------------------------------------------------------- G, H, I: spec values
@@ -284,4 +480,54 @@ fn negative_spec_values_reach_eval_as_values_not_flags() {
         assert!(!e.contains("unexpected argument"), "{e}");
         assert!(e.contains(needle), "`{needle}` not in: {e}");
     }
+}
+
+// ---------------------------------------------------------------- J: files
+
+#[test]
+fn unwritable_sweep_files_are_errors_naming_them_and_leave_no_temp_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = four_tasks(tmp.path());
+    let dir = tmp.path().join("sweep");
+    plan(&spec, &dir);
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    // `cells` is a file.
+    std::fs::write(dir.join("cells"), "").unwrap();
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("cells"), "{e}");
+    // `slurm` and `k8s` are files (and a task is left to submit).
+    std::fs::remove_file(dir.join("tasks/000003/done.json")).unwrap();
+    std::fs::write(dir.join("slurm"), "").unwrap();
+    let e = err(&thorarena(&["sweep", "slurm", s(&dir)]));
+    assert!(e.contains("slurm"), "{e}");
+    std::fs::write(dir.join("k8s"), "").unwrap();
+    let e = err(&thorarena(&[
+        "sweep",
+        "k8s",
+        s(&dir),
+        "--image",
+        "i",
+        "--claim",
+        "c",
+    ]));
+    assert!(e.contains("k8s"), "{e}");
+
+    // A full disk (a file size limit: writes fail with EFBIG) while writing plan.json.
+    let full = tmp.path().join("full");
+    let o = Command::new("bash")
+        .arg("-c")
+        .arg("trap '' XFSZ; ulimit -f 1; exec \"$0\" sweep plan \"$1\" --out \"$2\"")
+        .arg(BIN)
+        .arg(&spec)
+        .arg(&full)
+        .output()
+        .unwrap();
+    let e = err(&o);
+    assert!(e.contains("plan"), "{e}");
+    let left: Vec<String> = names(&full)
+        .into_iter()
+        .filter(|n| n.contains("tmp"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+    assert!(!full.join("plan.json").exists());
 }

@@ -24,6 +24,7 @@ mod check;
 mod plan;
 mod spec;
 mod status;
+mod text;
 
 pub use array::compact_ranges;
 pub use plan::{
@@ -32,6 +33,7 @@ pub use plan::{
 };
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{task_state, DoneRecord, FailedRecord, TaskState};
+pub use text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
 
 use std::path::PathBuf;
 

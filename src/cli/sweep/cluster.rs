@@ -22,7 +22,8 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
         None => std::env::current_exe()?,
     };
     let sdir = dir.join("slurm");
-    std::fs::create_dir_all(sdir.join("logs"))?;
+    let logs = sdir.join("logs");
+    std::fs::create_dir_all(&logs).with_context(|| format!("creating {}", logs.display()))?;
     let mut array = compact_ranges(&not_done);
     if let Some(k) = args.max_parallel {
         if k == 0 {
@@ -193,7 +194,7 @@ pub(super) fn k8s(args: &K8sArgs) -> anyhow::Result<()> {
         args.cpus_per_task,
     );
     let kdir = dir.join("k8s");
-    std::fs::create_dir_all(&kdir)?;
+    std::fs::create_dir_all(&kdir).with_context(|| format!("creating {}", kdir.display()))?;
     let path = kdir.join("job.yaml");
     std::fs::write(&path, y).with_context(|| format!("writing {}", path.display()))?;
     println!(

@@ -36,10 +36,18 @@ pub(super) fn run_task(
     let _ = std::fs::remove_file(tdir.join("failed.json"));
     let started = Instant::now();
     let fail = |reason: String, logs: &[&str]| -> anyhow::Result<Outcome> {
+        // Bounded and printable however much, and whatever, the processes wrote.
+        let reason = truncated(&printable(&reason), LOG_LINE_MAX_BYTES);
         let mut log_tail = Vec::new();
+        let mut budget = LOG_TAIL_MAX_BYTES;
         for name in logs {
-            let lines = tail(&tdir.join(name), 12);
+            let mut lines = log_tail_of(&tdir.join(name), 12);
+            let mut bytes: usize = lines.iter().map(String::len).sum();
+            while bytes > budget {
+                bytes -= lines.remove(0).len();
+            }
             if !lines.is_empty() {
+                budget -= bytes;
                 log_tail.push(format!("--- {name}"));
                 log_tail.extend(lines);
             }
@@ -128,20 +136,17 @@ pub(super) fn run_task(
             &["eval.log", "policy.log"],
         );
     }
-    // Complete and on disk before it counts as done.
-    let episodes_path = run_dir.join("episodes.jsonl");
-    let header = thorarena::results::read_header(&run_dir)?;
-    let records = thorarena::results::EpisodeLog::read(&episodes_path, &header)?.records;
-    if records.len() != task.episodes {
-        return fail(
-            format!(
-                "the run holds {} episodes, the plan {}",
-                records.len(),
-                task.episodes
-            ),
-            &["eval.log"],
-        );
-    }
+    // Complete, this task's, and on disk before it counts as done: `eval` exits 0 when
+    // a dying policy cut short every episode still in flight.
+    let records = match check_task_run(plan, task, &run_dir)? {
+        Ok(records) => records,
+        Err(problem) => {
+            return fail(
+                format!("{}; `sweep run` again resumes the task", problem.reason()),
+                &["eval.log", "policy.log"],
+            )
+        }
+    };
     for name in ["episodes.jsonl", "run.json", "summary.json", "tables.md"] {
         let path = run_dir.join(name);
         File::open(&path)
@@ -259,33 +264,26 @@ pub(super) fn lock_task(tdir: &Path) -> anyhow::Result<File> {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary sibling, synced and renamed.
+/// Writes `bytes` to `path` through a temporary sibling, synced and renamed; the
+/// temporary file is removed if any step fails (a full disk leaves nothing behind).
 pub(super) fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    let mut f = File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
-    f.write_all(bytes)?;
-    f.sync_all()?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
+    let written = (|| -> std::io::Result<()> {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e).with_context(|| format!("writing {}", path.display()));
+    }
     if let Some(parent) = path.parent() {
         if let Ok(d) = File::open(parent) {
             let _ = d.sync_all();
         }
     }
     Ok(())
-}
-
-/// The last `n` non-empty lines of a log file.
-pub(super) fn tail(path: &Path, n: usize) -> Vec<String> {
-    let Ok(f) = File::open(path) else {
-        return Vec::new();
-    };
-    let lines: Vec<String> = std::io::BufReader::new(f)
-        .lines()
-        .map_while(Result::ok)
-        .map(|l| l.rsplit('\r').next().unwrap_or("").trim_end().to_string())
-        .filter(|l| !l.is_empty())
-        .collect();
-    lines[lines.len().saturating_sub(n)..].to_vec()
 }
 
 pub(super) fn cores() -> usize {
