@@ -5,6 +5,7 @@
 //! before `collect`; spec values that are absurd, equivalent or negative; files that
 //! cannot be written. Each is an end-to-end test that failed on the code before its fix.
 
+use std::os::unix::fs::PermissionsExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -108,6 +109,91 @@ fn names(dir: &Path) -> Vec<String> {
         .collect();
     v.sort();
     v
+}
+
+// ---------------------------------------------------------------- A: the Slurm script
+
+#[test]
+fn slurm_values_that_sbatch_cannot_quote_are_refused_and_nothing_reaches_the_shell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = four_tasks(tmp.path());
+    let stub = tmp.path().join("stub-thorarena");
+    std::fs::write(&stub, "#!/bin/sh\nexit 0\n").unwrap();
+    std::fs::set_permissions(&stub, std::fs::Permissions::from_mode(0o755)).unwrap();
+
+    // A newline in the sweep directory used to end the #SBATCH line and start a command.
+    let work = tmp.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    let dir = tmp.path().join("s\ntouch injected;x");
+    plan(&spec, &dir);
+    let o = thorarena(&["sweep", "slurm", s(&dir), "--thorarena", s(&stub)]);
+    if o.status.success() {
+        let script = dir.join("slurm/sweep.sbatch");
+        let _ = Command::new("bash")
+            .arg(&script)
+            .current_dir(&work)
+            .output()
+            .unwrap();
+        assert!(
+            !work.join("injected").exists(),
+            "the sweep directory's name ran as a command:\n{}",
+            std::fs::read_to_string(&script).unwrap()
+        );
+    } else {
+        let e = err(&o);
+        assert!(e.contains("newline") || e.contains("control"), "{e}");
+    }
+
+    // Newlines in --partition and --time.
+    let good = tmp.path().join("good");
+    plan(&spec, &good);
+    for (flag, value) in [
+        ("--partition", "cpu\ntouch injected"),
+        ("--time", "01:00:00\ntouch injected"),
+        ("--partition", "cpu gpu"),
+        ("--time", "1:00 #x"),
+    ] {
+        let o = thorarena(&[
+            "sweep",
+            "slurm",
+            s(&good),
+            flag,
+            value,
+            "--thorarena",
+            s(&stub),
+        ]);
+        let e = err(&o);
+        assert!(e.contains(flag), "{flag} {value:?}: {e}");
+    }
+
+    // Quotes, spaces and `#` in the directory would change the #SBATCH line: refused,
+    // naming the directory; `%` (a filename pattern) is escaped.
+    for name in ["with space", "quote'd", "dq\"x", "hash#x"] {
+        let d = tmp.path().join(name);
+        plan(&spec, &d);
+        let e = err(&thorarena(&[
+            "sweep",
+            "slurm",
+            s(&d),
+            "--thorarena",
+            s(&stub),
+        ]));
+        assert!(e.contains(name), "{name}: {e}");
+    }
+    let pct = tmp.path().join("at-100%a");
+    plan(&spec, &pct);
+    ok(thorarena(&[
+        "sweep",
+        "slurm",
+        s(&pct),
+        "--thorarena",
+        s(&stub),
+    ]));
+    let script = std::fs::read_to_string(pct.join("slurm/sweep.sbatch")).unwrap();
+    assert!(
+        script.contains("/at-100%%a/slurm/logs/task-%a.log"),
+        "{script}"
+    );
 }
 
 // ---------------------------------------------------------------- B: placeholders

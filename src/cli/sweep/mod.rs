@@ -25,9 +25,9 @@ use thorarena::results::{
     read_summary, sort_records, write_header, write_record, write_results, Summary,
 };
 use thorarena::sweep::{
-    compact_ranges, diff_plans, log_tail as log_tail_of, printable, task_state, truncated,
-    DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec, Task, TaskState, LOG_LINE_MAX_BYTES,
-    LOG_TAIL_MAX_BYTES, PLAN_FILE,
+    compact_ranges, diff_plans, log_tail as log_tail_of, printable, shell_quote, task_state,
+    truncated, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec, Task, TaskState,
+    LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES, PLAN_FILE,
 };
 
 /// `thorarena sweep …`
@@ -184,7 +184,7 @@ mod status;
 mod task;
 mod verify;
 
-use cluster::{k8s, shell_quote, slurm};
+use cluster::{k8s, slurm};
 use collect::collect;
 use plan::{eval_cli, plan};
 use pool::run_all;
