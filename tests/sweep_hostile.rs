@@ -598,6 +598,22 @@ fn unwritable_sweep_files_are_errors_naming_them_and_leave_no_temp_file() {
     ]));
     assert!(e.contains("k8s"), "{e}");
 
+    // A task's logs cannot be created.
+    for log in ["eval.log", "policy.log"] {
+        let d = tmp.path().join(format!("logs-{log}"));
+        let body = format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\ncommand = \"{{thorarena}} client --session {{session}}\"\n"
+        );
+        let sub = tmp.path().join(format!("spec-{log}"));
+        std::fs::create_dir(&sub).unwrap();
+        let p = sub.join("spec.toml");
+        std::fs::write(&p, body).unwrap();
+        plan(&p, &d);
+        std::fs::create_dir_all(d.join("tasks/000000").join(log)).unwrap();
+        let e = err(&thorarena(&["sweep", "task", s(&d), "--index", "0"]));
+        assert!(e.contains(log), "{e}");
+    }
+
     // A full disk (a file size limit: writes fail with EFBIG) while writing plan.json.
     let full = tmp.path().join("full");
     let o = Command::new("bash")

@@ -82,7 +82,7 @@ pub(super) fn run_task(
 
     let session = format!("sweep-{index}-{}", std::process::id());
     let run_dir = tdir.join("run");
-    let eval_log = File::create(tdir.join("eval.log"))?;
+    let eval_log = create_log(&tdir.join("eval.log"))?;
     let mut eval_cmd = Command::new(std::env::current_exe()?);
     eval_cmd
         .args(task.eval_argv(&session))
@@ -97,7 +97,7 @@ pub(super) fn run_task(
     let mut policy: Option<Child> = None;
     if let Some(command) = &cell.policy.command {
         let line = policy_command_line(command, &session)?;
-        let log = File::create(tdir.join("policy.log"))?;
+        let log = create_log(&tdir.join("policy.log"))?;
         let mut c = Command::new("sh");
         c.args(["-c", &line])
             .current_dir(&plan.workdir)
@@ -262,6 +262,11 @@ pub(super) fn lock_task(tdir: &Path) -> anyhow::Result<File> {
             return Err(e).with_context(|| format!("locking {}", path.display()));
         }
     }
+}
+
+/// A task's log file, created (truncated) for an attempt; the error names it.
+fn create_log(path: &Path) -> anyhow::Result<File> {
+    File::create(path).with_context(|| format!("creating {}", path.display()))
 }
 
 /// Writes `bytes` to `path` through a temporary sibling, synced and renamed; the
