@@ -196,6 +196,37 @@ fn slurm_values_that_sbatch_cannot_quote_are_refused_and_nothing_reaches_the_she
     );
 }
 
+#[test]
+fn the_kubernetes_manifest_names_a_hostile_directory_exactly() {
+    // Already safe (JSON-quoted YAML scalars); kept so.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("k8s \"q\" 'q'\n$(touch M)#x: y%a");
+    plan(&four_tasks(tmp.path()), &dir);
+    ok(thorarena(&[
+        "sweep",
+        "k8s",
+        s(&dir),
+        "--image",
+        "img: x",
+        "--claim",
+        "c\nd",
+    ]));
+    let text = std::fs::read_to_string(dir.join("k8s/job.yaml")).unwrap();
+    let y: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    let c = &y["spec"]["template"]["spec"]["containers"][0];
+    let canonical = std::fs::canonicalize(&dir).unwrap();
+    assert_eq!(c["command"][3].as_str(), canonical.to_str(), "{text}");
+    assert_eq!(
+        c["volumeMounts"][0]["mountPath"].as_str(),
+        canonical.to_str()
+    );
+    assert_eq!(c["image"].as_str(), Some("img: x"));
+    assert_eq!(
+        y["spec"]["template"]["spec"]["volumes"][0]["persistentVolumeClaim"]["claimName"].as_str(),
+        Some("c\nd")
+    );
+}
+
 // ---------------------------------------------------------------- B: placeholders
 
 #[test]
