@@ -67,7 +67,7 @@ pub enum SweepError {
         message: String,
     },
     /// A value cannot be written into a job script as the literal it is.
-    #[error("{what} `{}` {why}", printable(.value))]
+    #[error("{what} `{}`: {why}", printable(.value))]
     Unquotable {
         /// Which value (`--partition`, the sweep directory, …).
         what: String,

@@ -80,7 +80,7 @@ fn utf8<'p>(what: &str, p: &'p Path) -> Result<&'p str, SweepError> {
         unquotable(
             what,
             &p.to_string_lossy(),
-            "is not UTF-8, which a job script cannot name",
+            "not UTF-8, which a job script cannot name",
         )
     })
 }
@@ -110,12 +110,12 @@ fn sbatch_path(dir: &str) -> Result<String, SweepError> {
         .find(|&c| c.is_control() || c.is_whitespace() || "\"'\\#".contains(c))
     {
         let why = if c == '\n' || c == '\r' {
-            "holds a newline, which would end the #SBATCH line and start a shell command".into()
+            "it holds a newline, which would end the #SBATCH line and start a shell command".into()
         } else if c.is_control() {
-            format!("holds the control character {c:?}, which an #SBATCH line cannot carry")
+            format!("it holds the control character {c:?}, which an #SBATCH line cannot carry")
         } else {
             format!(
-                "holds {c:?}, which sbatch reads as syntax in an #SBATCH line (whitespace ends the value, # starts a comment, quotes and \\ are stripped); plan the sweep into a directory without it"
+                "it holds {c:?}, which sbatch reads as syntax in an #SBATCH line (whitespace ends the value, # starts a comment, quotes and \\ are stripped); plan the sweep into a directory without it"
             )
         };
         return Err(unquotable("the sweep directory", dir, &why));
