@@ -41,7 +41,13 @@ pub(super) fn refuse_equivalent(
             "`settings`: `{}` and `{}` are the same setting ({}): give it once",
             spec.settings[a],
             spec.settings[b],
-            Setting::parse(&spec.settings[a]).map_or(String::new(), |s| s.name)
+            Setting::parse(&spec.settings[a]).map_or(String::new(), |s| format!(
+                "force replay coefficient {}, push {} N{}",
+                s.coefficient,
+                s.push_n,
+                s.push_heading_deg
+                    .map_or(String::new(), |d| format!(" at {d}°"))
+            ))
         )));
     }
     let dirs: Vec<&Path> = datasets.iter().map(|d| d.dir.as_path()).collect();
