@@ -140,10 +140,16 @@ pub(super) fn run_task(
     // a dying policy cut short every episode still in flight.
     let records = match check_task_run(plan, task, &run_dir)? {
         Ok(records) => records,
-        Err(problem) => {
+        Err(RunProblem::Incomplete(why)) => {
             return fail(
-                format!("{}; `sweep run` again resumes the task", problem.reason()),
+                format!("{why}; `sweep run` again resumes the task"),
                 &["eval.log", "policy.log"],
+            )
+        }
+        Err(RunProblem::NotThisTask(why)) => {
+            return fail(
+                format!("{why}; remove {} and run the task again", run_dir.display()),
+                &["eval.log"],
             )
         }
     };

@@ -19,14 +19,6 @@ pub(super) enum RunProblem {
     NotThisTask(String),
 }
 
-impl RunProblem {
-    pub(super) fn reason(&self) -> &str {
-        match self {
-            Self::Incomplete(r) | Self::NotThisTask(r) => r,
-        }
-    }
-}
-
 /// The run's records when `run` is complete and is task `task`'s; `Err` when it cannot
 /// be read at all (a message naming the file).
 pub(super) fn check_task_run(
