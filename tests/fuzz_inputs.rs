@@ -1,9 +1,12 @@
 //! Property tests of every reader of outside input: the motion importers (TWIST pickle,
 //! BeyondMimic npz, LAFAN CSV, force CSV), the dataset reader (manifest and sequence
-//! files) and the results reader (`run.json`, `episodes.jsonl`, `summary.json`). Each is
-//! fed valid files damaged at random — cut short, bits flipped, bytes inserted or
-//! overwritten, containers nested thousands deep — and must return (an error, or a value)
-//! within seconds: never a panic, never a hang.
+//! files), the results reader (`run.json`, `episodes.jsonl`, `summary.json`) and the
+//! sweep's files (spec TOML, `plan.json`, `done.json`, `failed.json`). Each is fed valid
+//! files damaged at random — cut short, bits flipped, bytes inserted or overwritten,
+//! containers nested thousands deep, numbers replaced — and must return (an error naming
+//! the file, or a value that holds what it claims) within seconds: never a panic, never a
+//! hang. The Slurm script of a sweep directory with shell and sbatch syntax in its name
+//! is either refused or passes `bash -n` and runs exactly `thorarena sweep task DIR`.
 //!
 //! `PROPTEST_CASES` sets the cases per reader (default 800 here: 4 000 in all, run by
 //! CI). A longer run: `PROPTEST_CASES=50000 cargo test --release --test fuzz_inputs`.
@@ -18,6 +21,7 @@ use thorarena::motion::import::npz::read_beyondmimic_npz;
 use thorarena::motion::import::twist_pkl::read_twist_pkl;
 use thorarena::motion::{Dataset, DatasetWriter};
 use thorarena::results::{read_header, read_summary, EpisodeLog};
+use thorarena::sweep::{task_state, Plan, SweepSpec, TaskState};
 
 mod common;
 use common::{g1, sample_sequence};
@@ -50,6 +54,9 @@ enum Damage {
     /// The whole file made the innermost of `count` nested containers: openings before
     /// it (after a pickle's PROTO), closings after it (before a pickle's STOP).
     Wrap((&'static [u8], &'static [u8]), usize),
+    /// The n-th run of digits (counting cyclically) replaced by a number: a task index,
+    /// a cell, a count that is out of range but still well-formed.
+    Number(usize, &'static str),
 }
 
 fn damage() -> impl Strategy<Value = Damage> {
@@ -97,6 +104,27 @@ fn damages() -> impl Strategy<Value = Vec<Damage>> {
     ]
 }
 
+/// Damage for the sweep's JSON records: the usual, or well-formed numbers out of range.
+fn sweep_damages() -> impl Strategy<Value = Vec<Damage>> {
+    let number = (
+        any::<usize>(),
+        prop::sample::select(vec![
+            "0",
+            "1",
+            "2",
+            "3",
+            "7",
+            "99999",
+            "18446744073709551615",
+        ]),
+    )
+        .prop_map(|(k, v)| Damage::Number(k, v));
+    prop_oneof![
+        1 => damages(),
+        1 => prop::collection::vec(number, 1..4),
+    ]
+}
+
 fn apply(bytes: &[u8], damages: &[Damage]) -> Vec<u8> {
     let mut b = bytes.to_vec();
     let at = |b: &Vec<u8>, p: f64| ((b.len() as f64) * p) as usize;
@@ -140,6 +168,25 @@ fn apply(bytes: &[u8], damages: &[Damage]) -> Vec<u8> {
                     b.len()
                 };
                 b.splice(end..end, close.repeat(*n));
+            }
+            Damage::Number(k, value) => {
+                let mut runs = Vec::new();
+                let mut i = 0;
+                while i < b.len() {
+                    if b[i].is_ascii_digit() {
+                        let start = i;
+                        while i < b.len() && b[i].is_ascii_digit() {
+                            i += 1;
+                        }
+                        runs.push(start..i);
+                    } else {
+                        i += 1;
+                    }
+                }
+                if !runs.is_empty() {
+                    let r = runs[k % runs.len()].clone();
+                    b.splice(r, value.bytes());
+                }
             }
         }
     }
@@ -228,6 +275,44 @@ fn write_seeds(root: &Path) {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    // A sweep over that dataset: its spec, plan and one record of each kind.
+    let spec = root.join("sweep.toml");
+    std::fs::write(
+        &spec,
+        format!(
+            "datasets = [\"{}\"]\nsettings = [\"force\", \"no-force\"]\nshards = 2\n[[policy]]\npolicy = \"hold\"\n",
+            ds.display()
+        ),
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["sweep", "plan"])
+        .arg(&spec)
+        .arg("--out")
+        .arg(root.join("sweep"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for (task, name, json) in [
+        (
+            0,
+            "done.json",
+            r#"{"task": 0, "episodes": 2, "wall_s": 1.5}"#,
+        ),
+        (
+            1,
+            "failed.json",
+            r#"{"task": 1, "reason": "thorarena eval failed (exit status: 1)", "log_tail": ["--- eval.log", "error: x"]}"#,
+        ),
+    ] {
+        let tdir = root.join(format!("sweep/tasks/{task:06}"));
+        std::fs::create_dir_all(&tdir).unwrap();
+        std::fs::write(tdir.join(name), json).unwrap();
+    }
     // A motion pickle: the real TWIST2 walk when the reference artifacts are here, else
     // one numpy pickles with the same keys (numpy arrays, as in real files: a pickle of
     // plain lists is not a motion file, and damaging an invalid seed tests nothing).
@@ -382,6 +467,212 @@ proptest! {
             }
         });
     }
+
+    #[test]
+    fn sweep_plan(d in sweep_damages()) {
+        let (_tmp, dir) = damaged_dir("sweep", "plan.json", &d);
+        returns_in_time("Plan::load", move || {
+            if let Ok(plan) = Plan::load(&dir) {
+                plan_holds_what_it_claims(&plan);
+            }
+        });
+    }
+
+    #[test]
+    fn sweep_task_records(d in sweep_damages(), task in 0usize..2) {
+        let file = format!("tasks/{task:06}/{}", ["done.json", "failed.json"][task]);
+        let (_tmp, dir) = damaged_dir("sweep", &file, &d);
+        returns_in_time("task_state", move || match task_state(&dir, task) {
+            Ok(TaskState::Done(r)) => assert_eq!(r.task, task, "done.json of task {task}"),
+            Ok(TaskState::Failed(r)) => {
+                assert_eq!(r.task, task, "failed.json of task {task}");
+            }
+            Ok(_) => {}
+            Err(e) => assert!(e.to_string().contains(&file), "{e}"),
+        });
+    }
+
+    #[test]
+    fn sweep_spec(d in damages()) {
+        let (_tmp, path) = damaged("sweep.toml", &d);
+        returns_in_time("SweepSpec::load", move || {
+            if let Err(e) = SweepSpec::load(&path) {
+                assert!(e.to_string().contains("sweep.toml"), "{e}");
+            }
+        });
+    }
+}
+
+/// What a plan that loaded must hold: every task and cell where its index says, every
+/// task's cell and shard in range.
+fn plan_holds_what_it_claims(plan: &Plan) {
+    assert!(!plan.tasks.is_empty() && !plan.cells.is_empty());
+    for (i, c) in plan.cells.iter().enumerate() {
+        assert_eq!(c.index, i);
+    }
+    for (i, t) in plan.tasks.iter().enumerate() {
+        assert_eq!(t.index, i);
+        let cell = plan.cells.get(t.cell).expect("the task's cell exists");
+        assert_eq!(t.shard.1, cell.shards);
+        assert!(t.shard.0 < t.shard.1);
+    }
+}
+
+/// Shell syntax that sbatch reads literally (no whitespace, quote, `\\`, `#`): a script
+/// for a directory named with it is written, and its body must not run it.
+const SHELL_FRAGMENTS: [&str; 16] = [
+    "$(touch${IFS}M)",
+    "`touch${IFS}M`",
+    ";touch${IFS}M;",
+    "&&touch${IFS}M",
+    "|touch${IFS}M",
+    ">M",
+    "$((1+1))",
+    "${HOME}",
+    "$M",
+    "*",
+    "?",
+    "~",
+    "!",
+    "{session}",
+    "%a",
+    "%%",
+];
+
+/// A sweep directory name: shell syntax, sbatch syntax, control characters, text.
+fn hostile_name() -> impl Strategy<Value = String> {
+    let refused = prop::sample::select(vec![
+        " ",
+        "\t",
+        "\n",
+        "\r",
+        "'",
+        "\"",
+        "#",
+        "\\",
+        "\u{1b}[31m",
+        "\ntouch M\n",
+    ]);
+    let plain = prop::sample::select(vec![
+        "a", "Z9", "-", "--x", ".", "é", "=", ",", "(", ")", "%",
+    ]);
+    let fragment = prop_oneof![
+        3 => prop::sample::select(SHELL_FRAGMENTS.to_vec()),
+        2 => plain,
+        1 => refused,
+    ];
+    prop::collection::vec(fragment, 1..6)
+        .prop_map(|v| v.concat())
+        .prop_filter("a name", |n| n != "." && n != "..")
+}
+
+#[test]
+fn slurm_scripts_are_written_for_shell_syntax_in_a_directory_name() {
+    for name in SHELL_FRAGMENTS {
+        assert!(
+            slurm_script_is_refused_or_injection_free(&format!("x{name}")),
+            "{name:?} was refused: the property would test nothing for it"
+        );
+    }
+}
+
+fn slurm_config() -> ProptestConfig {
+    let c = config();
+    ProptestConfig {
+        cases: c.cases.min(200),
+        ..c
+    }
+}
+
+proptest! {
+    #![proptest_config(slurm_config())]
+
+    #[test]
+    fn slurm_scripts_of_hostile_directories(name in hostile_name()) {
+        let _written = slurm_script_is_refused_or_injection_free(&name);
+    }
+}
+
+/// Whether a script was written (and then checked).
+fn slurm_script_is_refused_or_injection_free(name: &str) -> bool {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join(name);
+    std::fs::create_dir_all(dir.join("tasks")).unwrap();
+    std::fs::copy(seeds().root.join("sweep/plan.json"), dir.join("plan.json")).unwrap();
+    let stub = tmp.path().join("stub");
+    std::fs::write(&stub, "#!/bin/sh\nprintf '%s\\0' \"$@\" > \"$ARGS_FILE\"\n").unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&stub, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["sweep", "slurm"])
+        .arg(&dir)
+        .arg("--thorarena")
+        .arg(&stub)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!stderr.contains("panicked"), "{name:?}: {stderr}");
+    if !o.status.success() {
+        assert!(stderr.contains("sweep directory"), "{name:?}: {stderr}");
+        return false;
+    }
+    let script = dir.join("slurm/sweep.sbatch");
+    let text = std::fs::read_to_string(&script).unwrap();
+    let syntax = std::process::Command::new("bash")
+        .arg("-n")
+        .arg(&script)
+        .output()
+        .unwrap();
+    assert!(syntax.status.success(), "{name:?}: bash -n:\n{text}");
+    // What sbatch reads: each #SBATCH line one option, the log path the directory's.
+    let canonical = std::fs::canonicalize(&dir).unwrap();
+    for line in text.lines().filter(|l| l.starts_with("#SBATCH")) {
+        let words: Vec<&str> = line["#SBATCH".len()..].split_whitespace().collect();
+        assert_eq!(words.len(), 1, "{name:?}: {line:?}");
+        assert!(
+            !words[0].contains(['#', '"', '\'', '\\']),
+            "{name:?}: {line:?}"
+        );
+        if let Some(log) = words[0].strip_prefix("--output=") {
+            let log = log.replace("%%", "\u{0}").replace("%a", "\u{1}");
+            assert!(!log.contains('%'), "{name:?}: an unescaped % in {line:?}");
+            let log = log.replace('\u{0}', "%").replace('\u{1}', "%a");
+            assert_eq!(
+                Path::new(&log),
+                canonical.join("slurm/logs/task-%a.log"),
+                "{name:?}"
+            );
+        }
+    }
+    // The body runs exactly `thorarena sweep task DIR` and nothing else.
+    let cwd = tmp.path().join("cwd");
+    std::fs::create_dir(&cwd).unwrap();
+    let args_file = tmp.path().join("args");
+    let run = std::process::Command::new("bash")
+        .arg(&script)
+        .current_dir(&cwd)
+        .env("ARGS_FILE", &args_file)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{name:?}: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let left: Vec<_> = std::fs::read_dir(&cwd).unwrap().collect();
+    assert!(
+        left.is_empty(),
+        "{name:?}: the script created files:\n{text}"
+    );
+    let args = std::fs::read(&args_file).unwrap();
+    let args: Vec<&[u8]> = args.split(|&b| b == 0).filter(|a| !a.is_empty()).collect();
+    use std::os::unix::ffi::OsStrExt;
+    assert_eq!(
+        args,
+        [&b"sweep"[..], b"task", canonical.as_os_str().as_bytes()],
+        "{name:?}:\n{text}"
+    );
+    true
 }
 
 #[test]
@@ -404,4 +695,16 @@ fn the_seeds_are_valid_so_the_damage_is_what_is_tested() {
         4
     );
     read_summary(&s.join("run")).unwrap();
+    SweepSpec::load(&s.join("sweep.toml")).unwrap();
+    let plan = Plan::load(&s.join("sweep")).unwrap();
+    assert_eq!(plan.tasks.len(), 4);
+    plan_holds_what_it_claims(&plan);
+    assert!(matches!(
+        task_state(&s.join("sweep"), 0),
+        Ok(TaskState::Done(_))
+    ));
+    assert!(matches!(
+        task_state(&s.join("sweep"), 1),
+        Ok(TaskState::Failed(_))
+    ));
 }

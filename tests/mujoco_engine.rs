@@ -431,13 +431,13 @@ physics_dt_s = 0.001
         serde_json::from_value(plan["tasks"][t]["eval_args"].clone()).unwrap()
     };
     assert!(
-        !args(0).iter().any(|a| a == "--engine"),
+        !args(0).iter().any(|a| a.starts_with("--engine")),
         "rapier cells keep eval's defaults"
     );
-    let mj = args(1).join(" ");
+    let mj = args(1);
     assert!(
-        mj.contains("--engine mujoco") && mj.contains("--physics-dt 0.001"),
-        "{mj}"
+        mj.iter().any(|a| a == "--engine=mujoco") && mj.iter().any(|a| a == "--physics-dt=0.001"),
+        "{mj:?}"
     );
 
     // Collecting puts two engines' scores side by side only when asked.

@@ -1,8 +1,9 @@
 //! A sweep through a real Slurm: the test starts a single-node cluster of its own
 //! (`tests/slurm/start.sh`: munged, slurmctld, slurmd; Debian's packages, installed when
 //! missing and run as root), submits a 4-task sample sweep with
-//! `thorarena sweep slurm --submit --wait`, checks that `collect` equals the same sweep
-//! run locally, and stops the daemons it started by their pids. Without root (the
+//! `thorarena sweep slurm --submit --wait` from a sweep directory whose name holds an
+//! sbatch pattern and shell syntax, checks that `collect` equals the same sweep run
+//! locally, and stops the daemons it started by their pids. Without root (the
 //! daemons and the install need it) it is recorded as skipped; in CI it must run.
 
 use std::path::{Path, PathBuf};
@@ -88,7 +89,9 @@ fn a_sweep_on_slurm_equals_the_local_run() {
         ),
     )
     .unwrap();
-    let (on_slurm, local) = (tmp.path().join("slurm"), tmp.path().join("local"));
+    // `%j` in the directory is sbatch's job-id pattern unless written `%%j`, and `$HOME`
+    // is shell syntax: the logs must land in this very directory.
+    let (on_slurm, local) = (tmp.path().join("slurm-%j-$HOME"), tmp.path().join("local"));
     for dir in [&on_slurm, &local] {
         ok(Command::new(BIN)
             .args(["sweep", "plan"])

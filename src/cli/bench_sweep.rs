@@ -93,10 +93,26 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     );
 
     if args.plan_tasks > 0 {
-        // Any finished task run of the first round stands in for every task of the large
-        // sweep when timing `collect`.
-        let source = Plan::task_dir(&scratch.join("sweep-0"), 0).join("run");
-        plan_at_scale(&exe, &scratch, args.plan_tasks, &source)?;
+        // The first round's two shards of its first cell stand in for every task of the
+        // large sweep when timing `collect` (rewritten to each task's setting and policy).
+        let first = scratch.join("sweep-0");
+        let plan = Plan::load(&first)?;
+        let shards: Vec<PathBuf> = plan
+            .tasks
+            .iter()
+            .filter(|t| t.cell == 0)
+            .map(|t| Plan::task_dir(&first, t.index).join("run"))
+            .collect();
+        if shards.len() != 2 || plan.cells[0].episodes != 12 {
+            bail!("--plan-tasks needs a spec whose first cell is 2 shards of the bundled sample (sweeps/sample.toml)");
+        }
+        plan_at_scale(
+            &exe,
+            &scratch,
+            args.plan_tasks,
+            &plan.cells[0].dataset,
+            &shards,
+        )?;
     }
     Ok(())
 }
@@ -128,18 +144,13 @@ fn baseline_commands(plan: &Plan, workers: usize, out: &Path) -> anyhow::Result<
         .into_iter()
         .enumerate()
         .map(|(i, (_, args, settings))| {
+            // A plan's arguments are `--flag=value`, one argument each.
             let mut argv = Vec::new();
-            let mut it = args.into_iter();
-            while let Some(a) = it.next() {
-                match a.as_str() {
-                    "--settings" => {
-                        it.next();
-                        argv.extend(["--settings".into(), settings.join(",")]);
-                    }
-                    "--shard" => {
-                        it.next();
-                    }
-                    _ => argv.push(a),
+            for a in args {
+                if a.starts_with("--settings=") {
+                    argv.push(format!("--settings={}", settings.join(",")));
+                } else if !a.starts_with("--shard=") {
+                    argv.push(a);
                 }
             }
             argv.extend([
@@ -153,13 +164,19 @@ fn baseline_commands(plan: &Plan, workers: usize, out: &Path) -> anyhow::Result<
         .collect())
 }
 
-/// Plans ≈ `tasks` tasks (the sample × many force coefficients × shards) and times the
+/// Plans ≈ `tasks` tasks (the sample × many force coefficients × 2 shards) and times the
 /// plan, a status census, and `collect` with every task finished — each task's run
-/// hard-linked from `source` (one real task run), so the merge reads and writes as much
-/// as real runs of that size, without simulating them.
-fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize, source: &Path) -> anyhow::Result<()> {
-    let shards = 10;
-    let settings = (tasks / (2 * shards)).max(1);
+/// written from `shards` (one real run of each shard), its header and records renamed to
+/// the task's setting and policy, so `collect` reads, checks and merges as much as real
+/// runs of that size, without simulating them.
+fn plan_at_scale(
+    exe: &Path,
+    scratch: &Path,
+    tasks: usize,
+    sample: &Path,
+    shards: &[PathBuf],
+) -> anyhow::Result<()> {
+    let settings = (tasks / (2 * shards.len())).max(1);
     let coefficients: Vec<String> = (0..settings)
         .map(|i| format!("\"{}\"", 0.001 * i as f64))
         .collect();
@@ -168,9 +185,10 @@ fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize, source: &Path) -> any
     std::fs::write(
         &spec,
         format!(
-            "datasets = [{:?}]\nsettings = [{}]\nshards = {shards}\n[[policy]]\npolicy = \"balance\"\n[[policy]]\npolicy = \"hold\"\n",
-            thorarena::data_dir().join("sample").display().to_string(),
-            coefficients.join(", ")
+            "datasets = [{:?}]\nsettings = [{}]\nshards = {}\n[[policy]]\npolicy = \"balance\"\n[[policy]]\npolicy = \"hold\"\n",
+            sample.display().to_string(),
+            coefficients.join(", "),
+            shards.len()
         ),
     )?;
     let dir = scratch.join("large");
@@ -183,35 +201,60 @@ fn plan_at_scale(exe: &Path, scratch: &Path, tasks: usize, source: &Path) -> any
             .arg(&dir),
     )?;
     let plan_s = t.elapsed().as_secs_f64();
-    let n = Plan::load(&dir)?.tasks.len();
+    let plan = Plan::load(&dir)?;
     let t = Instant::now();
     run_ok(Command::new(exe).args(["sweep", "status"]).arg(&dir))?;
     let status_s = t.elapsed().as_secs_f64();
-    let files: Vec<PathBuf> = std::fs::read_dir(source)
-        .with_context(|| format!("reading {}", source.display()))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.is_file())
-        .collect();
-    let episodes = std::fs::read_to_string(source.join("episodes.jsonl"))?
-        .lines()
-        .count();
-    for i in 0..n {
-        let run = Plan::task_dir(&dir, i).join("run");
+    let sources: Vec<(thorarena::results::RunHeader, Vec<serde_json::Value>)> = shards
+        .iter()
+        .map(|run| -> anyhow::Result<_> {
+            let header = thorarena::results::read_header(run)?;
+            let records = std::fs::read_to_string(run.join("episodes.jsonl"))?
+                .lines()
+                .map(serde_json::from_str)
+                .collect::<Result<_, _>>()?;
+            Ok((header, records))
+        })
+        .collect::<anyhow::Result<_>>()?;
+    let mut episodes = 0;
+    for task in &plan.tasks {
+        let cell = &plan.cells[task.cell];
+        let (source, records) = &sources[task.shard.0];
+        let setting = thorarena::runner::Setting::parse(&cell.setting).context("a setting")?;
+        let mut header = source.clone();
+        header.policy = cell.policy.policy.clone();
+        header.settings = vec![setting.clone()];
+        let run = Plan::task_dir(&dir, task.index).join("run");
         std::fs::create_dir_all(&run)?;
-        for f in &files {
-            std::fs::hard_link(f, run.join(f.file_name().expect("a file")))?;
+        thorarena::results::write_header(&run, &header)?;
+        let mut lines = String::new();
+        for r in records {
+            let mut r = r.clone();
+            r["setting"] = serde_json::Value::String(setting.name.clone());
+            r["coefficient"] = serde_json::json!(setting.coefficient);
+            r["policy"] = serde_json::Value::String(header.policy.clone());
+            lines += &(serde_json::to_string(&r)? + "\n");
         }
+        std::fs::write(run.join("episodes.jsonl"), lines)?;
         std::fs::write(
-            Plan::task_dir(&dir, i).join("done.json"),
-            format!("{{\"task\":{i},\"episodes\":{episodes},\"wall_s\":0.0}}"),
+            Plan::task_dir(&dir, task.index).join("done.json"),
+            format!(
+                "{{\"task\":{},\"episodes\":{},\"wall_s\":0.0}}",
+                task.index,
+                records.len()
+            ),
         )?;
+        for name in ["summary.json", "tables.md"] {
+            std::fs::copy(shards[task.shard.0].join(name), run.join(name))?;
+        }
+        episodes += records.len();
     }
     let t = Instant::now();
     run_ok(Command::new(exe).args(["sweep", "collect"]).arg(&dir))?;
     let collect_s = t.elapsed().as_secs_f64();
     println!(
-        "a sweep of {n} tasks: plan {plan_s:.2} s, status {status_s:.2} s, collect {collect_s:.2} s ({} episodes read, each task's run standing in for itself)",
-        n * episodes
+        "a sweep of {} tasks: plan {plan_s:.2} s, status {status_s:.2} s, collect {collect_s:.2} s ({episodes} episodes read and checked, each task's run written from a real run of its shard)",
+        plan.tasks.len()
     );
     Ok(())
 }

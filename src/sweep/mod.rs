@@ -19,17 +19,23 @@
 //! ```
 
 mod array;
+mod axes;
+mod check;
 mod plan;
+mod slurm;
 mod spec;
 mod status;
+mod text;
 
 pub use array::compact_ranges;
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, Task, PLAN_FILE,
-    PLAN_FORMAT,
+    PLAN_FORMAT, SESSION_POLICY,
 };
+pub use slurm::{sbatch_script, shell_quote, SbatchRequest};
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{task_state, DoneRecord, FailedRecord, TaskState};
+pub use text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
 
 use std::path::PathBuf;
 
@@ -59,6 +65,16 @@ pub enum SweepError {
         path: PathBuf,
         /// What is wrong, naming the key.
         message: String,
+    },
+    /// A value cannot be written into a job script as the literal it is.
+    #[error("{what} `{}`: {why}", printable(.value))]
+    Unquotable {
+        /// Which value (`--partition`, the sweep directory, …).
+        what: String,
+        /// The value.
+        value: String,
+        /// Why it cannot be written.
+        why: String,
     },
     /// A plan or task record is unreadable or from another format version.
     #[error("{path}: {message}")]

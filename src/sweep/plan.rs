@@ -4,15 +4,19 @@
 
 use super::spec::{resolve, SweepSpec};
 use super::SweepError;
-use crate::runner::schedule;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// File name of the plan in a sweep directory.
 pub const PLAN_FILE: &str = "plan.json";
 /// Version of the plan and task-record format; a sweep directory of another one is
-/// refused rather than misread.
-pub const PLAN_FORMAT: u32 = 1;
+/// refused rather than misread. 2: the robot is recorded and eval arguments are
+/// `--flag=value` (a negative value is not read as a flag).
+pub const PLAN_FORMAT: u32 = 2;
+
+/// The `--policy` of a task whose policy is a launched process: the only argument in
+/// which [`Task::eval_argv`] fills in the session.
+pub const SESSION_POLICY: &str = "ipc:{session}";
 
 /// A sweep's plan, written to `DIR/plan.json` by `sweep plan`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -25,6 +29,8 @@ pub struct Plan {
     pub spec: PathBuf,
     /// Where policy commands run (the spec's directory).
     pub workdir: PathBuf,
+    /// The robot every task evaluates.
+    pub robot: String,
     /// The cells, in index order.
     pub cells: Vec<Cell>,
     /// The tasks, in index order.
@@ -123,8 +129,27 @@ pub struct Task {
     /// Episodes this task runs.
     pub episodes: usize,
     /// Arguments of `thorarena` (from `eval` on), without `--out`, `--resume` and
-    /// `--workers`; `{session}` stands for the session of a launched policy.
+    /// `--workers`, each option as `--flag=value`; `--policy=ipc:{session}` stands for
+    /// the session of a launched policy.
     pub eval_args: Vec<String>,
+}
+
+impl Task {
+    /// The task's `thorarena` arguments with `session` filled in — in `--policy` only, so
+    /// a dataset or profile path spelled with `{session}` stays that path.
+    pub fn eval_argv(&self, session: &str) -> Vec<String> {
+        let planned = format!("--policy={SESSION_POLICY}");
+        self.eval_args
+            .iter()
+            .map(|a| {
+                if *a == planned {
+                    format!("--policy=ipc:{session}")
+                } else {
+                    a.clone()
+                }
+            })
+            .collect()
+    }
 }
 
 /// What planning needs to know of a dataset.
@@ -147,6 +172,23 @@ impl Plan {
         datasets: &[DatasetInfo],
     ) -> Result<Self, SweepError> {
         let workdir = spec_path.parent().unwrap_or(Path::new("/")).to_path_buf();
+        let invalid = |message: String| SweepError::Invalid {
+            path: spec_path.to_path_buf(),
+            message,
+        };
+        // Before anything is allocated per task: a shard without an episode is no work,
+        // and `shards = 10⁹` would exhaust memory planning empty tasks.
+        for (spelled, ds) in spec.datasets.iter().zip(datasets) {
+            if spec.shards > ds.durations_s.len() {
+                return Err(invalid(format!(
+                    "`shards` = {} but dataset `{spelled}` has {} episodes per cell: at most {} shards",
+                    spec.shards,
+                    ds.durations_s.len(),
+                    ds.durations_s.len()
+                )));
+            }
+        }
+        super::axes::refuse_equivalent(spec, spec_path, datasets)?;
         let mut cells = Vec::new();
         let mut tasks = Vec::new();
         for p in &spec.policies {
@@ -157,7 +199,7 @@ impl Plan {
                         Some(file) => format!("twist2:{}", resolve(&workdir, file).display()),
                         None => pol.clone(),
                     },
-                    _ => "ipc:{session}".into(),
+                    _ => SESSION_POLICY.into(),
                 },
                 command: p.command.clone(),
                 profile: if p.profile.ends_with(".toml") {
@@ -198,16 +240,11 @@ impl Plan {
                             };
                             for i in 0..spec.shards {
                                 let shard = (i, spec.shards);
-                                let episodes = if spec.shards == 1 {
-                                    cell.episodes
-                                } else {
-                                    schedule(cell.episodes, 1, Some(shard)).len()
-                                };
                                 tasks.push(Task {
                                     index: tasks.len(),
                                     cell: cell.index,
                                     shard,
-                                    episodes,
+                                    episodes: shard_episodes(cell.episodes, shard),
                                     eval_args: eval_args(&spec.robot, &cell, shard),
                                 });
                             }
@@ -217,14 +254,18 @@ impl Plan {
                 }
             }
         }
-        Ok(Self {
+        let plan = Self {
             format: PLAN_FORMAT,
             thorarena_version: env!("CARGO_PKG_VERSION").into(),
             spec: spec_path.to_path_buf(),
             workdir,
+            robot: spec.robot.clone(),
             cells,
             tasks,
-        })
+        };
+        plan.check()
+            .map_err(|m| invalid(format!("the expanded plan is inconsistent: {m}")))?;
+        Ok(plan)
     }
 
     /// Reads `DIR/plan.json`, refusing another format version.
@@ -247,10 +288,17 @@ impl Plan {
                 ),
             });
         }
-        serde_json::from_str(&text).map_err(|e| SweepError::BadRecord {
-            path,
+        let plan: Self = serde_json::from_str(&text).map_err(|e| SweepError::BadRecord {
+            path: path.clone(),
             message: e.to_string(),
-        })
+        })?;
+        plan.check().map_err(|m| SweepError::BadRecord {
+            path,
+            message: format!(
+                "{m}: the plan does not hold what it claims (edited or damaged); plan the sweep again in a new directory"
+            ),
+        })?;
+        Ok(plan)
     }
 
     /// Simulated seconds of all tasks.
@@ -274,49 +322,48 @@ impl Plan {
     }
 }
 
-/// The `thorarena` arguments of one shard of `cell`.
-fn eval_args(robot: &str, cell: &Cell, shard: (usize, usize)) -> Vec<String> {
-    let mut a: Vec<String> = [
-        "eval",
-        "--robot",
-        robot,
-        "--dataset",
-        &cell.dataset.display().to_string(),
-        "--policy",
-        &cell.policy.policy,
-        "--profile",
-        &cell.policy.profile,
-        "--keypoints",
-        &cell.policy.keypoints,
-        "--settings",
-        &cell.setting,
-        "--budget",
-        &cell.latency.budget,
-        "--latency-mode",
-        &cell.latency.mode,
-        "--miss-rule",
-        &cell.latency.miss_rule,
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+/// Episodes of shard `(i, n)` of `episodes` (one setting): the jobs `j` with
+/// `j % n == i`, as [`crate::runner::schedule`] deals them, counted without listing them.
+pub(super) fn shard_episodes(episodes: usize, (i, n): (usize, usize)) -> usize {
+    if n == 0 || i >= episodes {
+        0
+    } else {
+        (episodes - 1 - i) / n + 1
+    }
+}
+
+/// The `thorarena` arguments of one shard of `cell`. Every option is one `--flag=value`
+/// argument, so a value starting with `-` (a negative coefficient, a typo'd budget) is
+/// read as that option's value and `eval` reports what is wrong with it.
+pub(super) fn eval_args(robot: &str, cell: &Cell, shard: (usize, usize)) -> Vec<String> {
+    let mut a = vec!["eval".to_string()];
+    let mut opt = |flag: &str, value: &str| a.push(format!("--{flag}={value}"));
+    opt("robot", robot);
+    opt("dataset", &cell.dataset.display().to_string());
+    opt("policy", &cell.policy.policy);
+    opt("profile", &cell.policy.profile);
+    opt("keypoints", &cell.policy.keypoints);
+    opt("settings", &cell.setting);
+    opt("budget", &cell.latency.budget);
+    opt("latency-mode", &cell.latency.mode);
+    opt("miss-rule", &cell.latency.miss_rule);
     if cell.engine != EngineAxis::default() {
-        a.extend(["--engine".into(), cell.engine.engine.clone()]);
+        opt("engine", &cell.engine.engine);
         if let Some(m) = &cell.engine.mjcf {
-            a.extend(["--mjcf".into(), m.display().to_string()]);
+            opt("mjcf", &m.display().to_string());
         }
         if let Some(dt) = cell.engine.physics_dt_s {
-            a.extend(["--physics-dt".into(), dt.to_string()]);
+            opt("physics-dt", &dt.to_string());
         }
     }
     if shard.1 > 1 {
-        a.extend(["--shard".into(), format!("{}/{}", shard.0, shard.1)]);
+        opt("shard", &format!("{}/{}", shard.0, shard.1));
     }
     if cell.policy.command.is_some() {
-        a.extend([
-            "--connect-timeout".into(),
-            cell.policy.connect_timeout_s.to_string(),
-        ]);
+        opt(
+            "connect-timeout",
+            &cell.policy.connect_timeout_s.to_string(),
+        );
     }
     a
 }

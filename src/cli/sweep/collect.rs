@@ -17,8 +17,44 @@ pub(super) struct CellResult {
 
 pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.dir)?;
+    let robot = crate::cli::load_robot(&plan.robot)?;
+    // Scores are computed against the references as they are now: they must be the
+    // ones the runs ran (`merge` and `--resume` check the same).
+    let mut datasets: BTreeMap<PathBuf, Vec<thorarena::motion::Sequence>> = BTreeMap::new();
+    for cell in &plan.cells {
+        if datasets.contains_key(&cell.dataset) {
+            continue;
+        }
+        let ds = Dataset::open(&cell.dataset, &robot)
+            .with_context(|| format!("dataset of cell {}", cell.index))?;
+        let now = ds.content_hash();
+        if now != cell.dataset_sha256 {
+            bail!(
+                "dataset {} changed since the sweep was planned (content hash {} then, {} now): its runs would be scored against other references; restore it, or plan a new sweep",
+                cell.dataset.display(),
+                &cell.dataset_sha256[..cell.dataset_sha256.len().min(12)],
+                &now[..12]
+            );
+        }
+        datasets.insert(cell.dataset.clone(), ds.load_all()?);
+    }
     let c = census(&args.dir, &plan)?;
-    let done: std::collections::HashSet<usize> = c.done.iter().copied().collect();
+    // A task counts when its done.json is there and its run is complete and its own.
+    let mut done: std::collections::HashSet<usize> = std::collections::HashSet::new();
+    let mut not_counted: Vec<String> = Vec::new();
+    for &i in &c.done {
+        let run = Plan::task_dir(&args.dir, i).join("run");
+        match check_task_run(&plan, &plan.tasks[i], &run)? {
+            Ok(_) => {
+                done.insert(i);
+            }
+            Err(RunProblem::NotThisTask(why)) => bail!(
+                "{why}; a run that is not the cell's is never scored under its label: remove {} and run the task again",
+                run.display()
+            ),
+            Err(RunProblem::Incomplete(why)) => not_counted.push(format!("task {i}: {why}")),
+        }
+    }
     let mut by_cell: BTreeMap<usize, Vec<&Task>> = BTreeMap::new();
     for t in &plan.tasks {
         by_cell.entry(t.cell).or_default().push(t);
@@ -28,14 +64,27 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         .filter(|(_, ts)| ts.iter().any(|t| !done.contains(&t.index)))
         .map(|(&c, _)| c)
         .collect();
+    let not_done: Vec<usize> = plan
+        .tasks
+        .iter()
+        .map(|t| t.index)
+        .filter(|i| !done.contains(i))
+        .collect();
     if !unfinished.is_empty() && !args.partial {
         bail!(
-            "{} of {} cells are unfinished (cells {}; tasks not done: {}): run them, or collect with --partial",
+            "{} of {} cells are unfinished (cells {}; tasks not done: {}{}): run them (`sweep run` resumes them), or collect with --partial",
             unfinished.len(),
             plan.cells.len(),
             compact_ranges(&unfinished),
-            compact_ranges(&c.not_done())
+            compact_ranges(&not_done),
+            not_counted
+                .iter()
+                .map(|w| format!("; {w}"))
+                .collect::<String>()
         );
+    }
+    for w in &not_counted {
+        eprintln!("not counted: {w}");
     }
     let engines: std::collections::BTreeSet<&str> = plan
         .cells
@@ -49,10 +98,7 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             thorarena::report::MIXED_ENGINES_WHY
         );
     }
-    let robot = crate::cli::load_robot(&plan_robot(&plan.tasks[0]))?;
     let mut results: Vec<Option<CellResult>> = Vec::new();
-    // Loaded once per dataset, however many cells share it.
-    let mut datasets: BTreeMap<PathBuf, Vec<thorarena::motion::Sequence>> = BTreeMap::new();
     for cell in &plan.cells {
         let tasks = &by_cell[&cell.index];
         let runs: Vec<PathBuf> = tasks
@@ -66,20 +112,21 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         }
         let (mut header, by_key) = read_shards(&runs)?;
         header.shard = None;
-        if !datasets.contains_key(&cell.dataset) {
-            let ds = Dataset::open(&cell.dataset, &robot)?;
-            datasets.insert(cell.dataset.clone(), ds.load_all()?);
-        }
         let sequences = &datasets[&cell.dataset];
         let mut records: Vec<_> = by_key.into_values().collect();
         sort_records(&mut records, &header);
         let out = Plan::cell_dir(&args.dir, cell.index);
-        std::fs::create_dir_all(&out)?;
-        let mut w = std::io::BufWriter::new(File::create(out.join("episodes.jsonl"))?);
+        std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
+        let episodes_path = out.join("episodes.jsonl");
+        let mut w = std::io::BufWriter::new(
+            File::create(&episodes_path)
+                .with_context(|| format!("creating {}", episodes_path.display()))?,
+        );
         for r in &records {
             write_record(&mut w, r)?;
         }
-        w.flush()?;
+        w.flush()
+            .with_context(|| format!("writing {}", episodes_path.display()))?;
         write_header(&out, &header)?;
         let thresholds = thorarena::runner::task_thresholds(sequences, header.control_dt_s);
         write_results(&out, &header, &records, thresholds, None)?;

@@ -14,7 +14,7 @@ use anyhow::{bail, Context};
 use clap::Parser;
 use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
-use std::io::{BufRead, Write};
+use std::io::Write;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, ExitStatus, Stdio};
@@ -25,8 +25,9 @@ use thorarena::results::{
     read_summary, sort_records, write_header, write_record, write_results, Summary,
 };
 use thorarena::sweep::{
-    compact_ranges, diff_plans, task_state, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec,
-    Task, TaskState, PLAN_FILE,
+    compact_ranges, diff_plans, log_tail as log_tail_of, printable, shell_quote, task_state,
+    truncated, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec, Task, TaskState,
+    LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES, PLAN_FILE,
 };
 
 /// `thorarena sweep …`
@@ -181,10 +182,12 @@ mod plan;
 mod pool;
 mod status;
 mod task;
+mod verify;
 
 use cluster::{k8s, slurm};
 use collect::collect;
-use plan::plan;
+use plan::{eval_cli, plan};
 use pool::run_all;
 use status::{census, status};
-use task::{cores, plan_robot, run_task, task, write_atomic, Outcome};
+use task::{cores, run_task, task, write_atomic, Outcome};
+use verify::{check_task_run, RunProblem};

@@ -91,11 +91,12 @@ pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
         // Loading the dataset, profile and keypoints once per combination keeps planning
         // a sweep of thousands of cells fast.
         let key = format!(
-            "{}|{}|{}|{}",
+            "{}|{}|{}|{}|{:?}",
             cell.policy.policy,
             cell.policy.profile,
             cell.policy.keypoints,
-            cell.dataset.display()
+            cell.dataset.display(),
+            cell.engine
         );
         if !checked.insert(key) {
             continue;
@@ -119,11 +120,7 @@ pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
 
 /// A task's `eval` arguments as `eval` parses them (`session` fills `{session}`).
 pub(super) fn eval_cli(task: &Task, session: &str) -> anyhow::Result<crate::cli::eval::Args> {
-    let argv = std::iter::once("thorarena".to_string()).chain(
-        task.eval_args
-            .iter()
-            .map(|a| a.replace("{session}", session)),
-    );
+    let argv = std::iter::once("thorarena".to_string()).chain(task.eval_argv(session));
     match crate::cli::Cli::try_parse_from(argv) {
         Ok(crate::cli::Cli {
             command: crate::cli::Command::Eval(a),

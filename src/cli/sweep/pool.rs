@@ -89,8 +89,8 @@ pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
     let failures: Vec<String> = results
         .iter()
         .filter_map(|(i, r)| match r {
-            Ok(Outcome::Failed(reason)) => Some(format!("task {i}: {reason}")),
-            Err(e) => Some(format!("task {i}: {e}")),
+            Ok(Outcome::Failed(reason)) => Some(format!("task {i}: {}", printable(reason))),
+            Err(e) => Some(format!("task {i}: {}", printable(e))),
             _ => None,
         })
         .collect();

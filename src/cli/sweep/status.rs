@@ -2,10 +2,11 @@
 
 use super::*;
 
-/// Tasks by state: (done, failed with reasons, started, not started).
+/// Tasks by state: (done, failed with reasons, started, not started). A record's
+/// task is the directory it lies in (`task_state` refuses one claiming another).
 pub(super) struct Census {
     pub(super) done: Vec<usize>,
-    pub(super) failed: Vec<FailedRecord>,
+    pub(super) failed: Vec<(usize, FailedRecord)>,
     pub(super) started: Vec<usize>,
     pub(super) not_started: Vec<usize>,
 }
@@ -20,7 +21,7 @@ pub(super) fn census(dir: &Path, plan: &Plan) -> anyhow::Result<Census> {
     for t in &plan.tasks {
         match task_state(dir, t.index)? {
             TaskState::Done(_) => c.done.push(t.index),
-            TaskState::Failed(f) => c.failed.push(f),
+            TaskState::Failed(f) => c.failed.push((t.index, f)),
             TaskState::Started => c.started.push(t.index),
             TaskState::NotStarted => c.not_started.push(t.index),
         }
@@ -30,7 +31,7 @@ pub(super) fn census(dir: &Path, plan: &Plan) -> anyhow::Result<Census> {
 
 impl Census {
     pub(super) fn not_done(&self) -> Vec<usize> {
-        let mut v: Vec<usize> = self.failed.iter().map(|f| f.task).collect();
+        let mut v: Vec<usize> = self.failed.iter().map(|(i, _)| *i).collect();
         v.extend(&self.started);
         v.extend(&self.not_started);
         v.sort_unstable();
@@ -50,13 +51,25 @@ pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
         c.started.len(),
         c.not_started.len()
     );
-    for f in &c.failed {
-        let cell = &plan.cells[plan.tasks[f.task].cell];
+    // Records are policy output and files anyone may edit: printed bounded, with
+    // control characters escaped.
+    for (i, f) in &c.failed {
+        let cell = &plan.cells[plan.tasks[*i].cell];
         println!(
-            "failed: task {} (cell {}, policy `{}`, setting `{}`): {}",
-            f.task, cell.index, cell.policy.name, cell.setting, f.reason
+            "failed: task {i} (cell {}, policy `{}`, setting `{}`): {}",
+            cell.index,
+            printable(&cell.policy.name),
+            printable(&cell.setting),
+            truncated(&printable(&f.reason), LOG_LINE_MAX_BYTES)
         );
+        let mut budget = LOG_TAIL_MAX_BYTES;
         for l in &f.log_tail {
+            let l = truncated(&printable(l), LOG_LINE_MAX_BYTES);
+            let Some(left) = budget.checked_sub(l.len()) else {
+                println!("    … (log tail cut at {LOG_TAIL_MAX_BYTES} bytes)");
+                break;
+            };
+            budget = left;
             println!("    {l}");
         }
     }

@@ -25,7 +25,7 @@ pub(super) fn run_task(
         .tasks
         .get(index)
         .with_context(|| format!("task {index}: the plan has tasks 0..{}", plan.tasks.len()))?;
-    let cell = &plan.cells[task.cell];
+    let cell = &plan.cells[task.cell]; // in range: the plan was checked when loaded
     let tdir = Plan::task_dir(dir, index);
     std::fs::create_dir_all(&tdir).with_context(|| format!("creating {}", tdir.display()))?;
     // One copy at a time; a second one waits, then finds the task done.
@@ -36,10 +36,18 @@ pub(super) fn run_task(
     let _ = std::fs::remove_file(tdir.join("failed.json"));
     let started = Instant::now();
     let fail = |reason: String, logs: &[&str]| -> anyhow::Result<Outcome> {
+        // Bounded and printable however much, and whatever, the processes wrote.
+        let reason = truncated(&printable(&reason), LOG_LINE_MAX_BYTES);
         let mut log_tail = Vec::new();
+        let mut budget = LOG_TAIL_MAX_BYTES;
         for name in logs {
-            let lines = tail(&tdir.join(name), 12);
+            let mut lines = log_tail_of(&tdir.join(name), 12);
+            let mut bytes: usize = lines.iter().map(String::len).sum();
+            while bytes > budget {
+                bytes -= lines.remove(0).len();
+            }
             if !lines.is_empty() {
+                budget -= bytes;
                 log_tail.push(format!("--- {name}"));
                 log_tail.extend(lines);
             }
@@ -57,7 +65,7 @@ pub(super) fn run_task(
     };
 
     // The dataset must be the one planned.
-    let robot = crate::cli::load_robot(&plan_robot(task))?;
+    let robot = crate::cli::load_robot(&plan.robot)?;
     let ds = match Dataset::open(&cell.dataset, &robot) {
         Ok(ds) => ds,
         Err(e) => return fail(format!("dataset {}: {e}", cell.dataset.display()), &[]),
@@ -74,14 +82,10 @@ pub(super) fn run_task(
 
     let session = format!("sweep-{index}-{}", std::process::id());
     let run_dir = tdir.join("run");
-    let eval_log = File::create(tdir.join("eval.log"))?;
+    let eval_log = create_log(&tdir.join("eval.log"))?;
     let mut eval_cmd = Command::new(std::env::current_exe()?);
     eval_cmd
-        .args(
-            task.eval_args
-                .iter()
-                .map(|a| a.replace("{session}", &session)),
-        )
+        .args(task.eval_argv(&session))
         .arg("--out")
         .arg(&run_dir)
         .args(["--resume", "--workers", &workers.to_string()])
@@ -92,11 +96,8 @@ pub(super) fn run_task(
 
     let mut policy: Option<Child> = None;
     if let Some(command) = &cell.policy.command {
-        let exe = std::env::current_exe()?;
-        let line = command
-            .replace("{session}", &session)
-            .replace("{thorarena}", &exe.display().to_string());
-        let log = File::create(tdir.join("policy.log"))?;
+        let line = policy_command_line(command, &session)?;
+        let log = create_log(&tdir.join("policy.log"))?;
         let mut c = Command::new("sh");
         c.args(["-c", &line])
             .current_dir(&plan.workdir)
@@ -135,20 +136,23 @@ pub(super) fn run_task(
             &["eval.log", "policy.log"],
         );
     }
-    // Complete and on disk before it counts as done.
-    let episodes_path = run_dir.join("episodes.jsonl");
-    let header = thorarena::results::read_header(&run_dir)?;
-    let records = thorarena::results::EpisodeLog::read(&episodes_path, &header)?.records;
-    if records.len() != task.episodes {
-        return fail(
-            format!(
-                "the run holds {} episodes, the plan {}",
-                records.len(),
-                task.episodes
-            ),
-            &["eval.log"],
-        );
-    }
+    // Complete, this task's, and on disk before it counts as done: `eval` exits 0 when
+    // a dying policy cut short every episode still in flight.
+    let records = match check_task_run(plan, task, &run_dir)? {
+        Ok(records) => records,
+        Err(RunProblem::Incomplete(why)) => {
+            return fail(
+                format!("{why}; `sweep run` again resumes the task"),
+                &["eval.log", "policy.log"],
+            )
+        }
+        Err(RunProblem::NotThisTask(why)) => {
+            return fail(
+                format!("{why}; remove {} and run the task again", run_dir.display()),
+                &["eval.log"],
+            )
+        }
+    };
     for name in ["episodes.jsonl", "run.json", "summary.json", "tables.md"] {
         let path = run_dir.join(name);
         File::open(&path)
@@ -168,14 +172,20 @@ pub(super) fn run_task(
     Ok(Outcome::Done)
 }
 
-/// The robot named in a task's arguments.
-pub(super) fn plan_robot(task: &Task) -> String {
-    task.eval_args
-        .iter()
-        .position(|a| a == "--robot")
-        .and_then(|i| task.eval_args.get(i + 1))
-        .cloned()
-        .unwrap_or_else(|| "g1_29dof".into())
+/// A policy command with its placeholders filled in as single shell words: the binary's
+/// path and the session are data, whatever characters they hold (`$(…)` in a directory
+/// name is not run).
+pub(super) fn policy_command_line(command: &str, session: &str) -> anyhow::Result<String> {
+    let exe = std::env::current_exe()?;
+    let exe = exe.to_str().with_context(|| {
+        format!(
+            "{}: not UTF-8, which `{{thorarena}}` cannot name",
+            exe.display()
+        )
+    })?;
+    Ok(command
+        .replace("{session}", &shell_quote(session))
+        .replace("{thorarena}", &shell_quote(exe)))
 }
 
 /// How an evaluation ended.
@@ -260,33 +270,31 @@ pub(super) fn lock_task(tdir: &Path) -> anyhow::Result<File> {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary sibling, synced and renamed.
+/// A task's log file, created (truncated) for an attempt; the error names it.
+fn create_log(path: &Path) -> anyhow::Result<File> {
+    File::create(path).with_context(|| format!("creating {}", path.display()))
+}
+
+/// Writes `bytes` to `path` through a temporary sibling, synced and renamed; the
+/// temporary file is removed if any step fails (a full disk leaves nothing behind).
 pub(super) fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    let mut f = File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
-    f.write_all(bytes)?;
-    f.sync_all()?;
-    std::fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))?;
+    let written = (|| -> std::io::Result<()> {
+        let mut f = File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e).with_context(|| format!("writing {}", path.display()));
+    }
     if let Some(parent) = path.parent() {
         if let Ok(d) = File::open(parent) {
             let _ = d.sync_all();
         }
     }
     Ok(())
-}
-
-/// The last `n` non-empty lines of a log file.
-pub(super) fn tail(path: &Path, n: usize) -> Vec<String> {
-    let Ok(f) = File::open(path) else {
-        return Vec::new();
-    };
-    let lines: Vec<String> = std::io::BufReader::new(f)
-        .lines()
-        .map_while(Result::ok)
-        .map(|l| l.rsplit('\r').next().unwrap_or("").trim_end().to_string())
-        .filter(|l| !l.is_empty())
-        .collect();
-    lines[lines.len().saturating_sub(n)..].to_vec()
 }
 
 pub(super) fn cores() -> usize {

@@ -1,0 +1,93 @@
+//! Text that came from a policy or a file, made safe to store and to print: a policy's
+//! output can be a 100 MB line or hold terminal escape sequences (`ESC ]0;…` retitles
+//! the terminal, `ESC [2J` clears it), and `sweep status` prints it back.
+
+use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
+
+/// Most bytes kept of one log line (longer lines are cut, marked `…`).
+pub const LOG_LINE_MAX_BYTES: usize = 4 * 1024;
+/// Most bytes of a log tail in all (whole lines, the last ones).
+pub const LOG_TAIL_MAX_BYTES: usize = 16 * 1024;
+/// Bytes read from the end of a log to find its last lines: the tail can hold no more.
+const LOG_READ_MAX_BYTES: u64 = 64 * 1024;
+
+/// `s` with every control character (C0, DEL, C1) written as an escape (`\n`, `\u{1b}`),
+/// so printing it cannot move the cursor, retitle or clear a terminal.
+pub fn printable(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if c.is_control() {
+            out.extend(c.escape_default());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// `s` cut to at most `max` bytes on a character boundary, `…` marking a cut.
+pub fn truncated(s: &str, max: usize) -> String {
+    if s.len() <= max {
+        return s.to_string();
+    }
+    let mut end = max.saturating_sub('…'.len_utf8());
+    while !s.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!("{}…", &s[..end])
+}
+
+/// The last `n` non-empty lines of a log file, each printable and at most
+/// [`LOG_LINE_MAX_BYTES`], together at most [`LOG_TAIL_MAX_BYTES`]; only the file's last
+/// 64 KiB are read, however large it is. A line rewritten with `\r` (a progress bar)
+/// counts as its last state.
+pub fn log_tail(path: &Path, n: usize) -> Vec<String> {
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return Vec::new();
+    };
+    let len = f.metadata().map_or(0, |m| m.len());
+    let start = len.saturating_sub(LOG_READ_MAX_BYTES);
+    let mut bytes = Vec::new();
+    if f.seek(SeekFrom::Start(start)).is_err()
+        || f.take(LOG_READ_MAX_BYTES).read_to_end(&mut bytes).is_err()
+    {
+        return Vec::new();
+    }
+    let text = String::from_utf8_lossy(&bytes);
+    let mut lines: Vec<String> = text
+        .split('\n')
+        .map(|l| l.rsplit('\r').next().unwrap_or("").trim_end())
+        .filter(|l| !l.is_empty())
+        .map(|l| truncated(&printable(l), LOG_LINE_MAX_BYTES))
+        .collect();
+    lines.drain(..lines.len().saturating_sub(n));
+    let mut total = 0;
+    let keep = lines
+        .iter()
+        .rev()
+        .take_while(|l| {
+            total += l.len();
+            total <= LOG_TAIL_MAX_BYTES
+        })
+        .count();
+    lines.split_off(lines.len() - keep)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn control_characters_are_escaped_and_text_kept() {
+        assert_eq!(printable("a\u{1b}]0;t\u{7}b\n"), "a\\u{1b}]0;t\\u{7}b\\n");
+        assert_eq!(printable("é ok"), "é ok");
+    }
+
+    #[test]
+    fn cuts_respect_characters() {
+        assert_eq!(truncated("abc", 3), "abc");
+        let cut = truncated(&"é".repeat(10), 8);
+        assert!(cut.len() <= 8 && cut.ends_with('…'), "{cut}");
+    }
+}

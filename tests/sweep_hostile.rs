@@ -1,0 +1,672 @@
+//! Issue 22 for sweeps, "trust nothing that crosses a boundary": a sweep directory, a
+//! binary path or a dataset path with shell or sbatch syntax in it; a policy that dies
+//! mid-run; task runs, plan entries and task records that were replaced, edited or
+//! misplaced; policy output that is huge or holds terminal escapes; a dataset changed
+//! before `collect`; spec values that are absurd, equivalent or negative; files that
+//! cannot be written. Each is an end-to-end test that failed on the code before its fix.
+
+use std::os::unix::fs::PermissionsExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+const SAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+
+fn thorarena(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .output()
+        .expect("thorarena runs")
+}
+
+fn ok(o: Output) -> Output {
+    assert!(
+        o.status.success(),
+        "stdout:\n{}\nstderr:\n{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// The error output of a command that must fail cleanly (an error, not a panic).
+fn err(o: &Output) -> String {
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        !o.status.success(),
+        "expected a failure; stdout:\n{}",
+        out(o)
+    );
+    assert_ne!(o.status.code(), Some(101), "a panic, not an error:\n{e}");
+    assert!(!e.contains("panicked"), "a panic, not an error:\n{e}");
+    e
+}
+
+fn out(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn spec(dir: &Path, body: &str) -> PathBuf {
+    let p = dir.join("spec.toml");
+    std::fs::write(&p, body).unwrap();
+    p
+}
+
+fn plan(spec: &Path, out: &Path) {
+    ok(thorarena(&[
+        "sweep",
+        "plan",
+        spec.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// One in-process policy, two settings, two shards: four quick tasks.
+fn four_tasks(tmp: &Path) -> PathBuf {
+    spec(
+        tmp,
+        &format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\", \"force\"]\nshards = 2\n[[policy]]\npolicy = \"hold\"\n"
+        ),
+    )
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        let dest = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_dir(&p, &dest);
+        } else {
+            std::fs::copy(&p, &dest).unwrap();
+        }
+    }
+}
+
+/// A copy of the sample holding only its first `n` sequences.
+fn small_dataset(tmp: &Path, n: usize) -> PathBuf {
+    let ds = tmp.join(format!("sample-{n}"));
+    copy_dir(Path::new(SAMPLE), &ds);
+    let manifest = ds.join("manifest.json");
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    m["sequences"].as_array_mut().unwrap().truncate(n);
+    std::fs::write(&manifest, serde_json::to_string(&m).unwrap()).unwrap();
+    ds
+}
+
+/// Files directly in `dir`.
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+// ---------------------------------------------------------------- A: the Slurm script
+
+#[test]
+fn slurm_values_that_sbatch_cannot_quote_are_refused_and_nothing_reaches_the_shell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = four_tasks(tmp.path());
+    let stub = tmp.path().join("stub-thorarena");
+    std::fs::write(&stub, "#!/bin/sh\nexit 0\n").unwrap();
+    std::fs::set_permissions(&stub, std::fs::Permissions::from_mode(0o755)).unwrap();
+
+    // A newline in the sweep directory used to end the #SBATCH line and start a command.
+    let work = tmp.path().join("work");
+    std::fs::create_dir(&work).unwrap();
+    let dir = tmp.path().join("s\ntouch injected;x");
+    plan(&spec, &dir);
+    let o = thorarena(&["sweep", "slurm", s(&dir), "--thorarena", s(&stub)]);
+    if o.status.success() {
+        let script = dir.join("slurm/sweep.sbatch");
+        let _ = Command::new("bash")
+            .arg(&script)
+            .current_dir(&work)
+            .output()
+            .unwrap();
+        assert!(
+            !work.join("injected").exists(),
+            "the sweep directory's name ran as a command:\n{}",
+            std::fs::read_to_string(&script).unwrap()
+        );
+    } else {
+        let e = err(&o);
+        assert!(e.contains("newline") || e.contains("control"), "{e}");
+    }
+
+    // Newlines in --partition and --time.
+    let good = tmp.path().join("good");
+    plan(&spec, &good);
+    for (flag, value) in [
+        ("--partition", "cpu\ntouch injected"),
+        ("--time", "01:00:00\ntouch injected"),
+        ("--partition", "cpu gpu"),
+        ("--time", "1:00 #x"),
+    ] {
+        let o = thorarena(&[
+            "sweep",
+            "slurm",
+            s(&good),
+            flag,
+            value,
+            "--thorarena",
+            s(&stub),
+        ]);
+        let e = err(&o);
+        assert!(e.contains(flag), "{flag} {value:?}: {e}");
+    }
+
+    // Quotes, spaces and `#` in the directory would change the #SBATCH line: refused,
+    // naming the directory; `%` (a filename pattern) is escaped.
+    for name in ["with space", "quote'd", "dq\"x", "hash#x"] {
+        let d = tmp.path().join(name);
+        plan(&spec, &d);
+        let e = err(&thorarena(&[
+            "sweep",
+            "slurm",
+            s(&d),
+            "--thorarena",
+            s(&stub),
+        ]));
+        assert!(e.contains(name), "{name}: {e}");
+    }
+    let pct = tmp.path().join("at-100%a");
+    plan(&spec, &pct);
+    ok(thorarena(&[
+        "sweep",
+        "slurm",
+        s(&pct),
+        "--thorarena",
+        s(&stub),
+    ]));
+    let script = std::fs::read_to_string(pct.join("slurm/sweep.sbatch")).unwrap();
+    assert!(
+        script.contains("/at-100%%a/slurm/logs/task-%a.log"),
+        "{script}"
+    );
+}
+
+#[test]
+fn the_kubernetes_manifest_names_a_hostile_directory_exactly() {
+    // Already safe (JSON-quoted YAML scalars); kept so.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("k8s \"q\" 'q'\n$(touch M)#x: y%a");
+    plan(&four_tasks(tmp.path()), &dir);
+    ok(thorarena(&[
+        "sweep",
+        "k8s",
+        s(&dir),
+        "--image",
+        "img: x",
+        "--claim",
+        "c\nd",
+    ]));
+    let text = std::fs::read_to_string(dir.join("k8s/job.yaml")).unwrap();
+    let y: serde_yaml::Value = serde_yaml::from_str(&text).unwrap();
+    let c = &y["spec"]["template"]["spec"]["containers"][0];
+    let canonical = std::fs::canonicalize(&dir).unwrap();
+    assert_eq!(c["command"][3].as_str(), canonical.to_str(), "{text}");
+    assert_eq!(
+        c["volumeMounts"][0]["mountPath"].as_str(),
+        canonical.to_str()
+    );
+    assert_eq!(c["image"].as_str(), Some("img: x"));
+    assert_eq!(
+        y["spec"]["template"]["spec"]["volumes"][0]["persistentVolumeClaim"]["claimName"].as_str(),
+        Some("c\nd")
+    );
+}
+
+// ---------------------------------------------------------------- B: placeholders
+
+#[test]
+fn the_binary_path_and_dataset_path_are_data_not_shell_or_placeholders() {
+    let tmp = tempfile::tempdir_in(env!("CARGO_TARGET_TMPDIR")).unwrap();
+    // The binary under a directory whose name is a command substitution.
+    let bindir = tmp.path().join("b$(touch pwned)");
+    std::fs::create_dir(&bindir).unwrap();
+    let exe = bindir.join("thorarena");
+    if std::fs::hard_link(BIN, &exe).is_err() {
+        std::fs::copy(BIN, &exe).unwrap();
+    }
+    // A dataset whose directory holds a placeholder's spelling.
+    let ds = tmp.path().join("x{session}y");
+    copy_dir(Path::new(SAMPLE), &ds);
+    let workdir = tmp.path().join("specs");
+    std::fs::create_dir(&workdir).unwrap();
+    let spec_path = spec(
+        &workdir,
+        &format!(
+            "datasets = [\"{}\"]\nsettings = [\"no-force\"]\n[[policy]]\nname = \"ipc\"\ncommand = \"{{thorarena}} client --session {{session}} --policy hold\"\nconnect_timeout_s = 30\n",
+            ds.display()
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    let o = Command::new(&exe)
+        .args(["sweep", "plan", s(&spec_path), "--out", s(&dir)])
+        .output()
+        .unwrap();
+    ok(o);
+    let plan_text = std::fs::read_to_string(dir.join("plan.json")).unwrap();
+    assert!(plan_text.contains("x{session}y"), "{plan_text}");
+    let o = Command::new(&exe)
+        .args(["sweep", "task", s(&dir), "--index", "0", "--workers", "2"])
+        .output()
+        .unwrap();
+    assert!(
+        !workdir.join("pwned").exists(),
+        "the binary's path ran as shell"
+    );
+    ok(o);
+    let header: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("tasks/000000/run/run.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        header["dataset"].as_str().unwrap(),
+        std::fs::canonicalize(&ds).unwrap().to_str().unwrap()
+    );
+}
+
+// ---------------------------------------------------------------- C: a dead policy
+
+#[test]
+fn a_policy_that_dies_mid_run_fails_its_task_and_collect_will_not_score_it() {
+    // Two episodes, both in flight when the policy dies: `eval` itself may end well.
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = small_dataset(tmp.path(), 2);
+    let spec_path = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{}\"]\nsettings = [\"no-force\"]\n[[policy]]\nname = \"dies\"\ncommand = \"{{thorarena}} client --session {{session}} --policy hold --die-after-steps 100\"\nconnect_timeout_s = 30\n",
+            ds.display()
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    let o = thorarena(&["sweep", "run", s(&dir), "--jobs", "1"]);
+    let e = err(&o);
+    // Usually eval ends at once with both episodes `policy_failed` (exit 0: the case
+    // this is about); on a loaded machine it may still be writing when the task stops
+    // it 3 s after the policy died. Either way the task failed.
+    assert!(
+        e.contains("ended policy_failed") || e.contains("the policy command exited"),
+        "{e}"
+    );
+    assert!(!dir.join("tasks/000000/done.json").exists());
+    let status = out(&ok(thorarena(&["sweep", "status", s(&dir)])));
+    assert!(status.contains("0 done, 1 failed"), "{status}");
+    assert!(status.contains("not done (--array): 0"), "{status}");
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("unfinished"), "{e}");
+    ok(thorarena(&["sweep", "collect", s(&dir), "--partial"]));
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let row = csv.lines().nth(1).unwrap();
+    assert!(row.contains(",false,"), "the cell is marked partial: {csv}");
+}
+
+#[test]
+fn collect_refuses_a_done_task_whose_run_holds_policy_failed_episodes() {
+    // The record written by a ThorArena that trusted the count: done.json beside a run
+    // whose episodes a dead policy cut short.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("sweep");
+    plan(&four_tasks(tmp.path()), &dir);
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    let episodes = dir.join("tasks/000001/run/episodes.jsonl");
+    let text = std::fs::read_to_string(&episodes).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut r: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
+    r["termination"] = serde_json::json!("policy_failed");
+    lines[0] = serde_json::to_string(&r).unwrap();
+    std::fs::write(&episodes, lines.join("\n") + "\n").unwrap();
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("policy_failed") && e.contains("task 1"), "{e}");
+    ok(thorarena(&["sweep", "collect", s(&dir), "--partial"]));
+    let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(rows[1].contains(",false,"), "{csv}");
+    assert!(rows[2].contains(",true,"), "{csv}");
+}
+
+// ---------------------------------------------------------------- D: runs and plan entries
+
+#[test]
+fn collect_refuses_a_task_run_that_is_not_its_cells() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec_path = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\n[[policy]]\npolicy = \"hold\"\n[[policy]]\npolicy = \"balance\"\n"
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    ok(thorarena(&["sweep", "collect", s(&dir)]));
+    // Task 0 (hold) now holds task 1's run (balance).
+    let (a, b) = (dir.join("tasks/000000/run"), dir.join("tasks/000001/run"));
+    std::fs::remove_dir_all(&a).unwrap();
+    copy_dir(&b, &a);
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(
+        e.contains("tasks/000000/run") && e.contains("policy") && e.contains("balance"),
+        "{e}"
+    );
+}
+
+/// Loads plan.json as JSON, lets `edit` change it, writes it back.
+fn edit_plan(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
+    let path = dir.join("plan.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    edit(&mut v);
+    std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
+}
+
+#[test]
+fn a_tampered_plan_is_an_error_naming_plan_json_never_a_panic() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = four_tasks(tmp.path());
+    let pristine = tmp.path().join("pristine");
+    plan(&spec, &pristine);
+    ok(thorarena(&["sweep", "task", s(&pristine), "--index", "0"]));
+    type Edit = Box<dyn Fn(&mut serde_json::Value)>;
+    let cases: Vec<(&str, Edit)> = vec![
+        (
+            "another policy in eval_args",
+            Box::new(|v| {
+                let args = v["tasks"][1]["eval_args"].as_array_mut().unwrap();
+                for a in args.iter_mut() {
+                    if a.as_str().is_some_and(|s| s.contains("hold")) {
+                        *a = serde_json::json!(a.as_str().unwrap().replace("hold", "balance"));
+                    }
+                }
+            }),
+        ),
+        (
+            "duplicate task index",
+            Box::new(|v| {
+                let t0 = v["tasks"][0].clone();
+                v["tasks"][1] = t0;
+            }),
+        ),
+        (
+            "cell out of range",
+            Box::new(|v| v["tasks"][3]["cell"] = serde_json::json!(99)),
+        ),
+        ("no tasks", Box::new(|v| v["tasks"] = serde_json::json!([]))),
+        ("no cells", Box::new(|v| v["cells"] = serde_json::json!([]))),
+        (
+            "shard out of range",
+            Box::new(|v| v["tasks"][1]["shard"] = serde_json::json!([5, 2])),
+        ),
+    ];
+    for (what, edit) in cases {
+        let dir = tmp.path().join(what.replace(' ', "-"));
+        copy_dir(&pristine, &dir);
+        edit_plan(&dir, edit);
+        for args in [
+            vec!["status"],
+            vec!["collect", "--partial"],
+            vec!["task", "--index", "1"],
+            vec!["run"],
+            vec!["slurm"],
+        ] {
+            let mut full = vec!["sweep", args[0], s(&dir)];
+            full.extend(&args[1..]);
+            let e = err(&thorarena(&full));
+            assert!(e.contains("plan.json"), "{what}, {args:?}: {e}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------- E: task records
+
+#[test]
+fn a_task_record_counts_for_the_directory_it_lies_in() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("sweep");
+    plan(&four_tasks(tmp.path()), &dir);
+    let t0 = dir.join("tasks/000000");
+    std::fs::create_dir_all(&t0).unwrap();
+    for task in [1, 99999] {
+        std::fs::write(
+            t0.join("failed.json"),
+            format!("{{\"task\": {task}, \"reason\": \"x\", \"log_tail\": []}}"),
+        )
+        .unwrap();
+        let o = thorarena(&["sweep", "status", s(&dir)]);
+        if o.status.success() {
+            // Location decides: task 0 is the failed one.
+            let status = out(&o);
+            assert!(
+                status.contains("failed: task 0") && status.contains("not done (--array): 0-3"),
+                "{status}"
+            );
+        } else {
+            let e = err(&o);
+            assert!(e.contains("tasks/000000/failed.json"), "{e}");
+        }
+    }
+}
+
+#[test]
+fn policy_output_in_task_records_is_bounded_and_cannot_drive_the_terminal() {
+    let tmp = tempfile::tempdir().unwrap();
+    let body = r#"
+datasets = ["SAMPLE"]
+settings = ["no-force"]
+[[policy]]
+name = "huge"
+command = '''echo {session} >/dev/null; head -c 30000000 /dev/zero | tr '\0' a; echo; exit 3'''
+connect_timeout_s = 20
+[[policy]]
+name = "escapes"
+command = '''echo {session} >/dev/null; printf '\033]0;pwned\007\033[2J\033[31mred\n' >&2; exit 3'''
+connect_timeout_s = 20
+"#;
+    let spec_path = spec(tmp.path(), &body.replace("SAMPLE", SAMPLE));
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    let o = thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]);
+    let e = err(&o);
+    assert!(!e.contains('\u{1b}'), "raw escapes in sweep run's output");
+    let failed = dir.join("tasks/000000/failed.json");
+    let size = std::fs::metadata(&failed).unwrap().len();
+    assert!(size < 20_000, "{}: {size} bytes", failed.display());
+    let o = ok(thorarena(&["sweep", "status", s(&dir)]));
+    let status = out(&o);
+    assert!(status.contains("2 failed"), "{status}");
+    assert!(
+        !status.contains('\u{1b}') && !status.contains('\u{7}'),
+        "{status:?}"
+    );
+    assert!(
+        status.contains("pwned"),
+        "the text itself is kept: {status}"
+    );
+    assert!(status.len() < 40_000, "{} bytes of status", status.len());
+}
+
+// ---------------------------------------------------------------- F: the dataset
+
+#[test]
+fn collect_refuses_a_dataset_changed_since_the_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("dataset");
+    copy_dir(Path::new(SAMPLE), &ds);
+    let spec_path = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{}\"]\nsettings = [\"no-force\"]\n[[policy]]\npolicy = \"hold\"\n",
+            ds.display()
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    plan(&spec_path, &dir);
+    ok(thorarena(&["sweep", "run", s(&dir)]));
+    let manifest = ds.join("manifest.json");
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    m["sequences"].as_array_mut().unwrap().pop();
+    std::fs::write(&manifest, serde_json::to_string(&m).unwrap()).unwrap();
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("changed") && e.contains(s(&ds)), "{e}");
+    assert!(!dir.join("results.csv").exists());
+}
+
+// ---------------------------------------------------------------- G, H, I: spec values
+
+fn plan_error(tmp: &Path, body: &str) -> String {
+    let p = spec(tmp, body);
+    let out = tmp.join("never");
+    let e = err(&thorarena(&["sweep", "plan", s(&p), "--out", s(&out)]));
+    assert!(!out.exists(), "nothing may be written: {e}");
+    e
+}
+
+#[test]
+fn shards_beyond_the_episodes_are_refused_naming_the_maximum() {
+    let tmp = tempfile::tempdir().unwrap();
+    for shards in ["13", "1000000000"] {
+        let e = plan_error(
+            tmp.path(),
+            &format!(
+                "datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\nshards = {shards}\n[[policy]]\npolicy = \"hold\"\n"
+            ),
+        );
+        assert!(e.contains("shards") && e.contains("at most 12"), "{e}");
+    }
+}
+
+#[test]
+fn equivalent_axis_values_are_refused_naming_both_spellings() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dotted = SAMPLE.replace("/data/sample", "/data/./sample");
+    let cases = [
+        (
+            format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"force\", \"1\"]\n[[policy]]\npolicy = \"hold\"\n"),
+            vec!["`force`", "`1`"],
+        ),
+        (
+            format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"0.5\", \"push:0\", \"0.50\"]\n[[policy]]\npolicy = \"hold\"\n"),
+            vec!["`0.5`", "`0.50`"],
+        ),
+        (
+            format!("datasets = [\"{SAMPLE}\", \"{dotted}\"]\nsettings = [\"force\"]\n[[policy]]\npolicy = \"hold\"\n"),
+            vec![SAMPLE, dotted.as_str()],
+        ),
+        (
+            format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\npolicy = \"hold\"\n[[engine]]\nengine = \"rapier\"\n[[engine]]\nengine = \"rapier\"\n"),
+            vec!["[[engine]] #1", "[[engine]] #2"],
+        ),
+    ];
+    for (body, needles) in cases {
+        let e = plan_error(tmp.path(), &body);
+        for n in needles {
+            assert!(e.contains(n), "`{n}` not in: {e}");
+        }
+    }
+}
+
+#[test]
+fn negative_spec_values_reach_eval_as_values_not_flags() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A negative replay coefficient is a valid setting.
+    let p = spec(
+        tmp.path(),
+        &format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"-1\"]\n[[policy]]\npolicy = \"hold\"\n"),
+    );
+    plan(&p, &tmp.path().join("negative"));
+    for (body, needle) in [
+        (
+            format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\npolicy = \"hold\"\n[[latency]]\nbudget = \"-5ms\"\n"),
+            "-5ms",
+        ),
+        (
+            format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\npolicy = \"hold\"\n[[engine]]\nengine = \"rapier\"\nphysics_dt_s = -0.001\n"),
+            "physics",
+        ),
+    ] {
+        let e = plan_error(tmp.path(), &body);
+        assert!(!e.contains("unexpected argument"), "{e}");
+        assert!(e.contains(needle), "`{needle}` not in: {e}");
+    }
+}
+
+// ---------------------------------------------------------------- J: files
+
+#[test]
+fn unwritable_sweep_files_are_errors_naming_them_and_leave_no_temp_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = four_tasks(tmp.path());
+    let dir = tmp.path().join("sweep");
+    plan(&spec, &dir);
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    // `cells` is a file.
+    std::fs::write(dir.join("cells"), "").unwrap();
+    let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
+    assert!(e.contains("cells"), "{e}");
+    // `slurm` and `k8s` are files (and a task is left to submit).
+    std::fs::remove_file(dir.join("tasks/000003/done.json")).unwrap();
+    std::fs::write(dir.join("slurm"), "").unwrap();
+    let e = err(&thorarena(&["sweep", "slurm", s(&dir)]));
+    assert!(e.contains("slurm"), "{e}");
+    std::fs::write(dir.join("k8s"), "").unwrap();
+    let e = err(&thorarena(&[
+        "sweep",
+        "k8s",
+        s(&dir),
+        "--image",
+        "i",
+        "--claim",
+        "c",
+    ]));
+    assert!(e.contains("k8s"), "{e}");
+
+    // A task's logs cannot be created.
+    for log in ["eval.log", "policy.log"] {
+        let d = tmp.path().join(format!("logs-{log}"));
+        let body = format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\ncommand = \"{{thorarena}} client --session {{session}}\"\n"
+        );
+        let sub = tmp.path().join(format!("spec-{log}"));
+        std::fs::create_dir(&sub).unwrap();
+        let p = sub.join("spec.toml");
+        std::fs::write(&p, body).unwrap();
+        plan(&p, &d);
+        std::fs::create_dir_all(d.join("tasks/000000").join(log)).unwrap();
+        let e = err(&thorarena(&["sweep", "task", s(&d), "--index", "0"]));
+        assert!(e.contains(log), "{e}");
+    }
+
+    // A full disk (a file size limit: writes fail with EFBIG) while writing plan.json.
+    let full = tmp.path().join("full");
+    let o = Command::new("bash")
+        .arg("-c")
+        .arg("trap '' XFSZ; ulimit -f 1; exec \"$0\" sweep plan \"$1\" --out \"$2\"")
+        .arg(BIN)
+        .arg(&spec)
+        .arg(&full)
+        .output()
+        .unwrap();
+    let e = err(&o);
+    assert!(e.contains("plan"), "{e}");
+    let left: Vec<String> = names(&full)
+        .into_iter()
+        .filter(|n| n.contains("tmp"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left: {left:?}");
+    assert!(!full.join("plan.json").exists());
+}
