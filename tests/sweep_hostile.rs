@@ -670,3 +670,51 @@ fn unwritable_sweep_files_are_errors_naming_them_and_leave_no_temp_file() {
     assert!(left.is_empty(), "temporary files left: {left:?}");
     assert!(!full.join("plan.json").exists());
 }
+
+#[test]
+fn a_policy_process_the_sweep_does_not_start_is_refused_at_once() {
+    // `policy = "ipc:NAME"` once made `sweep plan` serve the session and wait forever.
+    let tmp = tempfile::tempdir().unwrap();
+    let start = std::time::Instant::now();
+    let e = plan_error(
+        tmp.path(),
+        &format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\npolicy = \"ipc:elsewhere\"\n"),
+    );
+    assert!(
+        e.contains("ipc:elsewhere") && e.contains("give `command`"),
+        "{e}"
+    );
+    assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
+}
+
+#[test]
+fn a_cell_without_a_profile_takes_its_policy_familys() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\npolicy = \"hold\"\n[[policy]]\npolicy = \"twist2:missing.onnx\"\nprofile = \"default\"\n"
+        ),
+    );
+    // A TWIST2 network on the default profile: refused when planning, naming both.
+    let e = err(&thorarena(&[
+        "sweep",
+        "plan",
+        s(&p),
+        "--out",
+        s(&tmp.path().join("a")),
+    ]));
+    assert!(e.contains("trained for the `twist2` profile"), "{e}");
+    // Without `profile`, each cell's is its family's.
+    let p = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"force\"]\n[[policy]]\npolicy = \"hold\"\n"
+        ),
+    );
+    let out = tmp.path().join("b");
+    plan(&p, &out);
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
+    assert_eq!(plan["cells"][0]["policy"]["profile"], "default", "{plan}");
+}

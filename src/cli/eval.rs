@@ -151,7 +151,7 @@ impl EvalContext {
         let profile_name = args
             .profile
             .clone()
-            .unwrap_or_else(|| super::policy_arg::family_profile(policy).to_string());
+            .unwrap_or_else(|| thorarena::profile::family_profile(policy).to_string());
         let profile_path = if profile_name.ends_with(".toml") {
             PathBuf::from(&profile_name)
         } else {

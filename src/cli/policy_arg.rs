@@ -171,18 +171,6 @@ pub fn make_policy_vetted(
     })
 }
 
-/// The profile a policy family was trained with: `twist2` for `twist2:`, `beyondmimic`
-/// for `beyondmimic:`, `default` for the built-ins and policy processes.
-pub fn family_profile(spec: &str) -> &'static str {
-    if spec.starts_with("twist2:") {
-        "twist2"
-    } else if spec.starts_with("beyondmimic:") {
-        "beyondmimic"
-    } else {
-        "default"
-    }
-}
-
 /// Whether `profile` is one `spec`'s family was trained with: TWIST2 networks the
 /// `twist2` profile, BeyondMimic-style ones `beyondmimic` or a profile with a
 /// `[beyondmimic]` section (`holosoma-wbt`); the built-ins and policy processes any.

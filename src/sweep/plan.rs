@@ -202,10 +202,11 @@ impl Plan {
                     _ => SESSION_POLICY.into(),
                 },
                 command: p.command.clone(),
-                profile: if p.profile.ends_with(".toml") {
-                    resolve(&workdir, &p.profile).display().to_string()
-                } else {
-                    p.profile.clone()
+                profile: match &p.profile {
+                    Some(f) if f.ends_with(".toml") => resolve(&workdir, f).display().to_string(),
+                    Some(name) => name.clone(),
+                    None => crate::profile::family_profile(p.policy.as_deref().unwrap_or(""))
+                        .to_string(),
                 },
                 keypoints: p.keypoints.clone(),
                 connect_timeout_s: p.connect_timeout_s,

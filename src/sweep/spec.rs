@@ -79,9 +79,9 @@ pub struct PolicySpec {
     /// Shell command starting a policy process that joins session `{session}`;
     /// `{thorarena}` is this binary.
     pub command: Option<String>,
-    /// Dynamics profile.
-    #[serde(default = "default_name")]
-    pub profile: String,
+    /// Dynamics profile [default: the policy family's, `thorarena::profile::family_profile`].
+    #[serde(default)]
+    pub profile: Option<String>,
     /// Keypoint set.
     #[serde(default = "default_name")]
     pub keypoints: String,
@@ -180,6 +180,14 @@ impl SweepSpec {
                 (None, Some(c)) if !c.contains("{session}") => {
                     return Err(invalid(format!(
                         "[[policy]] #{}: `command` must contain {{session}}, the session the task serves",
+                        i + 1
+                    )))
+                }
+                // A session served by a process the sweep does not start: every task would
+                // wait on the same name (and planning, which tries each policy, with them).
+                (Some(p), None) if p.starts_with("ipc:") => {
+                    return Err(invalid(format!(
+                        "[[policy]] #{}: `policy = \"{p}\"` names a policy process the sweep does not start: give `command` (with {{session}}) that starts it for each task",
                         i + 1
                     )))
                 }

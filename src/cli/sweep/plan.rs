@@ -101,7 +101,7 @@ pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
         if !checked.insert(key) {
             continue;
         }
-        let ctx = crate::cli::eval::EvalContext::load(&args.run)
+        let ctx = crate::cli::eval::EvalContext::load_for(&args.run, &cell.policy.policy)
             .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
         if cell.policy.command.is_none() && checked.insert(format!("policy|{}", cell.policy.policy))
         {
