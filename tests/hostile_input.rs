@@ -695,6 +695,19 @@ fn absurd_durations_and_steps_are_errors_not_panics_or_endless_runs() {
             ],
             "20000000 physics steps per control step of 0.02 s; at most 1000",
         ),
+        (
+            // A budget too long for a duration once panicked in the parser.
+            vec![
+                "eval",
+                "--policy",
+                "hold",
+                "--budget",
+                "100000000000000000000000000000s",
+                "--out",
+                out,
+            ],
+            "too long for a budget",
+        ),
     ] {
         let started = std::time::Instant::now();
         let e = failure(&thorarena(dir.path(), &args));

@@ -107,7 +107,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         };
         steps += 1;
         if args.delay_ms > 0.0 && (args.delay_at_step == 0 || args.delay_at_step == steps) {
-            std::thread::sleep(Duration::from_secs_f64(args.delay_ms / 1e3));
+            std::thread::sleep(
+                Duration::try_from_secs_f64(args.delay_ms / 1e3).unwrap_or(Duration::MAX),
+            );
         }
         step.answer(&mut |obs, out| {
             let active = (0..obs.n_envs()).filter(|&i| obs.env(i).is_active());

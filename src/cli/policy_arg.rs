@@ -86,7 +86,9 @@ pub(super) fn parse_budget(s: &str) -> Result<Budget, String> {
     if !(secs.is_finite() && secs > 0.0) {
         return Err(format!("`{s}`: the budget must be > 0 (or `none`)"));
     }
-    Ok(Budget(Some(Duration::from_secs_f64(secs))))
+    Duration::try_from_secs_f64(secs)
+        .map(|d| Budget(Some(d)))
+        .map_err(|_| format!("`{s}`: too long for a budget (give one that fits a duration)"))
 }
 
 impl PolicyIoArgs {
