@@ -696,6 +696,41 @@ fn absurd_durations_and_steps_are_errors_not_panics_or_endless_runs() {
             "20000000 physics steps per control step of 0.02 s; at most 1000",
         ),
         (
+            vec![
+                "eval",
+                "--policy",
+                "hold",
+                "--envs",
+                "18446744073709551615",
+                "--out",
+                out,
+            ],
+            "at most 4096 environment slots",
+        ),
+        (
+            vec![
+                "eval",
+                "--policy",
+                "hold",
+                "--workers",
+                "100000",
+                "--out",
+                out,
+            ],
+            "at most 1024 threads",
+        ),
+        (
+            vec![
+                "data",
+                "synth",
+                "--out",
+                out,
+                "--per-task",
+                "18446744073709551615",
+            ],
+            "give 1 to 100000 sequences per task",
+        ),
+        (
             // A budget too long for a duration once panicked in the parser.
             vec![
                 "eval",

@@ -6,7 +6,16 @@ use std::path::Path;
 use thorarena::motion::synth::{synthesize, SynthOptions};
 use thorarena::motion::{DatasetWriter, Manifest, MANIFEST};
 
+/// Most sequences per task `data synth` writes (a million sequences would be ~100 GB).
+const MAX_PER_TASK: usize = 100_000;
+
 pub(super) fn run(args: &SynthArgs) -> anyhow::Result<()> {
+    if !(1..=MAX_PER_TASK).contains(&args.per_task) {
+        bail!(
+            "--per-task {}: give 1 to {MAX_PER_TASK} sequences per task",
+            args.per_task
+        );
+    }
     let robot = super::load_robot(&args.robot)?;
     if args.out.join(MANIFEST).exists() {
         if !args.force {

@@ -118,6 +118,9 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
+/// Most worker threads a run may ask for.
+const MAX_WORKERS: usize = 1024;
+
 /// What an evaluation needs before a policy is chosen: robot, profile, data, settings.
 pub(super) struct EvalContext {
     pub robot: RobotModel,
@@ -273,6 +276,9 @@ impl EvalContext {
         }
         let workers = match args.workers {
             Some(0) => bail!("--workers must be at least 1"),
+            Some(n) if n > MAX_WORKERS => {
+                bail!("--workers {n}: at most {MAX_WORKERS} threads (each one simulates its own environment slots)")
+            }
             Some(n) => n,
             None => std::thread::available_parallelism().map_or(1, |n| n.get()),
         };

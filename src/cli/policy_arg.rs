@@ -60,6 +60,9 @@ pub enum OnPolicyFailure {
     Wait,
 }
 
+/// Most environment slots a run may ask for.
+pub const MAX_ENVS: usize = 4096;
+
 /// A latency budget per step; `None` is pure lock-step.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Budget(pub Option<Duration>);
@@ -109,6 +112,9 @@ impl PolicyIoArgs {
     pub fn envs(&self, workers: usize) -> anyhow::Result<usize> {
         match self.envs {
             Some(0) => bail!("--envs must be at least 1"),
+            Some(n) if n > MAX_ENVS => {
+                bail!("--envs {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)")
+            }
             Some(n) => Ok(n),
             None => Ok(workers.max(1)),
         }
