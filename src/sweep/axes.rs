@@ -21,37 +21,26 @@ pub(super) fn refuse_equivalent(
         path: spec_path.to_path_buf(),
         message,
     };
-    // -0.0 + 0.0 is 0.0: `-0` and `0` are one coefficient.
-    let bits = |v: f64| (v + 0.0).to_bits();
-    let settings: Vec<Option<(u64, u64, Option<u64>)>> = spec
-        .settings
-        .iter()
-        .map(|s| {
-            Setting::parse(s).map(|p| {
-                (
-                    bits(p.coefficient),
-                    bits(p.push_n),
-                    p.push_heading_deg.map(bits),
-                )
-            })
-        })
-        .collect();
-    if let Some((a, b)) = first_pair(&settings, |x| x.is_some()) {
+    // Settings by the load they put on the robot, as `eval --settings` compares them.
+    let settings: Vec<Option<Setting>> = spec.settings.iter().map(|s| Setting::parse(s)).collect();
+    let same_load = |a: &Option<Setting>, b: &Option<Setting>| match (a, b) {
+        (Some(a), Some(b)) => a.same_load(b),
+        _ => false,
+    };
+    if let Some((a, b)) = first_pair(&settings, same_load) {
+        let s = settings[a].as_ref().expect("parsed");
         return Err(invalid(format!(
-            "`settings`: `{}` and `{}` are the same setting ({}): give it once",
+            "`settings`: `{}` and `{}` are the same setting (force replay coefficient {}, push {} N{}): give it once",
             spec.settings[a],
             spec.settings[b],
-            Setting::parse(&spec.settings[a]).map_or(String::new(), |s| format!(
-                "force replay coefficient {}, push {} N{}",
-                s.coefficient,
-                s.push_n,
-                s.push_heading_deg
-                    .map_or(String::new(), |d| format!(" at {d}°"))
-            ))
+            s.coefficient,
+            s.push_n,
+            s.push_heading_deg
+                .map_or(String::new(), |d| format!(" at {d}°"))
         )));
     }
     let dirs: Vec<&Path> = datasets.iter().map(|d| d.dir.as_path()).collect();
-    if let Some((a, b)) = first_pair(&dirs, |_| true) {
+    if let Some((a, b)) = first_pair(&dirs, |a, b| a == b) {
         return Err(invalid(format!(
             "`datasets`: `{}` and `{}` are the same directory ({}): give it once",
             spec.datasets[a],
@@ -68,10 +57,10 @@ pub(super) fn refuse_equivalent(
                 let p = resolve(base, m);
                 std::fs::canonicalize(&p).unwrap_or(p)
             });
-            (e.engine.clone(), mjcf, e.physics_dt_s.map(bits))
+            (e.engine.clone(), mjcf, e.physics_dt_s)
         })
         .collect();
-    if let Some((a, b)) = first_pair(&engines, |_| true) {
+    if let Some((a, b)) = first_pair(&engines, |a, b| a == b) {
         return Err(invalid(format!(
             "`[[engine]] #{}` and `[[engine]] #{}` are the same engine ({}): give it once",
             a + 1,
@@ -80,7 +69,7 @@ pub(super) fn refuse_equivalent(
         )));
     }
     let labels: Vec<String> = spec.engines.iter().map(|e| e.label()).collect();
-    if let Some((a, b)) = first_pair(&labels, |_| true) {
+    if let Some((a, b)) = first_pair(&labels, |a, b| a == b) {
         return Err(invalid(format!(
             "`[[engine]] #{}` and `[[engine]] #{}` have one label `{}`: give them distinct `name`s",
             a + 1,
@@ -91,11 +80,11 @@ pub(super) fn refuse_equivalent(
     Ok(())
 }
 
-/// The first `(i, j)`, `i < j`, of equal values that `counts` keeps.
-fn first_pair<T: PartialEq>(values: &[T], counts: impl Fn(&T) -> bool) -> Option<(usize, usize)> {
+/// The first `(i, j)`, `i < j`, of values that are `same`.
+fn first_pair<T>(values: &[T], same: impl Fn(&T, &T) -> bool) -> Option<(usize, usize)> {
     (0..values.len()).find_map(|j| {
         (0..j)
-            .find(|&i| counts(&values[j]) && values[i] == values[j])
+            .find(|&i| same(&values[i], &values[j]))
             .map(|i| (i, j))
     })
 }
