@@ -27,8 +27,10 @@ command -v make >/dev/null || missing+=(make)
 [ -x "${THORARENA_CHROMIUM:-/usr/bin/chromium}" ] || missing+=(chromium)
 if ((${#missing[@]})); then
     if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-        apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}" \
-            || say "apt-get could not install ${missing[*]}; tests that need them will not run"
+        say "installing ${missing[*]} with apt-get (its output: $logs/apt-get.log)"
+        { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"; } \
+            > "$logs/apt-get.log" 2>&1 \
+            || { tail -n 20 "$logs/apt-get.log"; say "apt-get could not install ${missing[*]}; tests that need them will not run"; }
     else
         say "missing ${missing[*]} (not root: not installing); tests that need them count as skipped"
     fi
@@ -76,7 +78,7 @@ cargo test --release --workspace "${features[@]}" --no-fail-fast 2>&1 | tee "$lo
 rust_rc=${PIPESTATUS[0]}
 
 say "python tests (pytest tools/tests adapters/python/tests)"
-python -m pytest -q -rs --confcutdir=. tools/tests adapters/python/tests 2>&1 | tee "$logs/pytest.log"
+python -m pytest -q -rsfE --confcutdir=. tools/tests adapters/python/tests 2>&1 | tee "$logs/pytest.log"
 py_rc=${PIPESTATUS[0]}
 
 # One closing line for both suites. Rust tests that skipped ran as passed: take them out.
@@ -99,6 +101,16 @@ fi
 if [ "$py_rc" != 0 ] && [ "$py_failed" = 0 ]; then
     echo "pytest exited $py_rc without a failing test: see $logs/pytest.log"
     failed=$((failed + 1))
+fi
+# Every failed test by name, just above the closing line: "SUITE: TEST" (the Rust suite is
+# the test binary's source, e.g. tests/sweep.rs).
+awk '/^     Running / {suite = ($2 == "unittests") ? $3 : $2} /^   Doc-tests / {suite = "doc-tests " $2}
+     /^test .* \.\.\. FAILED$/ {name = $0; sub(/^test /, "", name); sub(/ \.\.\. FAILED$/, "", name); print suite ": " name}' \
+    "$logs/cargo-test.log" > "$logs/failed.txt"
+grep -E '^(FAILED|ERROR) ' "$logs/pytest.log" | sed -E 's/^(FAILED|ERROR) //; s/ - .*$//' >> "$logs/failed.txt"
+if [ -s "$logs/failed.txt" ]; then
+    say "failed tests:"
+    sed 's/^/   /' "$logs/failed.txt"
 fi
 echo "tests: $passed passed, $failed failed, $skipped skipped" | tee "$logs/closing.txt"
 [ "$failed" = 0 ]

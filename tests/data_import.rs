@@ -294,3 +294,55 @@ fn exported_npz_holds_the_datasets_arrays_and_an_index() {
     assert_eq!(index["joint_names"].as_array().unwrap().len(), 29);
     assert_eq!(index["sequences"][0]["file"], "walk/m.npz");
 }
+
+/// A dataset without force logs: `data info` says so, `eval` runs `no-force` alone by
+/// default, refuses an explicit replay setting (it would print a second no-force column
+/// under the name `force`) unless asked, and takes a push, which replays nothing.
+#[test]
+fn a_dataset_without_force_logs_runs_no_force_unless_asked_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = import_walk_csv(dir.path());
+    let ds = ds.to_str().unwrap();
+    let info = thorarena(&["data", "info", ds]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(info.status.success());
+    assert!(
+        text.contains("1 of 1 sequences have no force logs"),
+        "{text}"
+    );
+    let eval = |out: &str, extra: &[&str]| {
+        let out = dir.path().join(out);
+        let mut args = vec!["eval", "--dataset", ds, "--policy", "hold", "--out"];
+        args.push(out.to_str().unwrap());
+        args.extend(extra);
+        let o = thorarena(&args);
+        (o, out)
+    };
+    let (o, out) = eval("default", &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("running `no-force` only"));
+    let header: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    let names: Vec<&str> = header["settings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["no-force"]);
+    for settings in ["force", "no-force,0.5"] {
+        let (o, _) = eval("refused", &["--settings", settings]);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && e.contains("no sequence evaluated"),
+            "{settings}: {e}"
+        );
+    }
+    let (o, _) = eval(
+        "asked",
+        &["--settings", "force", "--replay-without-force-logs"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (o, _) = eval("push", &["--settings", "push:20"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

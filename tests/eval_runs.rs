@@ -134,3 +134,162 @@ fn a_killed_run_resumes_without_losing_or_duplicating_episodes() {
         !o.status.success() && String::from_utf8_lossy(&o.stderr).contains("another configuration")
     );
 }
+
+/// `--tasks` and `--sequences` run part of a dataset, and every file says so: run.json
+/// records the selection, tables.md warns it is not full coverage, `report` flags it, and
+/// a resume with another selection is refused.
+#[test]
+fn tasks_and_sequences_run_part_of_a_dataset_and_the_run_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("part");
+    let o = eval(
+        &run,
+        &[
+            "--tasks",
+            "push_chair,clean_table",
+            "--sequences",
+            "push_chair_001,clean_table/clean_table_000",
+        ],
+    )
+    .output()
+    .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut tasks: Vec<(String, String)> = episodes(&run)
+        .iter()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            (
+                v["task"].as_str().unwrap().to_string(),
+                v["sequence_id"].as_str().unwrap().to_string(),
+            )
+        })
+        .collect();
+    tasks.sort();
+    assert_eq!(
+        tasks,
+        [
+            ("clean_table".to_string(), "clean_table_000".to_string()),
+            ("push_chair".to_string(), "push_chair_001".to_string())
+        ]
+    );
+    let header: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+    assert_eq!(
+        header["subset"]["tasks"],
+        serde_json::json!(["push_chair", "clean_table"])
+    );
+    assert_eq!(header["subset"]["dataset_sequences"], 12);
+    let tables = std::fs::read_to_string(run.join("tables.md")).unwrap();
+    assert!(
+        tables.contains("Part of the dataset: 2 of the dataset's 12 sequences"),
+        "{tables}"
+    );
+    let report = dir.path().join("r.html");
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args([
+            "report",
+            run.to_str().unwrap(),
+            "--out",
+            report.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(std::fs::read_to_string(&report)
+        .unwrap()
+        .contains("ran part of its dataset"));
+    // Resuming with the whole dataset is another configuration.
+    let o = eval(&run, &["--resume"]).output().unwrap();
+    assert!(
+        !o.status.success() && String::from_utf8_lossy(&o.stderr).contains("subset"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // Names the dataset does not hold are errors that say what it has.
+    for (flag, value, says) in [
+        ("--tasks", "push_chiar", "it has: clean_table"),
+        (
+            "--sequences",
+            "push_chair/clean_table_000",
+            "no sequence `push_chair/clean_table_000`",
+        ),
+        ("--tasks", "push_chair,push_chair", "given twice"),
+    ] {
+        let o = eval(&dir.path().join("bad"), &[flag, value])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(says),
+            "{flag} {value}: {err}"
+        );
+    }
+    let o = eval(
+        &dir.path().join("bad"),
+        &["--tasks", "pull_chair", "--sequences", "clean_table_000"],
+    )
+    .output()
+    .unwrap();
+    assert!(
+        !o.status.success()
+            && String::from_utf8_lossy(&o.stderr).contains("no sequence is of the tasks")
+    );
+}
+
+/// `episodes.csv` has one row per episode whose scores average to the FATS of
+/// `tables.md`, and FATS comes with its bootstrap interval (also in `summary.json`).
+#[test]
+fn episodes_csv_rows_average_to_the_tables_fats_and_fats_has_an_interval() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let o = eval(&run, &[]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mut csv = csv::Reader::from_path(run.join("episodes.csv")).unwrap();
+    let head: Vec<String> = csv.headers().unwrap().iter().map(str::to_string).collect();
+    assert_eq!(
+        head,
+        [
+            "task",
+            "sequence_id",
+            "setting",
+            "survival",
+            "kp_error_mean_mm",
+            "kp_error_rms_mm",
+            "score",
+            "termination"
+        ]
+    );
+    let rows: Vec<csv::StringRecord> = csv.records().map(Result::unwrap).collect();
+    assert_eq!(rows.len(), 12);
+    let mut by_task: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
+    for r in &rows {
+        let (mean, rms): (f64, f64) = (r[4].parse().unwrap(), r[5].parse().unwrap());
+        assert!(mean > 0.0 && rms >= mean, "RMS ≥ mean: {r:?}");
+        by_task
+            .entry(r[0].to_string())
+            .or_default()
+            .push(r[6].parse().unwrap());
+    }
+    let fats = by_task
+        .values()
+        .map(|v| v.iter().sum::<f64>() / v.len() as f64)
+        .sum::<f64>()
+        / by_task.len() as f64;
+    let settings = summary_settings(&run);
+    let average = settings["force"]["average"]["fats"].as_f64().unwrap();
+    assert!((fats - average).abs() < 1e-9, "{fats} vs {average}");
+    let ci = &settings["force"]["fats_ci95"];
+    let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+    assert!(
+        lo < average && average < hi,
+        "[{lo}, {hi}] around {average}"
+    );
+    let tables = std::fs::read_to_string(run.join("tables.md")).unwrap();
+    assert!(
+        tables.contains(&format!(
+            "| 95 % interval (bootstrap over episodes within tasks) | [{lo:.2}, {hi:.2}] |"
+        )),
+        "{tables}"
+    );
+    assert!(tables.contains("KP rows are the RMS"), "{tables}");
+}

@@ -54,7 +54,7 @@ fn the_baseline_table_is_what_eval_prints() {
         let label = readme_row[0].as_str();
         let shown = readme_row[1..].to_vec();
         let tables_label = if label == "survival" {
-            "Survival"
+            "Survival (mean)"
         } else {
             label
         };

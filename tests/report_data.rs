@@ -74,6 +74,7 @@ fn header(policy: &str) -> RunHeader {
                 })
             })
             .collect(),
+        subset: None,
         shard: None,
         io: PolicyIoRules::default(),
     }
@@ -206,7 +207,7 @@ fn csv_tables_hold_each_runs_own_scores_at_full_precision() {
     assert_eq!(b_avg, own["force"].1.fats);
 
     let diag = parse_csv(&diagnostics_multi_table(&runs).csv());
-    let survival = diag.iter().find(|r| r[0] == "Survival").unwrap();
+    let survival = diag.iter().find(|r| r[0] == "Survival (mean)").unwrap();
     let s: f64 = survival[3].parse().unwrap();
     assert_eq!(s, own["force"].1.survival);
     assert!(
@@ -227,12 +228,12 @@ fn undefined_diagnostics_are_empty_in_csv_and_a_dash_in_markdown() {
     let runs = load_runs(&[dir.path().join("a")]).unwrap();
     let table = diagnostics_multi_table(&runs);
     let csv = parse_csv(&table.csv());
-    let high = csv.iter().find(|r| r[0] == "High KP (mm)").unwrap();
+    let high = csv.iter().find(|r| r[0] == "High KP, RMS (mm)").unwrap();
     assert_eq!(high[1], "");
-    assert!(table.markdown().contains("| High KP (mm) | – |"));
+    assert!(table.markdown().contains("| High KP, RMS (mm) | – |"));
     // The single-run table of tables.md says the same.
-    assert!(diagnostics_table(&runs[0].results).contains("| High KP (mm) | – |"));
-    assert!(diagnostics_table(&runs[0].results).contains("| Survival | 1.000 |"));
+    assert!(diagnostics_table(&runs[0].results).contains("| High KP, RMS (mm) | – |"));
+    assert!(diagnostics_table(&runs[0].results).contains("| Survival (mean) | 1.000 |"));
 }
 
 #[test]

@@ -576,3 +576,68 @@ fn the_slurm_script_is_an_array_over_the_tasks_not_done() {
     assert!(script.contains("/slurm/logs/task-%a.log"), "{script}");
     assert!(script.contains(" sweep task "), "{script}");
 }
+
+/// A sweep's `tasks` and `sequences` reach every task's `eval`: the cells plan, run and
+/// collect only those episodes, and their runs record the selection.
+#[test]
+fn a_sweep_of_some_tasks_runs_and_records_only_those() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\ntasks = [\"push_chair\", \"pull_chair\"]\nsequences = [\"pull_chair_000\", \"push_chair/push_chair_001\"]\nshards = 2\n[[policy]]\npolicy = \"hold\"\n"
+        ),
+    );
+    let dir = tmp.path().join("s");
+    plan(&spec, &dir);
+    let plan_json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("plan.json")).unwrap()).unwrap();
+    assert_eq!(plan_json["cells"][0]["episodes"], 2);
+    ok(thorarena(&[
+        "sweep",
+        "run",
+        dir.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]));
+    let got = collected_cell(&dir);
+    let mut ids: Vec<String> = got
+        .iter()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["sequence_id"]
+                .as_str()
+                .unwrap()
+                .to_string()
+        })
+        .collect();
+    ids.sort();
+    assert_eq!(ids, ["pull_chair_000", "push_chair_001"]);
+    let header: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("cells/000000/run.json")).unwrap())
+            .unwrap();
+    assert_eq!(header["subset"]["sequences"][0], "pull_chair_000");
+    // A name the dataset does not hold fails at planning, not in every task.
+    let bad = tmp.path().join("bad-spec");
+    std::fs::create_dir_all(&bad).unwrap();
+    let bad_spec = spec_text_with(&bad, "tasks = [\"push_chiar\"]");
+    let e = err(&thorarena(&[
+        "sweep",
+        "plan",
+        bad_spec.to_str().unwrap(),
+        "--out",
+        tmp.path().join("never").to_str().unwrap(),
+    ]));
+    assert!(e.contains("no task `push_chiar`"), "{e}");
+}
+
+fn collected_cell(sweep: &Path) -> Vec<String> {
+    ok(thorarena(&["sweep", "collect", sweep.to_str().unwrap()]));
+    records(&sweep.join("cells/000000/episodes.jsonl"))
+}
+
+fn spec_text_with(dir: &Path, line: &str) -> PathBuf {
+    spec(
+        dir,
+        &format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\n{line}\n[[policy]]\npolicy = \"hold\"\n"),
+    )
+}

@@ -283,18 +283,38 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
     for (input, seq) in &seqs {
         writer.add(seq)?;
         eprintln!(
-            "imported {} → {}/{} ({} frames at {} fps, {:.1} s)",
+            "imported {} → {}/{} ({} frames at {} fps, {:.1} s{})",
             input.display(),
             seq.task,
             seq.sequence_id,
             seq.n_frames(),
-            seq.fps,
-            seq.duration_s()
+            fps_text(seq.fps),
+            seq.duration_s(),
+            if seq.forces_recorded {
+                ", with force logs"
+            } else {
+                ", no force logs"
+            }
         );
     }
     let ds = writer.finish()?;
-    eprintln!("{}: {} sequences", ds.dir.display(), ds.len());
+    eprintln!("{}: {}", ds.dir.display(), plural(ds.len(), "sequence"));
     Ok(())
+}
+
+/// A frame rate as people write it: `30`, `29.97`, `59.94`.
+fn fps_text(fps: f64) -> String {
+    let text = format!("{fps:.2}");
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// "1 sequence", "3 sequences".
+fn plural(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
 }
 
 fn export(args: &ExportArgs) -> anyhow::Result<()> {
@@ -327,21 +347,21 @@ pub fn describe(ds: &Dataset, seqs: &[Sequence], robot: &RobotModel) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "dataset {} ({} sequences, robot {}, content sha256 {})",
+        "dataset {} ({}, robot {}, content sha256 {})",
         ds.dir.display(),
-        seqs.len(),
+        plural(seqs.len(), "sequence"),
         ds.manifest.robot,
         &ds.content_hash()[..16]
     );
     let _ = writeln!(
         s,
-        "{:<16} {:>5} {:>10} {:>9} {:>9} {:>9} {:>12}",
-        "task", "seqs", "duration", "F p33", "F p66", "F max", "limit margin"
+        "{:<16} {:>5} {:>10} {:>11} {:>9} {:>9} {:>9} {:>12}",
+        "task", "seqs", "duration", "force logs", "F p33", "F p66", "F max", "limit margin"
     );
     let _ = writeln!(
         s,
-        "{:<16} {:>5} {:>10} {:>9} {:>9} {:>9} {:>12}",
-        "", "", "s", "N", "N", "N", "rad"
+        "{:<16} {:>5} {:>10} {:>11} {:>9} {:>9} {:>9} {:>12}",
+        "", "", "s", "seqs", "N", "N", "N", "rad"
     );
     // Tasks in order of first appearance, each once (a manifest need not be grouped).
     let mut tasks: Vec<&str> = Vec::new();
@@ -367,15 +387,30 @@ pub fn describe(ds: &Dataset, seqs: &[Sequence], robot: &RobotModel) -> String {
             .fold(0.0f64, |a, b| if b.abs() > a.abs() { b } else { a });
         let _ = writeln!(
             s,
-            "{:<16} {:>5} {:>10.1} {:>9.1} {:>9.1} {:>9.1} {:>12.3} {:>12.1}",
+            "{:<16} {:>5} {:>10.1} {:>11} {:>9.1} {:>9.1} {:>9.1} {:>12.3} {:>12.1}",
             task,
             group.len(),
             duration,
+            group.iter().filter(|q| q.forces_recorded).count(),
             percentile(&total, 33.0),
             percentile(&total, 66.0),
             total.last().copied().unwrap_or(0.0),
             margin,
             1e3 * ground
+        );
+    }
+    let logged = seqs.iter().filter(|q| q.forces_recorded).count();
+    if logged < seqs.len() {
+        let _ = writeln!(
+            s,
+            "{} of {} sequences have no force logs (imported without --forces; their forces are zero){}",
+            seqs.len() - logged,
+            seqs.len(),
+            if logged == 0 {
+                ": `eval` runs them under no-force only, unless --replay-without-force-logs"
+            } else {
+                ": under a replay setting they run as if no-force"
+            }
         );
     }
     // Datasets written before import checked for glitches (or by other tools) may hold

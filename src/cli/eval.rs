@@ -57,8 +57,21 @@ pub struct RunArgs {
     /// in over 1 s — the sensitivity probe of FACTS.md §8), or `push:<N>@<deg>` with the
     /// push turned by deg from the reference's initial heading (`push:20@90`: from the
     /// robot's right).
-    #[arg(long, value_delimiter = ',', default_value = "force,no-force")]
+    /// [default: force,no-force; no-force alone on a dataset without force logs].
+    #[arg(long, value_delimiter = ',')]
     pub settings: Vec<String>,
+    /// Run replay settings (`force`, a coefficient) on a dataset whose sequences have no
+    /// force logs: they replay zero forces, i.e. run as `no-force` under another name.
+    #[arg(long)]
+    pub replay_without_force_logs: bool,
+    /// Evaluate only these tasks, comma separated (default: every task). The run records
+    /// the selection, and its tables say they cover part of the dataset.
+    #[arg(long, value_delimiter = ',')]
+    pub tasks: Vec<String>,
+    /// Evaluate only these sequences, comma separated, each `SEQUENCE_ID` or
+    /// `TASK/SEQUENCE_ID` (default: every sequence; with --tasks, those of both).
+    #[arg(long, value_delimiter = ',')]
+    pub sequences: Vec<String>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub workers: Option<usize>,
@@ -118,6 +131,77 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
+/// The bundled profiles' names (`data/profiles/*.toml`), sorted.
+fn bundled_profile_names() -> Vec<String> {
+    let dir = bundled_profile_path("x")
+        .parent()
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| {
+            let p = e.path();
+            (p.extension()? == "toml").then(|| p.file_stem()?.to_str().map(str::to_string))?
+        })
+        .collect();
+    names.sort();
+    names
+}
+
+/// `--settings` when none is given (on a dataset with force logs).
+const DEFAULT_SETTINGS: [&str; 2] = ["force", "no-force"];
+
+/// Replay settings need recorded forces: on a dataset without force logs the default
+/// becomes `no-force` alone, and an explicit replay setting is refused unless
+/// `--replay-without-force-logs` (it would print a second `no-force` column under
+/// another name). A dataset only partly logged is run as asked, with a warning.
+fn fit_settings_to_force_logs(
+    settings: Vec<Setting>,
+    sequences: &[Sequence],
+    defaulted: bool,
+    replay_anyway: bool,
+    dataset: &std::path::Path,
+) -> anyhow::Result<Vec<Setting>> {
+    let logged = sequences.iter().filter(|q| q.forces_recorded).count();
+    let replaying: Vec<&str> = settings
+        .iter()
+        .filter(|s| s.coefficient != 0.0)
+        .map(|s| s.name.as_str())
+        .collect();
+    if replaying.is_empty() || logged == sequences.len() {
+        return Ok(settings);
+    }
+    if logged == 0 && defaulted {
+        eprintln!(
+            "note: no sequence evaluated from {} has force logs (imported without --forces): running `no-force` only (--settings force,... with --replay-without-force-logs to replay zeros anyway)",
+            dataset.display()
+        );
+        return Ok(settings
+            .into_iter()
+            .filter(|s| s.coefficient == 0.0)
+            .collect());
+    }
+    if logged == 0 && !replay_anyway {
+        bail!(
+            "--settings {}: replays recorded hand forces, but no sequence evaluated from {} has force logs (imported without --forces), so it would run as `no-force` under another name; use no-force or push:<N>, or --replay-without-force-logs to run it anyway",
+            replaying.join(","),
+            dataset.display()
+        );
+    }
+    if logged < sequences.len() {
+        eprintln!(
+            "warning: {} of the {} sequences evaluated from {} have no force logs: under {} they replay zero forces",
+            sequences.len() - logged,
+            sequences.len(),
+            dataset.display(),
+            replaying.join(", ")
+        );
+    }
+    Ok(settings)
+}
+
 /// Most worker threads a run may ask for.
 const MAX_WORKERS: usize = 1024;
 
@@ -129,6 +213,8 @@ pub(super) struct EvalContext {
     pub dataset: PathBuf,
     pub dataset_sha256: String,
     pub sequences: Vec<Sequence>,
+    /// `--tasks`/`--sequences` and the dataset's size, when they chose part of it.
+    pub subset: Option<thorarena::results::Subset>,
     pub settings: Vec<Setting>,
     pub workers: usize,
     pub envs: usize,
@@ -158,7 +244,16 @@ impl EvalContext {
         let profile_path = if profile_name.ends_with(".toml") {
             PathBuf::from(&profile_name)
         } else {
-            bundled_profile_path(&profile_name)
+            let path = bundled_profile_path(&profile_name);
+            if !path.is_file() {
+                let names = bundled_profile_names();
+                bail!(
+                    "--profile {profile_name}: no such profile{} (bundled: {}; or the path of a .toml file)",
+                    super::suggest::did_you_mean(&profile_name, names.iter().map(String::as_str)),
+                    names.join(", ")
+                );
+            }
+            path
         };
         let mut profile = load_profile(&profile_path, &robot)?;
         let profile_mismatch = match super::policy_arg::profile_fits(policy, &profile) {
@@ -215,8 +310,12 @@ impl EvalContext {
                 robot.name
             );
         }
-        let settings: Vec<Setting> = args
-            .settings
+        let spelled: Vec<String> = if args.settings.is_empty() {
+            DEFAULT_SETTINGS.iter().map(|s| s.to_string()).collect()
+        } else {
+            args.settings.clone()
+        };
+        let settings: Vec<Setting> = spelled
             .iter()
             .map(|s| {
                 Setting::parse(s).with_context(|| {
@@ -234,7 +333,7 @@ impl EvalContext {
                 .enumerate()
                 .find(|(_, b)| b.same_load(a))
             {
-                let (first, second) = (&args.settings[j], &args.settings[i]);
+                let (first, second) = (&spelled[j], &spelled[i]);
                 if first == second || settings[j].name == a.name {
                     bail!(
                         "--settings lists `{}` twice: every episode would run and count twice",
@@ -256,20 +355,39 @@ impl EvalContext {
         }
         args.io.rules()?;
         let ds = Dataset::open(&dataset, &robot)?;
-        let sequences = ds.load_all()?;
-        if sequences.is_empty() {
+        let all = ds.load_all()?;
+        if all.is_empty() {
             bail!(
                 "{} holds no sequence: nothing to evaluate",
                 dataset.display()
             );
         }
+        let selection = thorarena::motion::SequenceSelection {
+            tasks: args.tasks.clone(),
+            sequences: args.sequences.clone(),
+        };
+        let dataset_sequences = all.len();
+        let sequences = selection
+            .pick(all, |q| (&q.task, &q.sequence_id))
+            .with_context(|| format!("{} in {}", selection.flags(), dataset.display()))?;
+        let subset = (!selection.is_all()).then_some(thorarena::results::Subset {
+            selection,
+            dataset_sequences,
+        });
+        let settings = fit_settings_to_force_logs(
+            settings,
+            &sequences,
+            args.settings.is_empty(),
+            args.replay_without_force_logs,
+            &dataset,
+        )?;
         for name in &args.trace {
             if !sequences
                 .iter()
                 .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
             {
                 bail!(
-                    "--trace: no sequence `{name}` in {} (use TASK/SEQUENCE_ID)",
+                    "--trace: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",
                     ds.dir.display()
                 );
             }
@@ -291,6 +409,7 @@ impl EvalContext {
             engine,
             dataset,
             sequences,
+            subset,
             settings,
             workers,
             envs,
@@ -412,6 +531,7 @@ pub(super) fn evaluate(
         },
         settings: ctx.settings.clone(),
         sequences: PlannedSequence::plan(sequences, ctx.profile.control_dt_s),
+        subset: ctx.subset.clone(),
         shard: args.shard,
         io: args.io.rules()?,
     };
@@ -490,8 +610,13 @@ pub(super) fn evaluate(
     if !args.trace.is_empty() {
         std::fs::create_dir_all(&traces_dir)?;
     }
+    let part = header
+        .subset
+        .as_ref()
+        .map(|s| format!(" (part of it: {})", s.describe(header.sequences.len())))
+        .unwrap_or_default();
     eprintln!(
-        "evaluating `{}` on {}: {} episodes to run ({} already done), {} environment slots on {} workers",
+        "evaluating `{}` on {}{part}: {} episodes to run ({} already done), {} environment slots on {} workers",
         policy.name(),
         ctx.dataset.display(),
         jobs.len(),
@@ -562,7 +687,7 @@ pub(super) fn evaluate(
     let tables = write_results(out, &header, &records, thresholds, Some(io_report))?;
     println!("{tables}");
     eprintln!(
-        "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md}}",
+        "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md, episodes.csv}}",
         out.display()
     );
     // A run whose policy failed is not a result, even when every episode has a record:

@@ -20,6 +20,7 @@ mod report_html;
 mod robot_info;
 mod serve;
 mod sim_trace;
+mod suggest;
 mod sweep;
 mod view;
 

@@ -32,11 +32,12 @@ fn resolved(path: &Path) -> PathBuf {
 
 /// What a run directory consists of (`eval` writes them; `report`, `merge`, `view` and
 /// `--resume` read them back).
-const RUN_FILES: [&str; 5] = [
+const RUN_FILES: [&str; 6] = [
     "run.json",
     "episodes.jsonl",
     "summary.json",
     "tables.md",
+    "episodes.csv",
     "traces",
 ];
 

@@ -172,11 +172,39 @@ pub fn make_policy_vetted(
                 return Ok(Box::new(policy));
             }
             let Some(session) = ipc_session(other) else {
-                bail!("unknown policy `{other}` (built-in: hold, replay, balance; twist2:<file.onnx>; beyondmimic:<file.onnx>; or ipc:<session> for a policy process)");
+                bail!("{}", unknown_policy(other));
             };
             Box::new(connect_remote(session, robot, profile, io, envs, vet)?)
         }
     })
+}
+
+/// Why `spec` names no policy, with what it probably meant.
+fn unknown_policy(spec: &str) -> String {
+    let family = spec.trim_end_matches(':');
+    let example = match family {
+        "twist2" => Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
+        "beyondmimic" => Some("policy.onnx, an mjlab or holosoma G1 export"),
+        _ => None,
+    };
+    if let Some(example) = example {
+        return format!("`--policy {spec}` needs the network's file: `{family}:FILE.onnx` (e.g. {family}:{example})");
+    }
+    if family == "ipc" {
+        return "`--policy ipc` needs a session name: `ipc:NAME`, the name the policy process connects to".into();
+    }
+    let hint = super::suggest::did_you_mean(
+        spec,
+        [
+            "hold",
+            "replay",
+            "balance",
+            "twist2:",
+            "beyondmimic:",
+            "ipc:",
+        ],
+    );
+    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; or ipc:SESSION for a policy process")
 }
 
 /// Whether `profile` is one `spec`'s family was trained with: TWIST2 networks the

@@ -6,11 +6,13 @@
 //! regime weights (0.2, 0.3, 0.5) renormalised over the regimes an episode has, σ = 0.15 m.
 
 mod aggregate;
+mod bootstrap;
 mod episode;
 mod keypoints;
 mod regimes;
 
 pub use aggregate::{aggregate, Diagnostics, TaskSummary};
+pub use bootstrap::{central_95, mean_ci, stratified_mean_ci, MeanCi, BOOTSTRAP_RESAMPLES};
 pub use episode::{score_episode, EpisodeScore, EpisodeSeries, SIGMA_M};
 pub use keypoints::{keypoint_error_m, reanchor};
 pub use regimes::{percentile, Regime, RegimeThresholds, REGIME_WEIGHTS};

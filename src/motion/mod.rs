@@ -8,6 +8,7 @@ mod format;
 mod glitch;
 pub mod import;
 mod reference;
+mod selection;
 mod sequence;
 pub mod synth;
 
@@ -21,4 +22,5 @@ pub use glitch::{
 pub use reference::{
     ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference, ReferenceFrame,
 };
+pub use selection::{SelectionError, SequenceSelection};
 pub use sequence::{Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};

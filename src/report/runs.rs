@@ -410,6 +410,17 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
                 ),
             });
         }
+        if let Some(subset) = &r.header.subset {
+            out.push(ComparisonWarning {
+                kind: WarningKind::Partial,
+                message: format!(
+                    "{} ({}) ran part of its dataset: {}",
+                    r.label,
+                    r.dir.display(),
+                    subset.describe(r.header.sequences.len())
+                ),
+            });
+        }
         if let Some((i, n)) = r.header.shard {
             out.push(ComparisonWarning {
                 kind: WarningKind::Partial,

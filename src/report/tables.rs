@@ -23,15 +23,15 @@ pub struct DiagnosticRow {
 
 /// The diagnostics table's rows, in the paper's order (one definition for every table).
 pub const DIAGNOSTIC_ROWS: [DiagnosticRow; 10] = [
-    row("FATS", |d| d.fats, 2, ""),
-    row("Survival", |d| d.survival, 3, ""),
-    row("KP error (mm)", |d| d.kp_mm, 1, ""),
-    row("Low KP (mm)", |d| d.low_kp_mm, 1, ""),
-    row("High KP (mm)", |d| d.high_kp_mm, 1, ""),
+    row("FATS (mean)", |d| d.fats, 2, ""),
+    row("Survival (mean)", |d| d.survival, 3, ""),
+    row("KP error, RMS (mm)", |d| d.kp_mm, 1, ""),
+    row("Low KP, RMS (mm)", |d| d.low_kp_mm, 1, ""),
+    row("High KP, RMS (mm)", |d| d.high_kp_mm, 1, ""),
     row("Robustness ρ", |d| d.robustness, 3, ""),
     row("Power η", |d| d.power_overhead, 2, "×"),
-    row("Upper KP (mm)", |d| d.upper_kp_mm, 1, ""),
-    row("Lower KP (mm)", |d| d.lower_kp_mm, 1, ""),
+    row("Upper KP, RMS (mm)", |d| d.upper_kp_mm, 1, ""),
+    row("Lower KP, RMS (mm)", |d| d.lower_kp_mm, 1, ""),
     row("FATS Std", |d| d.fats_std, 2, ""),
 ];
 
@@ -59,8 +59,15 @@ fn format_number(v: f64, decimals: usize, suffix: &str) -> String {
     }
 }
 
-/// Task-level FATS, one column per setting.
-pub fn task_fats_table(results: &SettingResults) -> String {
+/// What the diagnostics table's numbers are, printed under it (and in README).
+pub const DIAGNOSTICS_NOTE: &str = "Each number is computed per task, then averaged over tasks. Per task: FATS and survival are means over its episodes; KP rows are the RMS of the keypoint error over its control steps (all its episodes pooled; low/high: steps of that force regime); ρ = low / high KP RMS; η = mean power in high-force steps over low-force steps; FATS Std is the population standard deviation of its episode scores.";
+
+/// Task-level FATS (mean episode score per task), one column per setting; under the
+/// average, its bootstrap 95 % interval where `intervals` has the setting.
+pub fn task_fats_table(
+    results: &SettingResults,
+    intervals: &std::collections::BTreeMap<String, [f64; 2]>,
+) -> String {
     let settings: Vec<&String> = results.keys().collect();
     let mut tasks: Vec<&str> = results
         .values()
@@ -74,7 +81,7 @@ pub fn task_fats_table(results: &SettingResults) -> String {
         "| Task | {} |",
         settings
             .iter()
-            .map(|x| format!("FATS ({x})"))
+            .map(|x| format!("FATS ({x}), mean of episodes"))
             .collect::<Vec<_>>()
             .join(" | ")
     );
@@ -97,6 +104,21 @@ pub fn task_fats_table(results: &SettingResults) -> String {
         .map(|k| format!("**{:.2}**", results[*k].1.fats))
         .collect();
     let _ = writeln!(s, "| **average** | {} |", avg.join(" | "));
+    if !intervals.is_empty() {
+        let ci: Vec<String> = settings
+            .iter()
+            .map(|k| {
+                intervals
+                    .get(*k)
+                    .map_or("–".into(), |[lo, hi]| format!("[{lo:.2}, {hi:.2}]"))
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| 95 % interval (bootstrap over episodes within tasks) | {} |",
+            ci.join(" | ")
+        );
+    }
     s
 }
 
@@ -121,6 +143,7 @@ pub fn diagnostics_table(results: &SettingResults) -> String {
             .collect();
         let _ = writeln!(s, "| {} | {} |", r.name, cells.join(" | "));
     }
+    let _ = writeln!(s, "\n{DIAGNOSTICS_NOTE}");
     s
 }
 

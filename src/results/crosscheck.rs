@@ -4,10 +4,9 @@
 //! under force is chaotic per episode, so only means over many episodes say anything.
 
 use super::EpisodeRecord;
-use crate::metrics::{score_episode, RegimeThresholds};
+pub use crate::metrics::{mean_ci, MeanCi};
+use crate::metrics::{score_episode, stratified_mean_ci, RegimeThresholds};
 use crate::runner::Setting;
-use rand::{RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -111,47 +110,6 @@ pub fn foot_slip_pair(a: &[Vec<f64>], b: &[Vec<f64>], control_dt_s: f64) -> Opti
         total_m: [total(last_a), total(last_b)],
         parts_at_s: parts.map(|k| (k + 1) as f64 * control_dt_s),
     })
-}
-
-/// A mean over episodes with its bootstrap 95 % confidence interval.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct MeanCi {
-    /// Episodes in the mean.
-    pub episodes: usize,
-    /// The mean.
-    pub mean: f64,
-    /// 2.5th and 97.5th percentiles of the bootstrap means.
-    pub ci95: [f64; 2],
-}
-
-/// The mean of `values` and its bootstrap interval from `resamples` resamples (NaN
-/// without a value).
-pub fn mean_ci(values: &[f64], resamples: usize, seed: u64) -> MeanCi {
-    let n = values.len();
-    if n == 0 {
-        return MeanCi {
-            episodes: 0,
-            mean: f64::NAN,
-            ci95: [f64::NAN; 2],
-        };
-    }
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let means: Vec<f64> = (0..resamples.max(1))
-        .map(|_| (0..n).map(|_| values[rng.random_range(0..n)]).sum::<f64>() / n as f64)
-        .collect();
-    MeanCi {
-        episodes: n,
-        mean: values.iter().sum::<f64>() / n as f64,
-        ci95: central_95(means),
-    }
-}
-
-/// The 2.5th and 97.5th percentiles of bootstrap estimates (not empty).
-fn central_95(mut estimates: Vec<f64>) -> [f64; 2] {
-    estimates.sort_by(f64::total_cmp);
-    let last = estimates.len() - 1;
-    let pct = |p: f64| estimates[((p * last as f64).round() as usize).min(last)];
-    [pct(0.025), pct(0.975)]
 }
 
 /// One episode on both engines.
@@ -311,29 +269,15 @@ pub fn compare_fats(pairs: &[&EpisodePair], resamples: usize, seed: u64) -> Comp
             / tasks
     };
     let (a, b) = (fats(&|p| p.0), fats(&|p| p.1));
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let diffs: Vec<f64> = (0..resamples.max(1))
-        .map(|_| {
-            by_task
-                .values()
-                .map(|v| {
-                    (0..v.len())
-                        .map(|_| {
-                            let (x, y) = v[rng.random_range(0..v.len())];
-                            y - x
-                        })
-                        .sum::<f64>()
-                        / v.len() as f64
-                })
-                .sum::<f64>()
-                / tasks
-        })
+    let diffs: Vec<Vec<f64>> = by_task
+        .values()
+        .map(|v| v.iter().map(|(x, y)| y - x).collect())
         .collect();
     Compared {
         a,
         b,
         diff: b - a,
-        ci95: central_95(diffs),
+        ci95: stratified_mean_ci(&diffs, resamples, seed).ci95,
     }
 }
 

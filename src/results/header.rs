@@ -67,11 +67,36 @@ pub struct RunHeader {
     /// The dataset's sequences, in dataset order (the schedule runs each under every
     /// setting).
     pub sequences: Vec<PlannedSequence>,
+    /// The sequences chosen when not the whole dataset (`--tasks`, `--sequences`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub subset: Option<Subset>,
     /// `(i, n)` when this run is shard i of n.
     pub shard: Option<(usize, usize)>,
     /// Rules of the policy's answers (miss rule, latency mode, budget).
     #[serde(default)]
     pub io: PolicyIoRules,
+}
+
+/// A run of part of its dataset: the selection, and how many sequences the whole dataset
+/// has (so a table can say "2 of 12 sequences").
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Subset {
+    /// Tasks and sequences chosen.
+    #[serde(flatten)]
+    pub selection: crate::motion::SequenceSelection,
+    /// Sequences of the whole dataset.
+    pub dataset_sequences: usize,
+}
+
+impl Subset {
+    /// "2 of 12 sequences (--tasks push_chair)".
+    pub fn describe(&self, planned: usize) -> String {
+        format!(
+            "{planned} of the dataset's {} sequences ({})",
+            self.dataset_sequences,
+            self.selection.flags()
+        )
+    }
 }
 
 impl RunHeader {
@@ -133,7 +158,12 @@ impl RunHeader {
         check("keypoints", self.keypoints == other.keypoints);
         check("termination", self.termination == other.termination);
         check("settings", self.settings == other.settings);
+        check(
+            "profile_mismatch_ok",
+            self.profile_mismatch_ok == other.profile_mismatch_ok,
+        );
         check("sequences", self.sequences == other.sequences);
+        check("subset", self.subset == other.subset);
         check("shard", self.shard == other.shard);
         check("io", self.io == other.io);
         d

@@ -8,6 +8,8 @@
 //! <run>/episodes.jsonl  EpisodeRecord per line, streamed as episodes finish
 //! <run>/summary.json    Summary: the scores computed from the records, and coverage
 //! <run>/tables.md       the paper's tables for people
+//! <run>/episodes.csv    EpisodeRow per episode: survival, mean and RMS keypoint error,
+//!                       score, termination (for spreadsheets)
 //! <run>/traces/         rollout traces (`eval --trace`)
 //! ```
 //!
@@ -22,18 +24,20 @@
 
 mod coverage;
 pub mod crosscheck;
+mod episode_table;
 mod episodes;
 mod header;
 mod record;
 mod summary;
 
 pub use coverage::{CellCoverage, Coverage};
+pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_CSV_FILE};
 pub use episodes::{write_record, EpisodeLog};
-pub use header::{read_header, write_header, PlannedSequence, RunHeader};
+pub use header::{read_header, write_header, PlannedSequence, RunHeader, Subset};
 pub use record::EpisodeRecord;
 pub use summary::{
-    read_summary, sort_records, summarize, write_results, PolicyIoReport, SettingResults,
-    SettingSummary, Summary,
+    fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,
+    SettingResults, SettingSummary, Summary,
 };
 
 use std::path::PathBuf;

@@ -1,10 +1,14 @@
-//! `summary.json` and `tables.md`: the scores of a run's records, written the same way by
+//! `summary.json`, `tables.md` and `episodes.csv`: the scores of a run's records, written the same way by
 //! `eval`, `merge` and a sweep's collect, so a merged run is written exactly as a single
 //! one.
 
+use super::episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_CSV_FILE};
 use super::header::parse_versioned;
 use super::{Coverage, EpisodeRecord, ResultsError, RunHeader, SUMMARY_FILE, TABLES_FILE};
-use crate::metrics::{aggregate, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary};
+use crate::metrics::{
+    aggregate, stratified_mean_ci, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary,
+    BOOTSTRAP_RESAMPLES,
+};
 use crate::policy::TransportStats;
 use crate::report::{diagnostics_table, task_fats_table};
 use crate::runner::LatencySummary;
@@ -62,6 +66,9 @@ pub struct SettingSummary {
     pub tasks: Vec<TaskSummary>,
     /// Averaged over tasks.
     pub average: Diagnostics,
+    /// FATS's bootstrap 95 % interval (episodes resampled within tasks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fats_ci95: Option<[f64; 2]>,
 }
 
 /// `summary.json`.
@@ -118,7 +125,29 @@ pub fn summarize(
         .collect()
 }
 
-/// Scores the records, writes `summary.json` and `tables.md`, returns the tables. A run
+/// Per setting, FATS's bootstrap 95 % interval: episode scores resampled within each task
+/// ([`BOOTSTRAP_RESAMPLES`] resamples, a fixed seed, so a run's interval is reproducible).
+pub fn fats_intervals(rows: &[EpisodeRow]) -> BTreeMap<String, [f64; 2]> {
+    let mut by_setting: BTreeMap<&str, BTreeMap<&str, Vec<f64>>> = BTreeMap::new();
+    for r in rows {
+        by_setting
+            .entry(&r.setting)
+            .or_default()
+            .entry(&r.task)
+            .or_default()
+            .push(r.score);
+    }
+    by_setting
+        .into_iter()
+        .map(|(setting, tasks)| {
+            let groups: Vec<Vec<f64>> = tasks.into_values().collect();
+            let ci = stratified_mean_ci(&groups, BOOTSTRAP_RESAMPLES, 0);
+            (setting.to_string(), ci.ci95)
+        })
+        .collect()
+}
+
+/// Scores the records, writes `summary.json`, `tables.md` and `episodes.csv`, returns the tables. A run
 /// that does not hold its whole plan says so at the top of the tables, cell by cell.
 pub fn write_results(
     out: &Path,
@@ -128,9 +157,18 @@ pub fn write_results(
     io: Option<PolicyIoReport>,
 ) -> Result<String, ResultsError> {
     let results = summarize(records, &thresholds);
+    let rows = episode_rows(records, &thresholds);
+    let intervals = fats_intervals(&rows);
     let coverage = Coverage::of(header, records);
     let shard_note = match header.shard {
         Some((i, n)) => format!("\n\n**Shard {i}/{n}: partial results; `thorarena merge` the shards for the benchmark.**"),
+        None => String::new(),
+    };
+    let subset_note = match &header.subset {
+        Some(subset) => format!(
+            "\n\n**Part of the dataset: {}; not the benchmark's full coverage.**",
+            subset.describe(header.sequences.len())
+        ),
         None => String::new(),
     };
     let partial_note = match coverage.sentence() {
@@ -138,7 +176,7 @@ pub fn write_results(
         None => String::new(),
     };
     let title = format!(
-        "ThorArena {} — policy `{}`, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{shard_note}{partial_note}",
+        "ThorArena {} — policy `{}`, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{subset_note}{shard_note}{partial_note}",
         header.version,
         header.policy,
         header.profile,
@@ -151,12 +189,14 @@ pub fn write_results(
     );
     let mut tables = format!(
         "{title}\n\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
-        task_fats_table(&results),
+        task_fats_table(&results, &intervals),
         diagnostics_table(&results)
     );
     if let Some(io) = &io {
         tables += &format!("\n{}", io.markdown(header));
     }
+    let csv_path = out.join(EPISODES_CSV_FILE);
+    write_episodes_csv(&csv_path, &rows)?;
     let tables_path = out.join(TABLES_FILE);
     std::fs::write(&tables_path, &tables).map_err(ResultsError::io(&tables_path))?;
     let summary = Summary {
@@ -166,7 +206,17 @@ pub fn write_results(
         thresholds,
         settings: results
             .into_iter()
-            .map(|(k, (tasks, average))| (k, SettingSummary { tasks, average }))
+            .map(|(k, (tasks, average))| {
+                let fats_ci95 = intervals.get(&k).copied();
+                (
+                    k,
+                    SettingSummary {
+                        tasks,
+                        average,
+                        fats_ci95,
+                    },
+                )
+            })
             .collect(),
         complete: coverage.is_complete(),
         coverage,

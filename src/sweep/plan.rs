@@ -4,6 +4,7 @@
 
 use super::spec::{resolve, SweepSpec};
 use super::SweepError;
+use crate::motion::SequenceSelection;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -48,6 +49,9 @@ pub struct Cell {
     pub dataset: PathBuf,
     /// Its content hash at planning time (a task refuses a changed dataset).
     pub dataset_sha256: String,
+    /// The sequences evaluated (`eval --tasks`, `--sequences`; empty: all).
+    #[serde(default, skip_serializing_if = "SequenceSelection::is_all")]
+    pub selection: SequenceSelection,
     /// Force setting as `eval --settings` takes it.
     pub setting: String,
     /// Latency rule.
@@ -159,8 +163,8 @@ pub struct DatasetInfo {
     pub dir: PathBuf,
     /// Content hash.
     pub sha256: String,
-    /// Each sequence's duration, s, in dataset order.
-    pub durations_s: Vec<f64>,
+    /// Each sequence's `(task, sequence id, duration in s)`, in dataset order.
+    pub sequences: Vec<(String, String, f64)>,
 }
 
 impl Plan {
@@ -176,15 +180,27 @@ impl Plan {
             path: spec_path.to_path_buf(),
             message,
         };
+        let selection = SequenceSelection {
+            tasks: spec.tasks.clone(),
+            sequences: spec.sequences.clone(),
+        };
+        // Each dataset's durations of the selected sequences.
+        let mut durations: Vec<Vec<f64>> = Vec::new();
+        for (spelled, ds) in spec.datasets.iter().zip(datasets) {
+            let picked = selection
+                .pick(ds.sequences.iter().collect(), |q| (&q.0, &q.1))
+                .map_err(|e| invalid(format!("`tasks`/`sequences` in dataset `{spelled}`: {e}")))?;
+            durations.push(picked.iter().map(|q| q.2).collect());
+        }
         // Before anything is allocated per task: a shard without an episode is no work,
         // and `shards = 10⁹` would exhaust memory planning empty tasks.
-        for (spelled, ds) in spec.datasets.iter().zip(datasets) {
-            if spec.shards > ds.durations_s.len() {
+        for (spelled, d) in spec.datasets.iter().zip(&durations) {
+            if spec.shards > d.len() {
                 return Err(invalid(format!(
                     "`shards` = {} but dataset `{spelled}` has {} episodes per cell: at most {} shards",
                     spec.shards,
-                    ds.durations_s.len(),
-                    ds.durations_s.len()
+                    d.len(),
+                    d.len()
                 )));
             }
         }
@@ -218,7 +234,7 @@ impl Plan {
                     mjcf: e.mjcf.as_deref().map(|m| resolve(&workdir, m)),
                     physics_dt_s: e.physics_dt_s,
                 };
-                for ds in datasets {
+                for (ds, durations_s) in datasets.iter().zip(&durations) {
                     for l in spec.latency_rules() {
                         let latency = LatencyRule {
                             name: l.label(),
@@ -232,12 +248,13 @@ impl Plan {
                                 policy: policy.clone(),
                                 dataset: ds.dir.clone(),
                                 dataset_sha256: ds.sha256.clone(),
+                                selection: selection.clone(),
                                 setting: setting.clone(),
                                 latency: latency.clone(),
                                 engine: engine.clone(),
                                 shards: spec.shards,
-                                episodes: ds.durations_s.len(),
-                                simulated_s: ds.durations_s.iter().sum(),
+                                episodes: durations_s.len(),
+                                simulated_s: durations_s.iter().sum(),
                             };
                             for i in 0..spec.shards {
                                 let shard = (i, spec.shards);
@@ -345,6 +362,12 @@ pub(super) fn eval_args(robot: &str, cell: &Cell, shard: (usize, usize)) -> Vec<
     opt("profile", &cell.policy.profile);
     opt("keypoints", &cell.policy.keypoints);
     opt("settings", &cell.setting);
+    if !cell.selection.tasks.is_empty() {
+        opt("tasks", &cell.selection.tasks.join(","));
+    }
+    if !cell.selection.sequences.is_empty() {
+        opt("sequences", &cell.selection.sequences.join(","));
+    }
     opt("budget", &cell.latency.budget);
     opt("latency-mode", &cell.latency.mode);
     opt("miss-rule", &cell.latency.miss_rule);

@@ -15,6 +15,13 @@ pub struct SweepSpec {
     /// Force settings, as `eval --settings` takes them: `force`, `no-force`, a replay
     /// coefficient (`0.5`), or `push:<N>`. Each is its own cell.
     pub settings: Vec<String>,
+    /// Only these tasks of each dataset (`eval --tasks`; default: every task).
+    #[serde(default)]
+    pub tasks: Vec<String>,
+    /// Only these sequences, `SEQUENCE_ID` or `TASK/SEQUENCE_ID` (`eval --sequences`;
+    /// default: every sequence).
+    #[serde(default)]
+    pub sequences: Vec<String>,
     /// Shards per cell (tasks per cell).
     #[serde(default = "one")]
     pub shards: usize,

@@ -24,7 +24,10 @@ pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
         datasets.push(DatasetInfo {
             dir,
             sha256: ds.content_hash(),
-            durations_s: sequences.iter().map(|s| s.duration_s()).collect(),
+            sequences: sequences
+                .iter()
+                .map(|s| (s.task.clone(), s.sequence_id.clone(), s.duration_s()))
+                .collect(),
         });
     }
     let plan = Plan::expand(&spec, &spec_path, &datasets)?;

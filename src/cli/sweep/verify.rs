@@ -77,6 +77,10 @@ fn header_problem(plan: &Plan, task: &Task, header: &RunHeader) -> anyhow::Resul
         differs("dataset", &header.dataset, &dataset)
     } else if header.dataset_sha256 != cell.dataset_sha256 {
         differs("dataset hash", &header.dataset_sha256, &cell.dataset_sha256)
+    } else if header.subset.as_ref().map(|s| &s.selection)
+        != (!cell.selection.is_all()).then_some(&cell.selection)
+    {
+        differs("tasks/sequences", &header.subset, &cell.selection)
     } else if header.sequences.len() != cell.episodes {
         differs("sequence count", &header.sequences.len(), &cell.episodes)
     } else if setting

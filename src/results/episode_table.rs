@@ -1,0 +1,97 @@
+//! `episodes.csv`: one row per episode with the numbers a reader wants per sequence
+//! (survival, mean and RMS keypoint error, score, why it ended), so per-sequence results
+//! can be read off a spreadsheet instead of the per-step series of `episodes.jsonl`.
+
+use super::{EpisodeRecord, ResultsError};
+use crate::episode::Termination;
+use crate::metrics::{score_episode, RegimeThresholds};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// `episodes.csv`.
+pub const EPISODES_CSV_FILE: &str = "episodes.csv";
+
+/// One row of `episodes.csv`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EpisodeRow {
+    /// Task.
+    pub task: String,
+    /// Sequence id.
+    pub sequence_id: String,
+    /// Setting name.
+    pub setting: String,
+    /// Survival `s_i = min(T_i / T_ref, 1)`.
+    pub survival: f64,
+    /// Mean over the episode's control steps of the keypoint error, mm.
+    pub kp_error_mean_mm: f64,
+    /// Root mean square over the episode's control steps of the keypoint error, mm.
+    pub kp_error_rms_mm: f64,
+    /// Episode score `S_i`, 0–100 (FATS is its mean over a task, then over tasks).
+    pub score: f64,
+    /// Why the episode ended early; empty when it ran to the end of its reference.
+    pub termination: String,
+}
+
+/// The rows of `records` (in their order), scored with each task's regime thresholds (a
+/// task without thresholds has every step in the low-force regime).
+pub fn episode_rows(
+    records: &[EpisodeRecord],
+    thresholds: &BTreeMap<String, RegimeThresholds>,
+) -> Vec<EpisodeRow> {
+    records
+        .iter()
+        .map(|r| {
+            let th = thresholds
+                .get(&r.task)
+                .copied()
+                .unwrap_or(RegimeThresholds {
+                    p33_n: 0.0,
+                    p66_n: 0.0,
+                });
+            let score = score_episode(&r.series, &th);
+            let e = &r.series.kp_err_m;
+            let n = e.len() as f64;
+            let (mean, rms) = if e.is_empty() {
+                (f64::NAN, f64::NAN)
+            } else {
+                (
+                    1e3 * e.iter().sum::<f64>() / n,
+                    1e3 * (e.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
+                )
+            };
+            EpisodeRow {
+                task: r.task.clone(),
+                sequence_id: r.sequence_id.clone(),
+                setting: r.setting.clone(),
+                survival: score.survival,
+                kp_error_mean_mm: mean,
+                kp_error_rms_mm: rms,
+                score: score.score,
+                termination: r.termination.map(termination_name).unwrap_or_default(),
+            }
+        })
+        .collect()
+}
+
+/// A termination as `episodes.jsonl` spells it (`torso_height`, `policy_failed`, …).
+fn termination_name(t: Termination) -> String {
+    serde_json::to_value(t)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_string))
+        .unwrap_or_default()
+}
+
+/// Writes `rows` to `path` as CSV with a header line.
+pub fn write_episodes_csv(path: &Path, rows: &[EpisodeRow]) -> Result<(), ResultsError> {
+    let failed = |source: std::io::Error| ResultsError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut w = csv::Writer::from_path(path).map_err(|e| failed(std::io::Error::other(e)))?;
+    for row in rows {
+        w.serialize(row)
+            .map_err(|e| failed(std::io::Error::other(e)))?;
+    }
+    w.flush().map_err(failed)
+}
