@@ -14,7 +14,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
 
-/// When an episode counts as failed (the same rule for every policy; BRIEF.md).
+/// When an episode counts as failed (the same rule for every policy; README, "What the scores mean").
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TerminationRule {

@@ -171,3 +171,31 @@ fn eval_writes_a_rollout_trace_for_a_named_sequence() {
     ]);
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--trace"));
 }
+
+/// A misspelt or incomplete policy or profile gets the message a user needs: the file a
+/// network family wants, the nearest name, the profiles there are.
+#[test]
+fn misspelt_policies_and_profiles_get_the_nearest_name_and_what_exists() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never");
+    for (args, says) in [
+        (
+            vec!["--policy", "twist2"],
+            "needs the network's file: `twist2:FILE.onnx`",
+        ),
+        (vec!["--policy", "beyondmimic:"], "`beyondmimic:FILE.onnx`"),
+        (vec!["--policy", "balanc"], "did you mean `balance`?"),
+        (vec!["--policy", "ipc"], "ipc:NAME"),
+        (
+            vec!["--policy", "hold", "--profile", "twist"],
+            "did you mean `twist2`?) (bundled: beyondmimic, default, gmt, holosoma-wbt, twist2",
+        ),
+    ] {
+        let mut a = vec!["eval", "--out", out.to_str().unwrap()];
+        a.extend(&args);
+        let o = thorarena(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(says), "{args:?}: {err}");
+    }
+    assert!(!out.exists(), "a refused run writes nothing");
+}

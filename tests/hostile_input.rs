@@ -1,4 +1,4 @@
-//! Bad and hostile input (issue 14, first part): names that would become paths outside the
+//! Bad and hostile input: names that would become paths outside the
 //! output directory, manifests that lie about robot or version or are not grouped, runs
 //! that would be silently replaced or double-counted, imports that would half-write.
 //! Each is a clear error (or a correct result), never a panic, never a file outside the

@@ -1,4 +1,4 @@
-//! Networks that lie (issue 22): a BeyondMimic policy whose `actions` output has the wrong
+//! Networks that lie: a BeyondMimic policy whose `actions` output has the wrong
 //! width, whose joint order names a joint twice, or whose action scale is zero is refused
 //! at load, naming the file — not scored as a network answering zeros; an onnx-motion file
 //! declaring a huge observation input is refused before any allocation, and one whose

@@ -3,7 +3,7 @@
 //! the robot model's kinematics puts them (joints and bodies matched by name, the same
 //! frames); the published TWIST2 policy walks the three released walks in it at TWIST2's
 //! own 1 ms step as in TWIST2's MuJoCo harness — survival 1.0 and a TWIST9 keypoint error
-//! within 5 % of 28.0 / 31.1 / 33.5 mm (FACTS.md §8); and an MJCF that is not the robot is
+//! within 5 % of 28.0 / 31.1 / 33.5 mm (SOURCES.md, TWIST2 in MuJoCo); and an MJCF that is not the robot is
 //! a clear error. In a build without the feature these tests are counted as skipped (and
 //! fail in CI, which builds it).
 

@@ -1,6 +1,6 @@
 //! The physics backends against analytic results and against themselves: momentum under a
 //! known force, an analytic PD step response, determinism, standing, kinematic
-//! consistency, and one test per rapier multibody pitfall of FACTS.md §5.
+//! consistency, and one test per rapier multibody pitfall of ARCHITECTURE.md, rapier pitfalls.
 //!
 //! Every test goes through the `Physics` trait via `backend`; the same suite
 //! (`physics_conformance/suite.rs`) runs once per backend: rapier, and MuJoCo on the MJCF

@@ -1,4 +1,4 @@
-//! Dynamics profiles: the shipped ones load with the numbers of FACTS.md §2–3, actions map
+//! Dynamics profiles: the shipped ones load with the numbers of SOURCES.md, Gains and Policies, actions map
 //! to targets as clip → scale → offset, and bad profiles are clear errors naming the field.
 
 use thorarena::profile::{bundled_profile_path, joint_group, load_profile};

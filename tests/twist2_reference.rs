@@ -1,8 +1,8 @@
 //! The published TWIST2 policy (`../shared/reference/twist2/twist2_1017_25k.onnx`) walks
 //! the three released TWIST2 walks in ThorArena as it does in MuJoCo, TWIST2's own
 //! setting: survival 1.0 on each walk without force, and a TWIST9 keypoint error within
-//! 10 % of the MuJoCo figure of FACTS.md §8 (28.0 / 31.1 / 33.5 mm). A constant 30 N push
-//! on both hands makes it fall, as in MuJoCo (FACTS.md §8: survival 0.30 at 30 N). The
+//! 10 % of the MuJoCo figure of SOURCES.md, TWIST2 in MuJoCo (28.0 / 31.1 / 33.5 mm). A constant 30 N push
+//! on both hands makes it fall, as in MuJoCo (SOURCES.md, TWIST2 in MuJoCo: survival 0.30 at 30 N). The
 //! Python adapter builds the same observation (1e-5) and, with ONNX Runtime, the same
 //! action (1e-4) as the Rust policy with tract, step by step over an episode. Skipped,
 //! saying so, when `../shared/reference` (or, for the last, Python's onnxruntime) is absent.

@@ -54,7 +54,7 @@ pub struct RunArgs {
     pub profile_mismatch_ok: bool,
     /// Settings, comma separated: `force`, `no-force`, a replay coefficient, or
     /// `push:<N>` (no replay; a constant world +x push of N newtons on each hand, ramped
-    /// in over 1 s — the sensitivity probe of FACTS.md §8), or `push:<N>@<deg>` with the
+    /// in over 1 s — the sensitivity probe of SOURCES.md, TWIST2 in MuJoCo), or `push:<N>@<deg>` with the
     /// push turned by deg from the reference's initial heading (`push:20@90`: from the
     /// robot's right).
     /// [default: force,no-force; no-force alone on a dataset without force logs].
@@ -484,10 +484,15 @@ pub(super) fn check_out(out: &std::path::Path, args: &RunArgs) -> anyhow::Result
             out.display()
         );
     }
+    let existed = out.exists();
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let probe = out.join(format!(".write-test-{}", std::process::id()));
     std::fs::write(&probe, b"").with_context(|| format!("{} is not writable", out.display()))?;
     let _ = std::fs::remove_file(probe);
+    // The run makes it again when it starts: a policy that fails to load leaves nothing.
+    if !existed {
+        let _ = std::fs::remove_dir(out);
+    }
     Ok(())
 }
 
@@ -690,6 +695,13 @@ pub(super) fn evaluate(
         "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md, episodes.csv}}",
         out.display()
     );
+    if !args.trace.is_empty() {
+        eprintln!(
+            "traces of {} in {}/<task>-<sequence>-<setting>.json: look at one with `thorarena view FILE`",
+            args.trace.join(", "),
+            traces_dir.display()
+        );
+    }
     // A run whose policy failed is not a result, even when every episode has a record:
     // the records of episodes it cut short say `policy_failed`, and the exit status must
     // say it too (sweeps and scripts go by it).

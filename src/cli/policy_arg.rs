@@ -157,6 +157,9 @@ pub fn make_policy_vetted(
                 .context("the robot lacks the leg joints `balance` needs")?,
         ),
         other => {
+            if other.ends_with(':') {
+                bail!("{}", unknown_policy(other));
+            }
             if let Some(path) = other.strip_prefix("twist2:") {
                 return Ok(Box::new(Twist2Policy::load(
                     std::path::Path::new(path),

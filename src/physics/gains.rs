@@ -6,7 +6,7 @@ use crate::robot::RobotModel;
 /// Gains derived from each joint's armature, as BeyondMimic/mjlab do for the G1:
 /// `kp = a·ω²`, `kd = 2·ζ·a·ω`, with torque limits from the model.
 ///
-/// With `natural_freq_hz = 10` and `damping_ratio = 2` this gives the table of FACTS.md §2
+/// With `natural_freq_hz = 10` and `damping_ratio = 2` this gives the table of SOURCES.md, Gains
 /// (e.g. hip pitch 40.18 / 2.558).
 pub fn armature_derived_gains(
     model: &RobotModel,
@@ -29,7 +29,7 @@ pub fn armature_derived_gains(
     }
 }
 
-/// The legged-gym gains of GMT, TWIST and TWIST2 training (FACTS.md §2): legs
+/// The legged-gym gains of GMT, TWIST and TWIST2 training (SOURCES.md, Gains): legs
 /// kp 100/100/100/150/40/40 and kd 2/2/2/4/2/2 (hip pitch, roll, yaw, knee, ankle pitch,
 /// roll), waist 150/4, arms 40/5. Joints are matched by name suffix, so any G1 variant works;
 /// a joint matching none of them keeps kp = kd = 0.

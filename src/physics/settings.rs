@@ -29,7 +29,7 @@ pub enum ContactMode {
 /// Engine-independent physics settings.
 ///
 /// The defaults are those with which the published TWIST2 policy walked in rapier as well
-/// as in MuJoCo (FACTS.md §9): 5 ms, one solver iteration, hybrid PD, sole contacts.
+/// as in MuJoCo (SOURCES.md, Physics settings): 5 ms, one solver iteration, hybrid PD, sole contacts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PhysicsSettings {

@@ -2,7 +2,7 @@
 //! tracking policy, in process: its 1432-dim observation built from the benchmark signals
 //! and the ONNX network run with tract.
 //!
-//! The observation is the one TWIST2's student policy was trained with (FACTS.md §3, read
+//! The observation is the one TWIST2's student policy was trained with (SOURCES.md, Policies, read
 //! from `deploy_real/server_low_level_g1_sim.py`, `deploy_real/server_motion_lib.py` and
 //! `g1_mimic_distill_config.py` of that repository):
 //!

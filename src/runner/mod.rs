@@ -35,7 +35,7 @@ pub struct Setting {
     /// Replay coefficient.
     pub coefficient: f64,
     /// A constant world-frame +x push on each hand, N, ramped in over
-    /// [`crate::replay::PUSH_RAMP_S`] (a sensitivity probe, as in FACTS.md §8; recorded
+    /// [`crate::replay::PUSH_RAMP_S`] (a sensitivity probe, as in SOURCES.md, TWIST2 in MuJoCo; recorded
     /// forces are not replayed with it).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub push_n: f64,

@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::process::Command;
 
-/// MuJoCo's mean TWIST9 keypoint error per walk in TWIST2's harness, mm (FACTS.md §8).
+/// MuJoCo's mean TWIST9 keypoint error per walk in TWIST2's harness, mm (SOURCES.md, TWIST2 in MuJoCo).
 pub const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
     ("0807_yanjie_walk_001", 28.0),
     ("0807_yanjie_walk_002", 31.1),

@@ -232,7 +232,12 @@ pub(super) fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String
         let row = vec![
             cell.index.to_string(),
             cell.policy.name.clone(),
-            cell.dataset.display().to_string(),
+            // As the spec names it: relative to the spec's directory when inside it.
+            cell.dataset
+                .strip_prefix(&plan.workdir)
+                .unwrap_or(&cell.dataset)
+                .display()
+                .to_string(),
             cell.setting.clone(),
             num(setting.as_ref().map(|s| s.coefficient)),
             num(setting.as_ref().map(|s| s.push_n)),

@@ -1,7 +1,7 @@
 //! Force profile building blocks: raised-cosine envelopes, short pulses, slow random
 //! fluctuations and sensor noise, all drawn from the sequence's seeded generator.
 //!
-//! Magnitudes are FACTS §4's task forces scaled down per FACTS §8: a policy trained
+//! Magnitudes are SOURCES.md, Task forces's task forces scaled down per SOURCES.md, push probe: a policy trained
 //! without forces survives a steady 10 N/hand push only 75 % of the time (20 N: 41 %), so
 //! sustained levels stay near 5–22 N per hand and the 30–60 N chair break-away peaks last
 //! well under a second.

@@ -1,6 +1,6 @@
-//! Synthetic motion–force dataset: the six tasks of the paper (FACTS §1) generated
+//! Synthetic motion–force dataset: the six tasks of the ThorArena paper (SOURCES.md) generated
 //! kinematically for our robot, with hand forces calibrated so that the benchmark
-//! discriminates between policies (FACTS §8).
+//! discriminates between policies (SOURCES.md, push probe).
 //!
 //! Each sequence is planned in the world (pelvis, feet, waist and hand targets, world hand
 //! forces), solved to joint angles by inverse kinematics, and its forces converted to the

@@ -62,7 +62,7 @@ pub fn hand_rest(sk: &Skeleton, side: usize) -> Vector3<f64> {
 
 /// `clean_table`: standing, wiping with one or both hands on a table in front; bouts of
 /// circles or back-and-forth strokes separated by short pauses with the hand lifted.
-/// Forces (FACTS §4 wiping 5–30 N, kept light per §8): the table pushes the hand up with
+/// Forces (SOURCES.md, Task forces wiping 5–30 N, kept light per the push probe): the table pushes the hand up with
 /// 5–12 N and friction of 3–8 N opposes the stroke.
 pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64) -> Plan {
     let n = n_frames(dur, fps);
@@ -159,7 +159,7 @@ pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64) -> P
 
 /// `liftup_water` (`up = true`) and `liftdown_water`: squat and bend to a container on a
 /// low surface, grasp it with both hands and stand up holding it — or the reverse. Forces
-/// (FACTS §4: 20–40 N per hand for a 4–5 L container, scaled down per §8 to 12–22 N): the
+/// (SOURCES.md, Task forces: 20–40 N per hand for a 4–5 L container, scaled down per the push probe to 12–22 N): the
 /// container's weight pulls each hand down while held, zero before grasp and after release.
 pub fn lift(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, up: bool) -> Plan {
     let n = n_frames(dur, fps);

@@ -84,8 +84,8 @@ pub fn walking(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, task: Wa
         off: g.end_s() + rng.random_range(0.2..0.6),
         fall: rng.random_range(0.2..0.6),
     };
-    // Chair: FACTS §4 15–50 N sustained, 50–100 N break-away, scaled per §8 to 8–18 N
-    // and 30–60 N peaks of 0.2–0.5 s. Carry: §4 10–50 N, here 5–10 N vertical plus a
+    // Chair: SOURCES.md, Task forces 15–50 N sustained, 50–100 N break-away, scaled per the push probe to 8–18 N
+    // and 30–60 N peaks of 0.2–0.5 s. Carry: 10–50 N (SOURCES.md, Task forces), here 5–10 N vertical plus a
     // partner's fluctuating ±10 N along the walk.
     let sustained = [0, 1].map(|_| level(rng, 8.0..18.0));
     let idle = level(rng, 1.0..4.0);

@@ -27,7 +27,7 @@ pub(super) struct World {
 
 /// Builds a world with the robot in `state`.
 ///
-/// Two of rapier 0.36's multibody pitfalls are handled here (FACTS.md §5):
+/// Two of rapier 0.36's multibody pitfalls are handled here (ARCHITECTURE.md, rapier pitfalls):
 /// - a floating root is integrated as if its centre of mass were at its frame origin, so
 ///   the root rigid body's frame is moved to the centre of mass and the root's child
 ///   joints are shifted by the same offset; readouts shift back;

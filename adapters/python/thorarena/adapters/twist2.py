@@ -10,8 +10,8 @@ and their order were read in forks carrying the same files: meetsitaram/TWIST2 a
 10267c3a2f46 (`server_low_level_g1_sim.py`: proprio, ankle zeroing, history of 10 x 127)
 and beac122c8d32 (`g1_mimic_future.py`: the student's mimic terms and proprio). The training
 timing (future frame at t, history refilled on the first two steps after a reset) was not
-re-read there; it comes from the prototype harness that walked the policy in MuJoCo
-(`../shared/design/prototype/twist2_mujoco_reference.py`, FACTS.md §8), which this module
+re-read there; it comes from our harness that walked the policy in MuJoCo
+(SOURCES.md, "TWIST2 in MuJoCo"), which this module
 matches number for number.
 
 Per environment, with R a frame's root rotation (quaternions (w, x, y, z)):
