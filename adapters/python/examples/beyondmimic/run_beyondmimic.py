@@ -16,6 +16,7 @@ import sys
 
 import numpy as np
 
+from thorarena import ThorArenaError
 from thorarena.adapters import BeyondMimicAdapter
 
 
@@ -61,4 +62,7 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except ThorArenaError as e:  # no session, refused, timed out: the message says why
+        sys.exit(f"error: {e}")

@@ -17,6 +17,7 @@ import sys
 import time
 
 import thorarena as ta
+from thorarena import ThorArenaError
 
 
 def main() -> int:
@@ -58,4 +59,7 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except ThorArenaError as e:  # no session, refused, timed out: the message says why
+        sys.exit(f"error: {e}")

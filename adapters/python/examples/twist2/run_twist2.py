@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from thorarena import ThorArenaError
 from thorarena.adapters import OnnxPolicy, Twist2Adapter
 
 
@@ -40,4 +41,7 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except ThorArenaError as e:  # no session, refused, timed out: the message says why
+        sys.exit(f"error: {e}")
