@@ -345,4 +345,21 @@ fn a_dataset_without_force_logs_runs_no_force_unless_asked_and_says_so() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (o, _) = eval("push", &["--settings", "push:20"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A sweep refuses the replay setting when it plans, not in every task.
+    let spec = dir.path().join("spec.toml");
+    std::fs::write(
+        &spec,
+        format!("datasets = [\"{ds}\"]\nsettings = [\"no-force\", \"0.5\"]\n[[policy]]\npolicy = \"hold\"\n"),
+    )
+    .unwrap();
+    let sweep = dir.path().join("sweep");
+    let o = thorarena(&[
+        "sweep",
+        "plan",
+        spec.to_str().unwrap(),
+        "--out",
+        sweep.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("has force logs"), "{e}");
 }

@@ -29,8 +29,8 @@ mod text;
 
 pub use array::compact_ranges;
 pub use plan::{
-    diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, Task, PLAN_FILE,
-    PLAN_FORMAT, SESSION_POLICY,
+    diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
+    PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
 };
 pub use slurm::{sbatch_script, shell_quote, SbatchRequest};
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};

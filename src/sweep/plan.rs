@@ -163,8 +163,22 @@ pub struct DatasetInfo {
     pub dir: PathBuf,
     /// Content hash.
     pub sha256: String,
-    /// Each sequence's `(task, sequence id, duration in s)`, in dataset order.
-    pub sequences: Vec<(String, String, f64)>,
+    /// Its sequences, in dataset order.
+    pub sequences: Vec<SequenceInfo>,
+}
+
+/// What planning needs to know of one sequence.
+#[derive(Debug, Clone)]
+pub struct SequenceInfo {
+    /// Task.
+    pub task: String,
+    /// Sequence id.
+    pub sequence_id: String,
+    /// Duration, s.
+    pub duration_s: f64,
+    /// Whether it has force logs (a replay setting on a dataset with none is refused, as
+    /// `eval` refuses it).
+    pub forces_recorded: bool,
 }
 
 impl Plan {
@@ -188,9 +202,19 @@ impl Plan {
         let mut durations: Vec<Vec<f64>> = Vec::new();
         for (spelled, ds) in spec.datasets.iter().zip(datasets) {
             let picked = selection
-                .pick(ds.sequences.iter().collect(), |q| (&q.0, &q.1))
+                .pick(ds.sequences.iter().collect(), |q| (&q.task, &q.sequence_id))
                 .map_err(|e| invalid(format!("`tasks`/`sequences` in dataset `{spelled}`: {e}")))?;
-            durations.push(picked.iter().map(|q| q.2).collect());
+            if picked.iter().all(|q| !q.forces_recorded) {
+                let replaying = spec.settings.iter().find(|s| {
+                    crate::runner::Setting::parse(s).is_some_and(|s| s.coefficient != 0.0)
+                });
+                if let Some(setting) = replaying {
+                    return Err(invalid(format!(
+                        "setting `{setting}` replays recorded hand forces, but no sequence of dataset `{spelled}` has force logs (imported without --forces): it would run as no-force under another name; use no-force or push:<N>"
+                    )));
+                }
+            }
+            durations.push(picked.iter().map(|q| q.duration_s).collect());
         }
         // Before anything is allocated per task: a shard without an episode is no work,
         // and `shards = 10⁹` would exhaust memory planning empty tasks.

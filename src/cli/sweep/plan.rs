@@ -26,7 +26,12 @@ pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
             sha256: ds.content_hash(),
             sequences: sequences
                 .iter()
-                .map(|s| (s.task.clone(), s.sequence_id.clone(), s.duration_s()))
+                .map(|s| thorarena::sweep::SequenceInfo {
+                    task: s.task.clone(),
+                    sequence_id: s.sequence_id.clone(),
+                    duration_s: s.duration_s(),
+                    forces_recorded: s.forces_recorded,
+                })
                 .collect(),
         });
     }
