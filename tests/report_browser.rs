@@ -229,7 +229,7 @@ fn check_scatter_markers(page: &str, facts: &Value, settings: &[&str], context: 
                     .as_str()
                     .is_some_and(|l| l.ends_with(&format!(" — {setting}")))
             })
-            .map(|d| d["point_style"].to_string())
+            .map(|d| d["point_style"].as_str().unwrap_or("?").to_string())
             .collect();
         assert_eq!(
             styles.len(),
@@ -243,7 +243,7 @@ fn check_scatter_markers(page: &str, facts: &Value, settings: &[&str], context: 
                 .any(|e| e["text"].as_str().is_some_and(|t| t.contains(setting)
                     && !t.contains("balance")
                     && !t.contains("hold"))
-                    && e["point_style"].to_string() == style),
+                    && e["point_style"].as_str() == Some(style.as_str())),
             "{page}: no legend entry maps marker {style} to setting {setting}: {legend:?}"
         );
         markers.insert(style);
