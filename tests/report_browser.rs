@@ -5,9 +5,10 @@
 //! plot's canvas exists and holds paint and data, the tables have their rows, the viewer
 //! draws the robot (its pixels differ from the empty scene), and moving the timeline —
 //! or pressing Play — moves it. In the report and the sweep's report (two policies × two
-//! force coefficients), as Chart.js drew them: each policy has one colour in every chart of
+//! latency rules × two force coefficients), as Chart.js drew them: each policy has one colour in every chart of
 //! both pages, every chart's legend names each of its policies in that colour, the scatter's
-//! legend maps each setting to its marker, and the sweep's title names its axes.
+//! legend maps each setting to its marker, the sweep's curves map their latency rule to a
+//! line style in their legend, and the sweep's title names its axes.
 //! Screenshots of the last run stay in `<target>/browser-tests/` for CI artifacts.
 //!
 //! The pages use the front-end bundle compiled into the binary. Needs `chromium` (Debian's
@@ -112,13 +113,14 @@ fn make_runs(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
     (balance, hold, trace)
 }
 
-/// A four-cell sweep (balance and hold, without and with force) collected into its report.
+/// An eight-cell sweep (balance and hold, without and with force, in lock step and with a
+/// 5 ms budget under measured latency) collected into its report.
 fn make_sweep(dir: &Path) -> PathBuf {
     let spec = dir.join("sweep.toml");
     std::fs::write(
         &spec,
         format!(
-            "datasets = [\"{ROOT}/data/sample\"]\nsettings = [\"no-force\", \"force\"]\n[[policy]]\npolicy = \"hold\"\n[[policy]]\npolicy = \"balance\"\n"
+            "datasets = [\"{ROOT}/data/sample\"]\nsettings = [\"no-force\", \"force\"]\n[[policy]]\npolicy = \"hold\"\n[[policy]]\npolicy = \"balance\"\n[[latency]]\nname = \"lock-step\"\n[[latency]]\nname = \"5ms\"\nbudget = \"5ms\"\nmode = \"measured\"\n"
         ),
     )
     .unwrap();
@@ -397,17 +399,53 @@ fn report_and_viewer_render_in_headless_chromium() {
             "#{id} is blank; {context}"
         );
         assert_eq!(
-            s["points"][id], 4,
-            "two policies, no force and force; {context}"
+            s["points"][id], 8,
+            "two policies and two latency rules, no force and force; {context}"
         );
         let datasets = s["charts"][id]["datasets"]
             .as_array()
             .cloned()
             .unwrap_or_default();
-        assert_eq!(datasets.len(), 2, "one line per policy; {context}");
+        assert_eq!(
+            datasets.len(),
+            4,
+            "one line per policy and latency rule; {context}"
+        );
+        // The second axis is a line style, and the legend says which.
+        let legend = s["charts"][id]["legend"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        let mut dashes = std::collections::BTreeSet::new();
+        for rule in ["lock-step", "5ms"] {
+            let of_rule: std::collections::BTreeSet<String> = datasets
+                .iter()
+                .filter(|d| {
+                    d["label"]
+                        .as_str()
+                        .is_some_and(|l| l.ends_with(&format!(" · {rule}")))
+                })
+                .map(|d| d["border_dash"].to_string())
+                .collect();
+            assert_eq!(
+                of_rule.len(),
+                1,
+                "#{id} {rule}: dashes {of_rule:?}; {context}"
+            );
+            let dash = of_rule.into_iter().next().unwrap();
+            let dash_value: Value = serde_json::from_str(&dash).unwrap();
+            assert!(
+                legend
+                    .iter()
+                    .any(|e| e["text"] == rule && e["line_dash"] == dash_value),
+                "#{id}: no legend entry maps line style {dash} to {rule}: {legend:?}"
+            );
+            dashes.insert(dash);
+        }
+        assert_eq!(dashes.len(), 2, "#{id}: latency rules share a line style");
     }
     assert_eq!(
-        s["title"], "sweep: 2 policies × 2 force coefficients",
+        s["title"], "sweep: 2 policies × 2 latency rules × 2 force coefficients",
         "{context}"
     );
     assert!(shots.join("sweep-report.png").is_file());

@@ -20,6 +20,7 @@ import {
   Legend,
   Tooltip,
 } from "chart.js";
+import { drawPoint } from "chart.js/helpers";
 
 Chart.register(
   RadarController,
@@ -52,37 +53,50 @@ function withAlpha(hex, alpha) {
   return `rgba(${(n >> 16) & 255}, ${(n >> 8) & 255}, ${n & 255}, ${alpha})`;
 }
 
-// A line legend sample wide enough to show its dash (Chart.js's own "line" point style is
-// as short as a marker is wide).
-function lineSample(color, lineDash) {
+// Legend samples drawn by us, all as wide as a dash needs: Chart.js's own point styles in
+// a legend are as wide as its font is high, or stretched (circles into ellipses).
+const SAMPLE_W = 30;
+const SAMPLE_H = 14;
+function sample(e) {
   const c = document.createElement("canvas");
-  c.width = 30;
-  c.height = 12;
+  c.width = SAMPLE_W;
+  c.height = SAMPLE_H;
   const g = c.getContext("2d");
-  g.strokeStyle = color;
-  g.lineWidth = 2.5;
-  g.setLineDash(lineDash);
-  g.beginPath();
-  g.moveTo(1, 6);
-  g.lineTo(29, 6);
-  g.stroke();
+  const s = e.swatch;
+  g.strokeStyle = e.color;
+  if (s.kind === "line") {
+    g.lineWidth = 2.5;
+    g.setLineDash(dash(s.dash));
+    g.beginPath();
+    g.moveTo(1, SAMPLE_H / 2);
+    g.lineTo(SAMPLE_W - 1, SAMPLE_H / 2);
+    g.stroke();
+  } else if (s.kind === "marker") {
+    g.fillStyle = s.filled ? withAlpha(e.color, 0.8) : "rgba(0, 0, 0, 0)";
+    drawPoint(g, { pointStyle: marker(s.marker), radius: 5, borderWidth: 1.5, rotation: 0 }, SAMPLE_W / 2, SAMPLE_H / 2);
+  } else {
+    g.fillStyle = withAlpha(e.color, s.alpha);
+    g.lineWidth = 1;
+    g.fillRect(4, 2, SAMPLE_W - 8, SAMPLE_H - 4);
+    g.strokeRect(4.5, 2.5, SAMPLE_W - 9, SAMPLE_H - 5);
+  }
   return c;
 }
 
 // The figure's own legend (colour → policy, marker → setting, dash → sweep axis value),
-// not one entry per dataset.
+// not one entry per dataset. `marker` and `lineDash` say what each sample shows.
 function legendItems(figure) {
-  return figure.legend.map((e) => {
-    const s = e.swatch;
-    const item = { text: e.text, fontColor: INK, hidden: false, lineWidth: 2, strokeStyle: e.color };
-    if (s.kind === "line") {
-      return { ...item, pointStyle: lineSample(e.color, dash(s.dash)), lineDash: dash(s.dash), fillStyle: e.color };
-    }
-    if (s.kind === "marker") {
-      return { ...item, pointStyle: marker(s.marker), lineWidth: 1.5, fillStyle: s.filled ? e.color : "rgba(0, 0, 0, 0)" };
-    }
-    return { ...item, pointStyle: "rect", lineWidth: 1, fillStyle: withAlpha(e.color, s.alpha) };
-  });
+  return figure.legend.map((e) => ({
+    text: e.text,
+    fontColor: INK,
+    hidden: false,
+    pointStyle: sample(e),
+    strokeStyle: e.color,
+    fillStyle: e.color,
+    lineWidth: 0,
+    lineDash: e.swatch.kind === "line" ? dash(e.swatch.dash) : [],
+    marker: e.swatch.kind === "marker" ? marker(e.swatch.marker) : undefined,
+  }));
 }
 
 function legend(figure) {
@@ -91,6 +105,8 @@ function legend(figure) {
     onClick: () => {},
     labels: {
       usePointStyle: true,
+      pointStyleWidth: SAMPLE_W,
+      boxHeight: SAMPLE_H,
       padding: 14,
       font: { size: 13 },
       generateLabels: () => legendItems(figure),
@@ -246,7 +262,7 @@ window.thorarenaCharts = Object.fromEntries(
         text: i.text,
         fill_style: i.fillStyle,
         stroke_style: i.strokeStyle,
-        point_style: i.pointStyle,
+        point_style: i.marker ?? (typeof i.pointStyle === "string" ? i.pointStyle : "sample"),
         line_dash: i.lineDash ?? [],
       })),
     },
