@@ -4,8 +4,12 @@
 //! cut off. Checked: no console error or exception, no request leaves the file, every
 //! plot's canvas exists and holds paint and data, the tables have their rows, the viewer
 //! draws the robot (its pixels differ from the empty scene), and moving the timeline —
-//! or pressing Play — moves it. Screenshots of the last run stay in
-//! `<target>/browser-tests/` for CI artifacts.
+//! or pressing Play — moves it. In the report and the sweep's report (two policies × two
+//! latency rules × two force coefficients), as Chart.js drew them: each policy has one colour in every chart of
+//! both pages, every chart's legend names each of its policies in that colour, the scatter's
+//! legend maps each setting to its marker, the sweep's curves map their latency rule to a
+//! line style in their legend, and the sweep's title names its axes.
+//! Screenshots of the last run stay in `<target>/browser-tests/` for CI artifacts.
 //!
 //! The pages use the front-end bundle compiled into the binary. Needs `chromium` (Debian's
 //! package), node, and the test driver's playwright-core (`npm ci --prefix web`); without
@@ -109,13 +113,14 @@ fn make_runs(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
     (balance, hold, trace)
 }
 
-/// A two-cell sweep (hold, without and with force) collected into its report.
+/// An eight-cell sweep (balance and hold, without and with force, in lock step and with a
+/// 5 ms budget under measured latency) collected into its report.
 fn make_sweep(dir: &Path) -> PathBuf {
     let spec = dir.join("sweep.toml");
     std::fs::write(
         &spec,
         format!(
-            "datasets = [\"{ROOT}/data/sample\"]\nsettings = [\"no-force\", \"force\"]\n[[policy]]\npolicy = \"hold\"\n"
+            "datasets = [\"{ROOT}/data/sample\"]\nsettings = [\"no-force\", \"force\"]\n[[policy]]\npolicy = \"hold\"\n[[policy]]\npolicy = \"balance\"\n[[latency]]\nname = \"lock-step\"\n[[latency]]\nname = \"5ms\"\nbudget = \"5ms\"\nmode = \"measured\"\n"
         ),
     )
     .unwrap();
@@ -139,6 +144,117 @@ fn make_sweep(dir: &Path) -> PathBuf {
         );
     }
     sweep.join("report.html")
+}
+
+/// Checks the charts of the report pages `pages` (name, facts) as drawn: one colour per
+/// policy across all of them, and legends that say which colour is which policy.
+fn check_chart_styles(pages: &[(&str, &Value)], context: &str) {
+    use std::collections::{BTreeMap, BTreeSet};
+    let mut colours: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    // (page, chart, policy, legend) to check once the colours are known to be one each.
+    let mut legends: Vec<(&str, &str, String, &Vec<Value>)> = Vec::new();
+    for (page, facts) in pages {
+        let charts = facts["charts"]
+            .as_object()
+            .unwrap_or_else(|| panic!("{page}: the page exposes no charts; {context}"));
+        for id in facts["declared_plots"].as_array().unwrap() {
+            let id = id.as_str().unwrap();
+            let chart = &charts
+                .get(id)
+                .unwrap_or_else(|| panic!("{page}: no chart #{id}; {context}"));
+            let legend = chart["legend"].as_array().unwrap();
+            let mut policies: BTreeSet<&str> = BTreeSet::new();
+            for d in chart["datasets"].as_array().unwrap() {
+                let policy = d["policy"]
+                    .as_str()
+                    .unwrap_or_else(|| panic!("{page} #{id}: a dataset without policy: {d}"));
+                let colour = d["border_color"]
+                    .as_str()
+                    .unwrap_or_else(|| panic!("{page} #{id}: a dataset without colour: {d}"))
+                    .to_ascii_lowercase();
+                colours
+                    .entry(policy.to_string())
+                    .or_default()
+                    .insert(colour);
+                policies.insert(policy);
+            }
+            for policy in policies {
+                legends.push((page, id, policy.to_string(), legend));
+            }
+        }
+    }
+    for (policy, set) in &colours {
+        assert_eq!(
+            set.len(),
+            1,
+            "policy {policy} is drawn in several colours {set:?}; {context}"
+        );
+    }
+    let distinct: BTreeSet<&String> = colours.values().flatten().collect();
+    assert_eq!(
+        distinct.len(),
+        colours.len(),
+        "two policies share a colour: {colours:?}"
+    );
+    for policy in ["balance", "hold"] {
+        assert!(colours.contains_key(policy), "{policy} is in no chart");
+    }
+    for (page, id, policy, legend) in legends {
+        let colour = colours[&policy].first().unwrap();
+        assert!(
+            legend
+                .iter()
+                .any(|e| e["text"].as_str().is_some_and(|t| t.contains(&policy))
+                    && e["stroke_style"]
+                        .as_str()
+                        .map(str::to_ascii_lowercase)
+                        .as_ref()
+                        == Some(colour)),
+            "{page} #{id}: no legend entry names {policy} in its colour {colour}: {legend:?}"
+        );
+    }
+}
+
+/// The scatter's legend maps each setting to the marker its points are drawn with, and
+/// settings have different markers.
+fn check_scatter_markers(page: &str, facts: &Value, settings: &[&str], context: &str) {
+    let chart = &facts["charts"]["scatter-tracking-survival"];
+    let legend = chart["legend"].as_array().cloned().unwrap_or_default();
+    let mut markers = std::collections::BTreeSet::new();
+    for setting in settings {
+        let styles: std::collections::BTreeSet<String> = chart["datasets"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|d| {
+                d["label"]
+                    .as_str()
+                    .is_some_and(|l| l.ends_with(&format!(" — {setting}")))
+            })
+            .map(|d| d["point_style"].as_str().unwrap_or("?").to_string())
+            .collect();
+        assert_eq!(
+            styles.len(),
+            1,
+            "{page}: the points of {setting} have markers {styles:?}; {context}"
+        );
+        let style = styles.into_iter().next().unwrap();
+        assert!(
+            legend
+                .iter()
+                .any(|e| e["text"].as_str().is_some_and(|t| t.contains(setting)
+                    && !t.contains("balance")
+                    && !t.contains("hold"))
+                    && e["point_style"].as_str() == Some(style.as_str())),
+            "{page}: no legend entry maps marker {style} to setting {setting}: {legend:?}"
+        );
+        markers.insert(style);
+    }
+    assert_eq!(
+        markers.len(),
+        settings.len(),
+        "{page}: settings share a marker"
+    );
 }
 
 fn differing(v: &Value) -> (u64, u64) {
@@ -247,6 +363,11 @@ fn report_and_viewer_render_in_headless_chromium() {
             "#{id} plots no data; {context}"
         );
     }
+    // Each plot also as an SVG file beside the page.
+    for id in &declared {
+        let svg = shots.join("report-figures").join(format!("{id}.svg"));
+        assert!(svg.is_file(), "{} not written", svg.display());
+    }
     // 12 episodes × 2 settings × 2 runs in the scatter plot.
     assert_eq!(r["points"]["scatter-tracking-survival"], 48, "{context}");
     assert_eq!(r["tables"]["fats-table"], 7, "six tasks and the average");
@@ -277,9 +398,69 @@ fn report_and_viewer_render_in_headless_chromium() {
             plot["painted_pixels"].as_u64().unwrap_or(0) > 2000,
             "#{id} is blank; {context}"
         );
-        assert_eq!(s["points"][id], 2, "no force and force; {context}");
+        assert_eq!(
+            s["points"][id], 8,
+            "two policies and two latency rules, no force and force; {context}"
+        );
+        let datasets = s["charts"][id]["datasets"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        assert_eq!(
+            datasets.len(),
+            4,
+            "one line per policy and latency rule; {context}"
+        );
+        // The second axis is a line style, and the legend says which.
+        let legend = s["charts"][id]["legend"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        let mut dashes = std::collections::BTreeSet::new();
+        for rule in ["lock-step", "5ms"] {
+            let of_rule: std::collections::BTreeSet<String> = datasets
+                .iter()
+                .filter(|d| {
+                    d["label"]
+                        .as_str()
+                        .is_some_and(|l| l.ends_with(&format!(" · {rule}")))
+                })
+                .map(|d| d["border_dash"].to_string())
+                .collect();
+            assert_eq!(
+                of_rule.len(),
+                1,
+                "#{id} {rule}: dashes {of_rule:?}; {context}"
+            );
+            let dash = of_rule.into_iter().next().unwrap();
+            let dash_value: Value = serde_json::from_str(&dash).unwrap();
+            assert!(
+                legend
+                    .iter()
+                    .any(|e| e["text"] == rule && e["line_dash"] == dash_value),
+                "#{id}: no legend entry maps line style {dash} to {rule}: {legend:?}"
+            );
+            dashes.insert(dash);
+        }
+        assert_eq!(dashes.len(), 2, "#{id}: latency rules share a line style");
     }
+    assert_eq!(
+        s["title"], "sweep: 2 policies × 2 latency rules × 2 force coefficients",
+        "{context}"
+    );
     assert!(shots.join("sweep-report.png").is_file());
+    for id in s["declared_plots"].as_array().unwrap() {
+        let svg = sweep_report
+            .with_file_name("report-figures")
+            .join(format!("{}.svg", id.as_str().unwrap()));
+        assert!(svg.is_file(), "{} not written", svg.display());
+    }
+    // One colour per policy across every chart of both pages; legends map colour →
+    // policy and, in the scatter, marker → setting.
+    check_chart_styles(&[("report", r), ("sweep report", s)], &context);
+    for (page, facts) in [("report", r), ("sweep report", s)] {
+        check_scatter_markers(page, facts, &["force", "no-force"], &context);
+    }
 
     let v = &facts["view"];
     for key in ["console_errors", "page_errors", "blocked_requests"] {

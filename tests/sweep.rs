@@ -154,6 +154,10 @@ fn a_sweep_equals_separate_evals_for_any_jobs_order_and_kill() {
             .any(|p| p.contains("budget") || p.contains("push")),
         "axes that did not vary are not plotted: {plots:?}"
     );
+    assert_eq!(
+        report_title_and_figures(&a),
+        ("sweep: 1 policy × 2 force coefficients".to_string(), true)
+    );
 
     // One task per process, last first (as a cluster may run them).
     let b = tmp.path().join("b");
@@ -320,6 +324,21 @@ fn two_copies_of_one_task_racing_leave_one_complete_run() {
     assert_eq!(run.len(), 6, "shard 1 of 2 of 12 sequences, each once");
 }
 
+/// A collected sweep's report's title, and whether each declared plot also has its SVG
+/// file in `report-figures/`.
+fn report_title_and_figures(sweep: &Path) -> (String, bool) {
+    let html = std::fs::read_to_string(sweep.join("report.html")).unwrap();
+    let start = html.find("<title>").unwrap() + "<title>".len();
+    let end = html.find("</title>").unwrap();
+    let svgs = report_plots(sweep).iter().all(|id| {
+        sweep
+            .join("report-figures")
+            .join(format!("{id}.svg"))
+            .is_file()
+    });
+    (html[start..end].to_string(), svgs)
+}
+
 /// The canvas ids a collected sweep's report declares.
 fn report_plots(sweep: &Path) -> Vec<String> {
     let html = std::fs::read_to_string(sweep.join("report.html")).unwrap();
@@ -366,6 +385,13 @@ mode = "measured"
             .collect::<Vec<_>>(),
         ["sweep-fats-vs-budget"],
         "one setting: no force curve; two measured budgets: the latency curve"
+    );
+    assert_eq!(
+        report_title_and_figures(&dir),
+        (
+            "sweep: 1 policy × 3 latency rules × 1 force coefficient".to_string(),
+            true
+        )
     );
     let csv = std::fs::read_to_string(dir.join("results.csv")).unwrap();
     assert!(

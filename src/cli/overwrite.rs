@@ -116,3 +116,48 @@ pub fn check_file(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> anyhow::Re
     }
     Ok(())
 }
+
+/// Refuses a directory of output files written beside an output (`report`'s
+/// `<stem>-figures/`) as [`check_file`] refuses each of `files` in it, and the directory
+/// itself when it is a file, is or holds one of `inputs`, or is part of an input run
+/// (always), or holds a run or a dataset (unless `overwrite`).
+pub fn check_files_dir(
+    dir: &Path,
+    files: &[String],
+    overwrite: bool,
+    inputs: &[PathBuf],
+) -> anyhow::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        bail!(
+            "{} is in the way of the figures directory: it is not a directory",
+            dir.display()
+        );
+    }
+    let target = resolved(dir);
+    for input in inputs {
+        let input = resolved(input);
+        let of_input = input.starts_with(&target)
+            || target
+                .strip_prefix(&input)
+                .is_ok_and(|rest| RUN_FILES.iter().any(|f| rest.starts_with(f)));
+        if of_input {
+            bail!(
+                "the figures directory {} would write over this command's input {}: choose another --out",
+                dir.display(),
+                input.display()
+            );
+        }
+    }
+    if let Some(what) = holds(dir) {
+        if !overwrite {
+            bail!(
+                "the figures directory {} already holds {what}: choose another --out, or pass --overwrite to write into it",
+                dir.display()
+            );
+        }
+    }
+    for f in files {
+        check_file(&dir.join(f), overwrite, inputs)?;
+    }
+    Ok(())
+}

@@ -1,12 +1,14 @@
 //! `thorarena report`: one self-contained HTML page comparing runs (tables side by side,
 //! FATS radar, tracking vs survival, low- vs high-force error, policy round trips), with
-//! the tables also as Markdown and CSV next to it for papers.
+//! the tables also as Markdown and CSV next to it, and every figure as an SVG file in
+//! `<stem>-figures/`, for papers.
 
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use thorarena::report::{
     comparison_notes, comparison_warnings, diagnostics_multi_table, fats_table, label_engines,
-    load_runs, mixed_engines, report_html, Page, WebBundle, MIXED_ENGINES_WHY,
+    load_runs, mixed_engines, report_figures, report_html, svg_figures, Page, SvgFigure, WebBundle,
+    MIXED_ENGINES_WHY,
 };
 
 /// Arguments of `report`.
@@ -16,7 +18,7 @@ pub struct Args {
     #[arg(required = true)]
     pub runs: Vec<PathBuf>,
     /// The HTML file; `<stem>.md`, `<stem>-fats.csv` and `<stem>-diagnostics.csv` are
-    /// written next to it.
+    /// written next to it, and each figure as `<stem>-figures/<figure>.svg`.
     #[arg(long, default_value = "report.html")]
     pub out: PathBuf,
     /// Compare runs simulated by different physics engines (rapier, MuJoCo). Refused
@@ -40,6 +42,16 @@ fn sibling(html: &Path, suffix: &str) -> PathBuf {
 
 fn write(path: &Path, text: &str) -> anyhow::Result<()> {
     std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes each figure as `dir/<id>.svg` (creating `dir`); figure files of an earlier report
+/// that this one does not draw are left as they are.
+pub(super) fn write_figures(dir: &Path, figures: &[SvgFigure]) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    for f in figures {
+        write(&dir.join(f.file_name()), &f.svg)?;
+    }
+    Ok(())
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -70,6 +82,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     ] {
         super::overwrite::check_file(&path, args.overwrite, &args.runs)?;
     }
+    let figures = svg_figures(&report_figures(&runs, &[]));
+    let figures_dir = sibling(&args.out, "-figures");
+    super::overwrite::check_files_dir(
+        &figures_dir,
+        &figures.iter().map(|f| f.file_name()).collect::<Vec<_>>(),
+        args.overwrite,
+        &args.runs,
+    )?;
     if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("creating {}", parent.display()))?;
@@ -124,11 +144,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     for (path, text) in &outputs {
         write(path, text)?;
     }
+    write_figures(&figures_dir, &figures)?;
     eprintln!(
-        "wrote {}",
+        "wrote {}, and {} SVG figures in {}: {}",
         outputs
             .iter()
             .map(|(p, _)| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        figures.len(),
+        figures_dir.display(),
+        figures
+            .iter()
+            .map(|f| f.file_name())
             .collect::<Vec<_>>()
             .join(", ")
     );

@@ -2,9 +2,11 @@
 //! they are ours and small), the data as inline JSON, and the page script from the
 //! front-end bundle (`web/bundle/`, compiled in as well).
 
-use super::runs::{comparison_notes, comparison_warnings, EpisodePoint, Run};
+use super::figures::{report_figures, Figure, ReportFigures, SweepChart};
+use super::runs::{comparison_notes, comparison_warnings, Run};
 use super::scene::ViewScene;
-use super::tables::{all_tasks, diagnostics_multi_table, fats_table};
+use super::style::{DASHES, MARKERS};
+use super::tables::{diagnostics_multi_table, fats_table};
 use super::ReportError;
 use serde::Serialize;
 use std::fmt::Write;
@@ -198,19 +200,6 @@ fn fill(template: &str, values: &[(&str, &str)]) -> String {
     out
 }
 
-/// An id fragment from a setting name (`push-30.5` → `push-30-5`).
-fn slug(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() {
-                c.to_ascii_lowercase()
-            } else {
-                '-'
-            }
-        })
-        .collect()
-}
-
 #[derive(Serialize)]
 struct RunInfo<'a> {
     label: &'a str,
@@ -218,82 +207,20 @@ struct RunInfo<'a> {
     dir: String,
 }
 
+/// The styles the figures' indices refer to.
 #[derive(Serialize)]
-struct Series {
-    run: usize,
-    values: Vec<Option<f64>>,
-}
-
-#[derive(Serialize)]
-struct RegimeSeries {
-    run: usize,
-    low: Vec<Option<f64>>,
-    high: Vec<Option<f64>>,
-}
-
-#[derive(Serialize)]
-struct SettingPlot<S> {
-    id: String,
-    setting: String,
-    series: Vec<S>,
-}
-
-#[derive(Serialize)]
-struct LatencySeries {
-    run: usize,
-    /// p50, p90, p99, p99.9, max, µs.
-    percentiles_us: [f64; 5],
-    mean_us: f64,
-    count: u64,
-    deadline_misses: u64,
-    late_replies: u64,
-    invalid_actions: u64,
-    policy_failures: u64,
-}
-
-#[derive(Serialize)]
-struct LatencyPlots {
-    percentiles_id: &'static str,
-    faults_id: &'static str,
-    series: Vec<LatencySeries>,
-}
-
-/// A line chart of a sweep: one series per policy (and per other varying axis), a metric
-/// against a swept quantity (force coefficient, push, latency budget).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SweepChart {
-    /// Canvas id.
-    pub id: String,
-    /// Caption.
-    pub title: String,
-    /// x axis label, with unit.
-    pub x_label: String,
-    /// y axis label.
-    pub y_label: String,
-    /// The lines.
-    pub series: Vec<CurveSeries>,
-}
-
-/// One line of a [`SweepChart`].
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct CurveSeries {
-    /// Legend label.
-    pub label: String,
-    /// `[x, y]`, sorted by x.
-    pub points: Vec<[f64; 2]>,
+struct Styles {
+    dashes: &'static [&'static [f64]],
+    markers: &'static [&'static str],
 }
 
 /// Everything the report script plots; `plots` lists every canvas id it must fill.
 #[derive(Serialize)]
 struct ReportData<'a> {
-    sweep: Vec<SweepChart>,
+    style: Styles,
     runs: Vec<RunInfo<'a>>,
-    tasks: Vec<String>,
-    radars: Vec<SettingPlot<Series>>,
-    scatter_id: &'static str,
-    episodes: Vec<EpisodePoint>,
-    regimes: Vec<SettingPlot<RegimeSeries>>,
-    latency: Option<LatencyPlots>,
+    figures: Vec<&'a Figure>,
+    episodes: &'a [super::runs::EpisodePoint],
     plots: Vec<String>,
 }
 
@@ -304,106 +231,29 @@ fn fmt_opt(v: Option<f64>, decimals: usize) -> String {
 
 /// The report page for `runs` (one or several) with the bundled `script` inlined.
 pub fn report_html(runs: &[Run], script: &str) -> String {
-    sweep_report_html(runs, &[], script)
+    let title = format!(
+        "ThorArena report — {}",
+        runs.iter()
+            .map(|r| r.label.as_str())
+            .collect::<Vec<_>>()
+            .join(" vs ")
+    );
+    page(runs, &report_figures(runs, &[]), &title, script)
 }
 
-/// The report page of a sweep: the sweep's curves first, then the comparison of its
-/// cells (`runs`) as in [`report_html`].
-pub fn sweep_report_html(runs: &[Run], sweep: &[SweepChart], script: &str) -> String {
-    let tasks = all_tasks(runs);
-    let mut settings: Vec<String> = Vec::new();
-    for r in runs {
-        for s in r.settings() {
-            if !settings.contains(&s) {
-                settings.push(s);
-            }
-        }
-    }
-    fn per_setting<'a>(runs: &'a [Run], s: &'a str) -> impl Iterator<Item = (usize, &'a Run)> {
-        runs.iter()
-            .enumerate()
-            .filter(move |(_, r)| r.results.contains_key(s))
-    }
-    let radars: Vec<SettingPlot<Series>> = settings
-        .iter()
-        .map(|s| SettingPlot {
-            id: format!("radar-{}", slug(s)),
-            setting: s.clone(),
-            series: per_setting(runs, s)
-                .map(|(i, r)| Series {
-                    run: i,
-                    values: tasks
-                        .iter()
-                        .map(|t| {
-                            r.task(s, t)
-                                .map(|t| t.diagnostics.fats)
-                                .filter(|v| v.is_finite())
-                        })
-                        .collect(),
-                })
-                .collect(),
-        })
-        .collect();
-    let regimes: Vec<SettingPlot<RegimeSeries>> = settings
-        .iter()
-        .map(|s| SettingPlot {
-            id: format!("kp-regimes-{}", slug(s)),
-            setting: s.clone(),
-            series: per_setting(runs, s)
-                .map(|(i, r)| {
-                    let get = |f: fn(&crate::metrics::Diagnostics) -> f64| {
-                        tasks
-                            .iter()
-                            .map(|t| {
-                                r.task(s, t)
-                                    .map(|t| f(&t.diagnostics))
-                                    .filter(|v| v.is_finite())
-                            })
-                            .collect()
-                    };
-                    RegimeSeries {
-                        run: i,
-                        low: get(|d| d.low_kp_mm),
-                        high: get(|d| d.high_kp_mm),
-                    }
-                })
-                .collect(),
-        })
-        .collect();
-    let latency_series: Vec<LatencySeries> = runs
-        .iter()
-        .enumerate()
-        .filter_map(|(i, r)| {
-            let io = r.policy_io.as_ref()?;
-            let t = io.transport?;
-            let l = &io.latency;
-            Some(LatencySeries {
-                run: i,
-                percentiles_us: [l.p50_us, l.p90_us, l.p99_us, l.p999_us, l.max_us],
-                mean_us: l.mean_us,
-                count: l.count,
-                deadline_misses: io.deadline_misses,
-                late_replies: t.late_replies,
-                invalid_actions: io.invalid_actions,
-                policy_failures: t.policy_failures,
-            })
-        })
-        .collect();
-    let latency = (!latency_series.is_empty()).then_some(LatencyPlots {
-        percentiles_id: "latency-percentiles",
-        faults_id: "latency-faults",
-        series: latency_series,
-    });
-    let mut plots: Vec<String> = sweep.iter().map(|c| c.id.clone()).collect();
-    plots.extend(radars.iter().map(|p| p.id.clone()));
-    plots.push("scatter-tracking-survival".into());
-    plots.extend(regimes.iter().map(|p| p.id.clone()));
-    if let Some(l) = &latency {
-        plots.push(l.percentiles_id.into());
-        plots.push(l.faults_id.into());
-    }
+/// The report page of a sweep titled `title` (the sweep's axes, e.g. "sweep: 2 policies ×
+/// 4 force coefficients"): the sweep's curves first, then the comparison of its cells
+/// (`runs`) as in [`report_html`].
+pub fn sweep_report_html(runs: &[Run], sweep: &[SweepChart], title: &str, script: &str) -> String {
+    page(runs, &report_figures(runs, sweep), title, script)
+}
+
+fn page(runs: &[Run], figures: &ReportFigures, title: &str, script: &str) -> String {
     let data = ReportData {
-        sweep: sweep.to_vec(),
+        style: Styles {
+            dashes: &DASHES,
+            markers: &MARKERS,
+        },
         runs: runs
             .iter()
             .map(|r| RunInfo {
@@ -412,30 +262,15 @@ pub fn sweep_report_html(runs: &[Run], sweep: &[SweepChart], script: &str) -> St
                 dir: r.dir.display().to_string(),
             })
             .collect(),
-        tasks,
-        episodes: runs
-            .iter()
-            .enumerate()
-            .flat_map(|(i, r)| r.episode_points(i))
-            .collect(),
-        scatter_id: "scatter-tracking-survival",
-        radars,
-        regimes,
-        latency,
-        plots,
+        figures: figures.all().collect(),
+        episodes: &figures.episodes,
+        plots: figures.all().map(|f| f.id.clone()).collect(),
     };
-    let body = report_body(runs, &data);
-    let title = format!(
-        "ThorArena report — {}",
-        runs.iter()
-            .map(|r| r.label.as_str())
-            .collect::<Vec<_>>()
-            .join(" vs ")
-    );
+    let body = report_body(runs, figures);
     fill(
         REPORT_TEMPLATE,
         &[
-            ("title", &escape(&title)),
+            ("title", &escape(title)),
             ("style", REPORT_STYLE),
             ("body", &body),
             ("data", &inline_json(&data)),
@@ -444,22 +279,22 @@ pub fn sweep_report_html(runs: &[Run], sweep: &[SweepChart], script: &str) -> St
     )
 }
 
-fn figure(id: &str, caption: &str) -> String {
+fn figure(f: &Figure) -> String {
     format!(
         "<figure><figcaption>{}</figcaption><div class=\"chart\"><canvas id=\"{}\"></canvas></div></figure>",
-        escape(caption),
-        escape(id)
+        escape(&f.caption),
+        escape(&f.id)
     )
 }
 
 /// The page body: runs, the comparability warnings, the tables, and one canvas per plot
 /// (the script fills them).
-fn report_body(runs: &[Run], data: &ReportData) -> String {
+fn report_body(runs: &[Run], data: &ReportFigures) -> String {
     let mut s = String::new();
     if !data.sweep.is_empty() {
         s += "<section id=\"sweep\"><h2>Sweep</h2><div class=\"grid\">";
-        for c in &data.sweep {
-            s += &figure(&c.id, &c.title);
+        for f in &data.sweep {
+            s += &figure(f);
         }
         s += "</div></section>";
     }
@@ -518,23 +353,14 @@ fn report_body(runs: &[Run], data: &ReportData) -> String {
         diagnostics_multi_table(runs).html("diagnostics-table")
     );
     s += "<section id=\"plots\"><h2>FATS per task</h2><div class=\"grid\">";
-    for p in &data.radars {
-        s += &figure(&p.id, &format!("FATS per task — {}", p.setting));
+    for f in &data.radars {
+        s += &figure(f);
     }
     s += "</div><h2>Tracking vs survival</h2><div class=\"grid wide\">";
-    s += &figure(
-        data.scatter_id,
-        "One point per episode: tracking score 100·exp(−E/σ) against survival; colour: run, marker: setting",
-    );
+    s += &figure(&data.scatter);
     s += "</div><h2>Keypoint error under low and high force</h2><div class=\"grid\">";
-    for p in &data.regimes {
-        s += &figure(
-            &p.id,
-            &format!(
-                "Low- vs high-force keypoint RMSE per task (mm) — {}",
-                p.setting
-            ),
-        );
+    for f in &data.regimes {
+        s += &figure(f);
     }
     s += "</div></section>";
     let io_runs: Vec<&Run> = runs.iter().filter(|r| r.policy_io.is_some()).collect();
@@ -563,16 +389,11 @@ fn report_body(runs: &[Run], data: &ReportData) -> String {
             );
         }
         s += "</tbody></table>";
-        if let Some(l) = &data.latency {
+        if !data.latency.is_empty() {
             s += "<div class=\"grid\">";
-            s += &figure(
-                l.percentiles_id,
-                "Round-trip latency percentiles through the policy server (µs, log scale; the run stores percentiles, not samples)",
-            );
-            s += &figure(
-                l.faults_id,
-                "Deadline misses, late replies and invalid actions",
-            );
+            for f in &data.latency {
+                s += &figure(f);
+            }
             s += "</div>";
         }
         s += "</section>";
@@ -619,11 +440,5 @@ mod tests {
         assert!(!json.contains('<'));
         let back: serde_json::Value = serde_json::from_str(&json).unwrap();
         assert_eq!(back["a"], "</script><b>");
-    }
-
-    #[test]
-    fn slugs_are_safe_ids() {
-        assert_eq!(slug("push-30.5"), "push-30-5");
-        assert_eq!(slug("no-force"), "no-force");
     }
 }

@@ -8,16 +8,24 @@
 //! opens from disk or an e-mail attachment with no network. The bundle is committed and
 //! compiled in ([`WebBundle`]), so building and running need no node; a test proves the
 //! committed copy is exactly what the lockfile builds.
+//!
+//! The figures are computed once as data ([`report_figures`]: colour per policy, dash and
+//! marker per other axis, legends) and drawn twice: by the page script with Chart.js, and
+//! as SVG files for papers ([`svg_figures`]).
 
+mod figures;
 mod html;
 mod runs;
 mod scene;
+mod style;
+mod svg;
 mod tables;
 
-pub use html::{
-    escape, report_html, sweep_report_html, view_html, CurveSeries, Page, SweepChart, WebBundle,
-    WEB_DIST_ENV,
+pub use figures::{
+    report_figures, CurveSeries, Dataset, Figure, FigureKind, LegendEntry, ReportFigures, Swatch,
+    SweepChart,
 };
+pub use html::{escape, report_html, sweep_report_html, view_html, Page, WebBundle, WEB_DIST_ENV};
 pub use runs::{
     comparison_notes, comparison_warnings, label_engines, label_runs, load_run, load_runs,
     mixed_engines, ComparisonWarning, EpisodePoint, Run, WarningKind, MIXED_ENGINES_WHY,
@@ -25,6 +33,8 @@ pub use runs::{
 pub use scene::{
     load_trace, trace_context, view_scene, BodyShapes, FeetView, ShapeView, TraceContext, ViewScene,
 };
+pub use style::{jitter, PolicyColors, DASHES, MARKERS, PALETTE, SURVIVAL_JITTER};
+pub use svg::{figure_svg, svg_figures, SvgFigure};
 pub use tables::{
     all_tasks, columns, diagnostics_multi_table, diagnostics_table, fats_table, task_fats_table,
     DiagnosticRow, NumberRow, NumberTable, DIAGNOSTIC_ROWS,

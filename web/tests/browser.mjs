@@ -140,6 +140,10 @@ async function checkReport(file, shot) {
     plots: await canvases(page, declared),
     tables,
     warning_box: await page.locator("#comparability-warnings").count(),
+    title: await page.title(),
+    // Per chart, as Chart.js holds it: each dataset's policy, colours, dash and marker, and
+    // each legend entry as drawn (null when the page exposes no charts).
+    charts: await page.evaluate(() => window.thorarenaCharts ?? null),
   };
   await page.screenshot({ path: join(args.shots, shot), fullPage: true });
   await context.close();

@@ -162,10 +162,15 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     let runs = thorarena::report::load_runs(&cell_dirs)?;
     let charts = sweep_charts(&plan, &results);
     let script = thorarena::report::WebBundle::locate()?.script(thorarena::report::Page::Report)?;
-    let html = thorarena::report::sweep_report_html(&runs, &charts, &script);
+    let title = sweep_title(&plan);
+    let html = thorarena::report::sweep_report_html(&runs, &charts, &title, &script);
     std::fs::write(&report, html).with_context(|| format!("writing {}", report.display()))?;
+    let figures_dir = args.dir.join("report-figures");
+    let figures =
+        thorarena::report::svg_figures(&thorarena::report::report_figures(&runs, &charts));
+    crate::cli::report_html::write_figures(&figures_dir, &figures)?;
     eprintln!(
-        "collected {} cells{}: {} and {}",
+        "collected {} cells{}: {}, {} and {} SVG figures in {}",
         results.iter().flatten().count(),
         if unfinished.is_empty() {
             String::new()
@@ -173,9 +178,67 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             format!(" ({} partial)", unfinished.len())
         },
         csv_path.display(),
-        report.display()
+        report.display(),
+        figures.len(),
+        figures_dir.display()
     );
     Ok(())
+}
+
+/// The report's title: the sweep's axes that vary, with how many values each takes
+/// ("sweep: 2 policies × 4 force coefficients").
+pub(super) fn sweep_title(plan: &Plan) -> String {
+    use std::collections::BTreeSet;
+    let count = |f: &dyn Fn(&thorarena::sweep::Cell) -> String| {
+        plan.cells.iter().map(f).collect::<BTreeSet<_>>().len()
+    };
+    let settings: Vec<Option<thorarena::runner::Setting>> = plan
+        .cells
+        .iter()
+        .map(|c| thorarena::runner::Setting::parse(&c.setting))
+        .collect();
+    let setting_noun = if settings
+        .iter()
+        .all(|s| s.as_ref().is_some_and(|s| s.push_n == 0.0))
+    {
+        ("force coefficient", "force coefficients")
+    } else if settings
+        .iter()
+        .all(|s| s.as_ref().is_some_and(|s| s.coefficient == 0.0))
+    {
+        ("push", "pushes")
+    } else {
+        ("force setting", "force settings")
+    };
+    let mut axes = Vec::new();
+    for (n, (one, many), always) in [
+        (
+            count(&|c| c.policy.name.clone()),
+            ("policy", "policies"),
+            true,
+        ),
+        (
+            count(&|c| c.dataset.display().to_string()),
+            ("dataset", "datasets"),
+            false,
+        ),
+        (
+            count(&|c| c.engine.name.clone()),
+            ("engine", "engines"),
+            false,
+        ),
+        (
+            count(&|c| c.latency.name.clone()),
+            ("latency rule", "latency rules"),
+            false,
+        ),
+        (count(&|c| c.setting.clone()), setting_noun, true),
+    ] {
+        if n > 1 || always {
+            axes.push(format!("{n} {}", if n == 1 { one } else { many }));
+        }
+    }
+    format!("sweep: {}", axes.join(" × "))
 }
 
 /// Columns of `results.csv`, one row per cell (a cell has one setting).
@@ -302,36 +365,44 @@ pub(super) fn sweep_charts(
     let many_latency = varies(&|c| c.latency.name.clone());
     let many_engines = varies(&|c| c.engine.name.clone());
     let many_settings = varies(&|c| c.setting.clone());
-    let label = |c: &thorarena::sweep::Cell, with_latency: bool, with_setting: bool| {
-        let mut l = c.policy.name.clone();
-        if many_engines {
-            l += &format!(" · {}", c.engine.name);
-        }
-        if many_datasets {
-            l += &format!(
-                " · {}",
-                c.dataset
-                    .file_name()
-                    .map_or(String::new(), |n| n.to_string_lossy().into())
-            );
-        }
-        if with_latency && many_latency {
-            l += &format!(" · {}", c.latency.name);
-        }
-        if with_setting && many_settings {
-            l += &format!(" · {}", c.setting);
-        }
-        l
-    };
-    // (cell, fats, survival) of every cell with results.
-    let points: Vec<(&thorarena::sweep::Cell, f64, f64)> = plan
+    // A line's colour is its policy as the cell's runs name it (the radars and the scatter
+    // colour the same runs by the same name); its dash is the values of the other axes
+    // that vary, and the sweep's own policy name when the runs name it otherwise.
+    let variant =
+        |c: &thorarena::sweep::Cell, policy: &str, with_latency: bool, with_setting: bool| {
+            let mut parts: Vec<String> = Vec::new();
+            if c.policy.name != policy {
+                parts.push(c.policy.name.clone());
+            }
+            if many_engines {
+                parts.push(c.engine.name.clone());
+            }
+            if many_datasets {
+                parts.push(
+                    c.dataset
+                        .file_name()
+                        .map_or(String::new(), |n| n.to_string_lossy().into()),
+                );
+            }
+            if with_latency && many_latency {
+                parts.push(c.latency.name.clone());
+            }
+            if with_setting && many_settings {
+                parts.push(c.setting.clone());
+            }
+            parts.join(" · ")
+        };
+    // (cell, its runs' policy, fats, survival) of every cell with results.
+    let points: Vec<(&thorarena::sweep::Cell, &str, f64, f64)> = plan
         .cells
         .iter()
         .zip(results)
         .filter_map(|(c, r)| {
-            let avg = &r.as_ref()?.summary.settings.values().next()?.average;
+            let r = r.as_ref()?;
+            let avg = &r.summary.settings.values().next()?.average;
             (avg.fats.is_finite() && avg.survival.is_finite()).then_some((
                 c,
+                r.summary.header.policy.as_str(),
                 avg.fats,
                 avg.survival,
             ))
@@ -342,22 +413,35 @@ pub(super) fn sweep_charts(
                  y: &dyn Fn(f64, f64) -> f64,
                  with_latency: bool,
                  with_setting: bool| {
-        let mut by_label: BTreeMap<String, Vec<[f64; 2]>> = BTreeMap::new();
+        let mut by_line: BTreeMap<(String, String), Vec<[f64; 2]>> = BTreeMap::new();
         let mut xs = BTreeSet::new();
-        for &(c, fats, survival) in &points {
+        for &(c, policy, fats, survival) in &points {
             if let Some(xv) = x(c) {
                 xs.insert(xv.to_bits());
-                by_label
-                    .entry(label(c, with_latency, with_setting))
+                by_line
+                    .entry((
+                        policy.to_string(),
+                        variant(c, policy, with_latency, with_setting),
+                    ))
                     .or_default()
                     .push([xv, y(fats, survival)]);
             }
         }
-        let series: Vec<CurveSeries> = by_label
+        let series: Vec<CurveSeries> = by_line
             .into_iter()
-            .map(|(label, mut points)| {
+            .map(|((policy, variant), mut points)| {
                 points.sort_by(|a, b| a[0].total_cmp(&b[0]));
-                CurveSeries { label, points }
+                let label = if variant.is_empty() {
+                    policy.clone()
+                } else {
+                    format!("{policy} · {variant}")
+                };
+                CurveSeries {
+                    label,
+                    policy,
+                    variant,
+                    points,
+                }
             })
             .collect();
         (xs.len() >= 2).then_some(series)
@@ -409,7 +493,7 @@ pub(super) fn sweep_charts(
     );
     if points
         .iter()
-        .any(|(c, _, _)| push(c).is_some_and(|p| p > 0.0))
+        .any(|(c, _, _, _)| push(c).is_some_and(|p| p > 0.0))
     {
         chart(
             "sweep-fats-vs-push",
