@@ -5,14 +5,14 @@ use super::*;
 
 /// What a cell's collected run holds.
 pub(super) struct CellResult {
-    dir: PathBuf,
-    episodes: usize,
-    complete: bool,
-    summary: Summary,
+    pub(super) dir: PathBuf,
+    pub(super) episodes: usize,
+    pub(super) complete: bool,
+    pub(super) summary: Summary,
     /// Summed over shards: deadline misses, invalid actions, policy failures.
-    faults: [u64; 3],
+    pub(super) faults: [u64; 3],
     /// p50, p99, p99.9 µs of a single-shard cell (shards keep separate histograms).
-    latency_us: Option<[f64; 3]>,
+    pub(super) latency_us: Option<[f64; 3]>,
 }
 
 pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
@@ -154,7 +154,7 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             latency_us,
         }));
     }
-    let csv = results_csv(&plan, &results);
+    let csv = super::results_csv::results_csv(&plan, &results);
     let csv_path = args.dir.join("results.csv");
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
     let cell_dirs: Vec<PathBuf> = results.iter().flatten().map(|r| r.dir.clone()).collect();
@@ -239,105 +239,6 @@ pub(super) fn sweep_title(plan: &Plan) -> String {
         }
     }
     format!("sweep: {}", axes.join(" × "))
-}
-
-/// Columns of `results.csv`, one row per cell (a cell has one setting).
-pub(super) const CSV_COLUMNS: [&str; 33] = [
-    "cell",
-    "policy",
-    "dataset",
-    "setting",
-    "force_coefficient",
-    "push_n",
-    "latency_rule",
-    "budget",
-    "latency_mode",
-    "miss_rule",
-    "profile",
-    "keypoints",
-    "episodes",
-    "episodes_expected",
-    "complete",
-    "fats",
-    "survival",
-    "kp_error_mm",
-    "low_kp_mm",
-    "high_kp_mm",
-    "robustness_rho",
-    "power_overhead_eta",
-    "upper_kp_mm",
-    "lower_kp_mm",
-    "fats_std",
-    "latency_p50_us",
-    "latency_p99_us",
-    "latency_p999_us",
-    "deadline_misses",
-    "invalid_actions",
-    "policy_failures",
-    "engine",
-    "physics_dt_s",
-];
-
-pub(super) fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(CSV_COLUMNS).expect("in memory");
-    let num = |v: Option<f64>| {
-        v.filter(|x| x.is_finite())
-            .map_or(String::new(), |x| x.to_string())
-    };
-    for (cell, r) in plan.cells.iter().zip(results) {
-        let setting = thorarena::runner::Setting::parse(&cell.setting);
-        let avg = r.as_ref().and_then(|r| {
-            let s = r.summary.settings.values().next()?;
-            serde_json::to_value(&s.average).ok()
-        });
-        let d = |key: &str| num(avg.as_ref().and_then(|a| a[key].as_f64()));
-        let row = vec![
-            cell.index.to_string(),
-            cell.policy.name.clone(),
-            // As the spec names it: relative to the spec's directory when inside it.
-            cell.dataset
-                .strip_prefix(&plan.workdir)
-                .unwrap_or(&cell.dataset)
-                .display()
-                .to_string(),
-            cell.setting.clone(),
-            num(setting.as_ref().map(|s| s.coefficient)),
-            num(setting.as_ref().map(|s| s.push_n)),
-            cell.latency.name.clone(),
-            cell.latency.budget.clone(),
-            cell.latency.mode.clone(),
-            cell.latency.miss_rule.clone(),
-            cell.policy.profile.clone(),
-            cell.policy.keypoints.clone(),
-            r.as_ref().map_or(0, |r| r.episodes).to_string(),
-            cell.episodes.to_string(),
-            r.as_ref().is_some_and(|r| r.complete).to_string(),
-            d("fats"),
-            d("survival"),
-            d("kp_mm"),
-            d("low_kp_mm"),
-            d("high_kp_mm"),
-            d("robustness"),
-            d("power_overhead"),
-            d("upper_kp_mm"),
-            d("lower_kp_mm"),
-            d("fats_std"),
-            num(r.as_ref().and_then(|r| r.latency_us.map(|l| l[0]))),
-            num(r.as_ref().and_then(|r| r.latency_us.map(|l| l[1]))),
-            num(r.as_ref().and_then(|r| r.latency_us.map(|l| l[2]))),
-            r.as_ref()
-                .map_or(String::new(), |r| r.faults[0].to_string()),
-            r.as_ref()
-                .map_or(String::new(), |r| r.faults[1].to_string()),
-            r.as_ref()
-                .map_or(String::new(), |r| r.faults[2].to_string()),
-            cell.engine.name.clone(),
-            num(r.as_ref().map(|r| r.summary.header.physics_dt_s)),
-        ];
-        w.write_record(&row).expect("in memory");
-    }
-    String::from_utf8(w.into_inner().expect("in memory")).expect("UTF-8")
 }
 
 /// A latency budget in ms, parsed as `--budget` parses it; `None` for `none`.

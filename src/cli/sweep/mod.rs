@@ -180,6 +180,7 @@ mod cluster;
 mod collect;
 mod plan;
 mod pool;
+mod results_csv;
 mod status;
 mod task;
 mod verify;
