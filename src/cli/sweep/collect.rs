@@ -159,7 +159,8 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
     let cell_dirs: Vec<PathBuf> = results.iter().flatten().map(|r| r.dir.clone()).collect();
     let report = args.dir.join("report.html");
-    let runs = thorarena::report::load_runs(&cell_dirs)?;
+    let mut runs = thorarena::report::load_runs(&cell_dirs)?;
+    label_cells(&plan, &results, &mut runs);
     let charts = sweep_charts(&plan, &results);
     let script = thorarena::report::WebBundle::locate()?.script(thorarena::report::Page::Report)?;
     let title = sweep_title(&plan);
@@ -249,6 +250,93 @@ pub(super) fn budget_ms(budget: &str) -> Option<f64> {
         .map(|d| d.as_secs_f64() * 1e3)
 }
 
+/// Which of a sweep's axes take more than one value: the ones a label must name.
+struct VaryingAxes {
+    datasets: bool,
+    latency: bool,
+    engines: bool,
+    settings: bool,
+}
+
+impl VaryingAxes {
+    fn of(plan: &Plan) -> Self {
+        use std::collections::BTreeSet;
+        let varies = |f: &dyn Fn(&thorarena::sweep::Cell) -> String| {
+            plan.cells.iter().map(f).collect::<BTreeSet<_>>().len() > 1
+        };
+        Self {
+            datasets: varies(&|c| c.dataset.display().to_string()),
+            latency: varies(&|c| c.latency.name.clone()),
+            engines: varies(&|c| c.engine.name.clone()),
+            settings: varies(&|c| c.setting.clone()),
+        }
+    }
+
+    /// A cell's values of the varying axes other than its policy, `·`-separated (and the
+    /// sweep's name of the policy when its runs name it otherwise): a line's dash in the
+    /// curves, and with the policy a run's label.
+    fn variant(
+        &self,
+        c: &thorarena::sweep::Cell,
+        policy: &str,
+        with_latency: bool,
+        with_setting: bool,
+    ) -> String {
+        let mut parts: Vec<String> = Vec::new();
+        if c.policy.name != policy {
+            parts.push(c.policy.name.clone());
+        }
+        if self.engines {
+            parts.push(c.engine.name.clone());
+        }
+        if self.datasets {
+            parts.push(
+                c.dataset
+                    .file_name()
+                    .map_or(String::new(), |n| n.to_string_lossy().into()),
+            );
+        }
+        if with_latency && self.latency {
+            parts.push(c.latency.name.clone());
+        }
+        if with_setting && self.settings {
+            parts.push(c.setting.clone());
+        }
+        parts.join(" · ")
+    }
+}
+
+/// Labels the cells' runs by what distinguishes them ("hold · 5ms · force") instead of
+/// their directory numbers, so a legend reads without the runs table; cells that differ in
+/// nothing a label names keep a number.
+fn label_cells(plan: &Plan, results: &[Option<CellResult>], runs: &mut [thorarena::report::Run]) {
+    let axes = VaryingAxes::of(plan);
+    let cells = plan.cells.iter().zip(results).filter(|(_, r)| r.is_some());
+    let mut labels: Vec<String> = cells
+        .zip(runs.iter())
+        .map(|((c, _), run)| {
+            let variant = axes.variant(c, &run.header.policy, true, true);
+            if variant.is_empty() {
+                run.header.policy.clone()
+            } else {
+                format!("{} · {variant}", run.header.policy)
+            }
+        })
+        .collect();
+    let snapshot = labels.clone();
+    for (l, (c, _)) in labels
+        .iter_mut()
+        .zip(plan.cells.iter().zip(results).filter(|(_, r)| r.is_some()))
+    {
+        if snapshot.iter().filter(|x| *x == l).count() > 1 {
+            *l = format!("{l} ({:06})", c.index);
+        }
+    }
+    for (run, label) in runs.iter_mut().zip(labels) {
+        run.label = label;
+    }
+}
+
 /// The curves a sweep is for, from its cells' averages: FATS and survival against the
 /// force coefficient (and against a constant push), one line per policy, and FATS against
 /// the latency budget under `--latency-mode measured`. A quantity that takes fewer than
@@ -259,39 +347,10 @@ pub(super) fn sweep_charts(
 ) -> Vec<thorarena::report::SweepChart> {
     use std::collections::BTreeSet;
     use thorarena::report::{CurveSeries, SweepChart};
-    let varies = |f: &dyn Fn(&thorarena::sweep::Cell) -> String| {
-        plan.cells.iter().map(f).collect::<BTreeSet<_>>().len() > 1
-    };
-    let many_datasets = varies(&|c| c.dataset.display().to_string());
-    let many_latency = varies(&|c| c.latency.name.clone());
-    let many_engines = varies(&|c| c.engine.name.clone());
-    let many_settings = varies(&|c| c.setting.clone());
-    // A line's colour is its policy as the cell's runs name it (the radars and the scatter
-    // colour the same runs by the same name); its dash is the values of the other axes
-    // that vary, and the sweep's own policy name when the runs name it otherwise.
+    let axes = VaryingAxes::of(plan);
     let variant =
         |c: &thorarena::sweep::Cell, policy: &str, with_latency: bool, with_setting: bool| {
-            let mut parts: Vec<String> = Vec::new();
-            if c.policy.name != policy {
-                parts.push(c.policy.name.clone());
-            }
-            if many_engines {
-                parts.push(c.engine.name.clone());
-            }
-            if many_datasets {
-                parts.push(
-                    c.dataset
-                        .file_name()
-                        .map_or(String::new(), |n| n.to_string_lossy().into()),
-                );
-            }
-            if with_latency && many_latency {
-                parts.push(c.latency.name.clone());
-            }
-            if with_setting && many_settings {
-                parts.push(c.setting.clone());
-            }
-            parts.join(" · ")
+            axes.variant(c, policy, with_latency, with_setting)
         };
     // (cell, its runs' policy, fats, survival) of every cell with results.
     let points: Vec<(&thorarena::sweep::Cell, &str, f64, f64)> = plan
