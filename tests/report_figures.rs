@@ -9,59 +9,27 @@ use quick_xml::events::Event;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use thorarena::episode::TerminationRule;
-use thorarena::metrics::{EpisodeSeries, RegimeThresholds};
+use thorarena::metrics::EpisodeSeries;
 use thorarena::report::{
     load_runs, report_figures, svg_figures, CurveSeries, FigureKind, ReportFigures, Swatch,
     SweepChart, MARKERS, SURVIVAL_JITTER,
 };
-use thorarena::results::{
-    write_header, write_record, write_results, EpisodeRecord, PlannedSequence, PolicyIoReport,
-    RunHeader, RESULTS_VERSION,
-};
-use thorarena::runner::{LatencySummary, PolicyIoRules, Setting};
+use thorarena::results::EpisodeRecord;
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+
+#[path = "common/run_dir.rs"]
+mod run_dir;
 /// A policy name that must be escaped in XML.
 const ODD: &str = "a<&b\"'>";
 
 /// A run of `policy`: two tasks × two sequences × (force, no-force), every episode whole
 /// (survival 1.0) except push_chair's, which fall after `fall` of 30 steps.
 fn write_run(dir: &Path, policy: &str, err_m: f64, fall: usize) {
-    let settings = ["force", "no-force"];
-    let header = RunHeader {
-        results_version: RESULTS_VERSION,
-        version: "0.1.0".into(),
-        policy: policy.into(),
-        profile: "default".into(),
-        profile_mismatch_ok: false,
-        control_dt_s: 0.02,
-        physics_dt_s: 0.005,
-        engine: thorarena::physics::Engine::Rapier,
-        dataset: "data/sample".into(),
-        dataset_sha256: "ab".repeat(32),
-        keypoints: "default".into(),
-        termination: TerminationRule::default(),
-        settings: settings.map(|s| Setting::parse(s).unwrap()).to_vec(),
-        sequences: ["clean_table", "push_chair"]
-            .iter()
-            .flat_map(|task| {
-                ["000", "001"].map(|id| PlannedSequence {
-                    task: task.to_string(),
-                    sequence_id: format!("{task}_{id}"),
-                    steps_ref: 30,
-                })
-            })
-            .collect(),
-        shard: None,
-        subset: None,
-        io: PolicyIoRules::default(),
-    };
-    std::fs::create_dir_all(dir).unwrap();
-    write_header(dir, &header).unwrap();
+    let header = run_dir::header(policy);
     let force = |k: usize| [0.0, 10.0, 20.0][k % 3];
     let mut records = Vec::new();
-    for setting in settings {
+    for setting in ["force", "no-force"] {
         for seq in &header.sequences {
             let steps = if seq.task == "push_chair" { fall } else { 30 };
             records.push(EpisodeRecord {
@@ -86,36 +54,7 @@ fn write_run(dir: &Path, policy: &str, err_m: f64, fall: usize) {
             });
         }
     }
-    let mut file = std::fs::File::create(dir.join("episodes.jsonl")).unwrap();
-    for r in &records {
-        write_record(&mut file, r).unwrap();
-    }
-    let th = RegimeThresholds::from_forces(&[0.0, 10.0, 20.0]);
-    let thresholds = [
-        ("clean_table".to_string(), th),
-        ("push_chair".to_string(), th),
-    ]
-    .into_iter()
-    .collect();
-    let io = PolicyIoReport {
-        latency: LatencySummary {
-            count: 120,
-            mean_us: 3.0,
-            p50_us: 2.0,
-            p90_us: 4.0,
-            p99_us: 9.0,
-            p999_us: 40.0,
-            max_us: 90.0,
-        },
-        transport: Some(
-            serde_json::from_value(serde_json::json!({"round_trips": 120,
-            "deadline_misses": 2, "late_replies": 1, "policy_failures": 0, "reconnections": 0}))
-            .unwrap(),
-        ),
-        deadline_misses: 2,
-        invalid_actions: 0,
-    };
-    write_results(dir, &header, &records, thresholds, Some(io)).unwrap();
+    run_dir::write_run(dir, &header, &records, true);
 }
 
 /// Three runs: the odd-named policy, and `hold` twice (a second run of one policy).
