@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use thorarena::results::crosscheck::{
     compare_push_levels, compare_settings, foot_slip_pair, joint_divergence, pair_episodes,
-    Compared, MeanCi, SettingComparison, SLIP_PARTING_M,
+    Compared, CrosscheckFile, EngineRuns, MeanCi, SettingComparison, SLIP_PARTING_M,
 };
 use thorarena::results::{read_header, read_summary, EpisodeLog, EPISODES_FILE};
 
@@ -244,14 +244,17 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             tables("push per hand", &levels, args.divergence_seconds)
         );
     }
-    let json = serde_json::json!({
-        "runs": {"rapier": dirs[0], "mujoco": dirs[1]},
-        "bootstrap_resamples": args.bootstrap,
-        "divergence_seconds": args.divergence_seconds,
-        "settings": settings,
-        "push_levels": levels,
-        "episodes": pairs,
-    });
+    let json = CrosscheckFile {
+        runs: EngineRuns {
+            rapier: &dirs[0],
+            mujoco: &dirs[1],
+        },
+        bootstrap_resamples: args.bootstrap,
+        divergence_seconds: args.divergence_seconds,
+        settings: &settings,
+        push_levels: &levels,
+        episodes: &pairs,
+    };
     let json_path = out.join("crosscheck.json");
     std::fs::write(&json_path, serde_json::to_string_pretty(&json)? + "\n")
         .with_context(|| format!("writing {}", json_path.display()))?;

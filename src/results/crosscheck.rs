@@ -112,6 +112,32 @@ pub fn foot_slip_pair(a: &[Vec<f64>], b: &[Vec<f64>], control_dt_s: f64) -> Opti
     })
 }
 
+/// `crosscheck.json`: the two runs compared, how, and the comparisons themselves.
+#[derive(Debug, Serialize)]
+pub struct CrosscheckFile<'a> {
+    /// The run directories, per engine.
+    pub runs: EngineRuns<'a>,
+    /// Bootstrap resamples of every interval.
+    pub bootstrap_resamples: usize,
+    /// Seconds of each episode over which joint angles are compared.
+    pub divergence_seconds: f64,
+    /// Per setting.
+    pub settings: &'a [SettingComparison],
+    /// Per push force, over its directions (empty without pushes).
+    pub push_levels: &'a [SettingComparison],
+    /// Every episode on both engines.
+    pub episodes: &'a [EpisodePair],
+}
+
+/// The run directory of each engine in a crosscheck.
+#[derive(Debug, Serialize)]
+pub struct EngineRuns<'a> {
+    /// The rapier run.
+    pub rapier: &'a std::path::Path,
+    /// The MuJoCo run.
+    pub mujoco: &'a std::path::Path,
+}
+
 /// One episode on both engines.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EpisodePair {
