@@ -35,6 +35,15 @@ pub struct RegimeThresholds {
 }
 
 impl RegimeThresholds {
+    /// A task's thresholds in `by_task`, or, for a task without any, all-zero thresholds
+    /// (every step in the low-force regime).
+    pub fn of_task(by_task: &std::collections::BTreeMap<String, Self>, task: &str) -> Self {
+        by_task.get(task).copied().unwrap_or(Self {
+            p33_n: 0.0,
+            p66_n: 0.0,
+        })
+    }
+
     /// Thresholds from every timestep's total force (any order).
     pub fn from_forces(total_force_n: &[f64]) -> Self {
         let mut sorted = total_force_n.to_vec();

@@ -96,14 +96,7 @@ impl Run {
         self.records
             .iter()
             .map(|r| {
-                let th = self
-                    .thresholds
-                    .get(&r.task)
-                    .copied()
-                    .unwrap_or(RegimeThresholds {
-                        p33_n: 0.0,
-                        p66_n: 0.0,
-                    });
+                let th = RegimeThresholds::of_task(&self.thresholds, &r.task);
                 let s = score_episode(&r.series, &th);
                 EpisodePoint {
                     run: run_index,

@@ -206,15 +206,11 @@ pub fn pair_episodes(
     b: &[EpisodeRecord],
     thresholds: &BTreeMap<String, RegimeThresholds>,
 ) -> (Vec<EpisodePair>, Vec<(String, String, String)>) {
-    let none = RegimeThresholds {
-        p33_n: 0.0,
-        p66_n: 0.0,
-    };
     let by_key: BTreeMap<_, _> = b.iter().map(|r| (r.key(), r)).collect();
     let mut unpaired: Vec<_> = Vec::new();
     let mut pairs = Vec::new();
     for r in a {
-        let th = thresholds.get(&r.task).unwrap_or(&none);
+        let th = &RegimeThresholds::of_task(thresholds, &r.task);
         match by_key.get(&r.key()) {
             Some(o) => pairs.push(EpisodePair {
                 task: r.task.clone(),

@@ -42,13 +42,7 @@ pub fn episode_rows(
     records
         .iter()
         .map(|r| {
-            let th = thresholds
-                .get(&r.task)
-                .copied()
-                .unwrap_or(RegimeThresholds {
-                    p33_n: 0.0,
-                    p66_n: 0.0,
-                });
+            let th = RegimeThresholds::of_task(thresholds, &r.task);
             let score = score_episode(&r.series, &th);
             let e = &r.series.kp_err_m;
             let n = e.len() as f64;

@@ -110,12 +110,7 @@ pub fn summarize(
             r.series.clone(),
         ));
     }
-    let th = |task: &str| {
-        thresholds.get(task).copied().unwrap_or(RegimeThresholds {
-            p33_n: 0.0,
-            p66_n: 0.0,
-        })
-    };
+    let th = |task: &str| RegimeThresholds::of_task(thresholds, task);
     by_setting
         .into_iter()
         .map(|(setting, eps)| {
