@@ -2,6 +2,7 @@
 //! frame), observe, advance one control step (action delay, force replay and PD at the
 //! physics rate, metrics, termination), finish.
 
+use crate::evaluation::{reference_steps, PolicyFault, PolicyFaults, Termination, TerminationRule};
 use crate::feet::{FeetMeter, FootContact};
 use crate::metrics::{keypoint_error_m, reanchor, EpisodeSeries};
 use crate::motion::{Reference, ReferenceFrame, Sequence};
@@ -13,81 +14,6 @@ use crate::robot::{forward_kinematics, frame_pose, lowest_sole_point_z, Keypoint
 use nalgebra::{Isometry3, Point3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
-
-/// When an episode counts as failed (the same rule for every policy; README, "What the scores mean").
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct TerminationRule {
-    /// Torso height off its reference by more than this, m.
-    pub max_torso_height_error_m: f64,
-    /// Torso tilt (angle between robot and reference projected gravity) above this, rad.
-    pub max_torso_tilt_error_rad: f64,
-}
-
-impl Default for TerminationRule {
-    fn default() -> Self {
-        Self {
-            max_torso_height_error_m: 0.25,
-            max_torso_tilt_error_rad: 0.8,
-        }
-    }
-}
-
-/// Why an episode ended early.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Termination {
-    /// Torso height error above the rule's limit.
-    TorsoHeight,
-    /// Torso tilt error above the rule's limit.
-    TorsoTilt,
-    /// The policy missed its latency budget under the `fail` miss rule.
-    DeadlineMiss,
-    /// The policy sent a non-finite or out-of-range action under the `fail` miss rule.
-    InvalidAction,
-    /// The policy process died or left mid-episode (not the policy's tracking: a run
-    /// resumed with `--resume` runs such episodes again).
-    PolicyFailed,
-    /// The physics state became non-finite (absurd forces or gains): counted as a fall,
-    /// and the step that diverged is not recorded, so no NaN reaches the results.
-    PhysicsDiverged,
-}
-
-/// One way a policy's answer can fail an environment for one control step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PolicyFault {
-    /// No action within the latency budget.
-    DeadlineMiss,
-    /// A non-finite action, or one beyond the profile's `max_abs_action`.
-    InvalidAction,
-}
-
-impl PolicyFault {
-    /// The termination it causes under the `fail` miss rule.
-    pub fn termination(self) -> Termination {
-        match self {
-            Self::DeadlineMiss => Termination::DeadlineMiss,
-            Self::InvalidAction => Termination::InvalidAction,
-        }
-    }
-}
-
-/// Ways a policy's answer failed an environment, counted per episode.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
-pub struct PolicyFaults {
-    /// Control steps whose action missed the latency budget.
-    pub deadline_misses: u64,
-    /// Control steps whose action was non-finite or beyond the profile's `max_abs_action`.
-    pub invalid_actions: u64,
-}
-
-impl PolicyFaults {
-    /// True when nothing went wrong (kept out of the results then).
-    pub fn is_empty(&self) -> bool {
-        *self == Self::default()
-    }
-}
 
 /// One control step of a rollout trace (`thorarena eval --trace`), for plots and replays.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -529,12 +455,6 @@ fn push_direction(setup: &EpisodeSetup, reference: &Reference) -> Vector3<f64> {
     let x = reference.sample(0.0).world_from_root.rotation * Vector3::x();
     let yaw = x.y.atan2(x.x) + deg.to_radians();
     Vector3::new(yaw.cos(), yaw.sin(), 0.0)
-}
-
-/// Control steps of a reference of `duration_s` at `control_dt_s` (`T_ref`): the steps
-/// an episode records when it runs to the end.
-pub fn reference_steps(duration_s: f64, control_dt_s: f64) -> usize {
-    (duration_s / control_dt_s + 1e-9).floor() as usize
 }
 
 /// Every number of the state is finite (a diverged simulation is not).

@@ -11,6 +11,7 @@
 
 pub mod embedded_data;
 pub mod episode;
+pub mod evaluation;
 pub mod feet;
 pub mod metrics;
 pub mod motion;

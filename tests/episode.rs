@@ -3,7 +3,8 @@
 //! steps, non-finite actions never reach the physics, and re-runs are bit-identical.
 
 use std::sync::Arc;
-use thorarena::episode::{Episode, EpisodeSetup, Termination, TerminationRule};
+use thorarena::episode::{Episode, EpisodeSetup};
+use thorarena::evaluation::{Termination, TerminationRule};
 use thorarena::motion::Sequence;
 use thorarena::physics::{standing_default_pose, PhysicsSettings, RapierPhysics};
 use thorarena::policy::{HoldPolicy, Policy, ReplayPolicy};
@@ -309,12 +310,15 @@ fn a_push_with_a_direction_turns_with_the_references_initial_heading() {
     close(hand_force(None), [10.0, 0.0, 0.0]);
     close(hand_force(Some(0.0)), [0.0, 10.0, 0.0]);
     close(hand_force(Some(90.0)), [-10.0, 0.0, 0.0]);
-    let s = thorarena::runner::Setting::parse("push:20@90").unwrap();
+    let s = thorarena::evaluation::Setting::parse("push:20@90").unwrap();
     assert_eq!(
         (s.name.as_str(), s.push_n, s.push_heading_deg),
         ("push-20@90", 20.0, Some(90.0))
     );
     for bad in ["push:20@400", "push:20@x", "push:20@", "push:2000@0"] {
-        assert!(thorarena::runner::Setting::parse(bad).is_none(), "{bad}");
+        assert!(
+            thorarena::evaluation::Setting::parse(bad).is_none(),
+            "{bad}"
+        );
     }
 }

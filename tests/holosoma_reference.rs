@@ -215,7 +215,8 @@ fn the_motion_in_the_network_is_imported_and_a_network_without_one_is_refused() 
 #[test]
 fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
     use std::sync::Arc;
-    use thorarena::episode::{EpisodeSetup, TerminationRule};
+    use thorarena::episode::EpisodeSetup;
+    use thorarena::evaluation::TerminationRule;
     use thorarena::policy::{BeyondMimicPolicy, Policy};
     const TEST: &str = "holosoma_reference::python_adapter";
     let Some(onnx) = onnx(TEST) else {

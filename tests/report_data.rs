@@ -7,12 +7,13 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use thorarena::episode::TraceStep;
+use thorarena::evaluation::EpisodeRecord;
 use thorarena::metrics::{EpisodeSeries, RegimeThresholds};
 use thorarena::report::{
     comparison_warnings, diagnostics_multi_table, diagnostics_table, fats_table, load_runs,
     report_html, view_scene, ReportError, TraceContext, WarningKind, WebBundle,
 };
-use thorarena::results::{summarize, EpisodeRecord};
+use thorarena::results::summarize;
 use thorarena::robot::{self, forward_kinematics};
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
@@ -32,7 +33,7 @@ fn record(task: &str, id: &str, setting: &str, steps: usize, err_m: f64) -> Epis
         setting: setting.into(),
         coefficient: if setting == "force" { 1.0 } else { 0.0 },
         policy: "p".into(),
-        termination: (steps < 30).then_some(thorarena::episode::Termination::TorsoTilt),
+        termination: (steps < 30).then_some(thorarena::evaluation::Termination::TorsoTilt),
         faults: Default::default(),
         series: EpisodeSeries {
             kp_err_m: (0..steps).map(err).collect(),

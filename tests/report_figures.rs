@@ -9,12 +9,12 @@ use quick_xml::events::Event;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use thorarena::evaluation::EpisodeRecord;
 use thorarena::metrics::EpisodeSeries;
 use thorarena::report::{
     load_runs, report_figures, svg_figures, CurveSeries, FigureKind, ReportFigures, Swatch,
     SweepChart, MARKERS, SURVIVAL_JITTER,
 };
-use thorarena::results::EpisodeRecord;
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
@@ -38,7 +38,7 @@ fn write_run(dir: &Path, policy: &str, err_m: f64, fall: usize) {
                 setting: setting.into(),
                 coefficient: if setting == "force" { 1.0 } else { 0.0 },
                 policy: policy.into(),
-                termination: (steps < 30).then_some(thorarena::episode::Termination::TorsoTilt),
+                termination: (steps < 30).then_some(thorarena::evaluation::Termination::TorsoTilt),
                 faults: Default::default(),
                 series: EpisodeSeries {
                     kp_err_m: (0..steps)

@@ -141,7 +141,8 @@ fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
 
 #[test]
 fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
-    use thorarena::episode::{EpisodeSetup, TerminationRule};
+    use thorarena::episode::EpisodeSetup;
+    use thorarena::evaluation::TerminationRule;
     use thorarena::policy::{Policy, Twist2Policy};
     const TEST: &str = "twist2_reference::python_adapter";
     let Some(reference) = reference_dir(TEST) else {

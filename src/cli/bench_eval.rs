@@ -5,7 +5,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
-use thorarena::episode::{Episode, EpisodeSetup, TerminationRule};
+use thorarena::episode::{Episode, EpisodeSetup};
+use thorarena::evaluation::TerminationRule;
 use thorarena::motion::Dataset;
 use thorarena::physics::{PhysicsSettings, RapierPhysics};
 use thorarena::policy::{HoldPolicy, Policy, ReplayPolicy};

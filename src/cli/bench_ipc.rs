@@ -15,8 +15,8 @@ use anyhow::{bail, Context};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
+use thorarena::evaluation::LatencyRecorder;
 use thorarena::robot::RobotModel;
-use thorarena::runner::LatencyRecorder;
 use thorarena_ipc::{
     EnvHeader, Layout, ObsBatchMut, SimConfig, SimSession, StepOutcome, WaitPolicy, FLAG_ACTIVE,
 };

@@ -9,7 +9,7 @@ use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use thorarena::runner::LatencyRecorder;
+use thorarena::evaluation::LatencyRecorder;
 use thorarena_ipc::{ActionBatchMut, Layout, ObsBatch, ObsBatchMut};
 
 /// Hidden subcommand: the socket baseline's echo peer.

@@ -220,7 +220,7 @@ fn plan_at_scale(
     for task in &plan.tasks {
         let cell = &plan.cells[task.cell];
         let (source, records) = &sources[task.shard.0];
-        let setting = thorarena::runner::Setting::parse(&cell.setting).context("a setting")?;
+        let setting = thorarena::evaluation::Setting::parse(&cell.setting).context("a setting")?;
         let mut header = source.clone();
         header.policy = cell.policy.policy.clone();
         header.settings = vec![setting.clone()];

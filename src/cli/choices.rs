@@ -1,7 +1,7 @@
 //! The command line's spellings of the library's choices: clap stays in the binary, so
 //! the library's enums derive nothing from it. Each maps one to one onto the library's.
 
-use thorarena::policy::{LatencyMode, MissRule};
+use thorarena::evaluation::{LatencyMode, MissRule};
 use thorarena::scenario::Scenario;
 
 /// `--miss-rule`.

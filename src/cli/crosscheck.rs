@@ -3,7 +3,7 @@
 //! score on each engine and their differences, means with a bootstrap 95 % confidence
 //! interval. Both runs are ordinary run directories (`<out>/rapier`, `<out>/mujoco`).
 
-use super::crosscheck_series::{SeriesLog, SERIES_FILE};
+use super::crosscheck_series::{EpisodeKey, SeriesLog, SERIES_FILE};
 use super::eval::{check_out, evaluate, EvalContext, FirstSeconds, RunArgs};
 use super::policy_arg::make_policy;
 use anyhow::{bail, Context};
@@ -177,7 +177,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         )?;
         let seconds = args.divergence_seconds;
         let mut write_error = None;
-        let mut sink = |r: &thorarena::results::EpisodeRecord,
+        let mut sink = |r: &thorarena::evaluation::EpisodeRecord,
                         trace: &thorarena::episode::EpisodeTrace| {
             let q = trace
                 .steps
@@ -209,14 +209,18 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let (mut pairs, unpaired) = pair_episodes(&a, &b, &thresholds);
     if !unpaired.is_empty() {
         bail!(
-            "{} episodes ran on one engine only (e.g. {:?})",
+            "{} episodes ran on one engine only (e.g. {})",
             unpaired.len(),
             unpaired[0]
         );
     }
     let mut without_series = 0;
     for p in &mut pairs {
-        let key = (p.task.clone(), p.sequence_id.clone(), p.setting.clone());
+        let key = EpisodeKey {
+            task: p.task.clone(),
+            sequence_id: p.sequence_id.clone(),
+            setting: p.setting.clone(),
+        };
         let (a, b) = (&series[0], &series[1]);
         if let (Some(qa), Some(qb)) = (a.first_q.get(&key), b.first_q.get(&key)) {
             p.joint_divergence = joint_divergence(qa, qb);

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 pub const SERIES_FILE: &str = "crosscheck-series.jsonl";
 
 /// An episode: (task, sequence id, setting).
-pub type EpisodeKey = (String, String, String);
+pub use thorarena::evaluation::EpisodeKey;
 
 /// Per episode, a series of vectors (per control step).
 pub type SeriesByEpisode = BTreeMap<EpisodeKey, Vec<Vec<f64>>>;
@@ -57,7 +57,11 @@ impl SeriesLog {
                 let line = line.with_context(|| format!("reading {}", path.display()))?;
                 match serde_json::from_str::<Line>(&line) {
                     Ok(l) => {
-                        let key = (l.task, l.sequence_id, l.setting);
+                        let key = EpisodeKey {
+                            task: l.task,
+                            sequence_id: l.sequence_id,
+                            setting: l.setting,
+                        };
                         first_q.insert(key.clone(), l.first_q);
                         foot_slip_m.insert(key, l.foot_slip_m);
                         kept.push(line);
@@ -91,7 +95,11 @@ impl SeriesLog {
         first_q: Vec<Vec<f64>>,
         foot_slip_m: Vec<Vec<f64>>,
     ) -> anyhow::Result<()> {
-        let (task, sequence_id, setting) = key.clone();
+        let EpisodeKey {
+            task,
+            sequence_id,
+            setting,
+        } = key.clone();
         let line = Line {
             task,
             sequence_id,

@@ -7,16 +7,17 @@ use anyhow::{bail, Context};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::PathBuf;
-use thorarena::episode::{EpisodeTrace, Termination, TerminationRule};
+use thorarena::episode::EpisodeTrace;
+use thorarena::evaluation::{EpisodeRecord, Setting, Termination, TerminationRule};
 use thorarena::motion::{Dataset, Sequence};
 use thorarena::policy::Policy;
 use thorarena::profile::{bundled_profile_path, load_profile, Profile};
 use thorarena::results::{
     read_header, sort_records, write_header, write_record, write_results, EpisodeLog,
-    EpisodeRecord, PlannedSequence, PolicyIoReport, RunHeader, RESULTS_VERSION,
+    PlannedSequence, PolicyIoReport, RunHeader, RESULTS_VERSION,
 };
 use thorarena::robot::RobotModel;
-use thorarena::runner::{run_eval, task_thresholds, EvalPlan, Setting};
+use thorarena::runner::{run_eval, task_thresholds, EvalPlan};
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
@@ -214,7 +215,7 @@ pub(super) struct EvalContext {
     pub dataset_sha256: String,
     pub sequences: Vec<Sequence>,
     /// `--tasks`/`--sequences` and the dataset's size, when they chose part of it.
-    pub subset: Option<thorarena::results::Subset>,
+    pub subset: Option<thorarena::motion::Subset>,
     pub settings: Vec<Setting>,
     pub workers: usize,
     pub envs: usize,
@@ -370,7 +371,7 @@ impl EvalContext {
         let sequences = selection
             .pick(all, |q| (&q.task, &q.sequence_id))
             .with_context(|| format!("{} in {}", selection.flags(), dataset.display()))?;
-        let subset = (!selection.is_all()).then_some(thorarena::results::Subset {
+        let subset = (!selection.is_all()).then_some(thorarena::motion::Subset {
             selection,
             dataset_sequences,
         });
@@ -689,7 +690,8 @@ pub(super) fn evaluate(
     records.extend(outcome.records);
     sort_records(&mut records, &header);
     let thresholds = task_thresholds(sequences, header.control_dt_s);
-    let tables = write_results(out, &header, &records, thresholds, Some(io_report))?;
+    let summary = write_results(out, &header, &records, thresholds, Some(io_report))?;
+    let tables = thorarena::report::write_run_tables(out, &summary)?;
     println!("{tables}");
     eprintln!(
         "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md, episodes.csv}}",

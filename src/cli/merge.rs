@@ -4,10 +4,11 @@
 use anyhow::{bail, Context};
 use std::collections::BTreeMap;
 use std::path::PathBuf;
+use thorarena::evaluation::EpisodeRecord;
 use thorarena::motion::Dataset;
 use thorarena::results::{
-    read_header, sort_records, write_header, write_record, write_results, EpisodeLog,
-    EpisodeRecord, RunHeader, EPISODES_FILE,
+    read_header, sort_records, write_header, write_record, write_results, EpisodeLog, RunHeader,
+    EPISODES_FILE,
 };
 use thorarena::runner::task_thresholds;
 
@@ -115,7 +116,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     write_header(&args.out, &header)?;
     let thresholds = task_thresholds(&sequences, header.control_dt_s);
-    let tables = write_results(&args.out, &header, &records, thresholds, None)?;
+    let summary = write_results(&args.out, &header, &records, thresholds, None)?;
+    let tables = thorarena::report::write_run_tables(&args.out, &summary)?;
     println!("{tables}");
     eprintln!(
         "merged {} runs, {} episodes → {}",

@@ -4,13 +4,13 @@
 use super::choices::{LatencyModeArg, MissRuleArg};
 use anyhow::{bail, Context};
 use std::time::Duration;
+use thorarena::evaluation::{parse_budget, Budget, PolicyIoRules};
 use thorarena::policy::{
     BalanceGains, BalancePolicy, BeyondMimicPolicy, HoldPolicy, Policy, RemoteConfig, RemotePolicy,
     ReplayPolicy, Twist2Policy,
 };
 use thorarena::profile::Profile;
 use thorarena::robot::RobotModel;
-use thorarena::runner::PolicyIoRules;
 use thorarena_ipc::{SimConfig, WaitPolicy};
 
 /// Options of a policy's answers (all policies) and of the session (remote ones).
@@ -62,37 +62,6 @@ pub enum OnPolicyFailure {
 
 /// Most environment slots a run may ask for.
 pub const MAX_ENVS: usize = 4096;
-
-/// A latency budget per step; `None` is pure lock-step.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Budget(pub Option<Duration>);
-
-/// Parses `--budget` (`none`, `2ms`, `500us`, `0.004s`); shared with the sweep, whose
-/// latency curves put budgets on an axis.
-pub(super) fn parse_budget(s: &str) -> Result<Budget, String> {
-    if s == "none" {
-        return Ok(Budget(None));
-    }
-    let (num, unit) = s
-        .find(|c: char| c.is_ascii_alphabetic())
-        .map(|i| s.split_at(i))
-        .ok_or_else(|| format!("`{s}`: give a unit (us, ms, s) or `none`"))?;
-    let v: f64 = num
-        .parse()
-        .map_err(|_| format!("`{s}`: `{num}` is not a number"))?;
-    let secs = match unit {
-        "us" | "µs" => v * 1e-6,
-        "ms" => v * 1e-3,
-        "s" => v,
-        _ => return Err(format!("`{s}`: unknown unit `{unit}` (us, ms, s)")),
-    };
-    if !(secs.is_finite() && secs > 0.0) {
-        return Err(format!("`{s}`: the budget must be > 0 (or `none`)"));
-    }
-    Duration::try_from_secs_f64(secs)
-        .map(|d| Budget(Some(d)))
-        .map_err(|_| format!("`{s}`: too long for a budget (give one that fits a duration)"))
-}
 
 impl PolicyIoArgs {
     /// The rules recorded in `run.json`.

@@ -22,5 +22,5 @@ pub use glitch::{
 pub use reference::{
     ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference, ReferenceFrame,
 };
-pub use selection::{SelectionError, SequenceSelection};
+pub use selection::{SelectionError, SequenceSelection, Subset};
 pub use sequence::{Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};

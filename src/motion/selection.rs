@@ -180,3 +180,25 @@ mod tests {
         );
     }
 }
+
+/// A run of part of its dataset: the selection, and how many sequences the whole dataset
+/// has (so a table can say "2 of 12 sequences").
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Subset {
+    /// Tasks and sequences chosen.
+    #[serde(flatten)]
+    pub selection: SequenceSelection,
+    /// Sequences of the whole dataset.
+    pub dataset_sequences: usize,
+}
+
+impl Subset {
+    /// "2 of 12 sequences (--tasks push_chair)".
+    pub fn describe(&self, planned: usize) -> String {
+        format!(
+            "{planned} of the dataset's {} sequences ({})",
+            self.dataset_sequences,
+            self.selection.flags()
+        )
+    }
+}

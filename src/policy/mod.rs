@@ -15,7 +15,6 @@ pub use twist2::Twist2Policy;
 
 use crate::motion::ReferenceFrame;
 use crate::physics::RootState;
-use serde::{Deserialize, Serialize};
 use std::time::Duration;
 
 /// What a policy sees of one environment at one control step: benchmark signals, not any
@@ -52,34 +51,6 @@ pub enum ActOutcome {
     /// The policy is gone (its process died or left): every running episode ends as
     /// `policy_failed`.
     Failed,
-}
-
-/// What happens to an environment whose action missed the deadline or was unusable
-/// (non-finite, or beyond the profile's `max_abs_action`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MissRule {
-    /// Keep applying the last action that reached the robot.
-    #[default]
-    Hold,
-    /// Apply the zero action (the profile's default pose for offset-style profiles).
-    Zero,
-    /// End the episode (`deadline_miss` or `invalid_action`).
-    Fail,
-}
-
-/// When a policy's action takes effect in simulated time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum LatencyMode {
-    /// At the start of the control step, whatever the policy took (lock-step; results are
-    /// deterministic).
-    #[default]
-    Ignore,
-    /// Deployment-faithful: the measured policy latency delays the action's effect,
-    /// rounded to physics steps and capped at one control period; the previous targets
-    /// act until then. Results then depend on the machine.
-    Measured,
 }
 
 /// A controller driven one control step at a time for a batch of environments.

@@ -15,6 +15,7 @@
 
 mod figures;
 mod html;
+mod run_tables;
 mod runs;
 mod scene;
 mod style;
@@ -26,6 +27,7 @@ pub use figures::{
     SweepChart,
 };
 pub use html::{escape, report_html, sweep_report_html, view_html, Page, WebBundle, WEB_DIST_ENV};
+pub use run_tables::{run_tables, write_run_tables};
 pub use runs::{
     comparison_notes, comparison_warnings, label_engines, label_runs, load_run, load_runs,
     mixed_engines, ComparisonWarning, EpisodePoint, Run, WarningKind, MIXED_ENGINES_WHY,

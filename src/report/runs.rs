@@ -5,10 +5,11 @@
 //! own numbers, and undefined diagnostics stay NaN (JSON wrote them as `null`).
 
 use super::ReportError;
+use crate::evaluation::EpisodeRecord;
 use crate::metrics::{score_episode, Diagnostics, RegimeThresholds, TaskSummary, SIGMA_M};
 use crate::results::{
-    read_header, read_summary, summarize, Coverage, EpisodeLog, EpisodeRecord, PolicyIoReport,
-    RunHeader, SettingResults, EPISODES_FILE,
+    read_header, read_summary, summarize, Coverage, EpisodeLog, PolicyIoReport, RunHeader,
+    SettingResults, EPISODES_FILE,
 };
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

@@ -5,7 +5,8 @@
 
 use super::ReportError;
 use crate::episode::TraceStep;
-use crate::results::{read_header, EpisodeLog, EpisodeRecord, RunHeader, EPISODES_FILE};
+use crate::evaluation::EpisodeRecord;
+use crate::results::{read_header, EpisodeLog, RunHeader, EPISODES_FILE};
 use crate::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::Serialize;

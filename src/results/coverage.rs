@@ -1,8 +1,9 @@
 //! How much of its plan a run holds: a run killed early, a cut file or a policy that died
 //! leaves cells with fewer episodes than planned, and every table built from it says so.
 
-use super::{EpisodeRecord, RunHeader};
-use crate::episode::Termination;
+use super::RunHeader;
+use crate::evaluation::EpisodeRecord;
+use crate::evaluation::Termination;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write;

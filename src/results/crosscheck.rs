@@ -3,10 +3,10 @@
 //! means and the mean paired difference with a bootstrap confidence interval — survival
 //! under force is chaotic per episode, so only means over many episodes say anything.
 
-use super::EpisodeRecord;
+use crate::evaluation::Setting;
+use crate::evaluation::{EpisodeKey, EpisodeRecord};
 pub use crate::metrics::{mean_ci, MeanCi};
 use crate::metrics::{score_episode, stratified_mean_ci, RegimeThresholds};
-use crate::runner::Setting;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -205,7 +205,7 @@ pub fn pair_episodes(
     a: &[EpisodeRecord],
     b: &[EpisodeRecord],
     thresholds: &BTreeMap<String, RegimeThresholds>,
-) -> (Vec<EpisodePair>, Vec<(String, String, String)>) {
+) -> (Vec<EpisodePair>, Vec<EpisodeKey>) {
     let by_key: BTreeMap<_, _> = b.iter().map(|r| (r.key(), r)).collect();
     let mut unpaired: Vec<_> = Vec::new();
     let mut pairs = Vec::new();

@@ -2,8 +2,9 @@
 //! (survival, mean and RMS keypoint error, score, why it ended), so per-sequence results
 //! can be read off a spreadsheet instead of the per-step series of `episodes.jsonl`.
 
-use super::{EpisodeRecord, ResultsError};
-use crate::episode::Termination;
+use super::ResultsError;
+use crate::evaluation::EpisodeRecord;
+use crate::evaluation::Termination;
 use crate::metrics::{score_episode, RegimeThresholds};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

@@ -1,7 +1,8 @@
 //! `episodes.jsonl`: one record per finished episode, appended and flushed as each
 //! finishes, so a killed run loses at most the line being written.
 
-use super::{EpisodeRecord, ResultsError, RunHeader};
+use super::{ResultsError, RunHeader};
+use crate::evaluation::EpisodeRecord;
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -56,7 +57,7 @@ impl EpisodeLog {
                     line: Some(line_no),
                     source,
                 })?;
-            record.check(header).map_err(bad)?;
+            header.check_record(&record).map_err(bad)?;
             if !seen.insert(record.key()) {
                 return Err(bad(format!(
                     "episode {}/{} ({}) is recorded twice",

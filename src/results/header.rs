@@ -1,9 +1,8 @@
 //! `run.json`: what a run measured.
 
 use super::{ResultsError, HEADER_FILE, RESULTS_VERSION};
-use crate::episode::{reference_steps, TerminationRule};
+use crate::evaluation::{reference_steps, EpisodeKey, PolicyIoRules, Setting, TerminationRule};
 use crate::motion::{Reference, Sequence};
-use crate::runner::{PolicyIoRules, Setting};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -69,34 +68,12 @@ pub struct RunHeader {
     pub sequences: Vec<PlannedSequence>,
     /// The sequences chosen when not the whole dataset (`--tasks`, `--sequences`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub subset: Option<Subset>,
+    pub subset: Option<crate::motion::Subset>,
     /// `(i, n)` when this run is shard i of n.
     pub shard: Option<(usize, usize)>,
     /// Rules of the policy's answers (miss rule, latency mode, budget).
     #[serde(default)]
     pub io: PolicyIoRules,
-}
-
-/// A run of part of its dataset: the selection, and how many sequences the whole dataset
-/// has (so a table can say "2 of 12 sequences").
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Subset {
-    /// Tasks and sequences chosen.
-    #[serde(flatten)]
-    pub selection: crate::motion::SequenceSelection,
-    /// Sequences of the whole dataset.
-    pub dataset_sequences: usize,
-}
-
-impl Subset {
-    /// "2 of 12 sequences (--tasks push_chair)".
-    pub fn describe(&self, planned: usize) -> String {
-        format!(
-            "{planned} of the dataset's {} sequences ({})",
-            self.dataset_sequences,
-            self.selection.flags()
-        )
-    }
 }
 
 impl RunHeader {
@@ -128,7 +105,16 @@ impl RunHeader {
     /// The episodes this run (or shard) plans, as (sequence index, setting index), in
     /// schedule order.
     pub fn planned_jobs(&self) -> Vec<(usize, usize)> {
-        crate::runner::schedule(self.sequences.len(), self.settings.len(), self.shard)
+        crate::evaluation::schedule(self.sequences.len(), self.settings.len(), self.shard)
+    }
+
+    /// The key of job `(sequence index, setting index)` of [`Self::planned_jobs`].
+    pub fn job_key(&self, (q, s): (usize, usize)) -> EpisodeKey {
+        EpisodeKey {
+            task: self.sequences[q].task.clone(),
+            sequence_id: self.sequences[q].sequence_id.clone(),
+            setting: self.settings[s].name.clone(),
+        }
     }
 
     /// The fields in which `other` differs from this header, by name (`version`,

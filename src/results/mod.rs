@@ -33,8 +33,7 @@ mod summary;
 pub use coverage::{CellCoverage, Coverage};
 pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_CSV_FILE};
 pub use episodes::{write_record, EpisodeLog};
-pub use header::{read_header, write_header, PlannedSequence, RunHeader, Subset};
-pub use record::EpisodeRecord;
+pub use header::{read_header, write_header, PlannedSequence, RunHeader};
 pub use summary::{
     fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,
     SettingResults, SettingSummary, Summary,

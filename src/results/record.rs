@@ -1,68 +1,36 @@
-//! One finished episode, as `episodes.jsonl` holds it, and what makes a record believable.
+//! What makes an episode record believable: that the run its header describes can have
+//! written it.
 
 use super::RunHeader;
-use crate::episode::{PolicyFaults, Termination};
-use crate::metrics::EpisodeSeries;
-use serde::{Deserialize, Serialize};
+use crate::evaluation::EpisodeRecord;
 
-/// One finished episode, as streamed to `episodes.jsonl`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EpisodeRecord {
-    /// Task.
-    pub task: String,
-    /// Sequence id.
-    pub sequence_id: String,
-    /// Setting name.
-    pub setting: String,
-    /// Replay coefficient.
-    pub coefficient: f64,
-    /// Policy name.
-    pub policy: String,
-    /// Why it ended early, if it did.
-    pub termination: Option<Termination>,
-    /// Deadline misses and invalid actions (absent when there were none).
-    #[serde(default, skip_serializing_if = "PolicyFaults::is_empty")]
-    pub faults: PolicyFaults,
-    /// The per-step series the scores are computed from.
-    pub series: EpisodeSeries,
-}
-
-impl EpisodeRecord {
-    /// The episode's identity in a run: (task, sequence id, setting).
-    pub fn key(&self) -> (String, String, String) {
-        (
-            self.task.clone(),
-            self.sequence_id.clone(),
-            self.setting.clone(),
-        )
-    }
-
-    /// Whether this record can have been written by the run `header` describes: policy,
+impl RunHeader {
+    /// Whether `record` can have been written by the run this header describes: policy,
     /// setting (and its coefficient) and sequence are the header's, the episode is one of
     /// this run's (or shard's) jobs, every series has one finite, non-negative value per
     /// recorded step, no more steps than the reference has, and all of them unless the
     /// episode ended early. The error names the episode and what is wrong.
-    pub fn check(&self, header: &RunHeader) -> Result<(), String> {
-        let name = format!("{}/{} ({})", self.task, self.sequence_id, self.setting);
+    pub fn check_record(&self, record: &EpisodeRecord) -> Result<(), String> {
+        let header = self;
+        let name = record.key();
         let bad = |what: String| Err(format!("episode {name}: {what}"));
-        if self.policy != header.policy {
+        if record.policy != header.policy {
             return bad(format!(
                 "policy `{}`, but the run is of `{}`",
-                self.policy, header.policy
+                record.policy, header.policy
             ));
         }
-        let Some(s) = header.setting_index(&self.setting) else {
+        let Some(s) = header.setting_index(&record.setting) else {
             return bad("a setting this run does not have".into());
         };
         let setting = &header.settings[s];
-        if self.coefficient.to_bits() != setting.coefficient.to_bits() {
+        if record.coefficient.to_bits() != setting.coefficient.to_bits() {
             return bad(format!(
                 "coefficient {}, but the run's setting has {}",
-                self.coefficient, setting.coefficient
+                record.coefficient, setting.coefficient
             ));
         }
-        let Some(q) = header.sequence_index(&self.task, &self.sequence_id) else {
+        let Some(q) = header.sequence_index(&record.task, &record.sequence_id) else {
             return bad("a task and sequence not in the run's dataset".into());
         };
         if let Some((i, n)) = header.shard {
@@ -72,7 +40,7 @@ impl EpisodeRecord {
             }
         }
         let steps_ref = header.sequences[q].steps_ref;
-        let series = &self.series;
+        let series = &record.series;
         if series.steps_ref != steps_ref {
             return bad(format!(
                 "steps_ref {}, but the reference has {steps_ref} control steps",
@@ -107,7 +75,7 @@ impl EpisodeRecord {
                 "{steps} recorded steps, more than the reference's {steps_ref}"
             ));
         }
-        if self.termination.is_none() && steps != steps_ref {
+        if record.termination.is_none() && steps != steps_ref {
             return bad(format!(
                 "{steps} of {steps_ref} steps recorded, but no termination says why it ended early"
             ));

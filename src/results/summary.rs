@@ -1,17 +1,18 @@
-//! `summary.json`, `tables.md` and `episodes.csv`: the scores of a run's records, written the same way by
-//! `eval`, `merge` and a sweep's collect, so a merged run is written exactly as a single
-//! one.
+//! `summary.json` and `episodes.csv`: the scores of a run's records, written the same way
+//! by `eval`, `merge` and a sweep's collect, so a merged run is written exactly as a
+//! single one. (`tables.md`, the same scores for people, is written by
+//! `report::write_run_tables` from the [`Summary`].)
 
 use super::episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_CSV_FILE};
 use super::header::parse_versioned;
-use super::{Coverage, EpisodeRecord, ResultsError, RunHeader, SUMMARY_FILE, TABLES_FILE};
+use super::{Coverage, ResultsError, RunHeader, SUMMARY_FILE};
+use crate::evaluation::EpisodeRecord;
+use crate::evaluation::LatencySummary;
 use crate::metrics::{
     aggregate, stratified_mean_ci, Diagnostics, EpisodeSeries, RegimeThresholds, TaskSummary,
     BOOTSTRAP_RESAMPLES,
 };
 use crate::policy::TransportStats;
-use crate::report::{diagnostics_table, task_fats_table};
-use crate::runner::LatencySummary;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -31,32 +32,6 @@ pub struct PolicyIoReport {
     /// Control steps with unusable actions, summed over episodes.
     #[serde(default)]
     pub invalid_actions: u64,
-}
-
-impl PolicyIoReport {
-    fn markdown(&self, header: &RunHeader) -> String {
-        let l = &self.latency;
-        let budget = header
-            .io
-            .budget_s
-            .map_or("none (lock-step)".to_string(), |b| {
-                format!("{:.3} ms", b * 1e3)
-            });
-        let mut s = format!(
-            "## Policy I/O
-
-Per-step latency over {} steps (µs): p50 {:.1}, p90 {:.1}, p99 {:.1}, p99.9 {:.1}, max {:.1}. Budget {budget}, miss rule `{:?}`, latency mode `{:?}`. Deadline misses: {}; invalid actions: {}.",
-            l.count, l.p50_us, l.p90_us, l.p99_us, l.p999_us, l.max_us,
-            header.io.miss_rule, header.io.latency_mode, self.deadline_misses, self.invalid_actions
-        );
-        if let Some(t) = &self.transport {
-            s += &format!(
-                " Late replies: {}; policy failures: {}; reconnections: {}.",
-                t.late_replies, t.policy_failures, t.reconnections
-            );
-        }
-        s + "\n"
-    }
 }
 
 /// One setting's scores.
@@ -142,58 +117,21 @@ pub fn fats_intervals(rows: &[EpisodeRow]) -> BTreeMap<String, [f64; 2]> {
         .collect()
 }
 
-/// Scores the records, writes `summary.json`, `tables.md` and `episodes.csv`, returns the tables. A run
-/// that does not hold its whole plan says so at the top of the tables, cell by cell.
+/// Scores the records, writes `summary.json` and `episodes.csv`, and returns the summary
+/// (its [`Summary::coverage`] says what a run that does not hold its whole plan lacks).
 pub fn write_results(
     out: &Path,
     header: &RunHeader,
     records: &[EpisodeRecord],
     thresholds: BTreeMap<String, RegimeThresholds>,
     io: Option<PolicyIoReport>,
-) -> Result<String, ResultsError> {
+) -> Result<Summary, ResultsError> {
     let results = summarize(records, &thresholds);
     let rows = episode_rows(records, &thresholds);
     let intervals = fats_intervals(&rows);
     let coverage = Coverage::of(header, records);
-    let shard_note = match header.shard {
-        Some((i, n)) => format!("\n\n**Shard {i}/{n}: partial results; `thorarena merge` the shards for the benchmark.**"),
-        None => String::new(),
-    };
-    let subset_note = match &header.subset {
-        Some(subset) => format!(
-            "\n\n**Part of the dataset: {}; not the benchmark's full coverage.**",
-            subset.describe(header.sequences.len())
-        ),
-        None => String::new(),
-    };
-    let partial_note = match coverage.sentence() {
-        Some(s) => format!("\n\n**Warning — {s}.**\n\n{}", coverage.markdown()),
-        None => String::new(),
-    };
-    let title = format!(
-        "ThorArena {} — policy `{}`, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{subset_note}{shard_note}{partial_note}",
-        header.version,
-        header.policy,
-        header.profile,
-        header.engine_label(),
-        header.dataset,
-        &header.dataset_sha256[..header.dataset_sha256.len().min(16)],
-        header.keypoints,
-        header.termination.max_torso_height_error_m,
-        header.termination.max_torso_tilt_error_rad
-    );
-    let mut tables = format!(
-        "{title}\n\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
-        task_fats_table(&results, &intervals),
-        diagnostics_table(&results)
-    );
-    if let Some(io) = &io {
-        tables += &format!("\n{}", io.markdown(header));
-    }
     let csv_path = out.join(EPISODES_CSV_FILE);
     write_episodes_csv(&csv_path, &rows)?;
-    let tables_path = out.join(TABLES_FILE);
-    std::fs::write(&tables_path, &tables).map_err(ResultsError::io(&tables_path))?;
     let summary = Summary {
         results_version: super::RESULTS_VERSION,
         header: header.clone(),
@@ -220,7 +158,7 @@ pub fn write_results(
     let path = out.join(SUMMARY_FILE);
     let text = serde_json::to_string_pretty(&summary).expect("a summary serializes") + "\n";
     std::fs::write(&path, text).map_err(ResultsError::io(&path))?;
-    Ok(tables)
+    Ok(summary)
 }
 
 /// Reads `<run>/summary.json`.

@@ -8,13 +8,13 @@
 //! slot or worker ran it, nor on N or W — because a reset rebuilds the physics world and
 //! every slot's episode sees only its own observations.
 
-use super::latency::LatencyRecorder;
-use super::{EvalPlan, LatencySummary};
-use crate::episode::{Episode, EpisodeSetup, EpisodeTrace, PolicyFault, Termination};
+use super::EvalPlan;
+use crate::episode::{Episode, EpisodeSetup, EpisodeTrace};
+use crate::evaluation::{EpisodeRecord, LatencyMode, MissRule, PolicyFault, Termination};
+use crate::evaluation::{LatencyRecorder, LatencySummary};
 use crate::motion::Sequence;
 use crate::physics::{make_physics, Physics, PhysicsSettings};
-use crate::policy::{ActOutcome, LatencyMode, MissRule, Observation, Policy, TransportStats};
-use crate::results::EpisodeRecord;
+use crate::policy::{ActOutcome, Observation, Policy, TransportStats};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::sync::Arc;

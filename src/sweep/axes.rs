@@ -8,7 +8,7 @@
 use super::plan::DatasetInfo;
 use super::spec::{resolve, SweepSpec};
 use super::SweepError;
-use crate::runner::Setting;
+use crate::evaluation::Setting;
 use std::path::Path;
 
 /// `Err` naming the first pair of equivalent values of an axis.

@@ -206,7 +206,7 @@ impl Plan {
                 .map_err(|e| invalid(format!("`tasks`/`sequences` in dataset `{spelled}`: {e}")))?;
             if picked.iter().all(|q| !q.forces_recorded) {
                 let replaying = spec.settings.iter().find(|s| {
-                    crate::runner::Setting::parse(s).is_some_and(|s| s.coefficient != 0.0)
+                    crate::evaluation::Setting::parse(s).is_some_and(|s| s.coefficient != 0.0)
                 });
                 if let Some(setting) = replaying {
                     return Err(invalid(format!(
@@ -365,7 +365,7 @@ impl Plan {
 }
 
 /// Episodes of shard `(i, n)` of `episodes` (one setting): the jobs `j` with
-/// `j % n == i`, as [`crate::runner::schedule`] deals them, counted without listing them.
+/// `j % n == i`, as [`crate::evaluation::schedule`] deals them, counted without listing them.
 pub(super) fn shard_episodes(episodes: usize, (i, n): (usize, usize)) -> usize {
     if n == 0 || i >= episodes {
         0

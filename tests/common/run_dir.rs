@@ -3,13 +3,14 @@
 #![allow(dead_code)]
 
 use std::path::Path;
-use thorarena::episode::TerminationRule;
+use thorarena::evaluation::{
+    EpisodeRecord, LatencySummary, PolicyIoRules, Setting, TerminationRule,
+};
 use thorarena::metrics::RegimeThresholds;
 use thorarena::results::{
-    write_header, write_record, write_results, EpisodeRecord, PlannedSequence, PolicyIoReport,
-    RunHeader, RESULTS_VERSION,
+    write_header, write_record, write_results, PlannedSequence, PolicyIoReport, RunHeader,
+    RESULTS_VERSION,
 };
-use thorarena::runner::{LatencySummary, PolicyIoRules, Setting};
 
 /// A run of `policy` planning clean_table and push_chair, two sequences each of 30
 /// steps, under `force` and `no-force`.
@@ -52,17 +53,10 @@ pub fn header(policy: &str) -> RunHeader {
 pub fn write_run(dir: &Path, header: &RunHeader, records: &[EpisodeRecord], transport: bool) {
     std::fs::create_dir_all(dir).unwrap();
     write_header(dir, header).unwrap();
-    let planned: Vec<(String, String, String)> = header
+    let planned: Vec<_> = header
         .planned_jobs()
         .into_iter()
-        .map(|(q, s)| {
-            let seq = &header.sequences[q];
-            (
-                seq.task.clone(),
-                seq.sequence_id.clone(),
-                header.settings[s].name.clone(),
-            )
-        })
+        .map(|job| header.job_key(job))
         .collect();
     let records: Vec<EpisodeRecord> = records
         .iter()
@@ -101,5 +95,6 @@ pub fn write_run(dir: &Path, header: &RunHeader, records: &[EpisodeRecord], tran
         deadline_misses: if transport { 2 } else { 0 },
         invalid_actions: 0,
     };
-    write_results(dir, header, &records, thresholds, Some(io)).unwrap();
+    let summary = write_results(dir, header, &records, thresholds, Some(io)).unwrap();
+    thorarena::report::write_run_tables(dir, &summary).unwrap();
 }

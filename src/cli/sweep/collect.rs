@@ -129,7 +129,8 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             .with_context(|| format!("writing {}", episodes_path.display()))?;
         write_header(&out, &header)?;
         let thresholds = thorarena::runner::task_thresholds(sequences, header.control_dt_s);
-        write_results(&out, &header, &records, thresholds, None)?;
+        let summary = write_results(&out, &header, &records, thresholds, None)?;
+        thorarena::report::write_run_tables(&out, &summary)?;
         let summary = read_summary(&out)?;
         let mut faults = [0u64; 3];
         let mut latency_us = None;
@@ -193,10 +194,10 @@ pub(super) fn sweep_title(plan: &Plan) -> String {
     let count = |f: &dyn Fn(&thorarena::sweep::Cell) -> String| {
         plan.cells.iter().map(f).collect::<BTreeSet<_>>().len()
     };
-    let settings: Vec<Option<thorarena::runner::Setting>> = plan
+    let settings: Vec<Option<thorarena::evaluation::Setting>> = plan
         .cells
         .iter()
-        .map(|c| thorarena::runner::Setting::parse(&c.setting))
+        .map(|c| thorarena::evaluation::Setting::parse(&c.setting))
         .collect();
     let setting_noun = if settings
         .iter()
@@ -244,7 +245,7 @@ pub(super) fn sweep_title(plan: &Plan) -> String {
 
 /// A latency budget in ms, parsed as `--budget` parses it; `None` for `none`.
 pub(super) fn budget_ms(budget: &str) -> Option<f64> {
-    crate::cli::policy_arg::parse_budget(budget)
+    thorarena::evaluation::parse_budget(budget)
         .ok()
         .and_then(|b| b.0)
         .map(|d| d.as_secs_f64() * 1e3)
@@ -406,7 +407,7 @@ pub(super) fn sweep_charts(
             .collect();
         (xs.len() >= 2).then_some(series)
     };
-    let setting = |c: &thorarena::sweep::Cell| thorarena::runner::Setting::parse(&c.setting);
+    let setting = |c: &thorarena::sweep::Cell| thorarena::evaluation::Setting::parse(&c.setting);
     let coefficient = |c: &thorarena::sweep::Cell| {
         setting(c)
             .filter(|s| s.push_n == 0.0)

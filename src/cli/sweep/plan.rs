@@ -89,7 +89,7 @@ pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
         let cell = &plan.cells[task.cell];
         let args = eval_cli(task, "plan-check")
             .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
-        if thorarena::runner::Setting::parse(&cell.setting).is_none() {
+        if thorarena::evaluation::Setting::parse(&cell.setting).is_none() {
             bail!(
                 "cell {}: setting `{}` is not force, no-force, a number or push:<N>",
                 cell.index,

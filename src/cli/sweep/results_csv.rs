@@ -60,7 +60,7 @@ pub(super) fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<R
         .iter()
         .zip(results)
         .map(|(cell, r)| {
-            let setting = thorarena::runner::Setting::parse(&cell.setting);
+            let setting = thorarena::evaluation::Setting::parse(&cell.setting);
             let scores = r.as_ref().and_then(|r| r.summary.settings.values().next());
             let d = |f: fn(&Diagnostics) -> f64| scores.and_then(|s| finite(f(&s.average)));
             let ci = scores.and_then(|s| s.fats_ci95);

@@ -7,7 +7,8 @@
 //! cut short by a policy failure.
 
 use super::*;
-use thorarena::results::{read_header, Coverage, EpisodeLog, EpisodeRecord, RunHeader};
+use thorarena::evaluation::EpisodeRecord;
+use thorarena::results::{read_header, Coverage, EpisodeLog, RunHeader};
 
 /// Why a task's run does not count for the task.
 #[derive(Debug)]
@@ -67,8 +68,8 @@ fn header_problem(plan: &Plan, task: &Task, header: &RunHeader) -> anyhow::Resul
         }
     }
     let dataset = cell.dataset.display().to_string();
-    let setting = thorarena::runner::Setting::parse(&cell.setting);
-    let termination = thorarena::episode::TerminationRule {
+    let setting = thorarena::evaluation::Setting::parse(&cell.setting);
+    let termination = thorarena::evaluation::TerminationRule {
         max_torso_height_error_m: run.max_torso_height_error,
         max_torso_tilt_error_rad: run.max_torso_tilt_error,
     };

@@ -1,0 +1,20 @@
+//! The vocabulary of an evaluation, below both the runner that performs one and the run
+//! directory that stores it: force [`Setting`]s, the rules every policy is held to
+//! ([`TerminationRule`], [`PolicyIoRules`], [`Budget`]), the [`schedule`] of episodes, an
+//! episode's identity ([`EpisodeKey`]) and outcome ([`EpisodeRecord`], [`Termination`],
+//! [`PolicyFaults`]), and the policy's latency histogram.
+//!
+//! `runner` and `results` both point down at this module and never at each other, so a
+//! record can travel from the runner to the report without either knowing the other.
+
+mod latency;
+mod record;
+mod rules;
+mod schedule;
+mod setting;
+
+pub use latency::{LatencyRecorder, LatencySummary};
+pub use record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
+pub use rules::{parse_budget, Budget, LatencyMode, MissRule, PolicyIoRules, TerminationRule};
+pub use schedule::{reference_steps, schedule};
+pub use setting::Setting;

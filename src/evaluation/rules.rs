@@ -1,0 +1,112 @@
+//! The rules every policy of a comparison is held to: when an episode has failed, and
+//! what the runner does with a policy's late or unusable answers. They are part of a
+//! run's identity (`run.json`), so runs under other rules are never merged or compared
+//! as one.
+
+use serde::{Deserialize, Serialize};
+use std::time::Duration;
+
+/// When an episode counts as failed (the same rule for every policy; README, "What the scores mean").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TerminationRule {
+    /// Torso height off its reference by more than this, m.
+    pub max_torso_height_error_m: f64,
+    /// Torso tilt (angle between robot and reference projected gravity) above this, rad.
+    pub max_torso_tilt_error_rad: f64,
+}
+
+impl Default for TerminationRule {
+    fn default() -> Self {
+        Self {
+            max_torso_height_error_m: 0.25,
+            max_torso_tilt_error_rad: 0.8,
+        }
+    }
+}
+
+/// The rules of the policy's answers: the same for every policy of a comparison, so they
+/// are part of the run's identity (`run.json`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PolicyIoRules {
+    /// Deadline-miss (and invalid-action) rule.
+    pub miss_rule: MissRule,
+    /// When actions take effect in simulated time.
+    pub latency_mode: LatencyMode,
+    /// Largest usable |raw action| (units of the profile's action); beyond it, or
+    /// non-finite, an action is invalid and the miss rule applies.
+    pub max_abs_action: f64,
+    /// Latency budget per step, s (`None`: lock-step). Enforced by remote policies.
+    pub budget_s: Option<f64>,
+}
+
+impl Default for PolicyIoRules {
+    fn default() -> Self {
+        Self {
+            miss_rule: MissRule::Hold,
+            latency_mode: LatencyMode::Ignore,
+            max_abs_action: 100.0,
+            budget_s: None,
+        }
+    }
+}
+
+/// What happens to an environment whose action missed the deadline or was unusable
+/// (non-finite, or beyond the profile's `max_abs_action`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MissRule {
+    /// Keep applying the last action that reached the robot.
+    #[default]
+    Hold,
+    /// Apply the zero action (the profile's default pose for offset-style profiles).
+    Zero,
+    /// End the episode (`deadline_miss` or `invalid_action`).
+    Fail,
+}
+
+/// When a policy's action takes effect in simulated time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LatencyMode {
+    /// At the start of the control step, whatever the policy took (lock-step; results are
+    /// deterministic).
+    #[default]
+    Ignore,
+    /// Deployment-faithful: the measured policy latency delays the action's effect,
+    /// rounded to physics steps and capped at one control period; the previous targets
+    /// act until then. Results then depend on the machine.
+    Measured,
+}
+
+/// A latency budget per step; `None` is pure lock-step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Budget(pub Option<Duration>);
+
+/// Parses `--budget` (`none`, `2ms`, `500us`, `0.004s`); shared with the sweep, whose
+/// latency curves put budgets on an axis.
+pub fn parse_budget(s: &str) -> Result<Budget, String> {
+    if s == "none" {
+        return Ok(Budget(None));
+    }
+    let (num, unit) = s
+        .find(|c: char| c.is_ascii_alphabetic())
+        .map(|i| s.split_at(i))
+        .ok_or_else(|| format!("`{s}`: give a unit (us, ms, s) or `none`"))?;
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("`{s}`: `{num}` is not a number"))?;
+    let secs = match unit {
+        "us" | "µs" => v * 1e-6,
+        "ms" => v * 1e-3,
+        "s" => v,
+        _ => return Err(format!("`{s}`: unknown unit `{unit}` (us, ms, s)")),
+    };
+    if !(secs.is_finite() && secs > 0.0) {
+        return Err(format!("`{s}`: the budget must be > 0 (or `none`)"));
+    }
+    Duration::try_from_secs_f64(secs)
+        .map(|d| Budget(Some(d)))
+        .map_err(|_| format!("`{s}`: too long for a budget (give one that fits a duration)"))
+}
