@@ -9,6 +9,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod benchmark;
 pub mod embedded_data;
 pub mod episode;
 pub mod evaluation;
@@ -19,6 +20,7 @@ pub mod names;
 pub mod physics;
 pub mod policy;
 pub mod profile;
+pub mod registry;
 pub mod replay;
 pub mod report;
 pub mod results;

@@ -2,12 +2,13 @@
 //! any number of workers, the force and no-force settings differ only through the replay,
 //! and every record streams out.
 
+use thorarena::evaluation::task_thresholds;
 use thorarena::evaluation::{schedule, PolicyIoRules, Setting, TerminationRule};
 use thorarena::motion::Sequence;
 use thorarena::policy::HoldPolicy;
 use thorarena::profile::{bundled_profile_path, load_profile};
 use thorarena::results::summarize;
-use thorarena::runner::{run_eval, task_thresholds, EvalPlan};
+use thorarena::runner::{run_eval, EvalPlan};
 
 mod common;
 use common::{g1, sample_sequence};

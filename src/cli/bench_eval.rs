@@ -30,7 +30,7 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let robot = Arc::new(super::load_robot(&args.robot)?);
+    let robot = Arc::new(thorarena::registry::robot(&args.robot)?);
     let profile = load_profile(&bundled_profile_path("default"), &robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let sequences = ds.load_all()?;

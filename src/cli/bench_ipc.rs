@@ -74,7 +74,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.steps == 0 || args.envs.contains(&0) {
         bail!("--steps and every --envs value must be at least 1");
     }
-    let robot = super::load_robot("g1_29dof")?;
+    let robot = thorarena::registry::robot("g1_29dof")?;
     let n_joints = robot.n_joints();
     println!(
         "round trip, observation published → actions received, {} timed steps after {} warm-up; spin {} µs then block; µs",

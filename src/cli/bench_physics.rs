@@ -93,7 +93,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         !args.dt.is_empty() && args.dt.iter().all(|&dt| dt > 0.0 && dt <= 0.05),
         "--dt must be in (0, 0.05] s"
     );
-    let model = Arc::new(super::load_robot(&args.robot)?);
+    let model = Arc::new(thorarena::registry::robot(&args.robot)?);
     let gains = thorarena::physics::standing_gains(&model);
     let mut engines = vec![Engine::Rapier];
     if cfg!(feature = "mujoco") {

@@ -8,6 +8,8 @@ use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
+use thorarena::evaluation::EpisodeRecord;
+use thorarena::results::{RunDir, RunHeader};
 use thorarena::sweep::Plan;
 
 /// Arguments of `bench sweep`.
@@ -205,14 +207,12 @@ fn plan_at_scale(
     let t = Instant::now();
     run_ok(Command::new(exe).args(["sweep", "status"]).arg(&dir))?;
     let status_s = t.elapsed().as_secs_f64();
-    let sources: Vec<(thorarena::results::RunHeader, Vec<serde_json::Value>)> = shards
+    let sources: Vec<(RunHeader, Vec<EpisodeRecord>)> = shards
         .iter()
         .map(|run| -> anyhow::Result<_> {
-            let header = thorarena::results::read_header(run)?;
-            let records = std::fs::read_to_string(run.join("episodes.jsonl"))?
-                .lines()
-                .map(serde_json::from_str)
-                .collect::<Result<_, _>>()?;
+            let run = RunDir::new(run);
+            let header = run.read_header()?;
+            let records = run.read_log(&header)?.records;
             Ok((header, records))
         })
         .collect::<anyhow::Result<_>>()?;
@@ -224,18 +224,18 @@ fn plan_at_scale(
         let mut header = source.clone();
         header.policy = cell.policy.policy.clone();
         header.settings = vec![setting.clone()];
-        let run = Plan::task_dir(&dir, task.index).join("run");
-        std::fs::create_dir_all(&run)?;
-        thorarena::results::write_header(&run, &header)?;
-        let mut lines = String::new();
+        let run = RunDir::new(Plan::task_dir(&dir, task.index).join("run"));
+        run.start(&header, false)?;
+        let mut appender = run.appender()?;
         for r in records {
-            let mut r = r.clone();
-            r["setting"] = serde_json::Value::String(setting.name.clone());
-            r["coefficient"] = serde_json::json!(setting.coefficient);
-            r["policy"] = serde_json::Value::String(header.policy.clone());
-            lines += &(serde_json::to_string(&r)? + "\n");
+            appender.append(&EpisodeRecord {
+                setting: setting.name.clone(),
+                coefficient: setting.coefficient,
+                policy: header.policy.clone(),
+                ..r.clone()
+            })?;
         }
-        std::fs::write(run.join("episodes.jsonl"), lines)?;
+        appender.flush()?;
         std::fs::write(
             Plan::task_dir(&dir, task.index).join("done.json"),
             format!(
@@ -244,9 +244,9 @@ fn plan_at_scale(
                 records.len()
             ),
         )?;
-        for name in ["summary.json", "tables.md"] {
-            std::fs::copy(shards[task.shard.0].join(name), run.join(name))?;
-        }
+        let source = RunDir::new(&shards[task.shard.0]);
+        std::fs::copy(source.summary_file(), run.summary_file())?;
+        std::fs::copy(source.tables_file(), run.tables_file())?;
         episodes += records.len();
     }
     let t = Instant::now();

@@ -55,7 +55,7 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let robot = super::load_robot(&args.robot)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
     let joint_names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
     let mut config = PolicyConfig::new(
         &args.session,

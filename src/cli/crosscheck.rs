@@ -4,7 +4,7 @@
 //! interval. Both runs are ordinary run directories (`<out>/rapier`, `<out>/mujoco`).
 
 use super::crosscheck_series::{EpisodeKey, SeriesLog, SERIES_FILE};
-use super::eval::{check_out, evaluate, EvalContext, FirstSeconds, RunArgs};
+use super::eval::{check_out, evaluate, load_spec, FirstSeconds, RunArgs};
 use super::policy_arg::make_policy;
 use anyhow::{bail, Context};
 use std::fmt::Write as _;
@@ -135,13 +135,11 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         mujoco_args.physics_dt = Some(dt);
     }
     // Both contexts first: a missing MuJoCo fails before anything runs.
-    let rapier_ctx = EvalContext::load_for(&rapier_args, &args.policy)?;
+    let rapier_ctx = load_spec(&rapier_args, &args.policy)?;
     let mujoco_ctx =
-        EvalContext::load_for(&mujoco_args, &args.policy).with_context(|| {
-            match args.mujoco_physics_dt {
-                Some(dt) => format!("the MuJoCo run (--mujoco-physics-dt {dt})"),
-                None => "the MuJoCo run".to_string(),
-            }
+        load_spec(&mujoco_args, &args.policy).with_context(|| match args.mujoco_physics_dt {
+            Some(dt) => format!("the MuJoCo run (--mujoco-physics-dt {dt})"),
+            None => "the MuJoCo run".to_string(),
         })?;
     let out = match &args.out {
         Some(o) => o.clone(),

@@ -170,12 +170,7 @@ fn read_raw(
         Format::BeyondmimicNpz => npz::read_beyondmimic_npz(path, args.joint_names.as_deref())?,
         Format::LafanCsv => lafan_csv::read_lafan_csv(path, args.fps)?,
         Format::OnnxMotion => {
-            let profile_path = if args.profile.ends_with(".toml") {
-                std::path::PathBuf::from(&args.profile)
-            } else {
-                thorarena::profile::bundled_profile_path(&args.profile)
-            };
-            let profile = thorarena::profile::load_profile(&profile_path, robot)?;
+            let profile = thorarena::registry::profile(&args.profile, robot)?;
             let body = profile
                 .beyondmimic
                 .as_ref()
@@ -186,7 +181,7 @@ fn read_raw(
 }
 
 fn import(args: &ImportArgs) -> anyhow::Result<()> {
-    let robot = super::load_robot(&args.robot)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
     if args.forces.is_some() && args.inputs.len() != 1 {
         bail!("--forces pairs one left and one right log with one motion; import motions with forces one at a time");
     }
@@ -323,7 +318,7 @@ fn export(args: &ExportArgs) -> anyhow::Result<()> {
         args.overwrite,
         std::slice::from_ref(&args.dataset),
     )?;
-    let robot = super::load_robot(&args.robot)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let ExportFormat::Npz = args.format;
     let files = thorarena::motion::export_npz(&ds, &args.out, |done, total| {
@@ -334,7 +329,7 @@ fn export(args: &ExportArgs) -> anyhow::Result<()> {
 }
 
 fn info(args: &InfoArgs) -> anyhow::Result<()> {
-    let robot = super::load_robot(&args.robot)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let seqs = ds.load_all()?;
     print!("{}", describe(&ds, &seqs, &robot));

@@ -16,7 +16,7 @@ pub(super) fn run(args: &SynthArgs) -> anyhow::Result<()> {
             args.per_task
         );
     }
-    let robot = super::load_robot(&args.robot)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
     if args.out.join(MANIFEST).exists() {
         if !args.force {
             bail!(

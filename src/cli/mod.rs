@@ -20,7 +20,6 @@ mod report_html;
 mod robot_info;
 mod serve;
 mod sim_trace;
-mod suggest;
 mod sweep;
 mod view;
 
@@ -146,16 +145,4 @@ pub fn run() -> anyhow::Result<()> {
         Command::Client(args) => client::run(&args),
         Command::Sweep(cmd) => sweep::run(&cmd),
     }
-}
-
-/// Loads a bundled robot by name, or a robot directory when the argument is a path.
-pub(crate) fn load_robot(name_or_dir: &str) -> anyhow::Result<thorarena::robot::RobotModel> {
-    use anyhow::Context;
-    let path = std::path::Path::new(name_or_dir);
-    let model = if path.join("robot.toml").is_file() {
-        thorarena::robot::load_robot_dir(path)
-    } else {
-        thorarena::robot::load_bundled(name_or_dir)
-    };
-    model.with_context(|| format!("loading robot `{name_or_dir}`"))
 }

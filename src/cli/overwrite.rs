@@ -9,6 +9,7 @@
 use anyhow::bail;
 use std::path::{Path, PathBuf};
 use thorarena::motion::MANIFEST;
+use thorarena::results::{RunDir, RUN_FILES};
 
 /// `path` made absolute with symbolic links and `..` resolved, as far as it exists (the
 /// output may not exist yet: its nearest existing ancestor is resolved).
@@ -30,20 +31,9 @@ fn resolved(path: &Path) -> PathBuf {
     }
 }
 
-/// What a run directory consists of (`eval` writes them; `report`, `merge`, `view` and
-/// `--resume` read them back).
-const RUN_FILES: [&str; 6] = [
-    "run.json",
-    "episodes.jsonl",
-    "summary.json",
-    "tables.md",
-    "episodes.csv",
-    "traces",
-];
-
 /// What a directory holds that must not be replaced silently.
 fn holds(dir: &Path) -> Option<&'static str> {
-    if dir.join("run.json").is_file() {
+    if RunDir::new(dir).holds_run() {
         Some("a run")
     } else if dir.join(MANIFEST).is_file() {
         Some("a dataset")

@@ -60,32 +60,15 @@ pub enum OnPolicyFailure {
     Wait,
 }
 
-/// Most environment slots a run may ask for.
-pub const MAX_ENVS: usize = 4096;
-
 impl PolicyIoArgs {
-    /// The rules recorded in `run.json`.
-    pub fn rules(&self) -> anyhow::Result<PolicyIoRules> {
-        if !(self.max_abs_action.is_finite() && self.max_abs_action > 0.0) {
-            bail!("--max-abs-action must be > 0, got {}", self.max_abs_action);
-        }
-        Ok(PolicyIoRules {
+    /// The rules recorded in `run.json` (checked with the rest of the evaluation by
+    /// [`thorarena::evaluation::EvalSpec::load`]).
+    pub fn rules(&self) -> PolicyIoRules {
+        PolicyIoRules {
             miss_rule: self.miss_rule.into(),
             latency_mode: self.latency_mode.into(),
             max_abs_action: self.max_abs_action,
             budget_s: self.budget.0.map(|b| b.as_secs_f64()),
-        })
-    }
-
-    /// Environment slots for `workers` worker threads.
-    pub fn envs(&self, workers: usize) -> anyhow::Result<usize> {
-        match self.envs {
-            Some(0) => bail!("--envs must be at least 1"),
-            Some(n) if n > MAX_ENVS => {
-                bail!("--envs {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)")
-            }
-            Some(n) => Ok(n),
-            None => Ok(workers.max(1)),
         }
     }
 }
@@ -165,7 +148,7 @@ fn unknown_policy(spec: &str) -> String {
     if family == "ipc" {
         return "`--policy ipc` needs a session name: `ipc:NAME`, the name the policy process connects to".into();
     }
-    let hint = super::suggest::did_you_mean(
+    let hint = thorarena::registry::did_you_mean(
         spec,
         [
             "hold",
@@ -177,28 +160,6 @@ fn unknown_policy(spec: &str) -> String {
         ],
     );
     format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; or ipc:SESSION for a policy process")
-}
-
-/// Whether `profile` is one `spec`'s family was trained with: TWIST2 networks the
-/// `twist2` profile, BeyondMimic-style ones `beyondmimic` or a profile with a
-/// `[beyondmimic]` section (`holosoma-wbt`); the built-ins and policy processes any.
-pub fn profile_fits(spec: &str, profile: &Profile) -> Result<(), String> {
-    if spec.starts_with("twist2:") && profile.name != "twist2" {
-        return Err(format!(
-            "TWIST2 networks are trained for the `twist2` profile (its gains, action scale and 50 Hz); `{}` contradicts it",
-            profile.name
-        ));
-    }
-    if spec.starts_with("beyondmimic:")
-        && profile.name != "beyondmimic"
-        && profile.beyondmimic.is_none()
-    {
-        return Err(format!(
-            "BeyondMimic-style networks run on `beyondmimic` or a profile with a [beyondmimic] section (holosoma-wbt); `{}` is neither",
-            profile.name
-        ));
-    }
-    Ok(())
 }
 
 /// Serves `session` and waits for a policy process.

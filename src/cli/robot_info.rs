@@ -23,7 +23,7 @@ pub struct MjcfArgs {
 
 /// `robot mjcf`: the generated MJCF on stdout.
 pub(super) fn mjcf(args: &MjcfArgs) -> anyhow::Result<()> {
-    let model = super::load_robot(&args.robot)?;
+    let model = thorarena::registry::robot(&args.robot)?;
     let settings = thorarena::physics::PhysicsSettings {
         dt_s: args.physics_dt,
         ..Default::default()
@@ -33,7 +33,7 @@ pub(super) fn mjcf(args: &MjcfArgs) -> anyhow::Result<()> {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let model = super::load_robot(&args.robot)?;
+    let model = thorarena::registry::robot(&args.robot)?;
     print!("{}", describe(&model));
     Ok(())
 }

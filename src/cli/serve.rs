@@ -1,7 +1,7 @@
 //! `thorarena serve`: the benchmark as a service for interactive work — serve a session,
 //! evaluate whichever policy process connects, write its results, wait for the next one.
 
-use super::eval::{evaluate, EvalContext, RunArgs};
+use super::eval::{evaluate, load_spec, RunArgs};
 use super::policy_arg::connect_remote;
 use std::path::PathBuf;
 use thorarena::policy::Policy;
@@ -26,7 +26,7 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let ctx = EvalContext::load(&args.run)?;
+    let ctx = load_spec(&args.run, "")?;
     for n in 1.. {
         let mut policy = connect_remote(
             &args.session,

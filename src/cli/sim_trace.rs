@@ -42,7 +42,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         args.dt
     );
     anyhow::ensure!(args.iterations >= 1, "--iterations must be at least 1");
-    let model = Arc::new(super::load_robot(&args.robot)?);
+    let model = Arc::new(thorarena::registry::robot(&args.robot)?);
     let settings = PhysicsSettings {
         dt_s: args.dt,
         solver_iterations: args.iterations,

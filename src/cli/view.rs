@@ -33,7 +33,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             bundle.describe()
         );
     }
-    let robot = super::load_robot(&args.robot)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
     let trace = load_trace(&args.trace)?;
     let context = trace_context(&args.trace);
     let scene = view_scene(&robot, &trace, &args.trace, &context)?;

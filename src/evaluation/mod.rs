@@ -2,7 +2,8 @@
 //! directory that stores it: force [`Setting`]s, the rules every policy is held to
 //! ([`TerminationRule`], [`PolicyIoRules`], [`Budget`]), the [`schedule`] of episodes, an
 //! episode's identity ([`EpisodeKey`]) and outcome ([`EpisodeRecord`], [`Termination`],
-//! [`PolicyFaults`]), and the policy's latency histogram.
+//! [`PolicyFaults`]), the regime thresholds of a dataset's tasks, the policy's latency
+//! histogram — and [`EvalSpec`], one evaluation checked from plain values.
 //!
 //! `runner` and `results` both point down at this module and never at each other, so a
 //! record can travel from the runner to the report without either knowing the other.
@@ -12,9 +13,16 @@ mod record;
 mod rules;
 mod schedule;
 mod setting;
+mod spec;
+mod thresholds;
 
 pub use latency::{LatencyRecorder, LatencySummary};
 pub use record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
 pub use rules::{parse_budget, Budget, LatencyMode, MissRule, PolicyIoRules, TerminationRule};
 pub use schedule::{reference_steps, schedule};
 pub use setting::Setting;
+pub use spec::{
+    parse_settings, Advice, EngineChoice, EvalRequest, EvalSpec, SpecError, DEFAULT_SETTINGS,
+    MAX_ENVS, MAX_SUBSTEPS, MAX_WORKERS,
+};
+pub use thresholds::task_thresholds;

@@ -1,7 +1,9 @@
 //! `run.json`: what a run measured.
 
 use super::{ResultsError, HEADER_FILE, RESULTS_VERSION};
-use crate::evaluation::{reference_steps, EpisodeKey, PolicyIoRules, Setting, TerminationRule};
+use crate::evaluation::{
+    reference_steps, EpisodeKey, EvalSpec, PolicyIoRules, Setting, TerminationRule,
+};
 use crate::motion::{Reference, Sequence};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -77,6 +79,29 @@ pub struct RunHeader {
 }
 
 impl RunHeader {
+    /// The header of evaluating `spec` with the policy named `policy`.
+    pub fn of(spec: &EvalSpec, policy: &str) -> Self {
+        Self {
+            results_version: RESULTS_VERSION,
+            version: env!("CARGO_PKG_VERSION").into(),
+            policy: policy.to_string(),
+            profile: spec.profile.name.clone(),
+            profile_mismatch_ok: spec.profile_mismatch,
+            control_dt_s: spec.profile.control_dt_s,
+            physics_dt_s: spec.profile.physics_dt_s,
+            engine: spec.engine.clone(),
+            dataset: spec.dataset.display().to_string(),
+            dataset_sha256: spec.dataset_sha256.clone(),
+            keypoints: spec.keypoints.clone(),
+            termination: spec.termination,
+            settings: spec.settings.clone(),
+            sequences: PlannedSequence::plan(&spec.sequences, spec.profile.control_dt_s),
+            subset: spec.subset.clone(),
+            shard: spec.shard,
+            io: spec.io,
+        }
+    }
+
     /// The engine that simulated the run, its model and step, as every score names it:
     /// `rapier at 5 ms`, `mujoco (generated MJCF) at 5 ms`, `mujoco (g1.xml) at 1 ms`.
     /// Under force the engines' scores differ (README, "Force response: rapier against

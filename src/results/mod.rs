@@ -27,13 +27,17 @@ pub mod crosscheck;
 mod episode_table;
 mod episodes;
 mod header;
+mod merge;
 mod record;
+mod run_dir;
 mod summary;
 
 pub use coverage::{CellCoverage, Coverage};
 pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_CSV_FILE};
 pub use episodes::{write_record, EpisodeLog};
 pub use header::{read_header, write_header, PlannedSequence, RunHeader};
+pub use merge::{read_shards, MergeError, Shards};
+pub use run_dir::{RecordAppender, RunDir, Started, RUN_FILES, TRACES_DIR};
 pub use summary::{
     fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,
     SettingResults, SettingSummary, Summary,
@@ -83,6 +87,25 @@ pub enum ResultsError {
         /// Its version (0: written before versions existed).
         found: u64,
     },
+    /// A directory a run cannot be written to.
+    #[error("{path} is not writable: {source}")]
+    NotWritable {
+        /// The directory.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A run resumed or merged with one of another configuration.
+    #[error("{path} was started with another configuration (it differs in: {})", differences.join(", "))]
+    OtherConfiguration {
+        /// The previous run.
+        path: PathBuf,
+        /// The header fields that differ.
+        differences: Vec<&'static str>,
+    },
+    /// Shards that cannot be merged into one run.
+    #[error(transparent)]
+    Merge(#[from] MergeError),
     /// A record that cannot have been written by the run its header describes.
     #[error("{path} line {line}: {reason}")]
     BadRecord {

@@ -16,14 +16,11 @@ mod lockstep;
 
 pub use lockstep::{run_eval, RunOutcome};
 
-use crate::evaluation::{PolicyIoRules, Setting, TerminationRule};
-use crate::metrics::RegimeThresholds;
-use crate::motion::{Reference, Sequence};
+use crate::evaluation::{EvalSpec, PolicyIoRules, Setting, TerminationRule};
 use crate::profile::Profile;
 use crate::robot::RobotModel;
-use std::collections::BTreeMap;
 
-/// Everything an evaluation needs.
+/// What the runner needs of an evaluation ([`Self::of`] an [`EvalSpec`]).
 pub struct EvalPlan<'a> {
     /// Robot.
     pub robot: &'a RobotModel,
@@ -51,24 +48,22 @@ pub struct EvalPlan<'a> {
     pub engine: crate::physics::Engine,
 }
 
-/// The regime thresholds of each task: percentiles of `|F_L| + |F_R|` over every control
-/// step of the task's references (the steps the metrics record).
-pub fn task_thresholds(
-    sequences: &[Sequence],
-    control_dt_s: f64,
-) -> BTreeMap<String, RegimeThresholds> {
-    let mut forces: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    for seq in sequences {
-        let r = Reference::new(seq);
-        let steps = (r.duration_s() / control_dt_s + 1e-9).floor() as usize;
-        let v = forces.entry(seq.task.clone()).or_default();
-        for k in 1..=steps {
-            let f = r.sample(k as f64 * control_dt_s).force_sensor;
-            v.push(f[0].norm() + f[1].norm());
+impl<'a> EvalPlan<'a> {
+    /// The runner's view of a checked evaluation; with `trace_first_s`, every episode also
+    /// records its first seconds (what `crosscheck` compares).
+    pub fn of(spec: &'a EvalSpec, trace_first_s: Option<f64>) -> Self {
+        Self {
+            robot: &spec.robot,
+            profile: &spec.profile,
+            keypoints: &spec.keypoints,
+            termination: spec.termination,
+            settings: spec.settings.clone(),
+            workers: spec.workers,
+            envs: spec.envs,
+            io: spec.io,
+            trace: spec.trace.clone(),
+            trace_first_s,
+            engine: spec.engine.clone(),
         }
     }
-    forces
-        .into_iter()
-        .map(|(task, v)| (task, RegimeThresholds::from_forces(&v)))
-        .collect()
 }

@@ -17,7 +17,7 @@ pub(super) struct CellResult {
 
 pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.dir)?;
-    let robot = crate::cli::load_robot(&plan.robot)?;
+    let robot = thorarena::registry::robot(&plan.robot)?;
     // Scores are computed against the references as they are now: they must be the
     // ones the runs ran (`merge` and `--resume` check the same).
     let mut datasets: BTreeMap<PathBuf, Vec<thorarena::motion::Sequence>> = BTreeMap::new();
@@ -110,28 +110,15 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             results.push(None);
             continue;
         }
-        let (mut header, by_key) = read_shards(&runs)?;
-        header.shard = None;
+        let shard_dirs: Vec<RunDir> = runs.iter().map(RunDir::new).collect();
+        let shards = thorarena::results::read_shards(&shard_dirs)?;
+        let header = shards.header.clone();
         let sequences = &datasets[&cell.dataset];
-        let mut records: Vec<_> = by_key.into_values().collect();
-        sort_records(&mut records, &header);
-        let out = Plan::cell_dir(&args.dir, cell.index);
-        std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
-        let episodes_path = out.join("episodes.jsonl");
-        let mut w = std::io::BufWriter::new(
-            File::create(&episodes_path)
-                .with_context(|| format!("creating {}", episodes_path.display()))?,
-        );
-        for r in &records {
-            write_record(&mut w, r)?;
-        }
-        w.flush()
-            .with_context(|| format!("writing {}", episodes_path.display()))?;
-        write_header(&out, &header)?;
-        let thresholds = thorarena::runner::task_thresholds(sequences, header.control_dt_s);
-        let summary = write_results(&out, &header, &records, thresholds, None)?;
-        thorarena::report::write_run_tables(&out, &summary)?;
-        let summary = read_summary(&out)?;
+        let out = RunDir::new(Plan::cell_dir(&args.dir, cell.index));
+        let thresholds = thorarena::evaluation::task_thresholds(sequences, header.control_dt_s);
+        let summary = out.rewrite(&header, &mut shards.into_records(), thresholds)?;
+        thorarena::report::write_run_tables(out.path(), &summary)?;
+        let out = out.path().to_path_buf();
         let mut faults = [0u64; 3];
         let mut latency_us = None;
         for run in &runs {
@@ -148,8 +135,8 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         }
         results.push(Some(CellResult {
             dir: out,
-            episodes: records.len(),
-            complete: records.len() == cell.episodes && summary.complete,
+            episodes: summary.episodes,
+            complete: summary.episodes == cell.episodes && summary.complete,
             summary,
             faults,
             latency_us,

@@ -9,7 +9,6 @@
 //! episode and is flushed to disk; an advisory lock on `tasks/<I>/lock`, held by the task
 //! and inherited by its eval process, keeps two copies of one task from running at once.
 
-use super::merge::read_shards;
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::collections::{BTreeMap, VecDeque};
@@ -21,9 +20,7 @@ use std::process::{Child, Command, ExitStatus, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use thorarena::motion::Dataset;
-use thorarena::results::{
-    read_summary, sort_records, write_header, write_record, write_results, Summary,
-};
+use thorarena::results::{read_summary, RunDir, Summary};
 use thorarena::sweep::{
     compact_ranges, diff_plans, log_tail as log_tail_of, printable, shell_quote, task_state,
     truncated, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec, Task, TaskState,

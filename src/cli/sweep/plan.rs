@@ -7,7 +7,7 @@ pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
         .with_context(|| format!("reading the sweep spec {}", args.spec.display()))?;
     let spec = SweepSpec::load(&spec_path)?;
     let base = spec_path.parent().unwrap_or(Path::new("/"));
-    let robot = crate::cli::load_robot(&spec.robot).context("`robot` of the sweep spec")?;
+    let robot = thorarena::registry::robot(&spec.robot).context("`robot` of the sweep spec")?;
     let mut datasets = Vec::new();
     for d in &spec.datasets {
         let dir = std::fs::canonicalize(base.join(d)).with_context(|| {
@@ -109,7 +109,7 @@ pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
         if !checked.insert(key) {
             continue;
         }
-        let ctx = crate::cli::eval::EvalContext::load_for(&args.run, &cell.policy.policy)
+        let ctx = crate::cli::eval::load_spec(&args.run, &cell.policy.policy)
             .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
         if cell.policy.command.is_none() && checked.insert(format!("policy|{}", cell.policy.policy))
         {

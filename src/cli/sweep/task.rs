@@ -65,7 +65,7 @@ pub(super) fn run_task(
     };
 
     // The dataset must be the one planned.
-    let robot = crate::cli::load_robot(&plan.robot)?;
+    let robot = thorarena::registry::robot(&plan.robot)?;
     let ds = match Dataset::open(&cell.dataset, &robot) {
         Ok(ds) => ds,
         Err(e) => return fail(format!("dataset {}: {e}", cell.dataset.display()), &[]),
@@ -153,12 +153,9 @@ pub(super) fn run_task(
             )
         }
     };
-    for name in ["episodes.jsonl", "run.json", "summary.json", "tables.md"] {
-        let path = run_dir.join(name);
-        File::open(&path)
-            .and_then(|f| f.sync_all())
-            .with_context(|| format!("flushing {}", path.display()))?;
-    }
+    RunDir::new(&run_dir)
+        .sync()
+        .context("flushing the task's run")?;
     let done = DoneRecord {
         task: index,
         episodes: records.len(),

@@ -8,7 +8,7 @@
 
 use super::*;
 use thorarena::evaluation::EpisodeRecord;
-use thorarena::results::{read_header, Coverage, EpisodeLog, RunHeader};
+use thorarena::results::{Coverage, RunDir, RunHeader};
 
 /// Why a task's run does not count for the task.
 #[derive(Debug)]
@@ -27,15 +27,16 @@ pub(super) fn check_task_run(
     task: &Task,
     run: &Path,
 ) -> anyhow::Result<Result<Vec<EpisodeRecord>, RunProblem>> {
-    let header = read_header(run)?;
+    let run = RunDir::new(run);
+    let header = run.read_header()?;
     if let Some(problem) = header_problem(plan, task, &header)? {
         return Ok(Err(RunProblem::NotThisTask(format!(
             "{}: not task {}'s run: {problem}",
-            run.join("run.json").display(),
+            run.header_file().display(),
             task.index
         ))));
     }
-    let log = EpisodeLog::read(&run.join("episodes.jsonl"), &header)?;
+    let log = run.read_log(&header)?;
     let coverage = Coverage::of(&header, &log.records);
     if log.torn_tail || !coverage.is_complete() || log.records.len() != task.episodes {
         let expected: usize = coverage.cells.iter().map(|c| c.expected).sum();
@@ -73,7 +74,7 @@ fn header_problem(plan: &Plan, task: &Task, header: &RunHeader) -> anyhow::Resul
         max_torso_height_error_m: run.max_torso_height_error,
         max_torso_tilt_error_rad: run.max_torso_tilt_error,
     };
-    let io = run.io.rules()?;
+    let io = run.io.rules();
     Ok(if header.dataset != dataset {
         differs("dataset", &header.dataset, &dataset)
     } else if header.dataset_sha256 != cell.dataset_sha256 {

@@ -1,0 +1,203 @@
+//! The benchmark end to end, above the runner and the run directory: [`evaluate`] takes a
+//! checked [`EvalSpec`], a connected policy and a [`RunDir`] and leaves a scored run —
+//! resumed if asked, records streamed as episodes finish, traces, `summary.json`,
+//! `episodes.csv` and `tables.md`; [`merge`] turns the shards of one evaluation into the
+//! run they add up to. The commands (`eval`, `serve`, `merge`, `crosscheck`, a sweep's
+//! tasks) only parse, call these and print.
+
+use crate::episode::EpisodeTrace;
+use crate::evaluation::{task_thresholds, EpisodeRecord, EvalSpec, Termination};
+use crate::motion::{DataError, Dataset};
+use crate::policy::Policy;
+use crate::results::{
+    read_shards, MergeError, PolicyIoReport, ResultsError, RunDir, RunHeader, Started, Summary,
+};
+use crate::robot::RobotModel;
+use crate::runner::{run_eval, EvalPlan};
+use std::collections::HashSet;
+
+/// Why an evaluation or a merge could not finish.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchmarkError {
+    /// The run directory could not be read or written.
+    #[error(transparent)]
+    Results(#[from] ResultsError),
+    /// The dataset of a run could not be read.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// The dataset changed since its runs ran: they would be scored against other
+    /// references.
+    #[error("dataset {dataset} changed since the shards ran (content hash differs)")]
+    DatasetChanged {
+        /// The dataset directory.
+        dataset: String,
+    },
+}
+
+/// How [`evaluate`] treats the run directory and what it records beyond the run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct EvalOptions {
+    /// Keep the finished episodes of a previous run of the same configuration in the
+    /// directory and run the rest.
+    pub resume: bool,
+    /// Hand every episode's first this many seconds to [`EvalObserver::episode`] as a
+    /// trace (`crosscheck` compares the engines there); nothing of it is written.
+    pub trace_first_s: Option<f64>,
+}
+
+/// What a run is about to do, once its directory is started.
+#[derive(Debug)]
+pub struct Starting<'a> {
+    /// The run's header (written).
+    pub header: &'a RunHeader,
+    /// What the start kept of a previous attempt.
+    pub started: &'a Started,
+    /// Episodes to run now.
+    pub to_run: usize,
+}
+
+/// Hears an evaluation's progress (the library prints nothing; a command shows it).
+pub trait EvalObserver {
+    /// The run directory is started and `to_run` episodes are about to run.
+    fn starting(&mut self, _starting: &Starting) {}
+    /// An episode finished and its record is written; `trace` is its rollout when one was
+    /// recorded (a `--trace` sequence, or [`EvalOptions::trace_first_s`]).
+    fn episode(&mut self, _record: &EpisodeRecord, _trace: Option<&EpisodeTrace>) {}
+}
+
+/// An observer that hears nothing.
+impl EvalObserver for () {}
+
+/// A finished evaluation.
+#[derive(Debug)]
+pub struct Evaluated {
+    /// Its header.
+    pub header: RunHeader,
+    /// Its scores, as written to `summary.json`.
+    pub summary: Summary,
+    /// `tables.md`, as written.
+    pub tables: String,
+    /// Episodes the policy cut short by failing (records ending `policy_failed`).
+    pub cut_short: usize,
+    /// Episodes that never ran because the policy failed and did not come back.
+    pub not_run: usize,
+}
+
+impl Evaluated {
+    /// A run whose policy failed is not a result, even when every episode has a record;
+    /// `--resume` with a working policy runs the missing ones.
+    pub fn policy_failed(&self) -> bool {
+        self.cut_short > 0 || self.not_run > 0
+    }
+}
+
+/// Runs the evaluation `spec` for one connected policy into `run`: starts the directory
+/// (resuming with [`EvalOptions::resume`]), runs every planned episode not already
+/// finished, appends each record as it finishes, writes the traces asked for, and writes
+/// the scores and tables.
+pub fn evaluate(
+    spec: &EvalSpec,
+    policy: &mut dyn Policy,
+    run: &RunDir,
+    options: EvalOptions,
+    observer: &mut dyn EvalObserver,
+) -> Result<Evaluated, BenchmarkError> {
+    let header = RunHeader::of(spec, policy.name());
+    let started = run.start(&header, options.resume)?;
+    let finished: HashSet<_> = started.kept.iter().map(EpisodeRecord::key).collect();
+    let jobs: Vec<(usize, usize)> = header
+        .planned_jobs()
+        .into_iter()
+        .filter(|&job| !finished.contains(&header.job_key(job)))
+        .collect();
+    observer.starting(&Starting {
+        header: &header,
+        started: &started,
+        to_run: jobs.len(),
+    });
+    let mut appender = run.appender()?;
+    let mut write_error: Option<ResultsError> = None;
+    let plan = EvalPlan::of(spec, options.trace_first_s);
+    let outcome = run_eval(&plan, &spec.sequences, &jobs, policy, &mut |r, trace| {
+        if let Err(e) = appender.append(r) {
+            write_error.get_or_insert(e);
+        }
+        if let Some(trace) = trace.filter(|_| spec.traces(&r.task, &r.sequence_id)) {
+            if let Err(e) = run.write_trace(&r.key(), &trace.steps) {
+                write_error.get_or_insert(e);
+            }
+        }
+        observer.episode(r, trace);
+    });
+    appender.flush()?;
+    if let Some(e) = write_error {
+        return Err(e.into());
+    }
+    let io = PolicyIoReport {
+        latency: outcome.latency,
+        transport: outcome.transport,
+        deadline_misses: outcome
+            .records
+            .iter()
+            .map(|r| r.faults.deadline_misses)
+            .sum(),
+        invalid_actions: outcome
+            .records
+            .iter()
+            .map(|r| r.faults.invalid_actions)
+            .sum(),
+    };
+    let mut records = started.kept;
+    records.extend(outcome.records);
+    let thresholds = task_thresholds(&spec.sequences, header.control_dt_s);
+    let summary = run.finish(&header, &mut records, thresholds, Some(io))?;
+    let tables = crate::report::write_run_tables(run.path(), &summary)?;
+    let cut_short = records
+        .iter()
+        .filter(|r| r.termination == Some(Termination::PolicyFailed))
+        .count();
+    Ok(Evaluated {
+        header,
+        summary,
+        tables,
+        cut_short,
+        not_run: outcome.not_run,
+    })
+}
+
+/// A run merged from shards.
+#[derive(Debug)]
+pub struct Merged {
+    /// Its scores.
+    pub summary: Summary,
+    /// `tables.md`, as written.
+    pub tables: String,
+}
+
+/// Merges `shards`, runs of one evaluation, into `out`: the same records, scores and
+/// tables a single run of the whole plan writes. The dataset must be the one they ran
+/// (by content), and every planned episode must be in some shard.
+pub fn merge(
+    shards: &[RunDir],
+    out: &RunDir,
+    robot: &RobotModel,
+) -> Result<Merged, BenchmarkError> {
+    let read = read_shards(shards)?;
+    let header = read.header.clone();
+    let ds = Dataset::open(std::path::Path::new(&header.dataset), robot)?;
+    if ds.content_hash() != header.dataset_sha256 {
+        return Err(BenchmarkError::DatasetChanged {
+            dataset: header.dataset.clone(),
+        });
+    }
+    let sequences = ds.load_all()?;
+    let missing = read.missing();
+    if !missing.is_empty() {
+        return Err(ResultsError::from(MergeError::Missing { missing }).into());
+    }
+    let mut records = read.into_records();
+    let thresholds = task_thresholds(&sequences, header.control_dt_s);
+    let summary = out.rewrite(&header, &mut records, thresholds)?;
+    let tables = crate::report::write_run_tables(out.path(), &summary)?;
+    Ok(Merged { summary, tables })
+}

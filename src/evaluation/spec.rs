@@ -1,0 +1,482 @@
+//! [`EvalSpec`]: one evaluation, validated. It is made from plain values
+//! ([`EvalRequest`]: what `eval`'s flags or a sweep cell say) before any policy connects,
+//! so a typo fails at once, and everything downstream — the run's header, the runner, a
+//! sweep's validation of its cells — reads this one shape.
+
+use super::{PolicyIoRules, Setting, TerminationRule};
+use crate::motion::{DataError, Dataset, SelectionError, Sequence, SequenceSelection, Subset};
+use crate::physics::{make_physics, Engine, EngineError, PhysicsSettings};
+use crate::profile::Profile;
+use crate::registry::{self, RegistryError};
+use crate::robot::RobotModel;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Most worker threads a run may ask for.
+pub const MAX_WORKERS: usize = 1024;
+/// Most environment slots a run may ask for.
+pub const MAX_ENVS: usize = 4096;
+/// The most physics steps per control step a physics step may ask for (0.02 ms at 50 Hz
+/// control: far finer than any engine's validated step; 10⁻⁹ s asked for 2·10⁷).
+pub const MAX_SUBSTEPS: usize = 1000;
+/// Settings when none is given (on a dataset with force logs).
+pub const DEFAULT_SETTINGS: [&str; 2] = ["force", "no-force"];
+
+/// Which engine simulates the run, before its model is checked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum EngineChoice {
+    /// rapier, built in.
+    #[default]
+    Rapier,
+    /// MuJoCo (a build with the `mujoco` feature).
+    Mujoco,
+}
+
+/// An evaluation as asked for, in plain values; every field is checked by
+/// [`EvalSpec::load`]. Names follow `eval`'s flags.
+#[derive(Debug, Clone)]
+pub struct EvalRequest {
+    /// The policy argument (`balance`, `twist2:FILE`, `ipc:SESSION`, …): its family picks
+    /// the profile when none is named.
+    pub policy: String,
+    /// Dataset directory (`None`: the bundled sample).
+    pub dataset: Option<PathBuf>,
+    /// Robot name or directory.
+    pub robot: String,
+    /// Profile name or `.toml` path (`None`: the policy family's).
+    pub profile: Option<String>,
+    /// Run under a profile the policy family was not trained with.
+    pub profile_mismatch_ok: bool,
+    /// Settings as spelled (empty: [`DEFAULT_SETTINGS`], or `no-force` alone on a dataset
+    /// without force logs).
+    pub settings: Vec<String>,
+    /// Run replay settings on a dataset without force logs.
+    pub replay_without_force_logs: bool,
+    /// Tasks and sequences to evaluate.
+    pub selection: SequenceSelection,
+    /// Worker threads (`None`: every core).
+    pub workers: Option<usize>,
+    /// Environment slots (`None`: one per worker).
+    pub envs: Option<usize>,
+    /// Keypoint set of the tracking error.
+    pub keypoints: String,
+    /// When an episode has failed.
+    pub termination: TerminationRule,
+    /// Sequences (`TASK/SEQUENCE_ID`) whose rollouts are written as traces.
+    pub trace: Vec<String>,
+    /// The engine.
+    pub engine: EngineChoice,
+    /// A user's MJCF for MuJoCo (`None`: generated from the robot model).
+    pub mjcf: Option<PathBuf>,
+    /// A physics step, s, instead of the profile's.
+    pub physics_dt_s: Option<f64>,
+    /// The rules of the policy's answers.
+    pub io: PolicyIoRules,
+    /// `(i, n)`: only shard i of n of the schedule.
+    pub shard: Option<(usize, usize)>,
+}
+
+impl Default for EvalRequest {
+    fn default() -> Self {
+        Self {
+            policy: "balance".into(),
+            dataset: None,
+            robot: "g1_29dof".into(),
+            profile: None,
+            profile_mismatch_ok: false,
+            settings: Vec::new(),
+            replay_without_force_logs: false,
+            selection: SequenceSelection::default(),
+            workers: None,
+            envs: None,
+            keypoints: "default".into(),
+            termination: TerminationRule::default(),
+            trace: Vec::new(),
+            engine: EngineChoice::Rapier,
+            mjcf: None,
+            physics_dt_s: None,
+            io: PolicyIoRules::default(),
+            shard: None,
+        }
+    }
+}
+
+/// Something the caller should tell the user about a valid spec.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Advice {
+    /// What the run does that was not asked for in so many words.
+    Note(String),
+    /// What may not be what the user meant.
+    Warning(String),
+}
+
+impl std::fmt::Display for Advice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Note(s) => write!(f, "note: {s}"),
+            Self::Warning(s) => write!(f, "warning: {s}"),
+        }
+    }
+}
+
+/// Why a request is not an evaluation that can run.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    /// A value out of its domain; the message names it as `eval` spells it.
+    #[error("{0}")]
+    Invalid(String),
+    /// The robot or profile named does not resolve.
+    #[error(transparent)]
+    Registry(#[from] RegistryError),
+    /// The engine cannot simulate the robot.
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    /// The dataset cannot be read.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// `--tasks` / `--sequences` select nothing usable.
+    #[error("{flags} in {dataset}")]
+    Selection {
+        /// The selection's flags as spelled.
+        flags: String,
+        /// The dataset.
+        dataset: PathBuf,
+        /// Why.
+        source: SelectionError,
+    },
+}
+
+fn invalid(message: impl Into<String>) -> SpecError {
+    SpecError::Invalid(message.into())
+}
+
+/// One evaluation, checked: robot, profile, engine, the sequences and settings, the
+/// rules, and how it is spread over threads.
+#[derive(Debug, Clone)]
+pub struct EvalSpec {
+    /// The robot.
+    pub robot: RobotModel,
+    /// The dynamics profile (with the physics step asked for).
+    pub profile: Profile,
+    /// The profile contradicts the policy family and the request allowed it.
+    pub profile_mismatch: bool,
+    /// The engine (checked: it makes a physics for the robot).
+    pub engine: Engine,
+    /// Dataset directory.
+    pub dataset: PathBuf,
+    /// Its content hash.
+    pub dataset_sha256: String,
+    /// The sequences evaluated, in dataset order.
+    pub sequences: Vec<Sequence>,
+    /// The selection and the dataset's size, when they chose part of it.
+    pub subset: Option<Subset>,
+    /// Settings, in the order asked.
+    pub settings: Vec<Setting>,
+    /// Keypoint set (exists for the robot).
+    pub keypoints: String,
+    /// When an episode has failed.
+    pub termination: TerminationRule,
+    /// The rules of the policy's answers.
+    pub io: PolicyIoRules,
+    /// Only shard i of n.
+    pub shard: Option<(usize, usize)>,
+    /// Sequences (`TASK/SEQUENCE_ID`, each evaluated) whose rollouts are written as traces.
+    pub trace: Vec<String>,
+    /// Worker threads.
+    pub workers: usize,
+    /// Environment slots.
+    pub envs: usize,
+    /// What the caller should tell the user.
+    pub advice: Vec<Advice>,
+}
+
+impl EvalSpec {
+    /// Checks `request` and loads everything it names: robot, profile (the policy
+    /// family's unless named), engine (a physics is made once, so the run's workers cannot
+    /// fail to), dataset and selection, settings, rules, threads.
+    pub fn load(request: &EvalRequest) -> Result<Self, SpecError> {
+        let mut advice = Vec::new();
+        let dataset = request
+            .dataset
+            .clone()
+            .unwrap_or_else(|| crate::data_dir().join("sample"));
+        let robot = registry::robot(&request.robot)?;
+        let profile_name = request
+            .profile
+            .clone()
+            .unwrap_or_else(|| registry::family_profile(&request.policy).to_string());
+        let mut profile = registry::profile(&profile_name, &robot).map_err(|e| match e {
+            RegistryError::UnknownProfile { .. } => {
+                invalid(format!("--profile {profile_name}: {e}"))
+            }
+            e => e.into(),
+        })?;
+        let profile_mismatch = match registry::profile_fits(&request.policy, &profile) {
+            Ok(()) => false,
+            Err(why) if request.profile_mismatch_ok => {
+                advice.push(Advice::Warning(format!(
+                    "{why} (--profile-mismatch-ok: run anyway, recorded in run.json)"
+                )));
+                true
+            }
+            Err(why) => return Err(invalid(format!("{why}: leave out --profile to use the family's, or pass --profile-mismatch-ok to run it anyway"))),
+        };
+        if let Some(dt) = request.physics_dt_s {
+            set_physics_dt(&mut profile, dt)?;
+        }
+        let engine = match (request.engine, &request.mjcf) {
+            (EngineChoice::Rapier, None) => Engine::Rapier,
+            (EngineChoice::Rapier, Some(_)) => {
+                return Err(invalid(
+                    "--mjcf is for --engine mujoco (rapier simulates the robot model itself)",
+                ))
+            }
+            (EngineChoice::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
+        };
+        make_physics(
+            &engine,
+            Arc::new(robot.clone()),
+            PhysicsSettings {
+                dt_s: profile.physics_dt_s,
+                ..Default::default()
+            },
+            profile.gains.clone(),
+        )?;
+        if robot.keypoint_set(&request.keypoints).is_none() {
+            return Err(invalid(format!(
+                "unknown keypoint set `{}` for robot {}",
+                request.keypoints, robot.name
+            )));
+        }
+        let settings = parse_settings(&request.settings)?;
+        check_termination(&request.termination)?;
+        check_io(&request.io)?;
+        let ds = Dataset::open(&dataset, &robot)?;
+        let all = ds.load_all()?;
+        if all.is_empty() {
+            return Err(invalid(format!(
+                "{} holds no sequence: nothing to evaluate",
+                dataset.display()
+            )));
+        }
+        let selection = request.selection.clone();
+        let dataset_sequences = all.len();
+        let sequences = selection
+            .pick(all, |q| (&q.task, &q.sequence_id))
+            .map_err(|source| SpecError::Selection {
+                flags: selection.flags(),
+                dataset: dataset.clone(),
+                source,
+            })?;
+        let subset = (!selection.is_all()).then_some(Subset {
+            selection,
+            dataset_sequences,
+        });
+        let settings = fit_settings_to_force_logs(
+            settings,
+            &sequences,
+            request.settings.is_empty(),
+            request.replay_without_force_logs,
+            &dataset,
+            &mut advice,
+        )?;
+        for name in &request.trace {
+            if !sequences
+                .iter()
+                .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
+            {
+                return Err(invalid(format!(
+                    "--trace: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",
+                    ds.dir.display()
+                )));
+            }
+        }
+        let workers = match request.workers {
+            Some(0) => return Err(invalid("--workers must be at least 1")),
+            Some(n) if n > MAX_WORKERS => {
+                return Err(invalid(format!("--workers {n}: at most {MAX_WORKERS} threads (each one simulates its own environment slots)")))
+            }
+            Some(n) => n,
+            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        };
+        let envs = match request.envs {
+            Some(0) => return Err(invalid("--envs must be at least 1")),
+            Some(n) if n > MAX_ENVS => {
+                return Err(invalid(format!(
+                "--envs {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)"
+            )))
+            }
+            Some(n) => n,
+            None => workers.max(1),
+        };
+        Ok(Self {
+            profile_mismatch,
+            dataset_sha256: ds.content_hash(),
+            robot,
+            profile,
+            engine,
+            dataset,
+            sequences,
+            subset,
+            settings,
+            keypoints: request.keypoints.clone(),
+            termination: request.termination,
+            io: request.io,
+            shard: request.shard,
+            trace: request.trace.clone(),
+            workers,
+            envs,
+            advice,
+        })
+    }
+
+    /// The dataset directory's name, for default output directories.
+    pub fn dataset_name(&self) -> &str {
+        self.dataset
+            .file_name()
+            .and_then(|s| s.to_str())
+            .unwrap_or("dataset")
+    }
+
+    /// Whether the sequence of `task`/`sequence_id` is one whose rollouts are traced.
+    pub fn traces(&self, task: &str, sequence_id: &str) -> bool {
+        self.trace
+            .iter()
+            .any(|t| t.split_once('/') == Some((task, sequence_id)))
+    }
+}
+
+/// Sets the profile's physics step to `dt` s, which must divide its control step.
+fn set_physics_dt(profile: &mut Profile, dt: f64) -> Result<(), SpecError> {
+    let ratio = profile.control_dt_s / dt;
+    if !(dt.is_finite() && dt > 0.0) || (ratio - ratio.round()).abs() > 1e-6 || ratio < 0.5 {
+        return Err(invalid(format!(
+            "--physics-dt {dt}: must be > 0 and divide the profile's control step {} s",
+            profile.control_dt_s
+        )));
+    }
+    if ratio.round() > MAX_SUBSTEPS as f64 {
+        return Err(invalid(format!(
+            "--physics-dt {dt}: {} physics steps per control step of {} s; at most {MAX_SUBSTEPS} (a step of {} s)",
+            ratio.round(),
+            profile.control_dt_s,
+            profile.control_dt_s / MAX_SUBSTEPS as f64
+        )));
+    }
+    profile.physics_dt_s = dt;
+    profile.substeps = ratio.round() as usize;
+    Ok(())
+}
+
+/// Parses the settings as spelled (none: [`DEFAULT_SETTINGS`]) and refuses two that load
+/// the robot the same way: every episode would run and count twice.
+pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
+    let spelled: Vec<String> = if spelled.is_empty() {
+        DEFAULT_SETTINGS.iter().map(|s| s.to_string()).collect()
+    } else {
+        spelled.to_vec()
+    };
+    let settings: Vec<Setting> = spelled
+        .iter()
+        .map(|s| {
+            Setting::parse(s).ok_or_else(|| {
+                invalid(format!(
+                    "--settings: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
+                    Setting::MAX_COEFFICIENT,
+                    Setting::MAX_PUSH_N
+                ))
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    for (i, a) in settings.iter().enumerate() {
+        if let Some((j, _)) = settings[..i]
+            .iter()
+            .enumerate()
+            .find(|(_, b)| b.same_load(a))
+        {
+            let (first, second) = (&spelled[j], &spelled[i]);
+            if first == second || settings[j].name == a.name {
+                return Err(invalid(format!(
+                    "--settings lists `{}` twice: every episode would run and count twice",
+                    a.name
+                )));
+            }
+            return Err(invalid(format!(
+                "--settings lists `{first}` and `{second}`, which are the same load on the robot: every episode would run and count twice under two names"
+            )));
+        }
+    }
+    Ok(settings)
+}
+
+fn check_termination(rule: &TerminationRule) -> Result<(), SpecError> {
+    for (flag, v) in [
+        ("--max-torso-height-error", rule.max_torso_height_error_m),
+        ("--max-torso-tilt-error", rule.max_torso_tilt_error_rad),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(invalid(format!("{flag} must be > 0, got {v}")));
+        }
+    }
+    Ok(())
+}
+
+fn check_io(io: &PolicyIoRules) -> Result<(), SpecError> {
+    if !(io.max_abs_action.is_finite() && io.max_abs_action > 0.0) {
+        return Err(invalid(format!(
+            "--max-abs-action must be > 0, got {}",
+            io.max_abs_action
+        )));
+    }
+    Ok(())
+}
+
+/// Replay settings need recorded forces: on a dataset without force logs the default
+/// becomes `no-force` alone, and an explicit replay setting is refused unless
+/// `replay_anyway` (it would print a second `no-force` column under another name). A
+/// dataset only partly logged is run as asked, with a warning.
+fn fit_settings_to_force_logs(
+    settings: Vec<Setting>,
+    sequences: &[Sequence],
+    defaulted: bool,
+    replay_anyway: bool,
+    dataset: &std::path::Path,
+    advice: &mut Vec<Advice>,
+) -> Result<Vec<Setting>, SpecError> {
+    let logged = sequences.iter().filter(|q| q.forces_recorded).count();
+    let replaying: Vec<&str> = settings
+        .iter()
+        .filter(|s| s.coefficient != 0.0)
+        .map(|s| s.name.as_str())
+        .collect();
+    if replaying.is_empty() || logged == sequences.len() {
+        return Ok(settings);
+    }
+    if logged == 0 && defaulted {
+        advice.push(Advice::Note(format!(
+            "no sequence evaluated from {} has force logs (imported without --forces): running `no-force` only (--settings force,... with --replay-without-force-logs to replay zeros anyway)",
+            dataset.display()
+        )));
+        return Ok(settings
+            .into_iter()
+            .filter(|s| s.coefficient == 0.0)
+            .collect());
+    }
+    if logged == 0 && !replay_anyway {
+        return Err(invalid(format!(
+            "--settings {}: replays recorded hand forces, but no sequence evaluated from {} has force logs (imported without --forces), so it would run as `no-force` under another name; use no-force or push:<N>, or --replay-without-force-logs to run it anyway",
+            replaying.join(","),
+            dataset.display()
+        )));
+    }
+    if logged < sequences.len() {
+        advice.push(Advice::Warning(format!(
+            "{} of the {} sequences evaluated from {} have no force logs: under {} they replay zero forces",
+            sequences.len() - logged,
+            sequences.len(),
+            dataset.display(),
+            replaying.join(", ")
+        )));
+    }
+    Ok(settings)
+}
