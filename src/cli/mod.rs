@@ -8,7 +8,6 @@ mod bench_sweep;
 mod choices;
 mod client;
 mod crosscheck;
-mod crosscheck_series;
 mod data;
 mod data_synth;
 mod eval;

@@ -13,6 +13,7 @@
 //! marker per other axis, legends) and drawn twice: by the page script with Chart.js, and
 //! as SVG files for papers ([`svg_figures`]).
 
+mod crosscheck_tables;
 mod figures;
 mod html;
 mod run_tables;
@@ -22,6 +23,7 @@ mod style;
 mod svg;
 mod tables;
 
+pub use crosscheck_tables::crosscheck_tables;
 pub use figures::{
     report_figures, CurveSeries, Dataset, Figure, FigureKind, LegendEntry, ReportFigures, Swatch,
     SweepChart,

@@ -37,7 +37,7 @@ pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_C
 pub use episodes::{write_record, EpisodeLog};
 pub use header::{read_header, write_header, PlannedSequence, RunHeader};
 pub use merge::{read_shards, MergeError, Shards};
-pub use run_dir::{RecordAppender, RunDir, Started, RUN_FILES, TRACES_DIR};
+pub use run_dir::{RecordAppender, RunDir, Started, CROSSCHECK_SERIES_FILE, RUN_FILES, TRACES_DIR};
 pub use summary::{
     fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,
     SettingResults, SettingSummary, Summary,
@@ -102,6 +102,14 @@ pub enum ResultsError {
         path: PathBuf,
         /// The header fields that differ.
         differences: Vec<&'static str>,
+    },
+    /// Two engines' runs of a crosscheck that do not hold the same episodes.
+    #[error("{count} episodes ran on one engine only (e.g. {example})")]
+    Unpaired {
+        /// Episodes in one run only.
+        count: usize,
+        /// One of them.
+        example: crate::evaluation::EpisodeKey,
     },
     /// Shards that cannot be merged into one run.
     #[error(transparent)]

@@ -20,6 +20,9 @@ use std::path::{Path, PathBuf};
 /// The directory of rollout traces, in a run directory.
 pub const TRACES_DIR: &str = "traces";
 
+/// The series `crosscheck` compares beyond the records, in each engine's run directory.
+pub const CROSSCHECK_SERIES_FILE: &str = "crosscheck-series.jsonl";
+
 /// Every entry a run directory may hold (what `--overwrite` replaces).
 pub const RUN_FILES: [&str; 6] = [
     HEADER_FILE,
@@ -79,6 +82,11 @@ impl RunDir {
     /// `tables.md`.
     pub fn tables_file(&self) -> PathBuf {
         self.dir.join(TABLES_FILE)
+    }
+
+    /// `crosscheck-series.jsonl` (a run made by `crosscheck`).
+    pub fn crosscheck_series_file(&self) -> PathBuf {
+        self.dir.join(CROSSCHECK_SERIES_FILE)
     }
 
     /// `traces/`.

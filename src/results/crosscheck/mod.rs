@@ -3,6 +3,15 @@
 //! means and the mean paired difference with a bootstrap confidence interval — survival
 //! under force is chaotic per episode, so only means over many episodes say anything.
 
+mod files;
+mod series;
+
+pub use files::{
+    compare_runs, write_crosscheck, Crosscheck, CrosscheckCsvRow, CROSSCHECK_CSV_FILE,
+    CROSSCHECK_JSON_FILE,
+};
+pub use series::{SeriesByEpisode, SeriesLog};
+
 use crate::evaluation::Setting;
 use crate::evaluation::{EpisodeKey, EpisodeRecord};
 pub use crate::metrics::{mean_ci, MeanCi};
@@ -156,6 +165,17 @@ pub struct EpisodePair {
     pub joint_divergence: Option<JointDivergence>,
     /// The feet's slip on both engines, when both runs recorded it.
     pub foot_slip: Option<FootSlipPair>,
+}
+
+impl EpisodePair {
+    /// The episode's identity.
+    pub fn key(&self) -> EpisodeKey {
+        EpisodeKey {
+            task: self.task.clone(),
+            sequence_id: self.sequence_id.clone(),
+            setting: self.setting.clone(),
+        }
+    }
 }
 
 /// A mean over episodes, on each engine, and the mean paired difference `b − a` with its

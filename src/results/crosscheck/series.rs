@@ -4,17 +4,13 @@
 //! crosscheck still compares the episodes finished before it was killed — they once came
 //! back with blank divergence columns and no warning.
 
-use anyhow::Context;
+use crate::results::{ResultsError, RunDir};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::io::{BufRead, Write};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-/// File name, in each engine's run directory.
-pub const SERIES_FILE: &str = "crosscheck-series.jsonl";
-
-/// An episode: (task, sequence id, setting).
-pub use thorarena::evaluation::EpisodeKey;
+pub use crate::evaluation::EpisodeKey;
 
 /// Per episode, a series of vectors (per control step).
 pub type SeriesByEpisode = BTreeMap<EpisodeKey, Vec<Vec<f64>>>;
@@ -39,22 +35,27 @@ pub struct SeriesLog {
     pub first_q: SeriesByEpisode,
     /// Accumulated foot slip, by episode.
     pub foot_slip_m: SeriesByEpisode,
+    /// Lines of an earlier attempt that could not be read (1-based line, why): their
+    /// episodes' series are dropped.
+    pub dropped_lines: Vec<(usize, String)>,
 }
 
 impl SeriesLog {
     /// Opens `dir`'s series: read back and appended to when `resume`, else started afresh.
-    /// A last line cut short by a kill is dropped (its episode runs again).
-    pub fn open(dir: &Path, resume: bool) -> anyhow::Result<Self> {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let path = dir.join(SERIES_FILE);
+    /// A last line cut short by a kill is dropped (its episode runs again), and so is an
+    /// unreadable line (counted in [`Self::dropped_lines`]).
+    pub fn open(run: &RunDir, resume: bool) -> Result<Self, ResultsError> {
+        let dir = run.path();
+        std::fs::create_dir_all(dir).map_err(ResultsError::io(dir))?;
+        let path = run.crosscheck_series_file();
+        let mut dropped_lines = Vec::new();
         let mut first_q = SeriesByEpisode::new();
         let mut foot_slip_m = SeriesByEpisode::new();
         let mut kept = Vec::new();
         if resume && path.exists() {
-            let file = std::fs::File::open(&path)
-                .with_context(|| format!("reading {}", path.display()))?;
+            let file = std::fs::File::open(&path).map_err(ResultsError::io(&path))?;
             for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
-                let line = line.with_context(|| format!("reading {}", path.display()))?;
+                let line = line.map_err(ResultsError::io(&path))?;
                 match serde_json::from_str::<Line>(&line) {
                     Ok(l) => {
                         let key = EpisodeKey {
@@ -66,25 +67,21 @@ impl SeriesLog {
                         foot_slip_m.insert(key, l.foot_slip_m);
                         kept.push(line);
                     }
-                    Err(e) => eprintln!(
-                        "--resume: {} line {} is unreadable ({e}); its episode's series is dropped",
-                        path.display(),
-                        i + 1
-                    ),
+                    Err(e) => dropped_lines.push((i + 1, e.to_string())),
                 }
             }
         }
         // Rewrite what was kept, without a torn last line, then append.
-        let mut file =
-            std::fs::File::create(&path).with_context(|| format!("creating {}", path.display()))?;
+        let mut file = std::fs::File::create(&path).map_err(ResultsError::io(&path))?;
         for line in &kept {
-            writeln!(file, "{line}").with_context(|| format!("writing {}", path.display()))?;
+            writeln!(file, "{line}").map_err(ResultsError::io(&path))?;
         }
         Ok(Self {
             path,
             file,
             first_q,
             foot_slip_m,
+            dropped_lines,
         })
     }
 
@@ -94,7 +91,7 @@ impl SeriesLog {
         key: EpisodeKey,
         first_q: Vec<Vec<f64>>,
         foot_slip_m: Vec<Vec<f64>>,
-    ) -> anyhow::Result<()> {
+    ) -> Result<(), ResultsError> {
         let EpisodeKey {
             task,
             sequence_id,
@@ -107,8 +104,12 @@ impl SeriesLog {
             first_q,
             foot_slip_m,
         };
-        writeln!(self.file, "{}", serde_json::to_string(&line)?)
-            .with_context(|| format!("writing {}", self.path.display()))?;
+        let text = serde_json::to_string(&line).map_err(|source| ResultsError::Json {
+            path: self.path.clone(),
+            line: None,
+            source,
+        })?;
+        writeln!(self.file, "{text}").map_err(ResultsError::io(&self.path))?;
         self.first_q.insert(key.clone(), line.first_q);
         self.foot_slip_m.insert(key, line.foot_slip_m);
         Ok(())
