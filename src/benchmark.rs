@@ -190,7 +190,7 @@ pub fn merge(
             dataset: header.dataset.clone(),
         });
     }
-    let sequences = ds.load_all()?;
+    let sequences = header.planned_sequences(&ds.load_all()?);
     let missing = read.missing();
     if !missing.is_empty() {
         return Err(ResultsError::from(MergeError::Missing { missing }).into());

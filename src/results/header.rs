@@ -133,6 +133,21 @@ impl RunHeader {
         crate::evaluation::schedule(self.sequences.len(), self.settings.len(), self.shard)
     }
 
+    /// Of a dataset's `sequences`, those this run planned (all of them unless it ran a
+    /// subset), in the plan's order: what its scores' regime thresholds are computed from,
+    /// so a merge or a collect scores a partial run as the run itself did.
+    pub fn planned_sequences(&self, sequences: &[Sequence]) -> Vec<Sequence> {
+        self.sequences
+            .iter()
+            .filter_map(|p| {
+                sequences
+                    .iter()
+                    .find(|q| q.task == p.task && q.sequence_id == p.sequence_id)
+                    .cloned()
+            })
+            .collect()
+    }
+
     /// The key of job `(sequence index, setting index)` of [`Self::planned_jobs`].
     pub fn job_key(&self, (q, s): (usize, usize)) -> EpisodeKey {
         EpisodeKey {

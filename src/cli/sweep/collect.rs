@@ -115,7 +115,10 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         let header = shards.header.clone();
         let sequences = &datasets[&cell.dataset];
         let out = RunDir::new(Plan::cell_dir(&args.dir, cell.index));
-        let thresholds = thorarena::evaluation::task_thresholds(sequences, header.control_dt_s);
+        let thresholds = thorarena::evaluation::task_thresholds(
+            &header.planned_sequences(sequences),
+            header.control_dt_s,
+        );
         let summary = out.rewrite(&header, &mut shards.into_records(), thresholds)?;
         thorarena::report::write_run_tables(out.path(), &summary)?;
         let out = out.path().to_path_buf();

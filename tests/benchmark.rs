@@ -1,0 +1,332 @@
+//! The evaluation through the library, in process (no binary): a checked `EvalSpec` run
+//! into a `RunDir` by `benchmark::evaluate`, resumed after a kill, sharded and merged by
+//! `benchmark::merge`, and two runs compared by `results::crosscheck` — each giving the
+//! same files as one uninterrupted run.
+
+use std::path::Path;
+use thorarena::benchmark::{self, BenchmarkError, EvalObserver, EvalOptions, Starting};
+use thorarena::evaluation::{EpisodeRecord, EvalRequest, EvalSpec, SpecError};
+use thorarena::motion::SequenceSelection;
+use thorarena::policy::HoldPolicy;
+use thorarena::results::crosscheck::{compare_runs, write_crosscheck, SeriesLog};
+use thorarena::results::{MergeError, ResultsError, RunDir};
+
+/// Two sample sequences of two tasks under force and no force: four `hold` episodes.
+fn request() -> EvalRequest {
+    EvalRequest {
+        policy: "hold".into(),
+        dataset: Some(concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample").into()),
+        selection: SequenceSelection {
+            tasks: Vec::new(),
+            sequences: vec![
+                "clean_table/clean_table_000".into(),
+                "push_chair/push_chair_000".into(),
+            ],
+        },
+        workers: Some(2),
+        ..EvalRequest::default()
+    }
+}
+
+/// Counts what an evaluation reports.
+#[derive(Default)]
+struct Counted {
+    to_run: usize,
+    kept: usize,
+    torn: bool,
+    episodes: usize,
+}
+
+impl EvalObserver for Counted {
+    fn starting(&mut self, s: &Starting) {
+        self.to_run = s.to_run;
+        self.kept = s.started.kept.len();
+        self.torn = s.started.torn_tail_dropped;
+    }
+    fn episode(&mut self, _: &EpisodeRecord, _: Option<&thorarena::episode::EpisodeTrace>) {
+        self.episodes += 1;
+    }
+}
+
+fn run_into(spec: &EvalSpec, dir: &Path, resume: bool) -> (benchmark::Evaluated, Counted) {
+    let mut counted = Counted::default();
+    let options = EvalOptions {
+        resume,
+        ..EvalOptions::default()
+    };
+    let done = benchmark::evaluate(
+        spec,
+        &mut HoldPolicy,
+        &RunDir::new(dir),
+        options,
+        &mut counted,
+    )
+    .unwrap();
+    (done, counted)
+}
+
+fn read(path: impl AsRef<Path>) -> String {
+    std::fs::read_to_string(path).unwrap()
+}
+
+/// The records of a run's `episodes.jsonl`, in key order (the file holds them in the
+/// order episodes finished).
+fn records(dir: &Path) -> Vec<EpisodeRecord> {
+    let mut r: Vec<EpisodeRecord> = read(dir.join("episodes.jsonl"))
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    r.sort_by_key(EpisodeRecord::key);
+    r
+}
+
+/// The same run: records by key, the scores (the policy's measured latency aside: it is
+/// the machine's), every other file byte for byte (no dump on failure: a record is
+/// kilobytes).
+fn assert_same_run(a: &Path, b: &Path, files: &[&str], what: &str) {
+    assert!(records(a) == records(b), "{what}: other records");
+    let scores = |dir: &Path| {
+        let mut s = RunDir::new(dir).read_summary().unwrap();
+        s.policy_io = None;
+        s
+    };
+    let (sa, sb) = (scores(a), scores(b));
+    let (ja, jb) = (
+        serde_json::to_value(&sa).unwrap(),
+        serde_json::to_value(&sb).unwrap(),
+    );
+    let differ: Vec<&String> = ja
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(k, v)| jb.get(k.as_str()) != Some(v))
+        .map(|(k, _)| k)
+        .collect();
+    assert!(sa == sb, "{what}: other scores (in {differ:?})");
+    for file in files {
+        assert!(
+            read(a.join(file)) == read(b.join(file)),
+            "{what}: {file} differs"
+        );
+    }
+}
+
+#[test]
+fn a_run_resumed_after_a_kill_ends_as_the_uninterrupted_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = EvalSpec::load(&request()).unwrap();
+    assert_eq!((spec.sequences.len(), spec.settings.len()), (2, 2));
+    let whole = tmp.path().join("whole");
+    let (done, counted) = run_into(&spec, &whole, false);
+    assert_eq!((counted.to_run, counted.episodes), (4, 4));
+    assert!(!done.policy_failed() && done.summary.complete);
+    assert_eq!(done.tables, read(whole.join("tables.md")));
+
+    // Killed after two episodes, in the middle of writing the third.
+    let killed = tmp.path().join("killed");
+    std::fs::create_dir_all(&killed).unwrap();
+    std::fs::copy(whole.join("run.json"), killed.join("run.json")).unwrap();
+    let text = read(whole.join("episodes.jsonl"));
+    let lines: Vec<&str> = text.lines().collect();
+    let torn = format!(
+        "{}\n{}\n{}",
+        lines[0],
+        lines[1],
+        &lines[2][..lines[2].len() / 2]
+    );
+    std::fs::write(killed.join("episodes.jsonl"), torn).unwrap();
+    let (resumed, counted) = run_into(&spec, &killed, true);
+    assert_eq!((counted.kept, counted.to_run, counted.episodes), (2, 2, 2));
+    assert!(counted.torn, "the torn line is reported dropped");
+    assert_same_run(
+        &killed,
+        &whole,
+        &["run.json", "episodes.csv"],
+        "the resumed run",
+    );
+    assert_eq!(resumed.summary.settings, done.summary.settings);
+
+    // Resuming it under another configuration is a typed error naming what differs,
+    // and leaves the run as it was.
+    let other = EvalSpec::load(&EvalRequest {
+        settings: vec!["no-force".into()],
+        ..request()
+    })
+    .unwrap();
+    let e = benchmark::evaluate(
+        &other,
+        &mut HoldPolicy,
+        &RunDir::new(&killed),
+        EvalOptions {
+            resume: true,
+            ..EvalOptions::default()
+        },
+        &mut (),
+    )
+    .unwrap_err();
+    match e {
+        BenchmarkError::Results(ResultsError::OtherConfiguration { differences, .. }) => {
+            assert_eq!(differences, ["settings"])
+        }
+        e => panic!("not the resume refusal: {e}"),
+    }
+    assert!(
+        records(&killed) == records(&whole),
+        "the refused resume changed the run"
+    );
+}
+
+#[test]
+fn shards_merge_into_the_unsharded_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole");
+    run_into(&EvalSpec::load(&request()).unwrap(), &whole, false);
+    let shards: Vec<RunDir> = (0..3)
+        .map(|i| {
+            let spec = EvalSpec::load(&EvalRequest {
+                shard: Some((i, 3)),
+                ..request()
+            })
+            .unwrap();
+            let dir = tmp.path().join(format!("shard{i}"));
+            run_into(&spec, &dir, false);
+            RunDir::new(dir)
+        })
+        .collect();
+    let robot = thorarena::registry::robot("g1_29dof").unwrap();
+    let merged_dir = tmp.path().join("merged");
+    let merged = benchmark::merge(&shards, &RunDir::new(&merged_dir), &robot).unwrap();
+    assert_eq!(merged.summary.episodes, 4);
+    assert_same_run(
+        &merged_dir,
+        &whole,
+        &["run.json", "episodes.csv"],
+        "the merge",
+    );
+    // Without one shard, the merge names what no shard holds.
+    let e =
+        benchmark::merge(&shards[..2], &RunDir::new(tmp.path().join("m2")), &robot).unwrap_err();
+    match e {
+        BenchmarkError::Results(ResultsError::Merge(MergeError::Missing { missing })) => {
+            assert_eq!(missing.len(), 1, "{missing:?}");
+            assert!(e_display(&missing[0]).contains('/'));
+        }
+        e => panic!("not the missing-episodes refusal: {e}"),
+    }
+    // A run of another evaluation is not a shard.
+    let other = EvalSpec::load(&EvalRequest {
+        settings: vec!["force".into()],
+        ..request()
+    })
+    .unwrap();
+    let stranger = tmp.path().join("stranger");
+    run_into(&other, &stranger, false);
+    let e = benchmark::merge(
+        &[shards[0].clone(), RunDir::new(&stranger)],
+        &RunDir::new(tmp.path().join("m3")),
+        &robot,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            BenchmarkError::Results(ResultsError::Merge(MergeError::NotAShard { .. }))
+        ),
+        "{e}"
+    );
+}
+
+fn e_display(key: &thorarena::evaluation::EpisodeKey) -> String {
+    key.to_string()
+}
+
+#[test]
+fn two_runs_of_one_engine_crosscheck_as_identical() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = EvalSpec::load(&request()).unwrap();
+    let runs = [tmp.path().join("a"), tmp.path().join("b")].map(RunDir::new);
+    let mut series = Vec::new();
+    for run in &runs {
+        let mut log = SeriesLog::open(run, false).unwrap();
+        struct Keep<'a>(&'a mut SeriesLog);
+        impl EvalObserver for Keep<'_> {
+            fn episode(
+                &mut self,
+                r: &EpisodeRecord,
+                trace: Option<&thorarena::episode::EpisodeTrace>,
+            ) {
+                let trace = trace.expect("a trace of the first seconds");
+                let q = trace.steps.iter().map(|s| s.q.clone()).collect();
+                self.0
+                    .append(r.key(), q, trace.foot_slip_m.clone())
+                    .unwrap();
+            }
+        }
+        let options = EvalOptions {
+            resume: false,
+            trace_first_s: Some(0.5),
+        };
+        benchmark::evaluate(&spec, &mut HoldPolicy, run, options, &mut Keep(&mut log)).unwrap();
+        series.push(log);
+    }
+    let check = compare_runs([&runs[0], &runs[1]], [&series[0], &series[1]], 200).unwrap();
+    assert_eq!((check.pairs.len(), check.without_series), (4, 0));
+    for s in &check.settings {
+        for c in [&s.survival, &s.kp_mm, &s.fats] {
+            assert_eq!((c.diff, c.ci95), (0.0, [0.0, 0.0]), "{}", s.setting);
+        }
+        assert_eq!(s.joint_divergence_rad.mean, 0.0);
+    }
+    let [json, csv] = write_crosscheck(
+        tmp.path(),
+        [runs[0].path(), runs[1].path()],
+        &check,
+        200,
+        0.5,
+    )
+    .unwrap();
+    let rows = read(csv);
+    assert_eq!(rows.lines().count(), 5, "a header and a row per episode");
+    assert!(rows.starts_with("task,sequence_id,setting,survival_rapier,"));
+    let file: serde_json::Value = serde_json::from_str(&read(json)).unwrap();
+    assert_eq!(file["episodes"].as_array().unwrap().len(), 4);
+    assert_eq!(file["bootstrap_resamples"], 200);
+}
+
+#[test]
+fn a_spec_is_checked_before_anything_runs() {
+    for (request, says) in [
+        (
+            EvalRequest {
+                workers: Some(0),
+                ..request()
+            },
+            "--workers must be at least 1",
+        ),
+        (
+            EvalRequest {
+                settings: vec!["force".into(), "1".into()],
+                ..request()
+            },
+            "same load on the robot",
+        ),
+        (
+            EvalRequest {
+                profile: Some("twist".into()),
+                ..request()
+            },
+            "did you mean `twist2`?",
+        ),
+        (
+            EvalRequest {
+                trace: vec!["clean_table/nope".into()],
+                ..request()
+            },
+            "--trace: no sequence `clean_table/nope`",
+        ),
+    ] {
+        let e = EvalSpec::load(&request).unwrap_err();
+        assert!(matches!(e, SpecError::Invalid(_)), "{e:?}");
+        assert!(e.to_string().contains(says), "{e}");
+    }
+}
