@@ -21,6 +21,7 @@ mod runs;
 mod scene;
 mod style;
 mod svg;
+mod sweep_figures;
 mod tables;
 
 pub use crosscheck_tables::crosscheck_tables;
@@ -39,6 +40,7 @@ pub use scene::{
 };
 pub use style::{jitter, PolicyColors, DASHES, MARKERS, PALETTE, SURVIVAL_JITTER};
 pub use svg::{figure_svg, svg_figures, SvgFigure};
+pub use sweep_figures::{budget_ms, label_cells, sweep_charts, sweep_title};
 pub use tables::{
     all_tasks, columns, diagnostics_multi_table, diagnostics_table, fats_table, task_fats_table,
     DiagnosticRow, NumberRow, NumberTable, DIAGNOSTIC_ROWS,

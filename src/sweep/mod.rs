@@ -20,21 +20,25 @@
 
 mod array;
 mod axes;
+mod cells;
 mod check;
 mod plan;
+mod results_csv;
 mod slurm;
 mod spec;
 mod status;
 mod text;
 
 pub use array::compact_ranges;
+pub use cells::CellResult;
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
     PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
 };
+pub use results_csv::{results_csv, results_rows, ResultsRow, RESULTS_CSV_FILE};
 pub use slurm::{sbatch_script, shell_quote, SbatchRequest};
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
-pub use status::{task_state, DoneRecord, FailedRecord, TaskState};
+pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
 pub use text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
 
 use std::path::PathBuf;

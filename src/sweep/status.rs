@@ -108,3 +108,46 @@ pub fn task_state(dir: &Path, index: usize) -> Result<TaskState, SweepError> {
         TaskState::NotStarted
     })
 }
+
+/// Tasks by state: (done, failed with reasons, started, not started). A record's
+/// task is the directory it lies in (`task_state` refuses one claiming another).
+pub struct Census {
+    /// Tasks whose `done.json` is there.
+    pub done: Vec<usize>,
+    /// Tasks whose last attempt failed, with why.
+    pub failed: Vec<(usize, FailedRecord)>,
+    /// Tasks started and neither done nor failed (running, or interrupted).
+    pub started: Vec<usize>,
+    /// Tasks never started.
+    pub not_started: Vec<usize>,
+}
+
+/// Every task of `plan` by its state in sweep directory `dir`.
+pub fn census(dir: &Path, plan: &Plan) -> Result<Census, SweepError> {
+    let mut c = Census {
+        done: Vec::new(),
+        failed: Vec::new(),
+        started: Vec::new(),
+        not_started: Vec::new(),
+    };
+    for t in &plan.tasks {
+        match task_state(dir, t.index)? {
+            TaskState::Done(_) => c.done.push(t.index),
+            TaskState::Failed(f) => c.failed.push((t.index, f)),
+            TaskState::Started => c.started.push(t.index),
+            TaskState::NotStarted => c.not_started.push(t.index),
+        }
+    }
+    Ok(c)
+}
+
+impl Census {
+    /// Every task not done, in index order.
+    pub fn not_done(&self) -> Vec<usize> {
+        let mut v: Vec<usize> = self.failed.iter().map(|(i, _)| *i).collect();
+        v.extend(&self.started);
+        v.extend(&self.not_started);
+        v.sort_unstable();
+        v
+    }
+}

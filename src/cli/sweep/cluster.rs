@@ -1,7 +1,10 @@
 //! `sweep slurm` and `sweep k8s`: job scripts and manifests for the cluster engines.
 
-use super::*;
-
+use super::{K8sArgs, SlurmArgs};
+use anyhow::{bail, Context};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use thorarena::sweep::{census, compact_ranges, Plan};
 pub(super) fn absolute(p: &Path) -> anyhow::Result<PathBuf> {
     std::fs::canonicalize(p).with_context(|| format!("{} does not exist", p.display()))
 }

@@ -9,23 +9,7 @@
 //! episode and is flushed to disk; an advisory lock on `tasks/<I>/lock`, held by the task
 //! and inherited by its eval process, keeps two copies of one task from running at once.
 
-use anyhow::{bail, Context};
-use clap::Parser;
-use std::collections::{BTreeMap, VecDeque};
-use std::fs::File;
-use std::io::Write;
-use std::os::unix::process::CommandExt;
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, ExitStatus, Stdio};
-use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
-use thorarena::motion::Dataset;
-use thorarena::results::{read_summary, RunDir, Summary};
-use thorarena::sweep::{
-    compact_ranges, diff_plans, log_tail as log_tail_of, printable, shell_quote, task_state,
-    truncated, DatasetInfo, DoneRecord, FailedRecord, Plan, SweepSpec, Task, TaskState,
-    LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES, PLAN_FILE,
-};
+use std::path::PathBuf;
 
 /// `thorarena sweep …`
 #[derive(Debug, clap::Subcommand)]
@@ -177,15 +161,13 @@ mod cluster;
 mod collect;
 mod plan;
 mod pool;
-mod results_csv;
 mod status;
 mod task;
 mod verify;
 
 use cluster::{k8s, slurm};
 use collect::collect;
-use plan::{eval_cli, plan};
+use plan::plan;
 use pool::run_all;
-use status::{census, status};
-use task::{cores, run_task, task, write_atomic, Outcome};
-use verify::{check_task_run, RunProblem};
+use status::status;
+use task::task;

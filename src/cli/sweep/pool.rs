@@ -1,7 +1,13 @@
 //! `sweep run`: the local pool, N tasks at a time, with progress over the sweep.
 
-use super::*;
-
+use super::task::{cores, run_task, Outcome};
+use super::RunArgs;
+use anyhow::bail;
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use thorarena::sweep::{printable, task_state, Plan, TaskState};
 pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
     let plan = Arc::new(Plan::load(&args.dir)?);
     let jobs = match args.jobs {

@@ -1,44 +1,9 @@
 //! `sweep status`: tasks by state, failure reasons, the not-done set.
 
-use super::*;
-
-/// Tasks by state: (done, failed with reasons, started, not started). A record's
-/// task is the directory it lies in (`task_state` refuses one claiming another).
-pub(super) struct Census {
-    pub(super) done: Vec<usize>,
-    pub(super) failed: Vec<(usize, FailedRecord)>,
-    pub(super) started: Vec<usize>,
-    pub(super) not_started: Vec<usize>,
-}
-
-pub(super) fn census(dir: &Path, plan: &Plan) -> anyhow::Result<Census> {
-    let mut c = Census {
-        done: Vec::new(),
-        failed: Vec::new(),
-        started: Vec::new(),
-        not_started: Vec::new(),
-    };
-    for t in &plan.tasks {
-        match task_state(dir, t.index)? {
-            TaskState::Done(_) => c.done.push(t.index),
-            TaskState::Failed(f) => c.failed.push((t.index, f)),
-            TaskState::Started => c.started.push(t.index),
-            TaskState::NotStarted => c.not_started.push(t.index),
-        }
-    }
-    Ok(c)
-}
-
-impl Census {
-    pub(super) fn not_done(&self) -> Vec<usize> {
-        let mut v: Vec<usize> = self.failed.iter().map(|(i, _)| *i).collect();
-        v.extend(&self.started);
-        v.extend(&self.not_started);
-        v.sort_unstable();
-        v
-    }
-}
-
+use super::StatusArgs;
+use thorarena::sweep::{
+    census, compact_ranges, printable, truncated, Plan, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
+};
 pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.dir)?;
     let c = census(&args.dir, &plan)?;

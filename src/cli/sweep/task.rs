@@ -1,8 +1,21 @@
 //! One task: a child `thorarena eval` (and a launched policy process), its lock, and the
 //! records that say it is done or why it failed.
 
-use super::*;
-
+use super::verify::{check_task_run, RunProblem};
+use super::TaskArgs;
+use anyhow::{bail, Context};
+use std::fs::File;
+use std::io::Write;
+use std::os::unix::process::CommandExt;
+use std::path::Path;
+use std::process::{Child, Command, ExitStatus, Stdio};
+use std::time::{Duration, Instant};
+use thorarena::motion::Dataset;
+use thorarena::results::RunDir;
+use thorarena::sweep::{
+    log_tail as log_tail_of, printable, shell_quote, task_state, truncated, DoneRecord,
+    FailedRecord, Plan, TaskState, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
+};
 /// What became of one attempt at a task.
 #[derive(Debug)]
 pub(super) enum Outcome {

@@ -6,9 +6,11 @@
 //! its hash, settings, shard, engine, rules) and it holds every planned episode, none
 //! cut short by a policy failure.
 
-use super::*;
+use super::plan::eval_cli;
+use std::path::Path;
 use thorarena::evaluation::EpisodeRecord;
 use thorarena::results::{Coverage, RunDir, RunHeader};
+use thorarena::sweep::{Plan, Task};
 
 /// Why a task's run does not count for the task.
 #[derive(Debug)]

@@ -1,15 +1,17 @@
 //! `results.csv`: one typed row per cell, its columns the fields of [`ResultsRow`], so a
 //! renamed metric is a compile error here rather than a column silently left empty.
 
-use super::collect::CellResult;
+use super::{CellResult, Plan};
+use crate::metrics::Diagnostics;
 use serde::Serialize;
-use thorarena::metrics::Diagnostics;
-use thorarena::sweep::Plan;
+
+/// `results.csv`, in the sweep directory.
+pub const RESULTS_CSV_FILE: &str = "results.csv";
 
 /// One cell of a sweep: its axes, how much of it ran, and its scores (empty where
 /// undefined or not run). Keypoint errors in mm, as every table prints them.
 #[derive(Debug, Serialize)]
-pub(super) struct ResultsRow {
+pub struct ResultsRow {
     cell: usize,
     policy: String,
     /// As the spec names it: relative to the spec's directory when inside it.
@@ -55,12 +57,12 @@ fn finite(v: f64) -> Option<f64> {
 }
 
 /// The rows of every cell, in plan order.
-pub(super) fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsRow> {
+pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsRow> {
     plan.cells
         .iter()
         .zip(results)
         .map(|(cell, r)| {
-            let setting = thorarena::evaluation::Setting::parse(&cell.setting);
+            let setting = crate::evaluation::Setting::parse(&cell.setting);
             let scores = r.as_ref().and_then(|r| r.summary.settings.values().next());
             let d = |f: fn(&Diagnostics) -> f64| scores.and_then(|s| finite(f(&s.average)));
             let ci = scores.and_then(|s| s.fats_ci95);
@@ -113,7 +115,7 @@ pub(super) fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<R
 }
 
 /// `results.csv`'s text: a header of the field names, then one line per cell.
-pub(super) fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String {
+pub fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String {
     let mut w = csv::Writer::from_writer(Vec::new());
     for row in results_rows(plan, results) {
         w.serialize(row)
