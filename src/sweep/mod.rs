@@ -30,7 +30,7 @@ mod status;
 mod text;
 
 pub use array::compact_ranges;
-pub use cells::CellResult;
+pub use cells::{CellFaults, CellLatency, CellResult};
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
     PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,

@@ -66,8 +66,8 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
             let scores = r.as_ref().and_then(|r| r.summary.settings.values().next());
             let d = |f: fn(&Diagnostics) -> f64| scores.and_then(|s| finite(f(&s.average)));
             let ci = scores.and_then(|s| s.fats_ci95);
-            let latency = |i: usize| r.as_ref().and_then(|r| r.latency_us.map(|l| l[i]));
-            let faults = |i: usize| r.as_ref().map(|r| r.faults[i]);
+            let latency = r.as_ref().and_then(|r| r.latency);
+            let faults = r.as_ref().map(|r| r.faults);
             ResultsRow {
                 cell: cell.index,
                 policy: cell.policy.name.clone(),
@@ -101,12 +101,12 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
                 upper_kp_mm: d(|d| d.upper_kp_mm),
                 lower_kp_mm: d(|d| d.lower_kp_mm),
                 fats_std: d(|d| d.fats_std),
-                latency_p50_us: latency(0),
-                latency_p99_us: latency(1),
-                latency_p999_us: latency(2),
-                deadline_misses: faults(0),
-                invalid_actions: faults(1),
-                policy_failures: faults(2),
+                latency_p50_us: latency.map(|l| l.p50_us),
+                latency_p99_us: latency.map(|l| l.p99_us),
+                latency_p999_us: latency.map(|l| l.p999_us),
+                deadline_misses: faults.map(|f| f.deadline_misses),
+                invalid_actions: faults.map(|f| f.invalid_actions),
+                policy_failures: faults.map(|f| f.policy_failures),
                 engine: cell.engine.name.clone(),
                 physics_dt_s: r.as_ref().map(|r| r.summary.header.physics_dt_s),
             }

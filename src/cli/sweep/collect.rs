@@ -8,7 +8,7 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use thorarena::motion::Dataset;
 use thorarena::report::{label_cells, sweep_charts, sweep_title};
-use thorarena::results::{read_summary, RunDir};
+use thorarena::results::RunDir;
 use thorarena::sweep::{census, compact_ranges, CellResult, Plan, Task};
 pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.dir)?;
@@ -106,39 +106,11 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             continue;
         }
         let shard_dirs: Vec<RunDir> = runs.iter().map(RunDir::new).collect();
-        let shards = thorarena::results::read_shards(&shard_dirs)?;
-        let header = shards.header.clone();
-        let sequences = &datasets[&cell.dataset];
         let out = RunDir::new(Plan::cell_dir(&args.dir, cell.index));
-        let thresholds = thorarena::evaluation::task_thresholds(
-            &header.planned_sequences(sequences),
-            header.control_dt_s,
-        );
-        let summary = out.rewrite(&header, &mut shards.into_records(), thresholds)?;
-        thorarena::report::write_run_tables(out.path(), &summary)?;
-        let out = out.path().to_path_buf();
-        let mut faults = [0u64; 3];
-        let mut latency_us = None;
-        for run in &runs {
-            let Some(io) = read_summary(run)?.policy_io else {
-                continue;
-            };
-            faults[0] += io.deadline_misses;
-            faults[1] += io.invalid_actions;
-            faults[2] += io.transport.map_or(0, |t| t.policy_failures);
-            if runs.len() == 1 {
-                let l = io.latency;
-                latency_us = Some([l.p50_us, l.p99_us, l.p999_us]);
-            }
-        }
-        results.push(Some(CellResult {
-            dir: out,
-            episodes: summary.episodes,
-            complete: summary.episodes == cell.episodes && summary.complete,
-            summary,
-            faults,
-            latency_us,
-        }));
+        let result =
+            CellResult::collect(&shard_dirs, &out, &datasets[&cell.dataset], cell.episodes)?;
+        thorarena::report::write_run_tables(out.path(), &result.summary)?;
+        results.push(Some(result));
     }
     let csv = thorarena::sweep::results_csv(&plan, &results);
     let csv_path = args.dir.join(thorarena::sweep::RESULTS_CSV_FILE);
