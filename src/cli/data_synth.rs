@@ -1,8 +1,9 @@
 //! `thorarena data synth`: writes the synthetic six-task dataset.
 
-use super::data::{describe, SynthArgs};
+use super::data::SynthArgs;
 use anyhow::{bail, Context};
 use std::path::Path;
+use thorarena::motion::describe;
 use thorarena::motion::synth::{synthesize, SynthOptions};
 use thorarena::motion::{DatasetWriter, Manifest, MANIFEST};
 

@@ -2,6 +2,7 @@
 //! resampling and forward kinematics of references.
 
 mod dataset;
+mod describe;
 mod error;
 mod export;
 mod format;
@@ -13,6 +14,7 @@ mod sequence;
 pub mod synth;
 
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
+pub use describe::{describe, joint_limit_margin, plural, total_hand_force};
 pub use error::DataError;
 pub use export::export_npz;
 pub use format::{decode_sequence, encode_sequence, sha256_hex, write_sequence, SCHEMA_VERSION};
