@@ -11,8 +11,8 @@ use crate::handshake::{
 };
 use crate::layout::{ActionBatchMut, Layout, ObsBatch, COMMAND_END};
 use crate::session::{
-    create_node, service_names, transport, wait_for, IpcError, PeerNode, WaitPolicy, Waited,
-    NODE_CHECK_EVERY,
+    create_node, service_names, transport, wait_for, Event, IpcError, Message, PeerNode, Port,
+    TransportOp, WaitPolicy, Waited, NODE_CHECK_EVERY,
 };
 use crate::PROTOCOL_VERSION;
 use iceoryx2::active_request::ActiveRequest;
@@ -162,11 +162,10 @@ impl PolicyClient {
         let obs_ready = obs_ready
             .listener_builder()
             .create()
-            .map_err(transport("obs_ready listener"))?;
-        let action_ready = action_ready
-            .notifier_builder()
-            .create()
-            .map_err(transport("action_ready notifier"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::ObsReadyListener)))?;
+        let action_ready = action_ready.notifier_builder().create().map_err(transport(
+            TransportOp::CreatePort(Port::ActionReadyNotifier),
+        ))?;
 
         let mut offsets = [0.0; MAX_REFERENCE_OFFSETS];
         offsets[..config.reference_offsets_s.len()].copy_from_slice(&config.reference_offsets_s);
@@ -182,12 +181,15 @@ impl PolicyClient {
         let hello_client = hello_service
             .client_builder()
             .create()
-            .map_err(transport("hello client"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::HelloClient)))?;
         let pending = hello_client
             .send_copy(hello)
-            .map_err(transport("sending hello"))?;
+            .map_err(transport(TransportOp::Send(Message::Hello)))?;
         let welcome = loop {
-            if let Some(r) = pending.receive().map_err(transport("receiving welcome"))? {
+            if let Some(r) = pending
+                .receive()
+                .map_err(transport(TransportOp::Receive(Message::Welcome)))?
+            {
                 break *r.payload();
             }
             if start.elapsed() > timeout {
@@ -219,7 +221,7 @@ impl PolicyClient {
             .initial_max_slice_len(layout.action_words())
             .allocation_strategy(AllocationStrategy::Static)
             .create()
-            .map_err(transport("step server"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::StepServer)))?;
         Ok(Self {
             info: SessionInfo {
                 layout,
@@ -265,7 +267,7 @@ impl PolicyClient {
         while let Some(r) = self
             .server
             .receive()
-            .map_err(transport("receiving observations"))?
+            .map_err(transport(TransportOp::Receive(Message::Observations)))?
         {
             newest = Some(r);
         }
@@ -331,7 +333,7 @@ impl PolicyStep {
             let response = self
                 .request
                 .loan_slice(self.layout.action_words())
-                .map_err(transport("loaning the action batch"))?;
+                .map_err(transport(TransportOp::Loan(Message::Actions)))?;
             self.response = Some(response);
         }
         let response = self.response.as_mut().expect("loaned above");
@@ -366,7 +368,7 @@ impl PolicyStep {
         client
             .action_ready
             .notify()
-            .map_err(transport("notifying action_ready"))?;
+            .map_err(transport(TransportOp::Notify(Event::ActionReady)))?;
         Ok(())
     }
 }

@@ -9,8 +9,8 @@ use crate::handshake::{from_fixed, joint_names_hash, to_fixed, Hello, Status, We
 use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
 use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
 use crate::session::{
-    create_node, service_names, transport, wait_for, IpcError, PeerNode, WaitPolicy, Waited,
-    NODE_CHECK_EVERY,
+    create_node, service_names, transport, wait_for, Event, IpcError, Message, PeerNode, Port,
+    TransportCause, TransportOp, WaitPolicy, Waited, NODE_CHECK_EVERY,
 };
 use crate::PROTOCOL_VERSION;
 use iceoryx2::identifiers::UniqueNodeId;
@@ -131,13 +131,6 @@ impl SimSession {
             ));
         }
         let node = create_node(&format!("thorarena-sim-{}", config.session))?;
-        let in_use = |e: &dyn CreateError| {
-            if e.already_exists() {
-                IpcError::SessionInUse(config.session.clone())
-            } else {
-                IpcError::Transport(format!("creating the session services: {e:?}"))
-            }
-        };
         let step = node
             .service_builder(&names.step)
             .request_response::<[u64], [u64]>()
@@ -150,27 +143,29 @@ impl SimSession {
             .max_borrowed_responses_per_pending_response(1)
             .enable_fire_and_forget_requests(true)
             .create()
-            .map_err(|e| in_use(&e))?;
+            .map_err(|e| service_creation_failed(&config.session, e))?;
         let obs_ready = node
             .service_builder(&names.obs_ready)
             .event()
             .max_notifiers(2)
             .max_listeners(4)
             .create()
-            .map_err(|e| in_use(&e))?
+            .map_err(|e| service_creation_failed(&config.session, e))?
             .notifier_builder()
             .create()
-            .map_err(transport("obs_ready notifier"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::ObsReadyNotifier)))?;
         let action_ready = node
             .service_builder(&names.action_ready)
             .event()
             .max_notifiers(4)
             .max_listeners(2)
             .create()
-            .map_err(|e| in_use(&e))?
+            .map_err(|e| service_creation_failed(&config.session, e))?
             .listener_builder()
             .create()
-            .map_err(transport("action_ready listener"))?;
+            .map_err(transport(TransportOp::CreatePort(
+                Port::ActionReadyListener,
+            )))?;
         // Last: a policy that finds `hello` finds the other three.
         let hello_service = node
             .service_builder(&names.hello)
@@ -179,11 +174,11 @@ impl SimSession {
             .max_clients(8)
             .max_active_requests_per_client(1)
             .create()
-            .map_err(|e| in_use(&e))?;
+            .map_err(|e| service_creation_failed(&config.session, e))?;
         let hello = hello_service
             .server_builder()
             .create()
-            .map_err(transport("hello server"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::HelloServer)))?;
         Ok(Self {
             joint_hash: joint_names_hash(&config.joint_names),
             config,
@@ -254,7 +249,11 @@ impl SimSession {
             _ => Ok(()),
         };
         loop {
-            while let Some(request) = self.hello.receive().map_err(transport("hello receive"))? {
+            while let Some(request) = self
+                .hello
+                .receive()
+                .map_err(transport(TransportOp::Receive(Message::Hello)))?
+            {
                 let hello = *request.payload();
                 let (status, message) = self.check(&hello);
                 let mut welcome = Welcome {
@@ -306,7 +305,7 @@ impl SimSession {
                     .initial_max_slice_len(layout.obs_words())
                     .allocation_strategy(AllocationStrategy::Static)
                     .create()
-                    .map_err(transport("step client"))?;
+                    .map_err(transport(TransportOp::CreatePort(Port::StepClient)))?;
                 welcome.status = Status::Ok as u32;
                 if request.send_copy(welcome).is_err() {
                     on_refused(&format!("policy `{}` left before its welcome", info.name));
@@ -419,17 +418,19 @@ impl SimSession {
         let mut request = conn
             .client
             .loan_slice(conn.layout.obs_words())
-            .map_err(transport("loaning the observation batch"))?;
+            .map_err(transport(TransportOp::Loan(Message::Observations)))?;
         {
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(request.payload_mut());
             let mut batch = ObsBatchMut::new(conn.layout, bytes, COMMAND_STEP, conn.seq);
             fill(&mut batch);
         }
         let sent = Instant::now();
-        let pending = request.send().map_err(transport("sending observations"))?;
+        let pending = request
+            .send()
+            .map_err(transport(TransportOp::Send(Message::Observations)))?;
         self.obs_ready
             .notify()
-            .map_err(transport("notifying obs_ready"))?;
+            .map_err(transport(TransportOp::Notify(Event::ObsReady)))?;
         let deadline = budget.map(|b| sent + b);
         let step_service = &self.step;
         let mut response = None;
@@ -462,7 +463,7 @@ impl SimSession {
             }
         }
         if let Some(e) = receive_error {
-            return Err(transport("receiving actions")(e));
+            return Err(transport(TransportOp::Receive(Message::Actions))(e));
         }
         match waited {
             Waited::Ready => {
@@ -470,11 +471,13 @@ impl SimSession {
                 let bytes: &[u8] = bytemuck::cast_slice(response.payload());
                 let batch = ActionBatch::new(conn.layout, bytes)?;
                 if batch.header().seq != conn.seq {
-                    return Err(IpcError::Transport(format!(
-                        "action batch answers step {} but step {} was sent",
-                        batch.header().seq,
-                        conn.seq
-                    )));
+                    return Err(IpcError::Transport {
+                        op: TransportOp::Receive(Message::Actions),
+                        cause: TransportCause::OutOfSequence {
+                            answered_seq: batch.header().seq,
+                            sent_seq: conn.seq,
+                        },
+                    });
                 }
                 read(&batch);
                 Ok(StepOutcome::Answered)
@@ -564,8 +567,18 @@ fn fixed_joints(v: &[f64]) -> [f64; MAX_JOINTS] {
 
 /// A service-creation error of iceoryx2 that may say "another live node owns this
 /// service" (its typed `AlreadyExists`), which is a session in use, not a transport fault.
-trait CreateError: std::fmt::Debug {
+trait CreateError: std::error::Error + Send + Sync + 'static {
     fn already_exists(&self) -> bool;
+}
+
+/// The error of creating one of `session`'s services: in use by another live run, or
+/// iceoryx2 failed.
+fn service_creation_failed(session: &str, e: impl CreateError) -> IpcError {
+    if e.already_exists() {
+        IpcError::SessionInUse(session.into())
+    } else {
+        transport(TransportOp::CreateServices)(e)
+    }
 }
 
 impl CreateError for iceoryx2::service::builder::request_response::RequestResponseCreateError {
