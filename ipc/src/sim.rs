@@ -13,6 +13,7 @@ use crate::session::{
     TransportCause, TransportOp, WaitPolicy, Waited, NODE_CHECK_EVERY,
 };
 use crate::PROTOCOL_VERSION;
+use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
@@ -27,6 +28,7 @@ type StepFactory = RrFactory<ipc::Service, [u64], (), [u64], ()>;
 type StepClient = Client<ipc::Service, [u64], (), [u64], ()>;
 type StepPending = PendingResponse<ipc::Service, [u64], (), [u64], ()>;
 type HelloFactory = RrFactory<ipc::Service, Hello, (), Welcome, ()>;
+type HelloRequest = ActiveRequest<ipc::Service, Hello, (), Welcome, ()>;
 
 /// A welcomed policy has this long to create its step server (its client library does so
 /// right after the welcome); one that does not is dropped and the next one accepted.
@@ -254,105 +256,136 @@ impl SimSession {
                 .receive()
                 .map_err(transport(TransportOp::Receive(Message::Hello)))?
             {
-                let hello = *request.payload();
-                let (status, message) = self.check(&hello);
-                let mut welcome = Welcome {
-                    protocol_version: PROTOCOL_VERSION,
-                    status: status as u32,
-                    n_joints: self.config.joint_names.len() as u32,
-                    n_envs: self.config.n_envs as u32,
-                    joint_names_hash: self.joint_hash,
-                    control_dt_s: self.config.control_dt_s,
-                    budget_s: self.config.budget.map_or(0.0, |b| b.as_secs_f64()),
-                    n_refs: hello.n_refs.min(MAX_REFERENCE_OFFSETS as u32),
-                    pid: std::process::id(),
-                    action_offset_rad: fixed_joints(&self.config.action_offset_rad),
-                    action_scale: fixed_joints(&self.config.action_scale),
-                    message: to_fixed(&message),
-                };
-                if status != Status::Ok {
-                    on_refused(&message);
-                    let _ = request.send_copy(welcome);
-                    continue;
+                if let Some(info) = self.admit(request, &mut vet, &mut on_refused, &timed_out)? {
+                    return Ok(info);
                 }
-                let n_refs = hello.n_refs as usize;
-                let info = PolicyInfo {
-                    name: from_fixed(&hello.name),
-                    pid: hello.pid,
-                    reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
-                };
-                if let Err(why) = vet(&info) {
-                    on_refused(&why);
-                    welcome.status = Status::Rejected as u32;
-                    welcome.message = to_fixed(&why);
-                    let _ = request.send_copy(welcome);
-                    continue;
-                }
-                // The node that sent this hello, as iceoryx2 registered its port.
-                let Some(peer_id) = client_node(&self.hello_service, request.origin()) else {
-                    on_refused(&format!("policy `{}` left before its welcome", info.name));
-                    continue;
-                };
-                let peer = PeerNode::new(peer_id, self.node.config(), NODE_CHECK_EVERY);
-                let layout = Layout {
-                    n_envs: self.config.n_envs,
-                    n_joints: self.config.joint_names.len(),
-                    n_refs,
-                };
-                let client = self
-                    .step
-                    .client_builder()
-                    .initial_max_slice_len(layout.obs_words())
-                    .allocation_strategy(AllocationStrategy::Static)
-                    .create()
-                    .map_err(transport(TransportOp::CreatePort(Port::StepClient)))?;
-                welcome.status = Status::Ok as u32;
-                if request.send_copy(welcome).is_err() {
-                    on_refused(&format!("policy `{}` left before its welcome", info.name));
-                    continue;
-                }
-                drop(request);
-                // The policy creates its step server after the welcome; wait for that
-                // node's server (not any server: a stale one of another node is not it).
-                let welcomed = Instant::now();
-                let served = loop {
-                    if has_server_of(&self.step, peer_id) {
-                        break true;
-                    }
-                    if !peer.alive() {
-                        on_refused(&format!(
-                            "policy `{}` died after its hello, before serving steps",
-                            info.name
-                        ));
-                        break false;
-                    }
-                    if welcomed.elapsed() > STEP_SERVER_WITHIN {
-                        on_refused(&format!(
-                            "policy `{}` did not serve steps within {STEP_SERVER_WITHIN:?} of its welcome",
-                            info.name
-                        ));
-                        break false;
-                    }
-                    timed_out("the policy's step server")?;
-                    std::thread::sleep(Duration::from_micros(200));
-                };
-                if !served {
-                    drop(client);
-                    self.node.try_cleanup_dead_nodes();
-                    continue;
-                }
-                self.connection = Some(Connection {
-                    info: info.clone(),
-                    peer,
-                    layout,
-                    client,
-                    seq: 0,
-                    overdue: None,
-                });
-                return Ok(info);
             }
             timed_out("a policy to connect")?;
             std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    /// Answers one hello: a policy the protocol or `vet` refuses is told why; one that is
+    /// welcomed is connected once its step server is up. `None`: not connected (the reason
+    /// went to `on_refused`), so the caller goes on waiting for the next hello.
+    fn admit(
+        &mut self,
+        request: HelloRequest,
+        vet: &mut impl FnMut(&PolicyInfo) -> Result<(), String>,
+        on_refused: &mut impl FnMut(&str),
+        timed_out: &impl Fn(&'static str) -> Result<(), IpcError>,
+    ) -> Result<Option<PolicyInfo>, IpcError> {
+        let hello = *request.payload();
+        let (status, message) = self.check(&hello);
+        let mut welcome = self.welcome(&hello, status, &message);
+        if status != Status::Ok {
+            on_refused(&message);
+            let _ = request.send_copy(welcome);
+            return Ok(None);
+        }
+        let n_refs = hello.n_refs as usize;
+        let info = PolicyInfo {
+            name: from_fixed(&hello.name),
+            pid: hello.pid,
+            reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
+        };
+        if let Err(why) = vet(&info) {
+            on_refused(&why);
+            welcome.status = Status::Rejected as u32;
+            welcome.message = to_fixed(&why);
+            let _ = request.send_copy(welcome);
+            return Ok(None);
+        }
+        // The node that sent this hello, as iceoryx2 registered its port.
+        let Some(peer_id) = client_node(&self.hello_service, request.origin()) else {
+            on_refused(&format!("policy `{}` left before its welcome", info.name));
+            return Ok(None);
+        };
+        let peer = PeerNode::new(peer_id, self.node.config(), NODE_CHECK_EVERY);
+        let layout = Layout {
+            n_envs: self.config.n_envs,
+            n_joints: self.config.joint_names.len(),
+            n_refs,
+        };
+        let client = self
+            .step
+            .client_builder()
+            .initial_max_slice_len(layout.obs_words())
+            .allocation_strategy(AllocationStrategy::Static)
+            .create()
+            .map_err(transport(TransportOp::CreatePort(Port::StepClient)))?;
+        welcome.status = Status::Ok as u32;
+        if request.send_copy(welcome).is_err() {
+            on_refused(&format!("policy `{}` left before its welcome", info.name));
+            return Ok(None);
+        }
+        drop(request);
+        if !self.await_step_server(peer_id, &peer, &info.name, on_refused, timed_out)? {
+            drop(client);
+            self.node.try_cleanup_dead_nodes();
+            return Ok(None);
+        }
+        self.connection = Some(Connection {
+            info: info.clone(),
+            peer,
+            layout,
+            client,
+            seq: 0,
+            overdue: None,
+        });
+        Ok(Some(info))
+    }
+
+    /// The welcome answering `hello` with `status` and `message` (the session's shape and
+    /// action mapping, whatever the status: a refused policy learns what it should be).
+    fn welcome(&self, hello: &Hello, status: Status, message: &str) -> Welcome {
+        Welcome {
+            protocol_version: PROTOCOL_VERSION,
+            status: status as u32,
+            n_joints: self.config.joint_names.len() as u32,
+            n_envs: self.config.n_envs as u32,
+            joint_names_hash: self.joint_hash,
+            control_dt_s: self.config.control_dt_s,
+            budget_s: self.config.budget.map_or(0.0, |b| b.as_secs_f64()),
+            n_refs: hello.n_refs.min(MAX_REFERENCE_OFFSETS as u32),
+            pid: std::process::id(),
+            action_offset_rad: fixed_joints(&self.config.action_offset_rad),
+            action_scale: fixed_joints(&self.config.action_scale),
+            message: to_fixed(message),
+        }
+    }
+
+    /// Waits for the welcomed policy `name` to create its step server. The policy creates
+    /// it after the welcome; this waits for that node's server (not any server: a stale
+    /// one of another node is not it). False, and the reason sent to `on_refused`, when the
+    /// policy died or did not serve within [`STEP_SERVER_WITHIN`].
+    fn await_step_server(
+        &self,
+        peer_id: UniqueNodeId,
+        peer: &PeerNode,
+        name: &str,
+        on_refused: &mut impl FnMut(&str),
+        timed_out: &impl Fn(&'static str) -> Result<(), IpcError>,
+    ) -> Result<bool, IpcError> {
+        let welcomed = Instant::now();
+        loop {
+            if has_server_of(&self.step, peer_id) {
+                return Ok(true);
+            }
+            if !peer.alive() {
+                on_refused(&format!(
+                    "policy `{name}` died after its hello, before serving steps"
+                ));
+                return Ok(false);
+            }
+            if welcomed.elapsed() > STEP_SERVER_WITHIN {
+                on_refused(&format!(
+                    "policy `{name}` did not serve steps within {STEP_SERVER_WITHIN:?} of its welcome"
+                ));
+                return Ok(false);
+            }
+            timed_out("the policy's step server")?;
+            std::thread::sleep(Duration::from_micros(200));
         }
     }
 
