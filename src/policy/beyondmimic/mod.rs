@@ -28,6 +28,8 @@ pub use observation::{
     Term, LAYOUT_154, LAYOUT_160,
 };
 
+pub(crate) use load::metadata_props;
+
 use super::{ActOutcome, Observation, Policy};
 use crate::robot::RobotModel;
 use std::path::PathBuf;
