@@ -11,19 +11,27 @@ use crate::handshake::{
 };
 use crate::layout::{ActionBatchMut, Layout, ObsBatch, COMMAND_END};
 use crate::session::{
-    create_node, service_names, transport, wait_for, IpcError, PeerNode, WaitPolicy, Waited,
-    NODE_CHECK_EVERY,
+    create_node, service_names, transport, wait_for, Event, IpcError, Message, PeerNode, Port,
+    ServiceNames, TransportOp, WaitPolicy, Waited, NODE_CHECK_EVERY,
 };
 use crate::PROTOCOL_VERSION;
 use iceoryx2::active_request::ActiveRequest;
+use iceoryx2::identifiers::UniqueNodeId;
+use iceoryx2::port::client::Client;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::server::Server;
 use iceoryx2::prelude::*;
 use iceoryx2::response_mut::ResponseMut;
+use iceoryx2::service::port_factory::event::PortFactory as EventPortFactory;
+use iceoryx2::service::port_factory::request_response::PortFactory as RrFactory;
 use std::time::{Duration, Instant};
 
 type StepServer = Server<ipc::Service, [u64], (), [u64], ()>;
+type StepFactory = RrFactory<ipc::Service, [u64], (), [u64], ()>;
+type HelloFactory = RrFactory<ipc::Service, Hello, (), Welcome, ()>;
+type HelloClient = Client<ipc::Service, Hello, (), Welcome, ()>;
+type EventFactory = EventPortFactory<ipc::Service>;
 type StepRequest = ActiveRequest<ipc::Service, [u64], (), [u64], ()>;
 type StepResponse = ResponseMut<ipc::Service, [u64], ()>;
 
@@ -120,116 +128,41 @@ impl PolicyClient {
         }
         let node = create_node(&format!("thorarena-policy-{}", config.session))?;
         let start = Instant::now();
-        // The simulator creates `hello` last, but a policy may also catch a session that is
-        // being torn down: open all four or retry until the timeout.
-        let open_all = || -> Option<_> {
-            let hello = node
-                .service_builder(&names.hello)
-                .request_response::<Hello, Welcome>()
-                .open()
-                .ok()?;
-            let step = node
-                .service_builder(&names.step)
-                .request_response::<[u64], [u64]>()
-                .open()
-                .ok()?;
-            let obs_ready = node.service_builder(&names.obs_ready).event().open().ok()?;
-            let action_ready = node
-                .service_builder(&names.action_ready)
-                .event()
-                .open()
-                .ok()?;
-            Some((hello, step, obs_ready, action_ready))
-        };
-        let (hello_service, step, obs_ready, action_ready) = loop {
-            match open_all() {
-                Some(services) => break services,
-                None if start.elapsed() < timeout => std::thread::sleep(Duration::from_millis(5)),
-                None => return Err(IpcError::NoSession(config.session.clone())),
-            }
-        };
-        // A policy already serves this session's steps: say so at once, rather than wait
-        // for a welcome the simulator cannot give in the middle of a run.
-        if step.dynamic_config().number_of_servers() > 0 {
-            return Err(IpcError::Refused {
-                status: Status::Busy,
-                message: format!(
-                    "session {:?} is in use: another policy is connected (a session serves one policy at a time)",
-                    config.session
-                ),
-            });
-        }
-        let obs_ready = obs_ready
+        let services = open_services(&node, &names, &config.session, start, timeout)?;
+        refuse_if_served(&services.step, &config.session)?;
+        let obs_ready = services
+            .obs_ready
             .listener_builder()
             .create()
-            .map_err(transport("obs_ready listener"))?;
-        let action_ready = action_ready
+            .map_err(transport(TransportOp::CreatePort(Port::ObsReadyListener)))?;
+        let action_ready = services
+            .action_ready
             .notifier_builder()
             .create()
-            .map_err(transport("action_ready notifier"))?;
-
-        let mut offsets = [0.0; MAX_REFERENCE_OFFSETS];
-        offsets[..config.reference_offsets_s.len()].copy_from_slice(&config.reference_offsets_s);
-        let hello = Hello {
-            protocol_version: config.protocol_version,
-            n_joints: config.joint_names.len() as u32,
-            joint_names_hash: joint_names_hash(&config.joint_names),
-            pid: config.announced_pid,
-            n_refs: config.reference_offsets_s.len() as u32,
-            reference_offsets_s: offsets,
-            name: to_fixed(&config.name),
-        };
-        let hello_client = hello_service
+            .map_err(transport(TransportOp::CreatePort(
+                Port::ActionReadyNotifier,
+            )))?;
+        let hello_client = services
+            .hello
             .client_builder()
             .create()
-            .map_err(transport("hello client"))?;
-        let pending = hello_client
-            .send_copy(hello)
-            .map_err(transport("sending hello"))?;
-        let welcome = loop {
-            if let Some(r) = pending.receive().map_err(transport("receiving welcome"))? {
-                break *r.payload();
-            }
-            if start.elapsed() > timeout {
-                return Err(IpcError::Timeout(timeout, "the simulator's welcome"));
-            }
-            std::thread::sleep(Duration::from_micros(200));
-        };
-        let status = Status::from_u32(welcome.status).unwrap_or(Status::ProtocolVersion);
-        if status != Status::Ok {
-            return Err(IpcError::Refused {
-                status,
-                message: from_fixed(&welcome.message),
-            });
-        }
+            .map_err(transport(TransportOp::CreatePort(Port::HelloClient)))?;
+        let welcome = say_hello(&hello_client, config, start, timeout)?;
         let layout = Layout {
             n_envs: welcome.n_envs as usize,
             n_joints: welcome.n_joints as usize,
             n_refs: welcome.n_refs as usize,
         };
-        // The simulator's node: the one serving `hello` (it welcomed us).
-        let mut simulator_node = None;
-        hello_service.dynamic_config().list_servers(|s| {
-            simulator_node = Some(s.node_id);
-            CallbackProgression::Stop
-        });
-        let simulator_node = simulator_node.ok_or(IpcError::PeerGone("simulator"))?;
-        let server = step
+        let simulator_node = hello_server_node(&services.hello)?;
+        let server = services
+            .step
             .server_builder()
             .initial_max_slice_len(layout.action_words())
             .allocation_strategy(AllocationStrategy::Static)
             .create()
-            .map_err(transport("step server"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::StepServer)))?;
         Ok(Self {
-            info: SessionInfo {
-                layout,
-                control_dt_s: welcome.control_dt_s,
-                budget: (welcome.budget_s > 0.0).then(|| Duration::from_secs_f64(welcome.budget_s)),
-                simulator_pid: welcome.pid,
-                action_offset_rad: welcome.action_offset_rad[..layout.n_joints.min(MAX_JOINTS)]
-                    .to_vec(),
-                action_scale: welcome.action_scale[..layout.n_joints.min(MAX_JOINTS)].to_vec(),
-            },
+            info: session_info(&welcome, layout),
             server,
             obs_ready,
             action_ready,
@@ -265,7 +198,7 @@ impl PolicyClient {
         while let Some(r) = self
             .server
             .receive()
-            .map_err(transport("receiving observations"))?
+            .map_err(transport(TransportOp::Receive(Message::Observations)))?
         {
             newest = Some(r);
         }
@@ -310,6 +243,140 @@ impl PolicyClient {
     }
 }
 
+/// The four services of a session, opened from the policy's side.
+struct Services {
+    hello: HelloFactory,
+    step: StepFactory,
+    obs_ready: EventFactory,
+    action_ready: EventFactory,
+}
+
+/// Opens the session's four services, retrying until `timeout` (from `start`) passes.
+///
+/// The simulator creates `hello` last, but a policy may also catch a session that is being
+/// torn down: all four must open, or none is used.
+fn open_services(
+    node: &Node<ipc::Service>,
+    names: &ServiceNames,
+    session: &str,
+    start: Instant,
+    timeout: Duration,
+) -> Result<Services, IpcError> {
+    loop {
+        match try_open_services(node, names) {
+            Some(services) => return Ok(services),
+            None if start.elapsed() < timeout => std::thread::sleep(Duration::from_millis(5)),
+            None => return Err(IpcError::NoSession(session.into())),
+        }
+    }
+}
+
+/// One attempt of [`open_services`]: `None` unless all four services open.
+fn try_open_services(node: &Node<ipc::Service>, names: &ServiceNames) -> Option<Services> {
+    let hello = node
+        .service_builder(&names.hello)
+        .request_response::<Hello, Welcome>()
+        .open()
+        .ok()?;
+    let step = node
+        .service_builder(&names.step)
+        .request_response::<[u64], [u64]>()
+        .open()
+        .ok()?;
+    let obs_ready = node.service_builder(&names.obs_ready).event().open().ok()?;
+    let action_ready = node
+        .service_builder(&names.action_ready)
+        .event()
+        .open()
+        .ok()?;
+    Some(Services {
+        hello,
+        step,
+        obs_ready,
+        action_ready,
+    })
+}
+
+/// Refuses at once a session whose steps another policy already serves, rather than wait
+/// for a welcome the simulator cannot give in the middle of a run.
+fn refuse_if_served(step: &StepFactory, session: &str) -> Result<(), IpcError> {
+    if step.dynamic_config().number_of_servers() > 0 {
+        return Err(IpcError::Refused {
+            status: Status::Busy,
+            message: format!(
+                "session {session:?} is in use: another policy is connected (a session serves one policy at a time)"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The handshake: sends the policy's hello through `client` and waits until `timeout`
+/// (from `start`) for the welcome; a welcome that refuses is an [`IpcError::Refused`].
+fn say_hello(
+    client: &HelloClient,
+    config: &PolicyConfig,
+    start: Instant,
+    timeout: Duration,
+) -> Result<Welcome, IpcError> {
+    let mut offsets = [0.0; MAX_REFERENCE_OFFSETS];
+    offsets[..config.reference_offsets_s.len()].copy_from_slice(&config.reference_offsets_s);
+    let hello = Hello {
+        protocol_version: config.protocol_version,
+        n_joints: config.joint_names.len() as u32,
+        joint_names_hash: joint_names_hash(&config.joint_names),
+        pid: config.announced_pid,
+        n_refs: config.reference_offsets_s.len() as u32,
+        reference_offsets_s: offsets,
+        name: to_fixed(&config.name),
+    };
+    let pending = client
+        .send_copy(hello)
+        .map_err(transport(TransportOp::Send(Message::Hello)))?;
+    let welcome = loop {
+        if let Some(r) = pending
+            .receive()
+            .map_err(transport(TransportOp::Receive(Message::Welcome)))?
+        {
+            break *r.payload();
+        }
+        if start.elapsed() > timeout {
+            return Err(IpcError::Timeout(timeout, "the simulator's welcome"));
+        }
+        std::thread::sleep(Duration::from_micros(200));
+    };
+    let status = Status::from_u32(welcome.status).unwrap_or(Status::ProtocolVersion);
+    if status != Status::Ok {
+        return Err(IpcError::Refused {
+            status,
+            message: from_fixed(&welcome.message),
+        });
+    }
+    Ok(welcome)
+}
+
+/// The simulator's node: the one serving `hello` (it welcomed us).
+fn hello_server_node(hello: &HelloFactory) -> Result<UniqueNodeId, IpcError> {
+    let mut simulator_node = None;
+    hello.dynamic_config().list_servers(|s| {
+        simulator_node = Some(s.node_id);
+        CallbackProgression::Stop
+    });
+    simulator_node.ok_or(IpcError::PeerGone("simulator"))
+}
+
+/// The session as the welcome describes it.
+fn session_info(welcome: &Welcome, layout: Layout) -> SessionInfo {
+    SessionInfo {
+        layout,
+        control_dt_s: welcome.control_dt_s,
+        budget: (welcome.budget_s > 0.0).then(|| Duration::from_secs_f64(welcome.budget_s)),
+        simulator_pid: welcome.pid,
+        action_offset_rad: welcome.action_offset_rad[..layout.n_joints.min(MAX_JOINTS)].to_vec(),
+        action_scale: welcome.action_scale[..layout.n_joints.min(MAX_JOINTS)].to_vec(),
+    }
+}
+
 /// One observation batch being answered.
 pub struct PolicyStep {
     request: StepRequest,
@@ -331,7 +398,7 @@ impl PolicyStep {
             let response = self
                 .request
                 .loan_slice(self.layout.action_words())
-                .map_err(transport("loaning the action batch"))?;
+                .map_err(transport(TransportOp::Loan(Message::Actions)))?;
             self.response = Some(response);
         }
         let response = self.response.as_mut().expect("loaned above");
@@ -366,7 +433,7 @@ impl PolicyStep {
         client
             .action_ready
             .notify()
-            .map_err(transport("notifying action_ready"))?;
+            .map_err(transport(TransportOp::Notify(Event::ActionReady)))?;
         Ok(())
     }
 }

@@ -114,7 +114,7 @@ impl ThorarenaStatus {
             IpcError::Timeout(..) => Self::Timeout,
             IpcError::PeerGone(_) => Self::SimulatorGone,
             IpcError::Layout(_) => Self::Layout,
-            IpcError::Transport(_) => Self::Transport,
+            IpcError::Transport { .. } => Self::Transport,
         }
     }
 

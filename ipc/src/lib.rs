@@ -25,7 +25,9 @@ pub use layout::{
     ActionBatch, ActionBatchMut, BatchHeader, EnvHeader, EnvObs, EnvObsMut, Layout, LayoutError,
     ObsBatch, ObsBatchMut, FLAG_ACTIVE, FLAG_PREVIOUS_TERMINATED, FLAG_RESET,
 };
-pub use session::{process_alive, IpcError, WaitPolicy};
+pub use session::{
+    process_alive, Event, IpcError, Message, Port, TransportCause, TransportOp, WaitPolicy,
+};
 pub use sim::{PolicyInfo, SimConfig, SimSession, StepOutcome};
 
 /// Version of the wire protocol; bumped on any change of the messages or the layout.

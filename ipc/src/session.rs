@@ -41,13 +41,179 @@ pub enum IpcError {
     /// A received block does not match the session's layout.
     #[error(transparent)]
     Layout(#[from] crate::LayoutError),
-    /// iceoryx2 failed (the message carries its error).
-    #[error("iceoryx2: {0}")]
-    Transport(String),
+    /// The transport failed while doing `op`: iceoryx2 returned an error, or the peer
+    /// answered out of sequence (`cause` says which).
+    #[error("iceoryx2: {op}: {cause}")]
+    Transport {
+        /// What this side was doing.
+        op: TransportOp,
+        /// Why it failed.
+        cause: TransportCause,
+    },
 }
 
-pub(crate) fn transport<E: std::fmt::Debug>(what: &str) -> impl FnOnce(E) -> IpcError + '_ {
-    move |e| IpcError::Transport(format!("{what}: {e:?}"))
+/// What a side was doing when the transport failed: callers match on it (a failed
+/// [`TransportOp::Send`] is not a failed [`TransportOp::CreateNode`]), and the error's
+/// text names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TransportOp {
+    /// Making an iceoryx2 node name of the session's.
+    NameNode,
+    /// Creating this side's iceoryx2 node.
+    CreateNode,
+    /// Creating the session's services (the simulator's side).
+    CreateServices,
+    /// Creating a port of one of the session's services.
+    CreatePort(Port),
+    /// Loaning a batch in shared memory to write it.
+    Loan(Message),
+    /// Sending a message.
+    Send(Message),
+    /// Receiving a message.
+    Receive(Message),
+    /// Waking the peer through an event service.
+    Notify(Event),
+    /// Blocking on this side's event listener.
+    WaitForEvent,
+}
+
+/// A port of a session's services, named as the error text names it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Port {
+    /// The simulator's server of the `hello` service.
+    HelloServer,
+    /// The policy's client of the `hello` service.
+    HelloClient,
+    /// The policy's server of the `step` service.
+    StepServer,
+    /// The simulator's client of the `step` service.
+    StepClient,
+    /// The simulator's notifier of the `obs_ready` event.
+    ObsReadyNotifier,
+    /// The policy's listener of the `obs_ready` event.
+    ObsReadyListener,
+    /// The policy's notifier of the `action_ready` event.
+    ActionReadyNotifier,
+    /// The simulator's listener of the `action_ready` event.
+    ActionReadyListener,
+}
+
+/// A message of the protocol.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Message {
+    /// The policy's handshake request.
+    Hello,
+    /// The simulator's handshake answer.
+    Welcome,
+    /// An observation batch (a `step` request).
+    Observations,
+    /// An action batch (a `step` response).
+    Actions,
+}
+
+/// An event service of a session.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Event {
+    /// The simulator published observations.
+    ObsReady,
+    /// The policy sent actions.
+    ActionReady,
+}
+
+/// Why a transport operation failed.
+#[derive(Debug)]
+pub enum TransportCause {
+    /// iceoryx2's own error (downcast it to the type the operation returns, e.g.
+    /// `iceoryx2::port::ReceiveError`). Not an error `source`: the text already shows it.
+    Iceoryx2(Box<dyn std::error::Error + Send + Sync>),
+    /// The action batch received answers another step than the one sent.
+    OutOfSequence {
+        /// The step the batch answers.
+        answered_seq: u64,
+        /// The step that was sent.
+        sent_seq: u64,
+    },
+}
+
+impl std::fmt::Display for TransportOp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NameNode => f.write_str("node name"),
+            Self::CreateNode => f.write_str("creating the node"),
+            Self::CreateServices => f.write_str("creating the session services"),
+            Self::CreatePort(port) => write!(f, "{port}"),
+            Self::Loan(Message::Observations) => f.write_str("loaning the observation batch"),
+            Self::Loan(Message::Actions) => f.write_str("loaning the action batch"),
+            Self::Loan(message) => write!(f, "loaning the {message}"),
+            Self::Send(message) => write!(f, "sending {message}"),
+            Self::Receive(message) => write!(f, "receiving {message}"),
+            Self::Notify(event) => write!(f, "notifying {event}"),
+            Self::WaitForEvent => f.write_str("waiting on the event listener"),
+        }
+    }
+}
+
+impl std::fmt::Display for Port {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::HelloServer => "hello server",
+            Self::HelloClient => "hello client",
+            Self::StepServer => "step server",
+            Self::StepClient => "step client",
+            Self::ObsReadyNotifier => "obs_ready notifier",
+            Self::ObsReadyListener => "obs_ready listener",
+            Self::ActionReadyNotifier => "action_ready notifier",
+            Self::ActionReadyListener => "action_ready listener",
+        })
+    }
+}
+
+impl std::fmt::Display for Message {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Hello => "hello",
+            Self::Welcome => "welcome",
+            Self::Observations => "observations",
+            Self::Actions => "actions",
+        })
+    }
+}
+
+impl std::fmt::Display for Event {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::ObsReady => "obs_ready",
+            Self::ActionReady => "action_ready",
+        })
+    }
+}
+
+impl std::fmt::Display for TransportCause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            // iceoryx2's Debug text names the variant (`NodeCreationFailure::…`), its Display
+            // often does not.
+            Self::Iceoryx2(e) => write!(f, "{e:?}"),
+            Self::OutOfSequence {
+                answered_seq,
+                sent_seq,
+            } => write!(
+                f,
+                "action batch answers step {answered_seq} but step {sent_seq} was sent"
+            ),
+        }
+    }
+}
+
+/// Maps an iceoryx2 error of `op` to [`IpcError::Transport`].
+pub(crate) fn transport<E>(op: TransportOp) -> impl FnOnce(E) -> IpcError
+where
+    E: std::error::Error + Send + Sync + 'static,
+{
+    move |e| IpcError::Transport {
+        op,
+        cause: TransportCause::Iceoryx2(Box::new(e)),
+    }
 }
 
 /// The four services of a session, named `thorarena/<session>/…` so concurrent runs never
@@ -84,12 +250,12 @@ pub(crate) fn service_names(session: &str) -> Result<ServiceNames, IpcError> {
 /// processes left behind in `/dev/shm` and `/tmp/iceoryx2`.
 pub(crate) fn create_node(name: &str) -> Result<Node<ipc::Service>, IpcError> {
     set_log_level_from_env_or(LogLevel::Error);
-    let node_name = NodeName::new(name).map_err(transport("node name"))?;
+    let node_name = NodeName::new(name).map_err(transport(TransportOp::NameNode))?;
     let node = NodeBuilder::new()
         .name(&node_name)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(transport("creating the node"))?;
+        .map_err(transport(TransportOp::CreateNode))?;
     node.try_cleanup_dead_nodes();
     Ok(node)
 }
@@ -225,7 +391,7 @@ pub(crate) fn wait_for(
             // A signal interrupted the wait (Ctrl-Z then `fg`: SIGSTOP, SIGCONT): nothing
             // happened to the session, so wait again after the liveness check below.
             Err(ListenerWaitError::InterruptSignal) => 0,
-            Err(e) => return Err(transport("waiting on the event listener")(e)),
+            Err(e) => return Err(transport(TransportOp::WaitForEvent)(e)),
         };
         if n == 0 && !ready() && (!peer_present() || !peer.alive()) {
             return Ok(Waited::PeerGone);

@@ -5,15 +5,14 @@
 //! In iceoryx2 terms the simulator is the *client* of the step service (it sends the
 //! request, the observation) and the *server* of the hello service.
 
-use crate::handshake::{from_fixed, joint_names_hash, to_fixed, Hello, Status, Welcome};
-use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
+mod accept;
+
+use crate::handshake::{joint_names_hash, Hello, Welcome, MAX_JOINTS};
 use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
 use crate::session::{
-    create_node, service_names, transport, wait_for, IpcError, PeerNode, WaitPolicy, Waited,
-    NODE_CHECK_EVERY,
+    create_node, service_names, transport, wait_for, Event, IpcError, Message, PeerNode, Port,
+    TransportCause, TransportOp, WaitPolicy, Waited,
 };
-use crate::PROTOCOL_VERSION;
-use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
 use iceoryx2::port::listener::Listener;
@@ -27,10 +26,6 @@ type StepFactory = RrFactory<ipc::Service, [u64], (), [u64], ()>;
 type StepClient = Client<ipc::Service, [u64], (), [u64], ()>;
 type StepPending = PendingResponse<ipc::Service, [u64], (), [u64], ()>;
 type HelloFactory = RrFactory<ipc::Service, Hello, (), Welcome, ()>;
-
-/// A welcomed policy has this long to create its step server (its client library does so
-/// right after the welcome); one that does not is dropped and the next one accepted.
-const STEP_SERVER_WITHIN: Duration = Duration::from_secs(10);
 
 /// What the simulator offers.
 #[derive(Debug, Clone)]
@@ -131,13 +126,6 @@ impl SimSession {
             ));
         }
         let node = create_node(&format!("thorarena-sim-{}", config.session))?;
-        let in_use = |e: &dyn CreateError| {
-            if e.already_exists() {
-                IpcError::SessionInUse(config.session.clone())
-            } else {
-                IpcError::Transport(format!("creating the session services: {e:?}"))
-            }
-        };
         let step = node
             .service_builder(&names.step)
             .request_response::<[u64], [u64]>()
@@ -150,27 +138,29 @@ impl SimSession {
             .max_borrowed_responses_per_pending_response(1)
             .enable_fire_and_forget_requests(true)
             .create()
-            .map_err(|e| in_use(&e))?;
+            .map_err(|e| service_creation_failed(&config.session, e))?;
         let obs_ready = node
             .service_builder(&names.obs_ready)
             .event()
             .max_notifiers(2)
             .max_listeners(4)
             .create()
-            .map_err(|e| in_use(&e))?
+            .map_err(|e| service_creation_failed(&config.session, e))?
             .notifier_builder()
             .create()
-            .map_err(transport("obs_ready notifier"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::ObsReadyNotifier)))?;
         let action_ready = node
             .service_builder(&names.action_ready)
             .event()
             .max_notifiers(4)
             .max_listeners(2)
             .create()
-            .map_err(|e| in_use(&e))?
+            .map_err(|e| service_creation_failed(&config.session, e))?
             .listener_builder()
             .create()
-            .map_err(transport("action_ready listener"))?;
+            .map_err(transport(TransportOp::CreatePort(
+                Port::ActionReadyListener,
+            )))?;
         // Last: a policy that finds `hello` finds the other three.
         let hello_service = node
             .service_builder(&names.hello)
@@ -179,11 +169,11 @@ impl SimSession {
             .max_clients(8)
             .max_active_requests_per_client(1)
             .create()
-            .map_err(|e| in_use(&e))?;
+            .map_err(|e| service_creation_failed(&config.session, e))?;
         let hello = hello_service
             .server_builder()
             .create()
-            .map_err(transport("hello server"))?;
+            .map_err(transport(TransportOp::CreatePort(Port::HelloServer)))?;
         Ok(Self {
             joint_hash: joint_names_hash(&config.joint_names),
             config,
@@ -224,173 +214,6 @@ impl SimSession {
         self.late_replies
     }
 
-    /// Waits for a policy to say hello; refuses mismatched ones (each refusal is passed to
-    /// `on_refused` and sent back to that policy) and keeps waiting for a good one. A
-    /// policy that dies or stalls between its hello and its step server is reported to
-    /// `on_refused` too, and the wait goes on.
-    pub fn accept(
-        &mut self,
-        timeout: Option<Duration>,
-        on_refused: impl FnMut(&str),
-    ) -> Result<PolicyInfo, IpcError> {
-        self.accept_vetted(timeout, |_| Ok(()), on_refused)
-    }
-
-    /// [`Self::accept`], and a policy the protocol accepts is also put to `vet` (the run's
-    /// own conditions: a name it can use, the policy a resumed run was made with): a
-    /// policy it refuses is told so in its welcome ([`Status::Rejected`] and the reason),
-    /// rather than welcomed and then sent away as if the run were over.
-    pub fn accept_vetted(
-        &mut self,
-        timeout: Option<Duration>,
-        mut vet: impl FnMut(&PolicyInfo) -> Result<(), String>,
-        mut on_refused: impl FnMut(&str),
-    ) -> Result<PolicyInfo, IpcError> {
-        self.connection = None;
-        self.node.try_cleanup_dead_nodes();
-        let start = Instant::now();
-        let timed_out = |what| match timeout {
-            Some(t) if start.elapsed() > t => Err(IpcError::Timeout(t, what)),
-            _ => Ok(()),
-        };
-        loop {
-            while let Some(request) = self.hello.receive().map_err(transport("hello receive"))? {
-                let hello = *request.payload();
-                let (status, message) = self.check(&hello);
-                let mut welcome = Welcome {
-                    protocol_version: PROTOCOL_VERSION,
-                    status: status as u32,
-                    n_joints: self.config.joint_names.len() as u32,
-                    n_envs: self.config.n_envs as u32,
-                    joint_names_hash: self.joint_hash,
-                    control_dt_s: self.config.control_dt_s,
-                    budget_s: self.config.budget.map_or(0.0, |b| b.as_secs_f64()),
-                    n_refs: hello.n_refs.min(MAX_REFERENCE_OFFSETS as u32),
-                    pid: std::process::id(),
-                    action_offset_rad: fixed_joints(&self.config.action_offset_rad),
-                    action_scale: fixed_joints(&self.config.action_scale),
-                    message: to_fixed(&message),
-                };
-                if status != Status::Ok {
-                    on_refused(&message);
-                    let _ = request.send_copy(welcome);
-                    continue;
-                }
-                let n_refs = hello.n_refs as usize;
-                let info = PolicyInfo {
-                    name: from_fixed(&hello.name),
-                    pid: hello.pid,
-                    reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
-                };
-                if let Err(why) = vet(&info) {
-                    on_refused(&why);
-                    welcome.status = Status::Rejected as u32;
-                    welcome.message = to_fixed(&why);
-                    let _ = request.send_copy(welcome);
-                    continue;
-                }
-                // The node that sent this hello, as iceoryx2 registered its port.
-                let Some(peer_id) = client_node(&self.hello_service, request.origin()) else {
-                    on_refused(&format!("policy `{}` left before its welcome", info.name));
-                    continue;
-                };
-                let peer = PeerNode::new(peer_id, self.node.config(), NODE_CHECK_EVERY);
-                let layout = Layout {
-                    n_envs: self.config.n_envs,
-                    n_joints: self.config.joint_names.len(),
-                    n_refs,
-                };
-                let client = self
-                    .step
-                    .client_builder()
-                    .initial_max_slice_len(layout.obs_words())
-                    .allocation_strategy(AllocationStrategy::Static)
-                    .create()
-                    .map_err(transport("step client"))?;
-                welcome.status = Status::Ok as u32;
-                if request.send_copy(welcome).is_err() {
-                    on_refused(&format!("policy `{}` left before its welcome", info.name));
-                    continue;
-                }
-                drop(request);
-                // The policy creates its step server after the welcome; wait for that
-                // node's server (not any server: a stale one of another node is not it).
-                let welcomed = Instant::now();
-                let served = loop {
-                    if has_server_of(&self.step, peer_id) {
-                        break true;
-                    }
-                    if !peer.alive() {
-                        on_refused(&format!(
-                            "policy `{}` died after its hello, before serving steps",
-                            info.name
-                        ));
-                        break false;
-                    }
-                    if welcomed.elapsed() > STEP_SERVER_WITHIN {
-                        on_refused(&format!(
-                            "policy `{}` did not serve steps within {STEP_SERVER_WITHIN:?} of its welcome",
-                            info.name
-                        ));
-                        break false;
-                    }
-                    timed_out("the policy's step server")?;
-                    std::thread::sleep(Duration::from_micros(200));
-                };
-                if !served {
-                    drop(client);
-                    self.node.try_cleanup_dead_nodes();
-                    continue;
-                }
-                self.connection = Some(Connection {
-                    info: info.clone(),
-                    peer,
-                    layout,
-                    client,
-                    seq: 0,
-                    overdue: None,
-                });
-                return Ok(info);
-            }
-            timed_out("a policy to connect")?;
-            std::thread::sleep(Duration::from_millis(1));
-        }
-    }
-
-    fn check(&self, hello: &Hello) -> (Status, String) {
-        let n = self.config.joint_names.len() as u32;
-        let offsets =
-            &hello.reference_offsets_s[..(hello.n_refs as usize).min(MAX_REFERENCE_OFFSETS)];
-        if self.connection.is_some() {
-            (Status::Busy, "another policy is connected".into())
-        } else if hello.protocol_version != PROTOCOL_VERSION {
-            let msg = format!(
-                "protocol version {} but the simulator speaks {PROTOCOL_VERSION}",
-                hello.protocol_version
-            );
-            (Status::ProtocolVersion, msg)
-        } else if hello.n_joints != n {
-            let msg = format!("{} joints but the robot has {n}", hello.n_joints);
-            (Status::JointCount, msg)
-        } else if hello.joint_names_hash != self.joint_hash {
-            let msg = format!(
-                "joint names hash {:#x} but the robot's canonical order hashes to {:#x}",
-                hello.joint_names_hash, self.joint_hash
-            );
-            (Status::JointNames, msg)
-        } else if hello.n_refs as usize > MAX_REFERENCE_OFFSETS
-            || hello.n_refs == 0
-            || offsets.iter().any(|o| !o.is_finite() || *o < 0.0)
-        {
-            let msg = format!(
-                "reference offsets must be 1 to {MAX_REFERENCE_OFFSETS} finite values >= 0 s"
-            );
-            (Status::ReferenceOffsets, msg)
-        } else {
-            (Status::Ok, String::new())
-        }
-    }
-
     /// One control step: `fill` writes the observation batch into shared memory, the batch
     /// is published, and the actions are awaited for `budget` from the moment of
     /// publishing (`None`: lock-step, as long as the policy lives) and handed to `read`.
@@ -419,17 +242,19 @@ impl SimSession {
         let mut request = conn
             .client
             .loan_slice(conn.layout.obs_words())
-            .map_err(transport("loaning the observation batch"))?;
+            .map_err(transport(TransportOp::Loan(Message::Observations)))?;
         {
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(request.payload_mut());
             let mut batch = ObsBatchMut::new(conn.layout, bytes, COMMAND_STEP, conn.seq);
             fill(&mut batch);
         }
         let sent = Instant::now();
-        let pending = request.send().map_err(transport("sending observations"))?;
+        let pending = request
+            .send()
+            .map_err(transport(TransportOp::Send(Message::Observations)))?;
         self.obs_ready
             .notify()
-            .map_err(transport("notifying obs_ready"))?;
+            .map_err(transport(TransportOp::Notify(Event::ObsReady)))?;
         let deadline = budget.map(|b| sent + b);
         let step_service = &self.step;
         let mut response = None;
@@ -462,7 +287,7 @@ impl SimSession {
             }
         }
         if let Some(e) = receive_error {
-            return Err(transport("receiving actions")(e));
+            return Err(transport(TransportOp::Receive(Message::Actions))(e));
         }
         match waited {
             Waited::Ready => {
@@ -470,11 +295,13 @@ impl SimSession {
                 let bytes: &[u8] = bytemuck::cast_slice(response.payload());
                 let batch = ActionBatch::new(conn.layout, bytes)?;
                 if batch.header().seq != conn.seq {
-                    return Err(IpcError::Transport(format!(
-                        "action batch answers step {} but step {} was sent",
-                        batch.header().seq,
-                        conn.seq
-                    )));
+                    return Err(IpcError::Transport {
+                        op: TransportOp::Receive(Message::Actions),
+                        cause: TransportCause::OutOfSequence {
+                            answered_seq: batch.header().seq,
+                            sent_seq: conn.seq,
+                        },
+                    });
                 }
                 read(&batch);
                 Ok(StepOutcome::Answered)
@@ -526,46 +353,20 @@ impl SimSession {
     }
 }
 
-/// The node that created client port `client` of the hello service.
-fn client_node(
-    hello: &HelloFactory,
-    client: iceoryx2::identifiers::UniqueClientId,
-) -> Option<UniqueNodeId> {
-    let mut node = None;
-    hello.dynamic_config().list_clients(|c| {
-        if c.client_id == client {
-            node = Some(c.node_id);
-            return CallbackProgression::Stop;
-        }
-        CallbackProgression::Continue
-    });
-    node
-}
-
-/// True when node `node` has created the step service's server.
-fn has_server_of(step: &StepFactory, node: UniqueNodeId) -> bool {
-    let mut found = false;
-    step.dynamic_config().list_servers(|s| {
-        found = s.node_id == node;
-        if found {
-            CallbackProgression::Stop
-        } else {
-            CallbackProgression::Continue
-        }
-    });
-    found
-}
-
-fn fixed_joints(v: &[f64]) -> [f64; MAX_JOINTS] {
-    let mut out = [0.0; MAX_JOINTS];
-    out[..v.len()].copy_from_slice(v);
-    out
-}
-
 /// A service-creation error of iceoryx2 that may say "another live node owns this
 /// service" (its typed `AlreadyExists`), which is a session in use, not a transport fault.
-trait CreateError: std::fmt::Debug {
+trait CreateError: std::error::Error + Send + Sync + 'static {
     fn already_exists(&self) -> bool;
+}
+
+/// The error of creating one of `session`'s services: in use by another live run, or
+/// iceoryx2 failed.
+fn service_creation_failed(session: &str, e: impl CreateError) -> IpcError {
+    if e.already_exists() {
+        IpcError::SessionInUse(session.into())
+    } else {
+        transport(TransportOp::CreateServices)(e)
+    }
 }
 
 impl CreateError for iceoryx2::service::builder::request_response::RequestResponseCreateError {

@@ -108,14 +108,7 @@ impl MujocoPhysics {
         settings: PhysicsSettings,
         gains: PdGains,
     ) -> Result<Self, MujocoError> {
-        // SAFETY: a plain C call without arguments.
-        let found = unsafe { mujoco_rs::mujoco_c::mj_version() };
-        if found != MUJOCO_VERSION as i32 {
-            return Err(MujocoError::Version {
-                found,
-                expected: MUJOCO_VERSION,
-            });
-        }
+        check_library_version()?;
         let label = mjcf.map_or_else(
             || PathBuf::from(format!("<generated from {}>", model.name)),
             Path::to_path_buf,
@@ -138,79 +131,13 @@ impl MujocoPhysics {
             path: label.clone(),
             message: format!("{e:?}"),
         })?;
-        let n = model.n_joints();
-        let mut bodies = Vec::with_capacity(model.bodies.len());
-        for b in &model.bodies {
-            bodies.push(
-                mj.name_to_id(MjtObjBase::mjOBJ_BODY, &b.name)
-                    .ok_or_else(|| mismatch(format!("no body `{}`", b.name)))?,
-            );
-        }
-        // Each robot joint: a hinge of the same name, on the body of the same name, about
-        // the same axis (a ball or slide joint of the right name was once scored).
-        let mut joints = vec![(0, 0); n];
-        let mut found = vec![false; n];
-        for (b, body) in model.bodies.iter().enumerate() {
-            let Some(j) = body.joint else { continue };
-            let name = &model.joints[j].name;
-            let id = mj
-                .name_to_id(MjtObjBase::mjOBJ_JOINT, name)
-                .ok_or_else(|| mismatch(format!("no joint `{name}`")))?;
-            let kind = mj.jnt_type()[id];
-            if kind != MjtJoint::mjJNT_HINGE {
-                return Err(mismatch(format!(
-                    "joint `{name}` is a {kind:?} joint, not a hinge"
-                )));
-            }
-            if mj.jnt_bodyid()[id] as usize != bodies[b] {
-                return Err(mismatch(format!(
-                    "joint `{name}` moves another body than `{}`",
-                    body.name
-                )));
-            }
-            let axis = nalgebra::Vector3::from(mj.jnt_axis()[id]);
-            let want = body.axis.normalize();
-            if axis.norm() < 1e-9 || axis.normalize().dot(&want) < 0.999 {
-                return Err(mismatch(format!(
-                    "joint `{name}` turns about ({:.3} {:.3} {:.3}) in its body's frame, the robot's about ({:.3} {:.3} {:.3})",
-                    axis.x, axis.y, axis.z, want.x, want.y, want.z
-                )));
-            }
-            joints[j] = (mj.jnt_qposadr()[id] as usize, mj.jnt_dofadr()[id] as usize);
-            found[j] = true;
-        }
-        if let Some(j) = found.iter().position(|f| !f) {
-            return Err(mismatch(format!(
-                "joint `{}` moves no body of the robot model",
-                model.joints[j].name
-            )));
-        }
-        let mut robot_body_of = vec![None; mj.ffi().nbody.max(0) as usize];
-        for (i, &b) in bodies.iter().enumerate() {
-            robot_body_of[b] = Some(i);
-        }
-        let root = bodies[0];
-        let free = if settings.fixed_base {
-            None
-        } else {
-            let jnt = mj.body_jntadr()[root];
-            let is_free = jnt >= 0 && mj.jnt_type()[jnt as usize] == MjtJoint::mjJNT_FREE;
-            if !is_free {
-                return Err(mismatch(format!(
-                    "the root body `{}` has no free joint",
-                    model.bodies[0].name
-                )));
-            }
-            Some((
-                mj.jnt_qposadr()[jnt as usize] as usize,
-                mj.jnt_dofadr()[jnt as usize] as usize,
-            ))
-        };
+        let idx = Indices::find(&mj, &model, settings.fixed_base).map_err(mismatch)?;
         {
             let opt = mj.opt_mut();
             opt.timestep = settings.dt_s;
             opt.gravity = settings.gravity;
         }
+        let n = model.n_joints();
         let data = MjData::new(Box::new(mj));
         let mut physics = Self {
             targets: model.default_pose(),
@@ -221,12 +148,7 @@ impl MujocoPhysics {
             settings,
             gains: gains.clone(),
             data,
-            idx: Indices {
-                joints,
-                bodies,
-                free,
-                robot_body_of,
-            },
+            idx,
             mjcf: label,
             unstable: false,
         };
@@ -259,6 +181,122 @@ impl MujocoPhysics {
             }
         }
     }
+}
+
+/// The MuJoCo library loaded at run time must be the version the bindings were made for.
+fn check_library_version() -> Result<(), MujocoError> {
+    // SAFETY: a plain C call without arguments.
+    let found = unsafe { mujoco_rs::mujoco_c::mj_version() };
+    if found != MUJOCO_VERSION as i32 {
+        return Err(MujocoError::Version {
+            found,
+            expected: MUJOCO_VERSION,
+        });
+    }
+    Ok(())
+}
+
+impl Indices {
+    /// Matches the robot model to the MuJoCo model `mj` by name; the error says what does
+    /// not match. A free joint on the root is required unless `fixed_base`.
+    fn find(mj: &MjModel, model: &RobotModel, fixed_base: bool) -> Result<Self, String> {
+        let bodies = body_ids(mj, model)?;
+        let joints = joint_addresses(mj, model, &bodies)?;
+        let mut robot_body_of = vec![None; mj.ffi().nbody.max(0) as usize];
+        for (i, &b) in bodies.iter().enumerate() {
+            robot_body_of[b] = Some(i);
+        }
+        let free = if fixed_base {
+            None
+        } else {
+            Some(free_joint_address(mj, model, bodies[0])?)
+        };
+        Ok(Self {
+            joints,
+            bodies,
+            free,
+            robot_body_of,
+        })
+    }
+}
+
+/// Per robot body, the MuJoCo body of the same name.
+fn body_ids(mj: &MjModel, model: &RobotModel) -> Result<Vec<usize>, String> {
+    let mut bodies = Vec::with_capacity(model.bodies.len());
+    for b in &model.bodies {
+        bodies.push(
+            mj.name_to_id(MjtObjBase::mjOBJ_BODY, &b.name)
+                .ok_or_else(|| format!("no body `{}`", b.name))?,
+        );
+    }
+    Ok(bodies)
+}
+
+/// Per robot joint, its (qpos address, dof address): a hinge of the same name, on the body
+/// of the same name (`bodies`: their MuJoCo ids), about the same axis (a ball or slide
+/// joint of the right name was once scored). Every robot joint must move a robot body.
+fn joint_addresses(
+    mj: &MjModel,
+    model: &RobotModel,
+    bodies: &[usize],
+) -> Result<Vec<(usize, usize)>, String> {
+    let n = model.n_joints();
+    let mut joints = vec![(0, 0); n];
+    let mut found = vec![false; n];
+    for (b, body) in model.bodies.iter().enumerate() {
+        let Some(j) = body.joint else { continue };
+        let name = &model.joints[j].name;
+        let id = mj
+            .name_to_id(MjtObjBase::mjOBJ_JOINT, name)
+            .ok_or_else(|| format!("no joint `{name}`"))?;
+        let kind = mj.jnt_type()[id];
+        if kind != MjtJoint::mjJNT_HINGE {
+            return Err(format!("joint `{name}` is a {kind:?} joint, not a hinge"));
+        }
+        if mj.jnt_bodyid()[id] as usize != bodies[b] {
+            return Err(format!(
+                "joint `{name}` moves another body than `{}`",
+                body.name
+            ));
+        }
+        let axis = nalgebra::Vector3::from(mj.jnt_axis()[id]);
+        let want = body.axis.normalize();
+        if axis.norm() < 1e-9 || axis.normalize().dot(&want) < 0.999 {
+            return Err(format!(
+                "joint `{name}` turns about ({:.3} {:.3} {:.3}) in its body's frame, the robot's about ({:.3} {:.3} {:.3})",
+                axis.x, axis.y, axis.z, want.x, want.y, want.z
+            ));
+        }
+        joints[j] = (mj.jnt_qposadr()[id] as usize, mj.jnt_dofadr()[id] as usize);
+        found[j] = true;
+    }
+    if let Some(j) = found.iter().position(|f| !f) {
+        return Err(format!(
+            "joint `{}` moves no body of the robot model",
+            model.joints[j].name
+        ));
+    }
+    Ok(joints)
+}
+
+/// The (qpos address, dof address) of the free joint of the root body (MuJoCo id `root`).
+fn free_joint_address(
+    mj: &MjModel,
+    model: &RobotModel,
+    root: usize,
+) -> Result<(usize, usize), String> {
+    let jnt = mj.body_jntadr()[root];
+    let is_free = jnt >= 0 && mj.jnt_type()[jnt as usize] == MjtJoint::mjJNT_FREE;
+    if !is_free {
+        return Err(format!(
+            "the root body `{}` has no free joint",
+            model.bodies[0].name
+        ));
+    }
+    Ok((
+        mj.jnt_qposadr()[jnt as usize] as usize,
+        mj.jnt_dofadr()[jnt as usize] as usize,
+    ))
 }
 
 fn body_pose(data: &MjData<Box<MjModel>>, body: usize) -> Isometry3<f64> {

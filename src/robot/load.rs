@@ -31,39 +31,107 @@ fn read(path: &Path) -> Result<String, RobotError> {
 }
 
 /// Assembles and validates a model from an already parsed config and URDF.
+///
+/// The phases run in this order, so the first error a broken robot reports stays the same
+/// however it is broken: root link, joint list, tree walk, joints, mass and shapes, extra
+/// frames, keypoints, hands.
 pub fn build_model(
     config: &RobotConfig,
     urdf: &urdf_rs::Robot,
     toml_path: &Path,
     urdf_path: &Path,
 ) -> Result<RobotModel, RobotError> {
-    let bad = |path: &Path, field: String, reason: String| RobotError::BadField {
-        path: path.to_path_buf(),
-        field,
-        reason,
+    let inputs = Inputs {
+        config,
+        urdf,
+        toml_path,
+        urdf_path,
     };
-    let link_index = |name: &str| urdf.links.iter().position(|l| l.name == name);
-    let root_link = link_index(&config.root_body).ok_or_else(|| {
-        bad(
-            toml_path,
-            "root_body".into(),
+    let root_link = inputs.link_index(&config.root_body).ok_or_else(|| {
+        inputs.bad_toml(
+            "root_body",
             format!("no URDF link named `{}`", config.root_body),
         )
     })?;
+    check_joint_list(&inputs)?;
+    let Tree {
+        mut bodies,
+        mut frames,
+        joints,
+        links,
+    } = walk_tree(&inputs, root_link)?;
+    let joints = actuated_joints(&inputs, joints)?;
+    add_mass_and_shapes(&inputs, &mut bodies, &links)?;
+    add_extra_frames(&inputs, &mut frames)?;
+    let keypoint_sets = keypoint_sets(&inputs, &frames)?;
+    let hands = [
+        hand(&inputs, &frames, "left", &config.hands.left)?,
+        hand(&inputs, &frames, "right", &config.hands.right)?,
+    ];
+    Ok(RobotModel {
+        name: config.name.clone(),
+        joints,
+        bodies,
+        frames,
+        keypoint_sets,
+        hands,
+    })
+}
 
-    // Every URDF joint must be either fixed or listed in robot.toml, and vice versa.
+/// The parsed `robot.toml` and URDF a model is built from, with their paths so that an
+/// error names the file (and field) at fault.
+struct Inputs<'a> {
+    config: &'a RobotConfig,
+    urdf: &'a urdf_rs::Robot,
+    toml_path: &'a Path,
+    urdf_path: &'a Path,
+}
+
+impl Inputs<'_> {
+    /// A bad field of `robot.toml`.
+    fn bad_toml(&self, field: impl Into<String>, reason: impl Into<String>) -> RobotError {
+        bad_field(self.toml_path, field.into(), reason.into())
+    }
+
+    /// A bad element of the URDF.
+    fn bad_urdf(&self, field: impl Into<String>, reason: impl Into<String>) -> RobotError {
+        bad_field(self.urdf_path, field.into(), reason.into())
+    }
+
+    /// The index of the URDF link `name`.
+    fn link_index(&self, name: &str) -> Option<usize> {
+        self.urdf.links.iter().position(|l| l.name == name)
+    }
+}
+
+fn bad_field(path: &Path, field: String, reason: String) -> RobotError {
+    RobotError::BadField {
+        path: path.to_path_buf(),
+        field,
+        reason,
+    }
+}
+
+/// Every URDF joint must be either fixed or listed in robot.toml, and vice versa; a listed
+/// joint must be revolute with a positive effort and velocity limit and a non-negative
+/// armature. Checked before the tree walk, which relies on it.
+fn check_joint_list(inputs: &Inputs) -> Result<(), RobotError> {
+    let Inputs {
+        config,
+        urdf,
+        urdf_path,
+        ..
+    } = inputs;
     let mut seen = std::collections::HashSet::new();
     for (i, jc) in config.joints.iter().enumerate() {
         if !seen.insert(jc.name.as_str()) {
-            return Err(bad(
-                toml_path,
+            return Err(inputs.bad_toml(
                 format!("joints[{i}].name"),
                 format!("`{}` is listed twice", jc.name),
             ));
         }
         let Some(uj) = urdf.joints.iter().find(|j| j.name == jc.name) else {
-            return Err(bad(
-                toml_path,
+            return Err(inputs.bad_toml(
                 format!("joints[{i}].name"),
                 format!(
                     "unknown joint `{}`: not in {}",
@@ -73,8 +141,7 @@ pub fn build_model(
             ));
         };
         if uj.joint_type != urdf_rs::JointType::Revolute {
-            return Err(bad(
-                toml_path,
+            return Err(inputs.bad_toml(
                 format!("joints[{i}].name"),
                 format!(
                     "`{}` is a {:?} joint; only revolute joints can be actuated",
@@ -87,16 +154,14 @@ pub fn build_model(
             ("velocity_rad_s", jc.velocity_rad_s),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(bad(
-                    toml_path,
+                return Err(inputs.bad_toml(
                     format!("joints[{i}].{field}"),
                     format!("must be > 0, got {v}"),
                 ));
             }
         }
         if !(jc.armature_kgm2.is_finite() && jc.armature_kgm2 >= 0.0) {
-            return Err(bad(
-                toml_path,
+            return Err(inputs.bad_toml(
                 format!("joints[{i}].armature_kgm2"),
                 format!("must be >= 0, got {}", jc.armature_kgm2),
             ));
@@ -116,9 +181,8 @@ pub fn build_model(
             })
             .map(|j| j.name.as_str())
             .collect();
-        return Err(bad(
-            toml_path,
-            "joints".into(),
+        return Err(inputs.bad_toml(
+            "joints",
             format!(
                 "lists {} joints but the URDF has {} non-fixed joints (missing: {})",
                 config.joints.len(),
@@ -127,48 +191,84 @@ pub fn build_model(
             ),
         ));
     }
+    Ok(())
+}
 
-    // Walk the tree from the root: moving joints start a new body, fixed ones merge.
-    let mut bodies: Vec<Body> = Vec::new();
-    let mut frames: Vec<Frame> = Vec::new();
-    let mut joints: Vec<Option<Joint>> = vec![None; config.joints.len()];
-    let mut stack: Vec<(usize, usize, Isometry3<f64>)> = Vec::new(); // (link, body, body_from_link)
-    let root = new_body(
-        &urdf.links[root_link],
-        None,
-        None,
-        Isometry3::identity(),
-        Vector3::x_axis(),
-    );
-    bodies.push(root);
-    stack.push((root_link, 0, Isometry3::identity()));
+/// Where a URDF link sits: (link index, body index, body_from_link).
+type LinkPlacement = (usize, usize, Isometry3<f64>);
+
+/// The URDF tree walked from the root: moving joints start a new body, fixed ones merge
+/// their child link into the parent's body.
+struct Tree {
+    /// Root first, then in URDF declaration order.
+    bodies: Vec<Body>,
+    /// One per link, in visiting order.
+    frames: Vec<Frame>,
+    /// By robot.toml joint index; `None` for a joint the walk never reached.
+    joints: Vec<Option<Joint>>,
+    /// Every link, in visiting order.
+    links: Vec<LinkPlacement>,
+}
+
+/// Walks the tree depth-first from `root_link`; a link reached twice is an error (the
+/// URDF is not a tree).
+fn walk_tree(inputs: &Inputs, root_link: usize) -> Result<Tree, RobotError> {
+    let urdf = inputs.urdf;
+    let mut tree = Tree {
+        bodies: vec![new_body(
+            &urdf.links[root_link],
+            None,
+            None,
+            Isometry3::identity(),
+            Vector3::x_axis(),
+        )],
+        frames: Vec::new(),
+        joints: vec![None; inputs.config.joints.len()],
+        links: Vec::new(),
+    };
+    let mut stack: Vec<LinkPlacement> = vec![(root_link, 0, Isometry3::identity())];
     let mut visited = vec![false; urdf.links.len()];
-    let mut order: Vec<(usize, usize, Isometry3<f64>)> = Vec::new();
     while let Some((link, body, body_from_link)) = stack.pop() {
         if std::mem::replace(&mut visited[link], true) {
-            return Err(bad(
-                urdf_path,
+            return Err(inputs.bad_urdf(
                 format!("link `{}`", urdf.links[link].name),
-                "appears twice in the tree".into(),
+                "appears twice in the tree",
             ));
         }
-        order.push((link, body, body_from_link));
-        frames.push(Frame {
+        tree.links.push((link, body, body_from_link));
+        tree.frames.push(Frame {
             name: urdf.links[link].name.clone(),
             body,
             body_from_frame: body_from_link,
         });
+        let children = tree.attach_children(inputs, link, body, body_from_link)?;
         // Bodies are numbered in URDF declaration order; the stack is filled in reverse so
         // that it pops them in that order too.
+        stack.extend(children.into_iter().rev());
+    }
+    Ok(tree)
+}
+
+impl Tree {
+    /// The child links of `link` (which sits in `body`), in URDF declaration order: a
+    /// fixed joint's child joins `body`; a moving joint's child starts a new body, and the
+    /// joint is recorded.
+    fn attach_children(
+        &mut self,
+        inputs: &Inputs,
+        link: usize,
+        body: usize,
+        body_from_link: Isometry3<f64>,
+    ) -> Result<Vec<LinkPlacement>, RobotError> {
+        let Inputs { config, urdf, .. } = inputs;
         let mut children = Vec::new();
         for uj in urdf
             .joints
             .iter()
             .filter(|j| j.parent.link == urdf.links[link].name)
         {
-            let child = link_index(&uj.child.link).ok_or_else(|| {
-                bad(
-                    urdf_path,
+            let child = inputs.link_index(&uj.child.link).ok_or_else(|| {
+                inputs.bad_urdf(
                     format!("joint `{}`.child", uj.name),
                     format!("no link `{}`", uj.child.link),
                 )
@@ -185,14 +285,10 @@ pub fn build_model(
                 .expect("checked above");
             let axis = Vector3::from(uj.axis.xyz.0);
             let axis = Unit::try_new(axis, 1e-9).ok_or_else(|| {
-                bad(
-                    urdf_path,
-                    format!("joint `{}`.axis", uj.name),
-                    "zero-length axis".into(),
-                )
+                inputs.bad_urdf(format!("joint `{}`.axis", uj.name), "zero-length axis")
             })?;
-            let new = bodies.len();
-            bodies.push(new_body(
+            let new = self.bodies.len();
+            self.bodies.push(new_body(
                 &urdf.links[child],
                 Some(body),
                 Some(ji),
@@ -200,7 +296,7 @@ pub fn build_model(
                 axis,
             ));
             let jc = &config.joints[ji];
-            joints[ji] = Some(Joint {
+            self.joints[ji] = Some(Joint {
                 name: jc.name.clone(),
                 body: new,
                 lower_rad: uj.limit.lower,
@@ -212,15 +308,20 @@ pub fn build_model(
             });
             children.push((child, new, Isometry3::identity()));
         }
-        stack.extend(children.into_iter().rev());
+        Ok(children)
     }
-    let joints: Vec<Joint> = joints
+}
+
+/// The joints in canonical order: each must have been reached from the root and its
+/// default angle must lie within its URDF limits.
+fn actuated_joints(inputs: &Inputs, reached: Vec<Option<Joint>>) -> Result<Vec<Joint>, RobotError> {
+    let config = inputs.config;
+    let joints: Vec<Joint> = reached
         .into_iter()
         .enumerate()
         .map(|(i, j)| {
             j.ok_or_else(|| {
-                bad(
-                    toml_path,
+                inputs.bad_toml(
                     format!("joints[{i}].name"),
                     format!(
                         "`{}` is not reachable from root `{}`",
@@ -232,8 +333,7 @@ pub fn build_model(
         .collect::<Result<_, _>>()?;
     for (i, j) in joints.iter().enumerate() {
         if !(j.lower_rad <= j.default_rad && j.default_rad <= j.upper_rad) {
-            return Err(bad(
-                toml_path,
+            return Err(inputs.bad_toml(
                 format!("joints[{i}].default_rad"),
                 format!(
                     "{} is outside the URDF limits [{}, {}]",
@@ -242,23 +342,30 @@ pub fn build_model(
             ));
         }
     }
+    Ok(joints)
+}
 
-    // Mass properties and shapes: every link adds to the body it belongs to.
+/// Mass properties and shapes: every link adds its inertial and collisions to the body it
+/// belongs to; a body that ends up without mass cannot move and is an error.
+fn add_mass_and_shapes(
+    inputs: &Inputs,
+    bodies: &mut [Body],
+    links: &[LinkPlacement],
+) -> Result<(), RobotError> {
     let mut acc: Vec<MassAccumulator> = vec![MassAccumulator::default(); bodies.len()];
-    for &(link, body, body_from_link) in &order {
-        let l = &urdf.links[link];
+    for &(link, body, body_from_link) in links {
+        let l = &inputs.urdf.links[link];
         acc[body].add(&l.inertial, &body_from_link);
         for (ci, c) in l.collision.iter().enumerate() {
             let geometry = geometry_of(&c.geometry).ok_or_else(|| {
-                bad(
-                    urdf_path,
+                inputs.bad_urdf(
                     format!("link `{}`.collision[{ci}]", l.name),
-                    "only box, sphere, capsule and cylinder collisions are supported".into(),
+                    "only box, sphere, capsule and cylinder collisions are supported",
                 )
             })?;
             let name = c.name.clone().unwrap_or_default();
             bodies[body].shapes.push(Shape {
-                is_sole: name == config.sole_collision,
+                is_sole: name == inputs.config.sole_collision,
                 name,
                 body_from_shape: body_from_link * pose_of(&c.origin),
                 geometry,
@@ -268,46 +375,60 @@ pub fn build_model(
     for (b, a) in bodies.iter_mut().zip(acc) {
         let (m, com, inertia) = a.finish();
         if m <= 0.0 || m.is_nan() {
-            return Err(bad(
-                urdf_path,
+            return Err(inputs.bad_urdf(
                 format!("link `{}`.inertial", b.name),
-                "moving body without mass".into(),
+                "moving body without mass",
             ));
         }
         b.mass_kg = m;
         b.com_b = com;
         b.inertia_kgm2 = inertia;
     }
+    Ok(())
+}
 
-    // Extra frames, keypoints, hands.
-    for (name, fc) in &config.frames {
+/// The extra frames of robot.toml, after the links' frames; an extra frame may not take a
+/// link's name, and its parent must be a link (or an earlier extra frame).
+fn add_extra_frames(inputs: &Inputs, frames: &mut Vec<Frame>) -> Result<(), RobotError> {
+    for (name, fc) in &inputs.config.frames {
         if frames.iter().any(|f| &f.name == name) {
-            return Err(bad(
-                toml_path,
+            return Err(inputs.bad_toml(
                 format!("frames.{name}"),
-                "a URDF link has that name already".into(),
+                "a URDF link has that name already",
             ));
         }
-        let frame = extra_frame(name, fc, &frames).ok_or_else(|| {
-            bad(
-                toml_path,
+        let frame = extra_frame(name, fc, frames).ok_or_else(|| {
+            inputs.bad_toml(
                 format!("frames.{name}.parent"),
                 format!("no URDF link `{}`", fc.parent),
             )
         })?;
         frames.push(frame);
     }
-    let frame_of = |name: &str, field: String| {
-        frames
-            .iter()
-            .position(|f| f.name == name)
-            .ok_or_else(|| bad(toml_path, field, format!("unknown body or frame `{name}`")))
-    };
+    Ok(())
+}
+
+/// The index of frame `name`; `field` names where robot.toml referred to it.
+fn frame_index(
+    inputs: &Inputs,
+    frames: &[Frame],
+    name: &str,
+    field: String,
+) -> Result<usize, RobotError> {
+    frames
+        .iter()
+        .position(|f| f.name == name)
+        .ok_or_else(|| inputs.bad_toml(field, format!("unknown body or frame `{name}`")))
+}
+
+/// The keypoint sets (upper-body frames, then lower-body ones); the `default` set is
+/// required, and no set may be empty.
+fn keypoint_sets(inputs: &Inputs, frames: &[Frame]) -> Result<Vec<KeypointSet>, RobotError> {
+    let config = inputs.config;
     if !config.keypoints.contains_key("default") {
-        return Err(bad(
-            toml_path,
-            "keypoints.default".into(),
-            "the `default` keypoint set is required".into(),
+        return Err(inputs.bad_toml(
+            "keypoints.default",
+            "the `default` keypoint set is required",
         ));
     }
     let mut keypoint_sets = Vec::new();
@@ -315,15 +436,16 @@ pub fn build_model(
         let mut idx = Vec::new();
         for (part, list) in [("upper", &kc.upper), ("lower", &kc.lower)] {
             for (k, f) in list.iter().enumerate() {
-                idx.push(frame_of(f, format!("keypoints.{name}.{part}[{k}]"))?);
+                idx.push(frame_index(
+                    inputs,
+                    frames,
+                    f,
+                    format!("keypoints.{name}.{part}[{k}]"),
+                )?);
             }
         }
         if idx.is_empty() {
-            return Err(bad(
-                toml_path,
-                format!("keypoints.{name}"),
-                "empty keypoint set".into(),
-            ));
+            return Err(inputs.bad_toml(format!("keypoints.{name}"), "empty keypoint set"));
         }
         keypoint_sets.push(KeypointSet {
             name: name.clone(),
@@ -331,25 +453,21 @@ pub fn build_model(
             n_upper: kc.upper.len(),
         });
     }
-    let hand = |side: &str, hc: &HandConfig| -> Result<Hand, RobotError> {
-        Ok(Hand {
-            frame: frame_of(&hc.frame, format!("hands.{side}.frame"))?,
-            point_hand: Point3::from(hc.point_xyz),
-            hand_from_sensor: rpy(hc.hand_from_sensor_rpy),
-        })
-    };
-    let hands = [
-        hand("left", &config.hands.left)?,
-        hand("right", &config.hands.right)?,
-    ];
+    Ok(keypoint_sets)
+}
 
-    Ok(RobotModel {
-        name: config.name.clone(),
-        joints,
-        bodies,
-        frames,
-        keypoint_sets,
-        hands,
+/// The `side` hand: the frame it is attached to, its contact point and its force sensor's
+/// orientation.
+fn hand(
+    inputs: &Inputs,
+    frames: &[Frame],
+    side: &str,
+    hc: &HandConfig,
+) -> Result<Hand, RobotError> {
+    Ok(Hand {
+        frame: frame_index(inputs, frames, &hc.frame, format!("hands.{side}.frame"))?,
+        point_hand: Point3::from(hc.point_xyz),
+        hand_from_sensor: rpy(hc.hand_from_sensor_rpy),
     })
 }
 

@@ -2,7 +2,7 @@
 //! cell, i.e. one `thorarena eval` invocation with its exact arguments), numbered
 //! 0..N-1 in a fixed order so that a task index means the same work on every node.
 
-use super::spec::{resolve, SweepSpec};
+use super::spec::{resolve, PolicySpec, SweepSpec};
 use super::SweepError;
 use crate::motion::SequenceSelection;
 use serde::{Deserialize, Serialize};
@@ -184,6 +184,9 @@ pub struct SequenceInfo {
 impl Plan {
     /// Expands `spec` (read from `spec_path`, absolute) over `datasets` (the spec's
     /// datasets, resolved and opened, in the spec's order).
+    ///
+    /// Cells are numbered policy-major: policy, engine, dataset, latency rule, setting
+    /// (innermost); each cell's shards are consecutive tasks.
     pub fn expand(
         spec: &SweepSpec,
         spec_path: &Path,
@@ -198,59 +201,13 @@ impl Plan {
             tasks: spec.tasks.clone(),
             sequences: spec.sequences.clone(),
         };
-        // Each dataset's durations of the selected sequences.
-        let mut durations: Vec<Vec<f64>> = Vec::new();
-        for (spelled, ds) in spec.datasets.iter().zip(datasets) {
-            let picked = selection
-                .pick(ds.sequences.iter().collect(), |q| (&q.task, &q.sequence_id))
-                .map_err(|e| invalid(format!("`tasks`/`sequences` in dataset `{spelled}`: {e}")))?;
-            if picked.iter().all(|q| !q.forces_recorded) {
-                let replaying = spec.settings.iter().find(|s| {
-                    crate::evaluation::Setting::parse(s).is_some_and(|s| s.coefficient != 0.0)
-                });
-                if let Some(setting) = replaying {
-                    return Err(invalid(format!(
-                        "setting `{setting}` replays recorded hand forces, but no sequence of dataset `{spelled}` has force logs (imported without --forces): it would run as no-force under another name; use no-force or push:<N>"
-                    )));
-                }
-            }
-            durations.push(picked.iter().map(|q| q.duration_s).collect());
-        }
-        // Before anything is allocated per task: a shard without an episode is no work,
-        // and `shards = 10⁹` would exhaust memory planning empty tasks.
-        for (spelled, d) in spec.datasets.iter().zip(&durations) {
-            if spec.shards > d.len() {
-                return Err(invalid(format!(
-                    "`shards` = {} but dataset `{spelled}` has {} episodes per cell: at most {} shards",
-                    spec.shards,
-                    d.len(),
-                    d.len()
-                )));
-            }
-        }
+        let durations = selected_durations(spec, datasets, &selection).map_err(invalid)?;
+        check_shards(spec, &durations).map_err(invalid)?;
         super::axes::refuse_equivalent(spec, spec_path, datasets)?;
         let mut cells = Vec::new();
         let mut tasks = Vec::new();
         for p in &spec.policies {
-            let policy = PolicyAxis {
-                name: p.label(),
-                policy: match (&p.policy, &p.command) {
-                    (Some(pol), _) => match pol.strip_prefix("twist2:") {
-                        Some(file) => format!("twist2:{}", resolve(&workdir, file).display()),
-                        None => pol.clone(),
-                    },
-                    _ => SESSION_POLICY.into(),
-                },
-                command: p.command.clone(),
-                profile: match &p.profile {
-                    Some(f) if f.ends_with(".toml") => resolve(&workdir, f).display().to_string(),
-                    Some(name) => name.clone(),
-                    None => crate::profile::family_profile(p.policy.as_deref().unwrap_or(""))
-                        .to_string(),
-                },
-                keypoints: p.keypoints.clone(),
-                connect_timeout_s: p.connect_timeout_s,
-            };
+            let policy = policy_axis(p, &workdir);
             for e in spec.engine_axis() {
                 let engine = EngineAxis {
                     name: e.label(),
@@ -280,16 +237,7 @@ impl Plan {
                                 episodes: durations_s.len(),
                                 simulated_s: durations_s.iter().sum(),
                             };
-                            for i in 0..spec.shards {
-                                let shard = (i, spec.shards);
-                                tasks.push(Task {
-                                    index: tasks.len(),
-                                    cell: cell.index,
-                                    shard,
-                                    episodes: shard_episodes(cell.episodes, shard),
-                                    eval_args: eval_args(&spec.robot, &cell, shard),
-                                });
-                            }
+                            push_shards(&mut tasks, &spec.robot, &cell);
                             cells.push(cell);
                         }
                     }
@@ -361,6 +309,88 @@ impl Plan {
     /// A cell's directory (merged shards).
     pub fn cell_dir(dir: &Path, index: usize) -> PathBuf {
         dir.join("cells").join(format!("{index:06}"))
+    }
+}
+
+/// Each dataset's durations of the sequences `selection` picks, s. A setting that replays
+/// recorded forces is refused on a dataset none of whose picked sequences has force logs:
+/// it would run as no-force under another name.
+fn selected_durations(
+    spec: &SweepSpec,
+    datasets: &[DatasetInfo],
+    selection: &SequenceSelection,
+) -> Result<Vec<Vec<f64>>, String> {
+    let mut durations: Vec<Vec<f64>> = Vec::new();
+    for (spelled, ds) in spec.datasets.iter().zip(datasets) {
+        let picked = selection
+            .pick(ds.sequences.iter().collect(), |q| (&q.task, &q.sequence_id))
+            .map_err(|e| format!("`tasks`/`sequences` in dataset `{spelled}`: {e}"))?;
+        if picked.iter().all(|q| !q.forces_recorded) {
+            let replaying = spec.settings.iter().find(|s| {
+                crate::evaluation::Setting::parse(s).is_some_and(|s| s.coefficient != 0.0)
+            });
+            if let Some(setting) = replaying {
+                return Err(format!(
+                    "setting `{setting}` replays recorded hand forces, but no sequence of dataset `{spelled}` has force logs (imported without --forces): it would run as no-force under another name; use no-force or push:<N>"
+                ));
+            }
+        }
+        durations.push(picked.iter().map(|q| q.duration_s).collect());
+    }
+    Ok(durations)
+}
+
+/// Every shard must get an episode of every dataset (`durations`: one per episode).
+/// Checked before anything is allocated per task: a shard without an episode is no work,
+/// and `shards = 10⁹` would exhaust memory planning empty tasks.
+fn check_shards(spec: &SweepSpec, durations: &[Vec<f64>]) -> Result<(), String> {
+    for (spelled, d) in spec.datasets.iter().zip(durations) {
+        if spec.shards > d.len() {
+            return Err(format!(
+                "`shards` = {} but dataset `{spelled}` has {} episodes per cell: at most {} shards",
+                spec.shards,
+                d.len(),
+                d.len()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The policy `p` as planned: paths made absolute against `workdir`, a launched policy's
+/// `--policy` the session placeholder, the profile defaulting to the policy family's.
+fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
+    PolicyAxis {
+        name: p.label(),
+        policy: match (&p.policy, &p.command) {
+            (Some(pol), _) => match pol.strip_prefix("twist2:") {
+                Some(file) => format!("twist2:{}", resolve(workdir, file).display()),
+                None => pol.clone(),
+            },
+            _ => SESSION_POLICY.into(),
+        },
+        command: p.command.clone(),
+        profile: match &p.profile {
+            Some(f) if f.ends_with(".toml") => resolve(workdir, f).display().to_string(),
+            Some(name) => name.clone(),
+            None => crate::profile::family_profile(p.policy.as_deref().unwrap_or("")).to_string(),
+        },
+        keypoints: p.keypoints.clone(),
+        connect_timeout_s: p.connect_timeout_s,
+    }
+}
+
+/// Appends the tasks of `cell`, one per shard, numbered on from those in `tasks`.
+fn push_shards(tasks: &mut Vec<Task>, robot: &str, cell: &Cell) {
+    for i in 0..cell.shards {
+        let shard = (i, cell.shards);
+        tasks.push(Task {
+            index: tasks.len(),
+            cell: cell.index,
+            shard,
+            episodes: shard_episodes(cell.episodes, shard),
+            eval_args: eval_args(robot, cell, shard),
+        });
     }
 }
 

@@ -7,9 +7,9 @@
 
 use super::force_csv::ForceLog;
 use super::{ImportError, RawMotion};
-use crate::motion::{Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};
+use crate::motion::{GlitchScan, Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};
 use crate::robot::RobotModel;
-use serde_json::{json, Value};
+use serde_json::{json, Map, Value};
 use std::path::Path;
 
 /// How to import one motion.
@@ -36,73 +36,24 @@ pub struct ImportOptions {
 }
 
 /// Builds the canonical sequence for `robot` from a raw motion read from `source`.
+///
+/// The phases run in this order, so the first error a broken file reports stays the same
+/// however it is broken: frame counts, root glitches, joint columns, root quaternions,
+/// forces, and the finished sequence's own validation.
 pub fn to_sequence(
     raw: RawMotion,
     robot: &RobotModel,
     opts: &ImportOptions,
     source: &Path,
 ) -> Result<Sequence, ImportError> {
-    let bad = |field: &str, reason: String| ImportError::BadField {
-        path: source.to_path_buf(),
-        field: field.into(),
-        reason,
-    };
+    let bad = |field: &str, reason: String| bad_field(source, field, reason);
     let mut raw = raw;
-    let t = raw.root_pos.len();
-    if raw.root_quat_wxyz.len() != t || raw.joint_pos.len() != t {
-        return Err(bad(
-            "frames",
-            format!(
-                "root_pos {t}, root orientation {}, joint angles {} frames",
-                raw.root_quat_wxyz.len(),
-                raw.joint_pos.len()
-            ),
-        ));
-    }
-    if !(raw.fps.is_finite() && raw.fps > 0.0) {
-        return Err(bad("fps", format!("must be > 0, got {}", raw.fps)));
-    }
-    if let Some(v) = &raw.joint_vel {
-        if v.len() != t {
-            return Err(bad(
-                "joint_vel",
-                format!("{} frames, but root_pos has {t}", v.len()),
-            ));
-        }
-    }
-    let glitches = crate::motion::scan_root_glitches(&raw.root_pos, raw.fps);
-    let repairable = opts.trim_glitches && glitches.is_trimmable();
-    if !(glitches.is_clean() || repairable) {
-        return Err(ImportError::RootGlitch {
-            path: source.to_path_buf(),
-            sequence_id: opts.sequence_id.clone(),
-            scan: glitches,
-            trim_requested: opts.trim_glitches,
-        });
-    }
+    check_frame_counts(&raw, source)?;
+    let glitches = trim_root_glitches(&mut raw, opts, source)?;
     // Source frame of the sequence's frame 0: forces are resampled on the source clock.
     let first_frame = glitches.leading_frames;
-    if !glitches.is_clean() {
-        let keep = first_frame..t - glitches.trailing_frames;
-        raw.root_pos = raw.root_pos[keep.clone()].to_vec();
-        raw.root_quat_wxyz = raw.root_quat_wxyz[keep.clone()].to_vec();
-        raw.joint_pos = raw.joint_pos[keep.clone()].to_vec();
-        raw.joint_vel = raw.joint_vel.map(|v| v[keep].to_vec());
-    }
     let t = raw.root_pos.len();
-    // Joint columns by name: unknown names are an error; robot joints the file lacks are 0.
-    let mut column_of = vec![None; robot.n_joints()];
-    for (c, name) in raw.joint_names.iter().enumerate() {
-        let j = robot.joint_index(name).ok_or_else(|| {
-            bad(
-                "joint_names",
-                format!("unknown joint `{name}` for robot {}", robot.name),
-            )
-        })?;
-        if column_of[j].replace(c).is_some() {
-            return Err(bad("joint_names", format!("`{name}` appears twice")));
-        }
-    }
+    let column_of = joint_columns(&raw, robot, source)?;
     let missing: Vec<&str> = robot
         .joints
         .iter()
@@ -120,96 +71,16 @@ pub fn to_sequence(
             })
             .collect()
     };
-    for (k, r) in raw.joint_pos.iter().enumerate() {
-        if r.len() != raw.joint_names.len() {
-            return Err(bad(
-                "joint_pos",
-                format!(
-                    "frame {k} has {} values for {} joint names",
-                    r.len(),
-                    raw.joint_names.len()
-                ),
-            ));
-        }
-    }
     let mut provenance = raw.provenance.clone();
     if !glitches.is_clean() {
-        let jumps: Vec<Value> = glitches
-            .jumps
-            .iter()
-            .map(|j| json!({"frame": j.frame, "distance_m": j.distance_m, "speed_m_per_s": j.speed_m_per_s}))
-            .collect();
-        provenance.insert(
-            "trimmed_glitch_frames".into(),
-            json!({
-                "leading": glitches.leading_frames,
-                "trailing": glitches.trailing_frames,
-                "source_frames": glitches.frames,
-                "root_jumps": jumps,
-                "note": "frame 0 of this sequence is source frame `leading`; forces are resampled on the source clock",
-            }),
-        );
+        record_trimmed_glitches(&glitches, &mut provenance);
     }
     if !missing.is_empty() {
         provenance.insert("missing_joints_set_to_zero".into(), json!(missing));
     }
-
-    let mut quats = raw.root_quat_wxyz.clone();
-    let mut renormalized = 0usize;
-    for (k, q) in quats.iter_mut().enumerate() {
-        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if !n.is_finite() || n < 1e-9 {
-            return Err(bad(
-                "root orientation",
-                format!("frame {k}: not a rotation (norm {n})"),
-            ));
-        }
-        if (n - 1.0).abs() > QUAT_NORM_TOLERANCE {
-            if !opts.renormalize_quaternions {
-                return Err(bad(
-                    "root orientation",
-                    format!("frame {k}: quaternion norm {n:.6} (pass --renormalize-quaternions to repair)"),
-                ));
-            }
-            renormalized += 1;
-        }
-        if opts.renormalize_quaternions {
-            q.iter_mut().for_each(|x| *x /= n);
-        }
-    }
-    if renormalized > 0 {
-        provenance.insert("renormalized_quaternion_frames".into(), json!(renormalized));
-    }
-
+    let quats = root_quaternions(&raw.root_quat_wxyz, opts, &mut provenance, source)?;
     let times: Vec<f64> = (0..t).map(|k| (first_frame + k) as f64 / raw.fps).collect();
-    let (force_sensor, forces_recorded) = match &opts.forces {
-        Some(logs) => {
-            let mut out = [Vec::new(), Vec::new()];
-            for side in [LEFT, RIGHT] {
-                let (f, outside) = logs[side].resample(&times, opts.force_offset_s);
-                out[side] = f
-                    .into_iter()
-                    .map(|v| v.map(|x| x * opts.force_sign))
-                    .collect();
-                if outside > 0 {
-                    let key = if side == LEFT {
-                        "left_force_frames_outside_log"
-                    } else {
-                        "right_force_frames_outside_log"
-                    };
-                    provenance.insert(key.into(), json!(outside));
-                }
-            }
-            provenance.insert("force_offset_s".into(), json!(opts.force_offset_s));
-            provenance.insert("force_sign".into(), json!(opts.force_sign));
-            (out, true)
-        }
-        None => {
-            provenance.insert("forces".into(), json!("none recorded: zero forces"));
-            ([vec![[0.0; 3]; t], vec![[0.0; 3]; t]], false)
-        }
-    };
-
+    let (force_sensor, forces_recorded) = sensor_forces(opts, &times, &mut provenance);
     let hand_quat = |side: usize| {
         let q = robot.hands[side].hand_from_sensor;
         [q.w, q.i, q.j, q.k]
@@ -236,6 +107,212 @@ pub fn to_sequence(
     seq.validate(source)
         .map_err(|e| bad("(sequence)", e.to_string()))?;
     Ok(seq)
+}
+
+/// A bad field of the motion read from `source`.
+fn bad_field(source: &Path, field: &str, reason: String) -> ImportError {
+    ImportError::BadField {
+        path: source.to_path_buf(),
+        field: field.into(),
+        reason,
+    }
+}
+
+/// Every per-frame array must have as many frames as `root_pos`, and the frame rate must
+/// be positive: the phases after this index them together.
+fn check_frame_counts(raw: &RawMotion, source: &Path) -> Result<(), ImportError> {
+    let t = raw.root_pos.len();
+    if raw.root_quat_wxyz.len() != t || raw.joint_pos.len() != t {
+        return Err(bad_field(
+            source,
+            "frames",
+            format!(
+                "root_pos {t}, root orientation {}, joint angles {} frames",
+                raw.root_quat_wxyz.len(),
+                raw.joint_pos.len()
+            ),
+        ));
+    }
+    if !(raw.fps.is_finite() && raw.fps > 0.0) {
+        return Err(bad_field(
+            source,
+            "fps",
+            format!("must be > 0, got {}", raw.fps),
+        ));
+    }
+    if let Some(v) = &raw.joint_vel {
+        if v.len() != t {
+            return Err(bad_field(
+                source,
+                "joint_vel",
+                format!("{} frames, but root_pos has {t}", v.len()),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Scans the root for teleoperation glitches: a clean motion passes; leading and trailing
+/// glitch frames are cut off when `opts.trim_glitches` asks for it; anything else is an
+/// error. Returns the scan (what was cut, for the provenance and the force clock).
+fn trim_root_glitches(
+    raw: &mut RawMotion,
+    opts: &ImportOptions,
+    source: &Path,
+) -> Result<GlitchScan, ImportError> {
+    let t = raw.root_pos.len();
+    let glitches = crate::motion::scan_root_glitches(&raw.root_pos, raw.fps);
+    let repairable = opts.trim_glitches && glitches.is_trimmable();
+    if !(glitches.is_clean() || repairable) {
+        return Err(ImportError::RootGlitch {
+            path: source.to_path_buf(),
+            sequence_id: opts.sequence_id.clone(),
+            scan: glitches,
+            trim_requested: opts.trim_glitches,
+        });
+    }
+    if !glitches.is_clean() {
+        let keep = glitches.leading_frames..t - glitches.trailing_frames;
+        raw.root_pos = raw.root_pos[keep.clone()].to_vec();
+        raw.root_quat_wxyz = raw.root_quat_wxyz[keep.clone()].to_vec();
+        raw.joint_pos = raw.joint_pos[keep.clone()].to_vec();
+        raw.joint_vel = raw.joint_vel.take().map(|v| v[keep].to_vec());
+    }
+    Ok(glitches)
+}
+
+/// For each robot joint, the file's column holding it (`None`: the file lacks it, and it
+/// is set to 0). A joint name the robot lacks, or named twice, is an error, and so is a
+/// frame whose joint angles do not match the names.
+fn joint_columns(
+    raw: &RawMotion,
+    robot: &RobotModel,
+    source: &Path,
+) -> Result<Vec<Option<usize>>, ImportError> {
+    let mut column_of = vec![None; robot.n_joints()];
+    for (c, name) in raw.joint_names.iter().enumerate() {
+        let j = robot.joint_index(name).ok_or_else(|| {
+            bad_field(
+                source,
+                "joint_names",
+                format!("unknown joint `{name}` for robot {}", robot.name),
+            )
+        })?;
+        if column_of[j].replace(c).is_some() {
+            return Err(bad_field(
+                source,
+                "joint_names",
+                format!("`{name}` appears twice"),
+            ));
+        }
+    }
+    for (k, r) in raw.joint_pos.iter().enumerate() {
+        if r.len() != raw.joint_names.len() {
+            return Err(bad_field(
+                source,
+                "joint_pos",
+                format!(
+                    "frame {k} has {} values for {} joint names",
+                    r.len(),
+                    raw.joint_names.len()
+                ),
+            ));
+        }
+    }
+    Ok(column_of)
+}
+
+/// Records in the provenance which glitch frames were trimmed, and the jumps found.
+fn record_trimmed_glitches(glitches: &GlitchScan, provenance: &mut Map<String, Value>) {
+    let jumps: Vec<Value> = glitches
+        .jumps
+        .iter()
+        .map(|j| json!({"frame": j.frame, "distance_m": j.distance_m, "speed_m_per_s": j.speed_m_per_s}))
+        .collect();
+    provenance.insert(
+        "trimmed_glitch_frames".into(),
+        json!({
+            "leading": glitches.leading_frames,
+            "trailing": glitches.trailing_frames,
+            "source_frames": glitches.frames,
+            "root_jumps": jumps,
+            "note": "frame 0 of this sequence is source frame `leading`; forces are resampled on the source clock",
+        }),
+    );
+}
+
+/// The root quaternions, checked: each must be a rotation; one off unit norm is an error
+/// unless `opts.renormalize_quaternions`, in which case all are renormalised and the count
+/// of those that were off is recorded in the provenance.
+fn root_quaternions(
+    root_quat_wxyz: &[[f64; 4]],
+    opts: &ImportOptions,
+    provenance: &mut Map<String, Value>,
+    source: &Path,
+) -> Result<Vec<[f64; 4]>, ImportError> {
+    let mut quats = root_quat_wxyz.to_vec();
+    let mut renormalized = 0usize;
+    for (k, q) in quats.iter_mut().enumerate() {
+        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !n.is_finite() || n < 1e-9 {
+            return Err(bad_field(
+                source,
+                "root orientation",
+                format!("frame {k}: not a rotation (norm {n})"),
+            ));
+        }
+        if (n - 1.0).abs() > QUAT_NORM_TOLERANCE {
+            if !opts.renormalize_quaternions {
+                return Err(bad_field(
+                    source,
+                    "root orientation",
+                    format!("frame {k}: quaternion norm {n:.6} (pass --renormalize-quaternions to repair)"),
+                ));
+            }
+            renormalized += 1;
+        }
+        if opts.renormalize_quaternions {
+            q.iter_mut().for_each(|x| *x /= n);
+        }
+    }
+    if renormalized > 0 {
+        provenance.insert("renormalized_quaternion_frames".into(), json!(renormalized));
+    }
+    Ok(quats)
+}
+
+/// The left and right sensor forces at the motion's frame `times` (s, source clock), N:
+/// the logs resampled, offset and signed as `opts` says, or zeros when none were recorded
+/// (the `bool`: whether they were). What was done is recorded in the provenance.
+fn sensor_forces(
+    opts: &ImportOptions,
+    times: &[f64],
+    provenance: &mut Map<String, Value>,
+) -> ([Vec<[f64; 3]>; 2], bool) {
+    let Some(logs) = &opts.forces else {
+        provenance.insert("forces".into(), json!("none recorded: zero forces"));
+        let t = times.len();
+        return ([vec![[0.0; 3]; t], vec![[0.0; 3]; t]], false);
+    };
+    let mut out = [Vec::new(), Vec::new()];
+    for side in [LEFT, RIGHT] {
+        let (f, outside) = logs[side].resample(times, opts.force_offset_s);
+        out[side] = f
+            .into_iter()
+            .map(|v| v.map(|x| x * opts.force_sign))
+            .collect();
+        if outside > 0 {
+            let key = if side == LEFT {
+                "left_force_frames_outside_log"
+            } else {
+                "right_force_frames_outside_log"
+            };
+            provenance.insert(key.into(), json!(outside));
+        }
+    }
+    provenance.insert("force_offset_s".into(), json!(opts.force_offset_s));
+    provenance.insert("force_sign".into(), json!(opts.force_sign));
+    (out, true)
 }
 
 #[cfg(test)]

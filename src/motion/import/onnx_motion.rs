@@ -18,6 +18,7 @@ use super::{ImportError, RawMotion};
 use crate::robot::{forward_kinematics, frame_pose, RobotModel};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use std::path::Path;
+use std::sync::Arc;
 use tract_onnx::prelude::*;
 
 const FORMAT: &str = "onnx-motion";
@@ -45,65 +46,189 @@ pub fn read_onnx_motion(
     reference_body: &str,
     control_dt_s: f64,
 ) -> Result<RawMotion, ImportError> {
-    let format_err = |reason: String| ImportError::Format {
-        path: path.to_path_buf(),
-        format: FORMAT,
-        reason,
-    };
-    let tract_err = |e: TractError| format_err(format!("{e:#}"));
     if !path.exists() {
         return Err(ImportError::Io {
             path: path.to_path_buf(),
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
         });
     }
-    let model = onnx().model_for_path(path).map_err(tract_err)?;
-    let props: std::collections::HashMap<String, String> = model
-        .properties
-        .iter()
-        .filter_map(|(k, v)| {
-            let key = k.strip_prefix("onnx.metadata_props.")?;
-            let plain = v.try_as_plain_ram().ok()?;
-            Some((key.to_string(), plain.to_scalar::<String>().ok()?.clone()))
+    let model = onnx().model_for_path(path).map_err(tract_error(path))?;
+    let props = crate::policy::beyondmimic::metadata_props(&model);
+    let meta = crate::policy::beyondmimic::FileMetadata::from_props(&props)
+        .map_err(|reason| format_error(path, reason))?;
+    let probe = MotionProbe::new(model, path)?;
+    let frames = probe.play(path)?;
+    let joint_names: Vec<String> = meta
+        .joint_names
+        .unwrap_or_else(|| robot.joints.iter().map(|j| j.name.clone()).collect());
+    check_frame_widths(&frames[0], &joint_names).map_err(|reason| format_error(path, reason))?;
+    let (root_pos, root_quat_wxyz) = root_poses(robot, reference_body, &joint_names, &frames)
+        .map_err(|reason| format_error(path, reason))?;
+    Ok(RawMotion {
+        fps: 1.0 / control_dt_s,
+        root_pos,
+        root_quat_wxyz,
+        joint_names,
+        joint_pos: frames.iter().map(|f| f[0].clone()).collect(),
+        joint_vel: Some(frames.iter().map(|f| f[1].clone()).collect()),
+        provenance: provenance(path, frames.len(), reference_body),
+    })
+}
+
+/// The file is not a network with an embedded motion (or the motion is unusable).
+fn format_error(path: &Path, reason: String) -> ImportError {
+    ImportError::Format {
+        path: path.to_path_buf(),
+        format: FORMAT,
+        reason,
+    }
+}
+
+/// tract could not load, prepare or run the network.
+fn tract_error(path: &Path) -> impl Fn(TractError) -> ImportError + Copy + '_ {
+    move |e| format_error(path, format!("{e:#}"))
+}
+
+/// One step's motion outputs, in [`MOTION_OUTPUTS`] order: joint positions, joint
+/// velocities (policy order), reference body position and quaternion (x, y, z, w).
+type MotionFrame = Vec<Vec<f64>>;
+
+/// The network made runnable with every input but the time step fed zeros, which it
+/// evaluates step by step for the motion outputs alone.
+struct MotionProbe {
+    plan: Arc<TypedRunnableModel>,
+    /// Per input: the zeros it is fed, or `None` for the `time_step` input.
+    zeros: Vec<Option<Tensor>>,
+    /// Output slots of [`MOTION_OUTPUTS`].
+    motion_outputs: [usize; 4],
+}
+
+impl MotionProbe {
+    /// Checks that the network has the motion outputs and a `time_step` input, fixes the
+    /// input shapes and makes it runnable.
+    fn new(model: InferenceModel, path: &Path) -> Result<Self, ImportError> {
+        let tract_err = tract_error(path);
+        let (inputs, outputs) = io_labels(&model).map_err(tract_err)?;
+        let missing: Vec<&str> = MOTION_OUTPUTS
+            .iter()
+            .copied()
+            .filter(|m| !outputs.iter().any(|o| o == m))
+            .collect();
+        if !missing.is_empty() {
+            return Err(format_error(path, format!(
+                "the network has no motion outputs {missing:?} (it has {outputs:?}): only networks with their reference motion embedded can be imported"
+            )));
+        }
+        let Some(time_input) = inputs.iter().position(|i| i == "time_step") else {
+            return Err(format_error(
+                path,
+                format!("the network has no `time_step` input (it has {inputs:?})"),
+            ));
+        };
+        let (model, zeros) = fix_inputs(model, &inputs, time_input, path)?;
+        let plan = model
+            .into_optimized()
+            .and_then(|m| m.into_runnable())
+            .map_err(tract_err)?;
+        let slot = |name: &str| {
+            outputs
+                .iter()
+                .position(|o| o == name)
+                .expect("checked above")
+        };
+        Ok(Self {
+            plan,
+            zeros,
+            motion_outputs: MOTION_OUTPUTS.map(slot),
         })
-        .collect();
-    let meta = crate::policy::beyondmimic::FileMetadata::from_props(&props).map_err(format_err)?;
+    }
+
+    /// The motion outputs at control step `step`.
+    fn eval(&self, step: usize) -> TractResult<MotionFrame> {
+        let feed: TVec<TValue> = self
+            .zeros
+            .iter()
+            .map(|z| match z {
+                Some(t) => Ok(t.clone().into()),
+                None => Tensor::from_shape(&[1, 1], &[step as f32]).map(Into::into),
+            })
+            .collect::<TractResult<_>>()?;
+        let out = self.plan.run(feed)?;
+        self.motion_outputs
+            .iter()
+            .map(|&i| {
+                let view = out[i].to_plain_array_view::<f32>()?;
+                Ok(view.iter().map(|&v| f64::from(v)).collect())
+            })
+            .collect()
+    }
+
+    /// Steps the network from 0 until its outputs stop changing (it clamps `time_step` to
+    /// its last frame): the frames up to the last change, a pause that ended kept.
+    fn play(&self, path: &Path) -> Result<Vec<MotionFrame>, ImportError> {
+        let mut frames: Vec<MotionFrame> = Vec::new();
+        let mut unchanged = 0usize;
+        let mut step = 0usize;
+        loop {
+            if step > MAX_STEPS {
+                return Err(format_error(path, format!(
+                    "the motion outputs still change after {MAX_STEPS} steps: not a clamped, embedded motion"
+                )));
+            }
+            let f = self.eval(step).map_err(tract_error(path))?;
+            if let Some(k) = f.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
+                return Err(format_error(
+                    path,
+                    format!(
+                        "output `{}` is not finite at step {step}",
+                        MOTION_OUTPUTS[k]
+                    ),
+                ));
+            }
+            if frames.last() == Some(&f) {
+                unchanged += 1;
+                if unchanged >= END_CONFIRM_STEPS {
+                    break;
+                }
+            } else {
+                // A pause that ended was motion after all: keep its frames.
+                for _ in 0..unchanged {
+                    let last = frames.last().expect("a frame before a repeat").clone();
+                    frames.push(last);
+                }
+                unchanged = 0;
+                frames.push(f);
+            }
+            step += 1;
+        }
+        Ok(frames)
+    }
+}
+
+/// The labels of the network's inputs and outputs (an outlet's label, else its node's
+/// name).
+fn io_labels(model: &InferenceModel) -> TractResult<(Vec<String>, Vec<String>)> {
     let label = |o: &OutletId| {
         model
             .outlet_label(*o)
             .map(str::to_string)
             .unwrap_or_else(|| model.node(o.node).name.clone())
     };
-    let inputs: Vec<String> = model
-        .input_outlets()
-        .map_err(tract_err)?
-        .iter()
-        .map(label)
-        .collect();
-    let outputs: Vec<String> = model
-        .output_outlets()
-        .map_err(tract_err)?
-        .iter()
-        .map(label)
-        .collect();
-    let missing: Vec<&str> = MOTION_OUTPUTS
-        .iter()
-        .copied()
-        .filter(|m| !outputs.iter().any(|o| o == m))
-        .collect();
-    if !missing.is_empty() {
-        return Err(format_err(format!(
-            "the network has no motion outputs {missing:?} (it has {outputs:?}): only networks with their reference motion embedded can be imported"
-        )));
-    }
-    let Some(time_input) = inputs.iter().position(|i| i == "time_step") else {
-        return Err(format_err(format!(
-            "the network has no `time_step` input (it has {inputs:?})"
-        )));
-    };
-    // Every other input (the observation) is fed zeros: the motion outputs depend on the
-    // step alone.
-    let mut model = model;
+    let inputs = model.input_outlets()?.iter().map(label).collect();
+    let outputs = model.output_outlets()?.iter().map(label).collect();
+    Ok((inputs, outputs))
+}
+
+/// Fixes every input's shape: the time step [1, 1]; every other input (the observation)
+/// its declared fixed shape, fed zeros — the motion outputs depend on the step alone.
+/// Returns the model and, per input, its zeros (`None` for the time step).
+fn fix_inputs(
+    mut model: InferenceModel,
+    inputs: &[String],
+    time_input: usize,
+    path: &Path,
+) -> Result<(InferenceModel, Vec<Option<Tensor>>), ImportError> {
+    let tract_err = tract_error(path);
     let mut zeros = Vec::new();
     for (i, name) in inputs.iter().enumerate() {
         if i == time_input {
@@ -123,11 +248,12 @@ pub fn read_onnx_motion(
                     .and_then(|d| usize::try_from(d).ok())
             })
             .collect();
-        let dims = dims.ok_or_else(|| format_err(format!("input `{name}` has no fixed shape")))?;
+        let dims =
+            dims.ok_or_else(|| format_error(path, format!("input `{name}` has no fixed shape")))?;
         // Zeros are allocated for it: a declared shape is not trusted with memory.
         let values = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
         if values.is_none_or(|n| n > MAX_INPUT_VALUES) {
-            return Err(format_err(format!(
+            return Err(format_error(path, format!(
                 "input `{name}` declares shape {dims:?}, more than {MAX_INPUT_VALUES} values: not a policy's observation"
             )));
         }
@@ -136,99 +262,53 @@ pub fn read_onnx_motion(
             .map_err(tract_err)?;
         zeros.push(Some(Tensor::zero::<f32>(&dims).map_err(tract_err)?));
     }
-    let plan = model
-        .into_optimized()
-        .and_then(|m| m.into_runnable())
-        .map_err(tract_err)?;
-    let slot = |name: &str| {
-        outputs
-            .iter()
-            .position(|o| o == name)
-            .expect("checked above")
-    };
-    let [jp, jv, rp, rq] = MOTION_OUTPUTS.map(slot);
-    let eval = |step: usize| -> Result<Vec<Vec<f64>>, ImportError> {
-        let feed: TVec<TValue> = zeros
-            .iter()
-            .map(|z| match z {
-                Some(t) => Ok(t.clone().into()),
-                None => Tensor::from_shape(&[1, 1], &[step as f32]).map(Into::into),
-            })
-            .collect::<TractResult<_>>()
-            .map_err(tract_err)?;
-        let out = plan.run(feed).map_err(tract_err)?;
-        [jp, jv, rp, rq]
-            .iter()
-            .map(|&i| {
-                let view = out[i].to_plain_array_view::<f32>().map_err(tract_err)?;
-                Ok(view.iter().map(|&v| f64::from(v)).collect())
-            })
-            .collect()
-    };
+    Ok((model, zeros))
+}
 
-    let mut frames: Vec<Vec<Vec<f64>>> = Vec::new();
-    let mut unchanged = 0usize;
-    let mut step = 0usize;
-    loop {
-        if step > MAX_STEPS {
-            return Err(format_err(format!(
-                "the motion outputs still change after {MAX_STEPS} steps: not a clamped, embedded motion"
-            )));
-        }
-        let f = eval(step)?;
-        if let Some(k) = f.iter().position(|v| v.iter().any(|x| !x.is_finite())) {
-            return Err(format_err(format!(
-                "output `{}` is not finite at step {step}",
-                MOTION_OUTPUTS[k]
-            )));
-        }
-        if frames.last() == Some(&f) {
-            unchanged += 1;
-            if unchanged >= END_CONFIRM_STEPS {
-                break;
-            }
-        } else {
-            // A pause that ended was motion after all: keep its frames.
-            for _ in 0..unchanged {
-                let last = frames.last().expect("a frame before a repeat").clone();
-                frames.push(last);
-            }
-            unchanged = 0;
-            frames.push(f);
-        }
-        step += 1;
-    }
-    let joint_names: Vec<String> = meta
-        .joint_names
-        .unwrap_or_else(|| robot.joints.iter().map(|j| j.name.clone()).collect());
-    let first = &frames[0];
+/// The motion outputs must be one value per joint name, and a 3-vector and a quaternion.
+fn check_frame_widths(first: &MotionFrame, joint_names: &[String]) -> Result<(), String> {
     if first[0].len() != joint_names.len() || first[1].len() != joint_names.len() {
-        return Err(format_err(format!(
+        return Err(format!(
             "joint_pos has {} values and joint_vel {}, for {} joint names",
             first[0].len(),
             first[1].len(),
             joint_names.len()
-        )));
+        ));
     }
     if first[2].len() != 3 || first[3].len() != 4 {
-        return Err(format_err(format!(
+        return Err(format!(
             "ref_pos_xyz has {} values and ref_quat_xyzw {} (3 and 4 expected)",
             first[2].len(),
             first[3].len()
-        )));
+        ));
     }
+    Ok(())
+}
+
+/// Per frame, the root position, m, and orientation quaternion (w, x, y, z).
+type RootPoses = (Vec<[f64; 3]>, Vec<[f64; 4]>);
+
+/// The root (pelvis) pose of every frame, from the reference body's pose: pelvis = body ·
+/// (pelvis → body at that frame's joint angles)⁻¹. Joints the robot lacks are ignored;
+/// those the network lacks stay at the default pose.
+fn root_poses(
+    robot: &RobotModel,
+    reference_body: &str,
+    joint_names: &[String],
+    frames: &[MotionFrame],
+) -> Result<RootPoses, String> {
     let to_canonical: Vec<Option<usize>> =
         joint_names.iter().map(|j| robot.joint_index(j)).collect();
     let body = robot.frame_index(reference_body).ok_or_else(|| {
-        format_err(format!(
+        format!(
             "reference body `{reference_body}` is not a body of {}",
             robot.name
-        ))
+        )
     })?;
     let mut poses = Vec::new();
     let mut root_pos = Vec::with_capacity(frames.len());
     let mut root_quat_wxyz = Vec::with_capacity(frames.len());
-    for f in &frames {
+    for f in frames {
         let mut q = robot.default_pose();
         for (i, c) in to_canonical.iter().enumerate() {
             if let Some(c) = c {
@@ -248,23 +328,24 @@ pub fn read_onnx_motion(
         root_pos.push([t.x, t.y, t.z]);
         root_quat_wxyz.push([r.w, r.i, r.j, r.k]);
     }
+    Ok((root_pos, root_quat_wxyz))
+}
+
+/// Where the motion came from and how it was read.
+fn provenance(
+    path: &Path,
+    n_frames: usize,
+    reference_body: &str,
+) -> serde_json::Map<String, serde_json::Value> {
     let mut provenance = serde_json::Map::new();
     for (k, v) in [
         ("format", serde_json::json!(FORMAT)),
         ("source_file", serde_json::json!(path.file_name().map(|s| s.to_string_lossy().to_string()))),
-        ("frames", serde_json::json!(frames.len())),
+        ("frames", serde_json::json!(n_frames)),
         ("reference_body", serde_json::json!(reference_body)),
         ("note", serde_json::json!("motion read from the network's outputs at every time_step; the root pose derived from the reference body's pose through the robot's kinematics; no forces recorded")),
     ] {
         provenance.insert(k.to_string(), v);
     }
-    Ok(RawMotion {
-        fps: 1.0 / control_dt_s,
-        root_pos,
-        root_quat_wxyz,
-        joint_names,
-        joint_pos: frames.iter().map(|f| f[0].clone()).collect(),
-        joint_vel: Some(frames.iter().map(|f| f[1].clone()).collect()),
-        provenance,
-    })
+    provenance
 }

@@ -109,12 +109,8 @@ fn opcode(op: u8) -> Option<(Arg, Effect)> {
 /// and why; a stream this walk cannot follow (an unknown opcode, a cut argument, a stack
 /// underflow) is an error too, since decoding it would fail anyway.
 pub fn check_nesting(bytes: &[u8], limit: u32) -> Result<(), String> {
-    let mut stack: Vec<Entry> = Vec::new();
-    let mut memo: Vec<u32> = Vec::new(); // depths in order of storing; ids are small
-    let mut memo_by_id: std::collections::HashMap<u64, u32> = std::collections::HashMap::new();
+    let mut walk = Walk::default();
     let mut pos = 0usize;
-    let cut = |at: usize| format!("the pickle ends inside the argument of the opcode at byte {at}");
-    let underflow = |at: usize| format!("the opcode at byte {at} takes more than the stack holds");
     while pos < bytes.len() {
         let at = pos;
         let op = bytes[pos];
@@ -122,131 +118,9 @@ pub fn check_nesting(bytes: &[u8], limit: u32) -> Result<(), String> {
         let Some((arg, effect)) = opcode(op) else {
             return Err(format!("unknown pickle opcode 0x{op:02x} at byte {at}"));
         };
-        let mut arg_bytes: &[u8] = &[];
-        match arg {
-            Arg::None => {}
-            Arg::Fixed(n) => {
-                arg_bytes = bytes.get(pos..pos + n).ok_or_else(|| cut(at))?;
-                pos += n;
-            }
-            Arg::Lines(n) => {
-                let start = pos;
-                for _ in 0..n {
-                    let nl = bytes[pos..]
-                        .iter()
-                        .position(|&b| b == b'\n')
-                        .ok_or_else(|| cut(at))?;
-                    pos += nl + 1;
-                }
-                arg_bytes = &bytes[start..pos];
-            }
-            Arg::Counted(n) => {
-                let len_bytes = bytes.get(pos..pos + n).ok_or_else(|| cut(at))?;
-                let mut len = [0u8; 8];
-                len[..n].copy_from_slice(len_bytes);
-                let len = usize::try_from(u64::from_le_bytes(len)).map_err(|_| cut(at))?;
-                pos += n;
-                if len > bytes.len() - pos {
-                    return Err(cut(at));
-                }
-                pos += len;
-            }
-        }
-        let pop_value = |stack: &mut Vec<Entry>| match stack.pop() {
-            Some(Entry::Value(d)) => Ok(d),
-            _ => Err(underflow(at)),
-        };
-        let pop_mark = |stack: &mut Vec<Entry>| -> Result<u32, String> {
-            let mut deepest = 0;
-            loop {
-                match stack.pop() {
-                    Some(Entry::Mark) => return Ok(deepest),
-                    Some(Entry::Value(d)) => deepest = deepest.max(d),
-                    None => return Err(underflow(at)),
-                }
-            }
-        };
-        let into_top = |stack: &mut Vec<Entry>, child: u32| match stack.last_mut() {
-            Some(Entry::Value(d)) => {
-                *d = (*d).max(child + 1);
-                Ok(*d)
-            }
-            _ => Err(underflow(at)),
-        };
-        let depth = match effect {
-            Effect::Push => {
-                stack.push(Entry::Value(1));
-                1
-            }
-            Effect::Mark => {
-                stack.push(Entry::Mark);
-                0
-            }
-            Effect::Nothing => 0,
-            Effect::Stop => return Ok(()),
-            Effect::Pop => {
-                match stack.pop() {
-                    Some(_) => {}
-                    None => return Err(underflow(at)),
-                }
-                0
-            }
-            Effect::PopMark => {
-                pop_mark(&mut stack)?;
-                0
-            }
-            Effect::Dup => {
-                let top = *stack.last().ok_or_else(|| underflow(at))?;
-                stack.push(top);
-                0
-            }
-            Effect::Combine(n) => {
-                let mut deepest = 0;
-                for _ in 0..n {
-                    deepest = deepest.max(pop_value(&mut stack)?);
-                }
-                stack.push(Entry::Value(deepest + 1));
-                deepest + 1
-            }
-            Effect::CombineMark => {
-                let d = pop_mark(&mut stack)? + 1;
-                stack.push(Entry::Value(d));
-                d
-            }
-            Effect::Into(n) => {
-                let mut deepest = 0;
-                for _ in 0..n {
-                    deepest = deepest.max(pop_value(&mut stack)?);
-                }
-                into_top(&mut stack, deepest)?
-            }
-            Effect::IntoMark => {
-                let d = pop_mark(&mut stack)?;
-                into_top(&mut stack, d)?
-            }
-            Effect::Put => {
-                let Some(Entry::Value(d)) = stack.last() else {
-                    return Err(underflow(at));
-                };
-                match arg {
-                    Arg::None => memo.push(*d),
-                    _ => {
-                        memo_by_id.insert(memo_id(op, arg_bytes), *d);
-                    }
-                }
-                0
-            }
-            Effect::Get => {
-                let id = memo_id(op, arg_bytes);
-                // MEMOIZE numbers entries from 0 in order; PUT names them explicitly.
-                let d = memo_by_id
-                    .get(&id)
-                    .copied()
-                    .or_else(|| usize::try_from(id).ok().and_then(|i| memo.get(i).copied()))
-                    .unwrap_or(1);
-                stack.push(Entry::Value(d));
-                d
-            }
+        let arg_bytes = read_arg(bytes, &mut pos, &arg, at)?;
+        let Some(depth) = walk.apply(effect, op, &arg, arg_bytes, at)? else {
+            return Ok(());
         };
         if depth > limit {
             return Err(format!(
@@ -255,6 +129,190 @@ pub fn check_nesting(bytes: &[u8], limit: u32) -> Result<(), String> {
         }
     }
     Err("the pickle has no STOP opcode".into())
+}
+
+fn cut(at: usize) -> String {
+    format!("the pickle ends inside the argument of the opcode at byte {at}")
+}
+
+fn underflow(at: usize) -> String {
+    format!("the opcode at byte {at} takes more than the stack holds")
+}
+
+/// Skips the argument of the opcode at byte `at`, which starts at `*pos`, and moves `*pos`
+/// past it. Returns the argument's bytes for fixed and line arguments (memo ids are read
+/// from them); a counted argument (a string or bytes) is skipped unread.
+fn read_arg<'a>(
+    bytes: &'a [u8],
+    pos: &mut usize,
+    arg: &Arg,
+    at: usize,
+) -> Result<&'a [u8], String> {
+    match *arg {
+        Arg::None => Ok(&[]),
+        Arg::Fixed(n) => {
+            let arg_bytes = bytes.get(*pos..*pos + n).ok_or_else(|| cut(at))?;
+            *pos += n;
+            Ok(arg_bytes)
+        }
+        Arg::Lines(n) => {
+            let start = *pos;
+            for _ in 0..n {
+                let nl = bytes[*pos..]
+                    .iter()
+                    .position(|&b| b == b'\n')
+                    .ok_or_else(|| cut(at))?;
+                *pos += nl + 1;
+            }
+            Ok(&bytes[start..*pos])
+        }
+        Arg::Counted(n) => {
+            let len_bytes = bytes.get(*pos..*pos + n).ok_or_else(|| cut(at))?;
+            let mut len = [0u8; 8];
+            len[..n].copy_from_slice(len_bytes);
+            let len = usize::try_from(u64::from_le_bytes(len)).map_err(|_| cut(at))?;
+            *pos += n;
+            if len > bytes.len() - *pos {
+                return Err(cut(at));
+            }
+            *pos += len;
+            Ok(&[])
+        }
+    }
+}
+
+/// The pickle machine's stack and memo, holding nesting depths instead of values.
+#[derive(Default)]
+struct Walk {
+    stack: Vec<Entry>,
+    /// Depths in order of storing (MEMOIZE); ids are small.
+    memo: Vec<u32>,
+    /// Depths stored by explicit id (PUT).
+    memo_by_id: std::collections::HashMap<u64, u32>,
+}
+
+impl Walk {
+    /// Applies the `effect` of opcode `op` (at byte `at`, with argument `arg_bytes`).
+    /// Returns the depth of the value it made or touched (0 for none), or `None` at STOP.
+    fn apply(
+        &mut self,
+        effect: Effect,
+        op: u8,
+        arg: &Arg,
+        arg_bytes: &[u8],
+        at: usize,
+    ) -> Result<Option<u32>, String> {
+        let depth = match effect {
+            Effect::Push => {
+                self.stack.push(Entry::Value(1));
+                1
+            }
+            Effect::Mark => {
+                self.stack.push(Entry::Mark);
+                0
+            }
+            Effect::Nothing => 0,
+            Effect::Stop => return Ok(None),
+            Effect::Pop => {
+                match self.stack.pop() {
+                    Some(_) => {}
+                    None => return Err(underflow(at)),
+                }
+                0
+            }
+            Effect::PopMark => {
+                self.pop_mark(at)?;
+                0
+            }
+            Effect::Dup => {
+                let top = *self.stack.last().ok_or_else(|| underflow(at))?;
+                self.stack.push(top);
+                0
+            }
+            Effect::Combine(n) => {
+                let deepest = self.pop_values(n, at)?;
+                self.stack.push(Entry::Value(deepest + 1));
+                deepest + 1
+            }
+            Effect::CombineMark => {
+                let d = self.pop_mark(at)? + 1;
+                self.stack.push(Entry::Value(d));
+                d
+            }
+            Effect::Into(n) => {
+                let deepest = self.pop_values(n, at)?;
+                self.add_to_top(deepest, at)?
+            }
+            Effect::IntoMark => {
+                let d = self.pop_mark(at)?;
+                self.add_to_top(d, at)?
+            }
+            Effect::Put => {
+                let Some(Entry::Value(d)) = self.stack.last() else {
+                    return Err(underflow(at));
+                };
+                match arg {
+                    Arg::None => self.memo.push(*d),
+                    _ => {
+                        self.memo_by_id.insert(memo_id(op, arg_bytes), *d);
+                    }
+                }
+                0
+            }
+            Effect::Get => {
+                let id = memo_id(op, arg_bytes);
+                // MEMOIZE numbers entries from 0 in order; PUT names them explicitly.
+                let d = self
+                    .memo_by_id
+                    .get(&id)
+                    .copied()
+                    .or_else(|| {
+                        usize::try_from(id)
+                            .ok()
+                            .and_then(|i| self.memo.get(i).copied())
+                    })
+                    .unwrap_or(1);
+                self.stack.push(Entry::Value(d));
+                d
+            }
+        };
+        Ok(Some(depth))
+    }
+
+    /// Pops `n` values; returns the deepest.
+    fn pop_values(&mut self, n: usize, at: usize) -> Result<u32, String> {
+        let mut deepest = 0;
+        for _ in 0..n {
+            match self.stack.pop() {
+                Some(Entry::Value(d)) => deepest = deepest.max(d),
+                _ => return Err(underflow(at)),
+            }
+        }
+        Ok(deepest)
+    }
+
+    /// Pops down to and including the top mark; returns the deepest value popped.
+    fn pop_mark(&mut self, at: usize) -> Result<u32, String> {
+        let mut deepest = 0;
+        loop {
+            match self.stack.pop() {
+                Some(Entry::Mark) => return Ok(deepest),
+                Some(Entry::Value(d)) => deepest = deepest.max(d),
+                None => return Err(underflow(at)),
+            }
+        }
+    }
+
+    /// Puts a value `child` levels deep into the container on top; returns its new depth.
+    fn add_to_top(&mut self, child: u32, at: usize) -> Result<u32, String> {
+        match self.stack.last_mut() {
+            Some(Entry::Value(d)) => {
+                *d = (*d).max(child + 1);
+                Ok(*d)
+            }
+            _ => Err(underflow(at)),
+        }
+    }
 }
 
 /// The memo key of a PUT/GET opcode's argument (text digits for protocol 0, else

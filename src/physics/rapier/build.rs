@@ -3,7 +3,7 @@
 use super::convert::{pose_to_rapier, vec_to_rapier};
 use crate::physics::settings::{ContactMode, PdForm, PhysicsSettings};
 use crate::physics::state::{PdGains, ResetState};
-use crate::robot::{forward_kinematics, Geometry, RobotModel};
+use crate::robot::{forward_kinematics, Body, Geometry, RobotModel};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::prelude::*;
 
@@ -22,8 +22,11 @@ pub(super) struct World {
     /// The ground's collider.
     pub ground: ColliderHandle,
     /// Every robot collider: its model body and its pose in that body's (model) frame.
-    pub robot_colliders: Vec<(ColliderHandle, usize, Isometry3<f64>)>,
+    pub robot_colliders: Vec<RobotCollider>,
 }
+
+/// A robot collider, its model body, and its pose in that body's (model) frame.
+pub(super) type RobotCollider = (ColliderHandle, usize, Isometry3<f64>);
 
 /// Builds a world with the robot in `state`.
 ///
@@ -39,6 +42,36 @@ pub(super) fn build_world(
     gains: &PdGains,
     state: &ResetState,
 ) -> World {
+    let mut world = empty_world(settings);
+    let ground = insert_ground(&mut world, settings);
+    let root_com_b = model.bodies[0].com_b;
+    let root_shift =
+        Isometry3::from_parts(Translation3::from(root_com_b), UnitQuaternion::identity());
+    let (bodies, robot_colliders) = insert_bodies(&mut world, model, settings, state, root_shift);
+    let joint_handles = insert_joints(&mut world, model, settings, &bodies, root_shift);
+    let (multibody, links) = settle_multibody(&mut world, bodies[0], &joint_handles);
+    let mb = world
+        .multibody_joints
+        .get_multibody_mut(multibody)
+        .expect("exists");
+    set_joint_dynamics(mb, model, settings, gains, &links);
+    set_joint_angles(mb, state, &links);
+    mb.forward_kinematics(&world.bodies, true);
+    mb.update_rigid_bodies(&mut world.bodies, true);
+    set_velocities(mb, settings, state, root_com_b, &links);
+    World {
+        world,
+        bodies,
+        multibody,
+        links,
+        root_com_b,
+        ground,
+        robot_colliders,
+    }
+}
+
+/// A world with the settings' gravity, time step and solver iterations, and nothing in it.
+fn empty_world(settings: &PhysicsSettings) -> PhysicsWorld {
     let mut world = PhysicsWorld {
         gravity: Vector::new(
             settings.gravity[0] as f32,
@@ -49,16 +82,30 @@ pub(super) fn build_world(
     };
     world.integration_parameters.dt = settings.dt_s as f32;
     world.integration_parameters.num_solver_iterations = settings.solver_iterations.max(1);
+    world
+}
 
-    // Ground: the top face of a large box at z = 0.
+/// The ground: the top face of a large box at z = 0.
+fn insert_ground(world: &mut PhysicsWorld, settings: &PhysicsSettings) -> ColliderHandle {
     let ground_body =
         world.insert_body(RigidBodyBuilder::fixed().translation(Vector::new(0.0, 0.0, -0.5)));
-    let ground = world.insert_collider(
+    world.insert_collider(
         ColliderBuilder::cuboid(100.0, 100.0, 0.5).friction(settings.friction as f32),
         Some(ground_body),
-    );
-    let mut robot_colliders = Vec::new();
+    )
+}
 
+/// One rigid body per model body, posed as `state` puts it, with the colliders
+/// `settings.contacts` asks for. The root body's frame sits at its centre of mass
+/// (`root_shift` from the model's root frame; see [`build_world`]). Returns the bodies and
+/// every robot collider with its model body and its pose in that body's model frame.
+fn insert_bodies(
+    world: &mut PhysicsWorld,
+    model: &RobotModel,
+    settings: &PhysicsSettings,
+    state: &ResetState,
+    root_shift: Isometry3<f64>,
+) -> (Vec<RigidBodyHandle>, Vec<RobotCollider>) {
     let mut world_from_body = Vec::new();
     forward_kinematics(
         model,
@@ -66,11 +113,8 @@ pub(super) fn build_world(
         &state.q,
         &mut world_from_body,
     );
-    let root_com_b = model.bodies[0].com_b;
-    let root_shift =
-        Isometry3::from_parts(Translation3::from(root_com_b), UnitQuaternion::identity());
-
     let mut bodies = Vec::with_capacity(model.bodies.len());
+    let mut robot_colliders = Vec::new();
     for (i, body) in model.bodies.iter().enumerate() {
         let (pose, local_com) = if i == 0 {
             (world_from_body[0] * root_shift, Vector3::zeros())
@@ -82,27 +126,11 @@ pub(super) fn build_world(
         } else {
             RigidBodyBuilder::dynamic()
         };
-        let inertia = body.inertia_kgm2.map(|x| x as f32);
-        let mprops = MassProperties::with_inertia_matrix(
-            vec_to_rapier(&local_com),
-            body.mass_kg as f32,
-            Matrix::from_cols_array(&[
-                inertia[(0, 0)],
-                inertia[(1, 0)],
-                inertia[(2, 0)],
-                inertia[(0, 1)],
-                inertia[(1, 1)],
-                inertia[(2, 1)],
-                inertia[(0, 2)],
-                inertia[(1, 2)],
-                inertia[(2, 2)],
-            ]),
-        );
         let handle = world.insert_body(
             builder
                 .pose(pose_to_rapier(&pose))
                 .can_sleep(false)
-                .additional_mass_properties(mprops),
+                .additional_mass_properties(mass_properties(body, &local_com)),
         );
         let body_shift = if i == 0 {
             root_shift.inverse()
@@ -129,7 +157,40 @@ pub(super) fn build_world(
         }
         bodies.push(handle);
     }
+    (bodies, robot_colliders)
+}
 
+/// The body's mass and inertia, with its centre of mass at `local_com` in the rigid body's
+/// frame (colliders get zero density: the model's inertials are the whole mass).
+fn mass_properties(body: &Body, local_com: &Vector3<f64>) -> MassProperties {
+    let inertia = body.inertia_kgm2.map(|x| x as f32);
+    MassProperties::with_inertia_matrix(
+        vec_to_rapier(local_com),
+        body.mass_kg as f32,
+        Matrix::from_cols_array(&[
+            inertia[(0, 0)],
+            inertia[(1, 0)],
+            inertia[(2, 0)],
+            inertia[(0, 1)],
+            inertia[(1, 1)],
+            inertia[(2, 1)],
+            inertia[(0, 2)],
+            inertia[(1, 2)],
+            inertia[(2, 2)],
+        ]),
+    )
+}
+
+/// A revolute multibody joint per model joint (canonical order), with the URDF limits when
+/// `settings.joint_limits`. Joints of the root's children are shifted with the root frame
+/// (see [`build_world`]).
+fn insert_joints(
+    world: &mut PhysicsWorld,
+    model: &RobotModel,
+    settings: &PhysicsSettings,
+    bodies: &[RigidBodyHandle],
+    root_shift: Isometry3<f64>,
+) -> Vec<MultibodyJointHandle> {
     let mut joint_handles = Vec::with_capacity(model.joints.len());
     for joint in &model.joints {
         let body = &model.bodies[joint.body];
@@ -162,12 +223,20 @@ pub(super) fn build_world(
             .expect("the robot tree has no loops");
         joint_handles.push(handle);
     }
+    joint_handles
+}
 
-    // Forward kinematics first: it settles the root type (free or fixed) and so the DoF
-    // indices read below.
+/// The robot's multibody and, per joint, its link id and generalized-coordinate index.
+/// Forward kinematics runs first: it settles the root type (free or fixed) and so the DoF
+/// indices read here.
+fn settle_multibody(
+    world: &mut PhysicsWorld,
+    root: RigidBodyHandle,
+    joint_handles: &[MultibodyJointHandle],
+) -> (MultibodyIndex, Vec<(usize, usize)>) {
     let multibody = world
         .multibody_joints
-        .rigid_body_link(bodies[0])
+        .rigid_body_link(root)
         .expect("root is in the multibody")
         .multibody;
     world
@@ -182,24 +251,45 @@ pub(super) fn build_world(
             (link_id, mb.link(link_id).expect("valid link").assembly_id())
         })
         .collect();
-    let mb = world
-        .multibody_joints
-        .get_multibody_mut(multibody)
-        .expect("exists");
+    (multibody, links)
+}
+
+/// Armature per joint, and damping: rapier's default damping zeroed everywhere (see
+/// [`build_world`]), the hybrid PD's kd written in its place.
+fn set_joint_dynamics(
+    mb: &mut Multibody,
+    model: &RobotModel,
+    settings: &PhysicsSettings,
+    gains: &PdGains,
+    links: &[(usize, usize)],
+) {
     mb.damping_mut().fill(0.0);
-    for (j, &(link_id, dof)) in links.iter().enumerate() {
+    for (j, &(_, dof)) in links.iter().enumerate() {
         mb.armature_mut()[dof] = model.joints[j].armature_kgm2 as f32;
         if settings.pd_form == PdForm::Hybrid {
             mb.damping_mut()[dof] = gains.kd[j] as f32;
         }
+    }
+}
+
+/// Moves every joint to `state`'s angle.
+fn set_joint_angles(mb: &mut Multibody, state: &ResetState, links: &[(usize, usize)]) {
+    for (j, &(link_id, _)) in links.iter().enumerate() {
         let l = mb.link_mut(link_id).expect("valid link");
         let current = l.joint.coords()[3];
         l.joint.apply_displacement(&[state.q[j] as f32 - current]);
     }
-    mb.forward_kinematics(&world.bodies, true);
-    mb.update_rigid_bodies(&mut world.bodies, true);
+}
 
-    // Generalized velocity: root [v of the centre of mass, ω] in world, then joint rates.
+/// The generalized velocity of `state`: a free root's [v of the centre of mass, ω] in
+/// world (the root frame sits at the centre of mass, `root_com_b`), then joint rates.
+fn set_velocities(
+    mb: &mut Multibody,
+    settings: &PhysicsSettings,
+    state: &ResetState,
+    root_com_b: Vector3<f64>,
+    links: &[(usize, usize)],
+) {
     let mut gv = mb.generalized_velocity_mut();
     if !settings.fixed_base {
         let r = state.root.world_from_root.rotation * root_com_b;
@@ -211,16 +301,6 @@ pub(super) fn build_world(
     }
     for (j, &(_, dof)) in links.iter().enumerate() {
         gv[dof] = state.qd[j] as f32;
-    }
-
-    World {
-        world,
-        bodies,
-        multibody,
-        links,
-        root_com_b,
-        ground,
-        robot_colliders,
     }
 }
 
