@@ -4,7 +4,7 @@ use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use thorarena::motion::import::canonical::{to_sequence, ImportOptions};
 use thorarena::motion::import::{force_csv, lafan_csv, npz, onnx_motion, twist_pkl, RawMotion};
-use thorarena::motion::{ground_check, shift_root_height, Dataset, DatasetWriter};
+use thorarena::motion::{correct_ground, ground_check, Dataset, DatasetWriter, TrimmedGlitches};
 
 /// `thorarena data …`
 #[derive(Debug, clap::Subcommand)]
@@ -232,28 +232,8 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
             force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
         };
         let mut seq = to_sequence(raw, &robot, &opts, input)?;
-        if let Some(trim) = seq.provenance.get("trimmed_glitch_frames") {
-            let jumps: Vec<String> = trim["root_jumps"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .map(|j| {
-                    let k = j["frame"].as_u64().unwrap_or(0);
-                    format!(
-                        "{}→{} {:.2} m",
-                        k.saturating_sub(1),
-                        k,
-                        j["distance_m"].as_f64().unwrap_or(f64::NAN)
-                    )
-                })
-                .collect();
-            eprintln!(
-                "  trimmed glitch frames: {} leading, {} trailing of {} (root jumps {})",
-                trim["leading"],
-                trim["trailing"],
-                trim["source_frames"],
-                jumps.join(", ")
-            );
+        if let Some(trim) = TrimmedGlitches::in_provenance(&seq.provenance) {
+            eprintln!("  trimmed glitch frames: {}", trim.summary());
         }
         if let Some(g) = ground_check(&robot, &seq) {
             eprintln!(
@@ -262,10 +242,7 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
                 1e3 * g.min_m
             );
             if args.ground_correct {
-                shift_root_height(&mut seq, -g.offset_m);
-                if let Some(p) = seq.provenance.as_object_mut() {
-                    p.insert("ground_shift_m".into(), serde_json::json!(-g.offset_m));
-                }
+                correct_ground(&mut seq, &g);
             }
         }
         seqs.push((input, seq));

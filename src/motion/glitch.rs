@@ -43,7 +43,7 @@ pub const MAX_HUMAN_ROOT_SPEED_M_PER_S: f64 = 10.0;
 pub const EDGE_GLITCH_WINDOW_S: f64 = 0.5;
 
 /// One implausible root step between consecutive frames.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RootJump {
     /// The later frame of the step: the jump is from frame `frame - 1` to `frame`.
     pub frame: usize,
@@ -170,6 +170,67 @@ pub fn scan_root_glitches(root_pos_m: &[[f64; 3]], fps: f64) -> GlitchScan {
         trailing_frames: frames - end_kept,
         interior,
         frames,
+    }
+}
+
+/// What `--trim-glitches` cut from an imported motion, as its provenance records it under
+/// [`TrimmedGlitches::KEY`]: read back typed, never by string keys.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TrimmedGlitches {
+    /// Frames dropped at the start: frame 0 of the sequence is this source frame.
+    pub leading: usize,
+    /// Frames dropped at the end.
+    pub trailing: usize,
+    /// Frames of the source motion.
+    pub source_frames: usize,
+    /// The jumps found, in source frames.
+    pub root_jumps: Vec<RootJump>,
+    /// How to read the frame numbers.
+    pub note: String,
+}
+
+impl TrimmedGlitches {
+    /// Its key in a sequence's provenance.
+    pub const KEY: &'static str = "trimmed_glitch_frames";
+
+    /// The record of a scan whose edge glitches were trimmed.
+    pub fn of(scan: &GlitchScan) -> Self {
+        Self {
+            leading: scan.leading_frames,
+            trailing: scan.trailing_frames,
+            source_frames: scan.frames,
+            root_jumps: scan.jumps.clone(),
+            note: "frame 0 of this sequence is source frame `leading`; forces are resampled on the source clock".into(),
+        }
+    }
+
+    /// The record in `provenance`, if the import trimmed anything (an unreadable record is
+    /// reported as absent rather than guessed at).
+    pub fn in_provenance(provenance: &serde_json::Value) -> Option<Self> {
+        serde_json::from_value(provenance.get(Self::KEY)?.clone()).ok()
+    }
+
+    /// "2 leading, 0 trailing of 45 (root jumps 0→1 3.20 m, 1→2 2.90 m)".
+    pub fn summary(&self) -> String {
+        let jumps: Vec<String> = self
+            .root_jumps
+            .iter()
+            .map(|j| {
+                format!(
+                    "{}→{} {:.2} m",
+                    j.frame.saturating_sub(1),
+                    j.frame,
+                    j.distance_m
+                )
+            })
+            .collect();
+        format!(
+            "{} leading, {} trailing of {} (root jumps {})",
+            self.leading,
+            self.trailing,
+            self.source_frames,
+            jumps.join(", ")
+        )
     }
 }
 

@@ -19,10 +19,12 @@ pub use error::DataError;
 pub use export::export_npz;
 pub use format::{decode_sequence, encode_sequence, sha256_hex, write_sequence, SCHEMA_VERSION};
 pub use glitch::{
-    scan_root_glitches, GlitchScan, RootJump, EDGE_GLITCH_WINDOW_S, MAX_HUMAN_ROOT_SPEED_M_PER_S,
+    scan_root_glitches, GlitchScan, RootJump, TrimmedGlitches, EDGE_GLITCH_WINDOW_S,
+    MAX_HUMAN_ROOT_SPEED_M_PER_S,
 };
 pub use reference::{
-    ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference, ReferenceFrame,
+    correct_ground, ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference,
+    ReferenceFrame, GROUND_SHIFT_KEY,
 };
 pub use selection::{SelectionError, SequenceSelection, Subset};
 pub use sequence::{Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};

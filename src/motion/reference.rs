@@ -198,3 +198,15 @@ pub fn ground_check(robot: &RobotModel, seq: &Sequence) -> Option<GroundCheck> {
 pub fn shift_root_height(seq: &mut Sequence, dz_m: f64) {
     seq.root_pos.iter_mut().for_each(|p| p[2] += dz_m);
 }
+
+/// Key of the ground correction in a sequence's provenance: the root height shift, m.
+pub const GROUND_SHIFT_KEY: &str = "ground_shift_m";
+
+/// Moves the root so that the median lowest sole point of `check` sits on the ground, and
+/// records the shift in the provenance under [`GROUND_SHIFT_KEY`].
+pub fn correct_ground(seq: &mut Sequence, check: &GroundCheck) {
+    shift_root_height(seq, -check.offset_m);
+    if let Some(p) = seq.provenance.as_object_mut() {
+        p.insert(GROUND_SHIFT_KEY.into(), serde_json::json!(-check.offset_m));
+    }
+}

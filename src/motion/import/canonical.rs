@@ -7,7 +7,7 @@
 
 use super::force_csv::ForceLog;
 use super::{ImportError, RawMotion};
-use crate::motion::{GlitchScan, Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};
+use crate::motion::{GlitchScan, Sequence, TrimmedGlitches, LEFT, QUAT_NORM_TOLERANCE, RIGHT};
 use crate::robot::RobotModel;
 use serde_json::{json, Map, Value};
 use std::path::Path;
@@ -224,20 +224,9 @@ fn joint_columns(
 
 /// Records in the provenance which glitch frames were trimmed, and the jumps found.
 fn record_trimmed_glitches(glitches: &GlitchScan, provenance: &mut Map<String, Value>) {
-    let jumps: Vec<Value> = glitches
-        .jumps
-        .iter()
-        .map(|j| json!({"frame": j.frame, "distance_m": j.distance_m, "speed_m_per_s": j.speed_m_per_s}))
-        .collect();
     provenance.insert(
-        "trimmed_glitch_frames".into(),
-        json!({
-            "leading": glitches.leading_frames,
-            "trailing": glitches.trailing_frames,
-            "source_frames": glitches.frames,
-            "root_jumps": jumps,
-            "note": "frame 0 of this sequence is source frame `leading`; forces are resampled on the source clock",
-        }),
+        TrimmedGlitches::KEY.into(),
+        serde_json::to_value(TrimmedGlitches::of(glitches)).expect("numbers and strings"),
     );
 }
 
