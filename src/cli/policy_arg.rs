@@ -5,10 +5,8 @@ use super::choices::{LatencyModeArg, MissRuleArg};
 use anyhow::{bail, Context};
 use std::time::Duration;
 use thorarena::evaluation::{parse_budget, Budget, PolicyIoRules};
-use thorarena::policy::{
-    BalanceGains, BalancePolicy, BeyondMimicPolicy, HoldPolicy, Policy, RemoteConfig, RemotePolicy,
-    ReplayPolicy, Twist2Policy,
-};
+use thorarena::policy::{Policy, RemoteConfig, RemotePolicy};
+use thorarena::registry::PolicyChoice;
 use thorarena::profile::Profile;
 use thorarena::robot::RobotModel;
 use thorarena_ipc::{SimConfig, WaitPolicy};
@@ -73,11 +71,6 @@ impl PolicyIoArgs {
     }
 }
 
-/// The session name of `ipc:<session>`, if the policy argument is one.
-pub fn ipc_session(policy: &str) -> Option<&str> {
-    policy.strip_prefix("ipc:")
-}
-
 /// Builds the policy named by `--policy`; for `ipc:<session>` creates the session and
 /// waits for a policy process to connect.
 pub fn make_policy(
@@ -100,66 +93,12 @@ pub fn make_policy_vetted(
     envs: usize,
     vet: &mut dyn FnMut(&str) -> Result<(), String>,
 ) -> anyhow::Result<Box<dyn Policy>> {
-    let default_pose = profile.action_offset_rad.clone();
-    Ok(match spec {
-        "hold" => Box::new(HoldPolicy),
-        "replay" => Box::new(ReplayPolicy::new(default_pose)),
-        "balance" => Box::new(
-            BalancePolicy::new(robot, default_pose, BalanceGains::default())
-                .context("the robot lacks the leg joints `balance` needs")?,
-        ),
-        other => {
-            if other.ends_with(':') {
-                bail!("{}", unknown_policy(other));
-            }
-            if let Some(path) = other.strip_prefix("twist2:") {
-                return Ok(Box::new(Twist2Policy::load(
-                    std::path::Path::new(path),
-                    profile.action_offset_rad.clone(),
-                )?));
-            }
-            if let Some(path) = other.strip_prefix("beyondmimic:") {
-                let policy = BeyondMimicPolicy::load(
-                    std::path::Path::new(path),
-                    std::sync::Arc::new(robot.clone()),
-                    profile,
-                )?;
-                return Ok(Box::new(policy));
-            }
-            let Some(session) = ipc_session(other) else {
-                bail!("{}", unknown_policy(other));
-            };
-            Box::new(connect_remote(session, robot, profile, io, envs, vet)?)
-        }
-    })
-}
-
-/// Why `spec` names no policy, with what it probably meant.
-fn unknown_policy(spec: &str) -> String {
-    let family = spec.trim_end_matches(':');
-    let example = match family {
-        "twist2" => Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
-        "beyondmimic" => Some("policy.onnx, an mjlab or holosoma G1 export"),
-        _ => None,
-    };
-    if let Some(example) = example {
-        return format!("`--policy {spec}` needs the network's file: `{family}:FILE.onnx` (e.g. {family}:{example})");
+    match thorarena::registry::policy(spec, robot, profile)? {
+        PolicyChoice::InProcess(policy) => Ok(policy),
+        PolicyChoice::Session(session) => Ok(Box::new(connect_remote(
+            session, robot, profile, io, envs, vet,
+        )?)),
     }
-    if family == "ipc" {
-        return "`--policy ipc` needs a session name: `ipc:NAME`, the name the policy process connects to".into();
-    }
-    let hint = thorarena::registry::did_you_mean(
-        spec,
-        [
-            "hold",
-            "replay",
-            "balance",
-            "twist2:",
-            "beyondmimic:",
-            "ipc:",
-        ],
-    );
-    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; or ipc:SESSION for a policy process")
 }
 
 /// Serves `session` and waits for a policy process.

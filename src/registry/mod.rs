@@ -4,8 +4,10 @@
 //! matches nothing is an error listing what exists, with the nearest one when it looks
 //! like a typo ([`did_you_mean`]).
 
+mod policies;
 mod suggest;
 
+pub use policies::{ipc_session, policy, unknown_policy, PolicyChoice};
 pub use suggest::{closest, did_you_mean};
 
 use crate::profile::{bundled_profile_path, load_profile, Profile, ProfileError};
@@ -28,6 +30,18 @@ pub enum RegistryError {
     /// The profile exists but cannot be used for the robot.
     #[error(transparent)]
     Profile(#[from] ProfileError),
+    /// A policy argument that names no policy (the message says what it probably meant).
+    #[error("{0}")]
+    UnknownPolicy(String),
+    /// `balance` needs the leg joints of a humanoid.
+    #[error("the robot lacks the leg joints `balance` needs")]
+    BalanceNeedsLegs,
+    /// A TWIST2 network that cannot be used.
+    #[error(transparent)]
+    Twist2(#[from] crate::policy::twist2::Twist2Error),
+    /// A BeyondMimic-style network that cannot be used.
+    #[error(transparent)]
+    BeyondMimic(#[from] crate::policy::beyondmimic::BeyondMimicError),
     /// The robot could not be loaded.
     #[error("loading robot `{name}`")]
     Robot {
