@@ -2,37 +2,67 @@
 //! record is checked against its header, so a bad record is an error naming the file and
 //! line — never a panic in `report`, `merge` or `eval --resume`, never a score that moved
 //! silently — and a run holding less than its plan is reported as partial, cell by cell.
+//!
+//! Every reader is called in process, as the commands call it: `report`'s
+//! `report::load_runs`, `merge`'s `benchmark::merge`, `eval --resume`'s
+//! `benchmark::evaluate`.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use thorarena::benchmark::{self, EvalObserver, EvalOptions, Starting};
+use thorarena::evaluation::{EvalRequest, EvalSpec};
 use thorarena::motion::DatasetWriter;
+use thorarena::policy::HoldPolicy;
+use thorarena::report::{comparison_markdown, comparison_notes, comparison_warnings, load_runs};
+use thorarena::results::RunDir;
 
 mod common;
 use common::{g1, sample_sequence};
 
-const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
-
-fn thorarena(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .current_dir(cwd)
-        .args(args)
-        .output()
-        .expect("thorarena runs")
+/// The error's message with its causes, as the command line prints it.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        text += &format!(": {c}");
+        cause = c.source();
+    }
+    text
 }
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+/// `eval --policy hold --dataset DS --out RUN` (with `--resume`), in process; whether
+/// the resume dropped a line cut short.
+fn eval_hold(ds: &Path, run: &Path, resume: bool) -> Result<bool, String> {
+    struct Torn(bool);
+    impl EvalObserver for Torn {
+        fn starting(&mut self, s: &Starting) {
+            self.0 = s.started.torn_tail_dropped;
+        }
+    }
+    let spec = EvalSpec::load(&EvalRequest {
+        policy: "hold".into(),
+        dataset: Some(ds.to_path_buf()),
+        ..EvalRequest::default()
+    })
+    .map_err(|e| chain(&e))?;
+    let mut torn = Torn(false);
+    let options = EvalOptions {
+        resume,
+        ..EvalOptions::default()
+    };
+    benchmark::evaluate(
+        &spec,
+        &mut HoldPolicy,
+        &RunDir::new(run),
+        options,
+        &mut torn,
+    )
+    .map_err(|e| chain(&e))?;
+    Ok(torn.0)
 }
 
-fn failure(o: &Output) -> String {
-    let e = stderr(o);
-    assert!(
-        !o.status.success(),
-        "expected an error; stderr: {e}; stdout: {}",
-        String::from_utf8_lossy(&o.stdout)
-    );
-    assert!(!e.contains("panicked"), "a panic: {e}");
-    e
+/// `report RUN`'s reading of the run.
+fn report_error(run: &Path) -> String {
+    chain(&load_runs(&[run.to_path_buf()]).expect_err("report refuses the run"))
 }
 
 /// A finished `hold` run of a two-task dataset (4 episodes: 2 sequences × force,
@@ -47,19 +77,7 @@ fn finished_run(tmp: &Path) -> (PathBuf, PathBuf) {
         w.add(&s).unwrap();
     }
     w.finish().unwrap();
-    let o = thorarena(
-        tmp,
-        &[
-            "eval",
-            "--dataset",
-            ds.to_str().unwrap(),
-            "--policy",
-            "hold",
-            "--out",
-            "run",
-        ],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
+    eval_hold(&ds, &tmp.join("run"), false).unwrap();
     (tmp.join("run"), ds)
 }
 
@@ -78,20 +96,14 @@ fn write_lines(run: &Path, records: &[serde_json::Value]) {
 
 /// Every reader of a run refuses `run` with a message containing `expected` and the line.
 fn every_reader_refuses(tmp: &Path, run: &Path, line: usize, expected: &str) {
-    let r = run.to_str().unwrap();
     let at = format!("episodes.jsonl line {line}");
-    let report = failure(&thorarena(tmp, &["report", r, "--out", "r.html"]));
-    let merge = failure(&thorarena(tmp, &["merge", r, "--out", "merged"]));
-    let mut resume = vec!["eval", "--policy", "hold", "--out", r, "--resume"];
-    let dataset = serde_json::from_str::<serde_json::Value>(
-        &std::fs::read_to_string(run.join("run.json")).unwrap(),
-    )
-    .unwrap()["dataset"]
-        .as_str()
-        .unwrap()
-        .to_string();
-    resume.extend(["--dataset", &dataset]);
-    let resumed = failure(&thorarena(tmp, &resume));
+    let report = report_error(run);
+    let merge = chain(
+        &benchmark::merge(&[RunDir::new(run)], &RunDir::new(tmp.join("merged")), &g1())
+            .expect_err("merge refuses the run"),
+    );
+    let dataset = RunDir::new(run).read_header().unwrap().dataset;
+    let resumed = eval_hold(Path::new(&dataset), run, true).expect_err("resume refuses the run");
     for (what, e) in [("report", report), ("merge", merge), ("resume", resumed)] {
         assert!(
             e.contains(&at) && e.contains(expected),
@@ -172,20 +184,14 @@ fn a_run_of_another_results_version_is_refused_plainly() {
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     h.as_object_mut().unwrap().remove("results_version");
     std::fs::write(&path, h.to_string()).unwrap();
-    let e = failure(&thorarena(
-        tmp.path(),
-        &["report", run.to_str().unwrap(), "--out", "r.html"],
-    ));
+    let e = report_error(&run);
     assert!(
         e.contains("results version 0") && e.contains("reads version 2"),
         "{e}"
     );
     h["results_version"] = (u64::from(u32::MAX) + 3).into();
     std::fs::write(&path, h.to_string()).unwrap();
-    let e = failure(&thorarena(
-        tmp.path(),
-        &["report", run.to_str().unwrap(), "--out", "r.html"],
-    ));
+    let e = report_error(&run);
     assert!(e.contains("results version 4294967298"), "{e}");
 }
 
@@ -198,18 +204,16 @@ fn a_partial_run_is_reported_as_partial_cell_by_cell() {
     let all: Vec<&str> = text.lines().collect();
     let cut = format!("{}\n{}\n{}", all[0], all[1], &all[3][..all[3].len() / 2]);
     std::fs::write(run.join("episodes.jsonl"), cut).unwrap();
-    let o = thorarena(
-        tmp.path(),
-        &["report", run.to_str().unwrap(), "--out", "r.html"],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    let e = stderr(&o);
+    let runs = load_runs(std::slice::from_ref(&run)).unwrap();
+    let warnings = comparison_warnings(&runs);
+    let e: Vec<&str> = warnings.iter().map(|w| w.message.as_str()).collect();
+    let e = e.join("\n");
     assert!(
         e.contains("partial run: 2 of 4 planned episodes missing") && e.contains("cut short"),
         "{e}"
     );
-    let md = std::fs::read_to_string(tmp.path().join("r.md")).unwrap();
-    let html = std::fs::read_to_string(tmp.path().join("r.html")).unwrap();
+    let md = comparison_markdown(&runs, &warnings, &comparison_notes(&runs));
+    let html = thorarena::report::report_html(&runs, "");
     for page in [&md, &html] {
         assert!(page.contains("partial run"), "not said on the page");
         assert!(
@@ -219,21 +223,8 @@ fn a_partial_run_is_reported_as_partial_cell_by_cell() {
     }
     // The run's own tables, rewritten by resuming it, are complete again.
     let ds = tmp.path().join("ds");
-    let o = thorarena(
-        tmp.path(),
-        &[
-            "eval",
-            "--dataset",
-            ds.to_str().unwrap(),
-            "--policy",
-            "hold",
-            "--out",
-            "run",
-            "--resume",
-        ],
-    );
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("cut short; it is dropped"));
+    let torn_dropped = eval_hold(&ds, &run, true).unwrap();
+    assert!(torn_dropped, "the line cut short is dropped");
     assert_eq!(lines(&run).len(), 4);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();

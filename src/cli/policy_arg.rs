@@ -6,8 +6,8 @@ use anyhow::{bail, Context};
 use std::time::Duration;
 use thorarena::evaluation::{parse_budget, Budget, PolicyIoRules};
 use thorarena::policy::{Policy, RemoteConfig, RemotePolicy};
-use thorarena::registry::PolicyChoice;
 use thorarena::profile::Profile;
+use thorarena::registry::PolicyChoice;
 use thorarena::robot::RobotModel;
 use thorarena_ipc::{SimConfig, WaitPolicy};
 

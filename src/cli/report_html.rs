@@ -6,9 +6,9 @@
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use thorarena::report::{
-    comparison_notes, comparison_warnings, diagnostics_multi_table, fats_table, label_engines,
-    load_runs, mixed_engines, report_figures, report_html, svg_figures, Page, SvgFigure, WebBundle,
-    MIXED_ENGINES_WHY,
+    comparison_markdown, comparison_notes, comparison_warnings, diagnostics_multi_table,
+    fats_table, label_engines, load_runs, mixed_engines, report_figures, report_html, svg_figures,
+    Page, SvgFigure, WebBundle, MIXED_ENGINES_WHY,
 };
 
 /// Arguments of `report`.
@@ -104,34 +104,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     let fats = fats_table(&runs);
     let diagnostics = diagnostics_multi_table(&runs);
-    let mut md = String::from("# ThorArena report\n\n");
-    for r in &runs {
-        md += &format!(
-            "- **{}**: `{}` — policy `{}`, profile `{}`, engine {}, dataset {} (sha256 {}), keypoints `{}`\n",
-            r.label,
-            r.dir.display(),
-            r.header.policy,
-            r.header.profile,
-            r.header.engine_label(),
-            r.header.dataset,
-            &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(16)],
-            r.header.keypoints
-        );
-    }
-    for n in &notes {
-        md += &format!("\nNote: {n}\n");
-    }
-    if !warnings.is_empty() {
-        md += "\n> **Warning: these runs are not comparable as they stand.**\n";
-        for w in &warnings {
-            md += &format!(">\n> - {}\n", w.message);
-        }
-    }
-    md += &format!(
-        "\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
-        fats.markdown(),
-        diagnostics.markdown()
-    );
+    let md = comparison_markdown(&runs, &warnings, &notes);
     let outputs = [
         (sibling(&args.out, ".md"), md),
         (sibling(&args.out, "-fats.csv"), fats.csv()),

@@ -42,8 +42,8 @@ pub use style::{jitter, PolicyColors, DASHES, MARKERS, PALETTE, SURVIVAL_JITTER}
 pub use svg::{figure_svg, svg_figures, SvgFigure};
 pub use sweep_figures::{budget_ms, label_cells, sweep_charts, sweep_title};
 pub use tables::{
-    all_tasks, columns, diagnostics_multi_table, diagnostics_table, fats_table, task_fats_table,
-    DiagnosticRow, NumberRow, NumberTable, DIAGNOSTIC_ROWS,
+    all_tasks, columns, comparison_markdown, diagnostics_multi_table, diagnostics_table,
+    fats_table, task_fats_table, DiagnosticRow, NumberRow, NumberTable, DIAGNOSTIC_ROWS,
 };
 
 use std::path::PathBuf;

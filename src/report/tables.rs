@@ -326,3 +326,41 @@ impl NumberTable {
         s + "</tbody></table>"
     }
 }
+
+/// The Markdown report of several runs (`thorarena report`'s `.md`): each run with what
+/// it measured, the notes and the comparability warnings, then the paper's two tables.
+pub fn comparison_markdown(
+    runs: &[Run],
+    warnings: &[super::ComparisonWarning],
+    notes: &[String],
+) -> String {
+    let mut md = String::from("# ThorArena report\n\n");
+    for r in runs {
+        md += &format!(
+            "- **{}**: `{}` — policy `{}`, profile `{}`, engine {}, dataset {} (sha256 {}), keypoints `{}`\n",
+            r.label,
+            r.dir.display(),
+            r.header.policy,
+            r.header.profile,
+            r.header.engine_label(),
+            r.header.dataset,
+            &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(16)],
+            r.header.keypoints
+        );
+    }
+    for n in notes {
+        md += &format!("\nNote: {n}\n");
+    }
+    if !warnings.is_empty() {
+        md += "\n> **Warning: these runs are not comparable as they stand.**\n";
+        for w in warnings {
+            md += &format!(">\n> - {}\n", w.message);
+        }
+    }
+    md += &format!(
+        "\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
+        fats_table(runs).markdown(),
+        diagnostics_multi_table(runs).markdown()
+    );
+    md
+}
