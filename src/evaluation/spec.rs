@@ -9,7 +9,7 @@ use crate::physics::{make_physics, Engine, EngineError, PhysicsSettings};
 use crate::profile::Profile;
 use crate::registry::{self, RegistryError};
 use crate::robot::RobotModel;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Most worker threads a run may ask for.
@@ -201,47 +201,8 @@ impl EvalSpec {
             .clone()
             .unwrap_or_else(|| crate::data_dir().join("sample"));
         let robot = registry::robot(&request.robot)?;
-        let profile_name = request
-            .profile
-            .clone()
-            .unwrap_or_else(|| registry::family_profile(&request.policy).to_string());
-        let mut profile = registry::profile(&profile_name, &robot).map_err(|e| match e {
-            RegistryError::UnknownProfile { .. } => {
-                invalid(format!("--profile {profile_name}: {e}"))
-            }
-            e => e.into(),
-        })?;
-        let profile_mismatch = match registry::profile_fits(&request.policy, &profile) {
-            Ok(()) => false,
-            Err(why) if request.profile_mismatch_ok => {
-                advice.push(Advice::Warning(format!(
-                    "{why} (--profile-mismatch-ok: run anyway, recorded in run.json)"
-                )));
-                true
-            }
-            Err(why) => return Err(invalid(format!("{why}: leave out --profile to use the family's, or pass --profile-mismatch-ok to run it anyway"))),
-        };
-        if let Some(dt) = request.physics_dt_s {
-            set_physics_dt(&mut profile, dt)?;
-        }
-        let engine = match (request.engine, &request.mjcf) {
-            (EngineChoice::Rapier, None) => Engine::Rapier,
-            (EngineChoice::Rapier, Some(_)) => {
-                return Err(invalid(
-                    "--mjcf is for --engine mujoco (rapier simulates the robot model itself)",
-                ))
-            }
-            (EngineChoice::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
-        };
-        make_physics(
-            &engine,
-            Arc::new(robot.clone()),
-            PhysicsSettings {
-                dt_s: profile.physics_dt_s,
-                ..Default::default()
-            },
-            profile.gains.clone(),
-        )?;
+        let (profile, profile_mismatch) = resolve_profile(request, &robot, &mut advice)?;
+        let engine = check_engine(request, &robot, &profile)?;
         if robot.keypoint_set(&request.keypoints).is_none() {
             return Err(invalid(format!(
                 "unknown keypoint set `{}` for robot {}",
@@ -251,73 +212,26 @@ impl EvalSpec {
         let settings = parse_settings(&request.settings)?;
         check_termination(&request.termination)?;
         check_io(&request.io)?;
-        let ds = Dataset::open(&dataset, &robot)?;
-        let all = ds.load_all()?;
-        if all.is_empty() {
-            return Err(invalid(format!(
-                "{} holds no sequence: nothing to evaluate",
-                dataset.display()
-            )));
-        }
-        let selection = request.selection.clone();
-        let dataset_sequences = all.len();
-        let sequences = selection
-            .pick(all, |q| (&q.task, &q.sequence_id))
-            .map_err(|source| SpecError::Selection {
-                flags: selection.flags(),
-                dataset: dataset.clone(),
-                source,
-            })?;
-        let subset = (!selection.is_all()).then_some(Subset {
-            selection,
-            dataset_sequences,
-        });
+        let picked = pick_sequences(request, &dataset, &robot)?;
         let settings = fit_settings_to_force_logs(
             settings,
-            &sequences,
+            &picked.sequences,
             request.settings.is_empty(),
             request.replay_without_force_logs,
             &dataset,
             &mut advice,
         )?;
-        for name in &request.trace {
-            if !sequences
-                .iter()
-                .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
-            {
-                return Err(invalid(format!(
-                    "--trace: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",
-                    ds.dir.display()
-                )));
-            }
-        }
-        let workers = match request.workers {
-            Some(0) => return Err(invalid("--workers must be at least 1")),
-            Some(n) if n > MAX_WORKERS => {
-                return Err(invalid(format!("--workers {n}: at most {MAX_WORKERS} threads (each one simulates its own environment slots)")))
-            }
-            Some(n) => n,
-            None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-        };
-        let envs = match request.envs {
-            Some(0) => return Err(invalid("--envs must be at least 1")),
-            Some(n) if n > MAX_ENVS => {
-                return Err(invalid(format!(
-                "--envs {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)"
-            )))
-            }
-            Some(n) => n,
-            None => workers.max(1),
-        };
+        check_trace(&request.trace, &picked.sequences, &dataset)?;
+        let (workers, envs) = threads(request)?;
         Ok(Self {
             profile_mismatch,
-            dataset_sha256: ds.content_hash(),
+            dataset_sha256: picked.sha256,
             robot,
             profile,
             engine,
             dataset,
-            sequences,
-            subset,
+            sequences: picked.sequences,
+            subset: picked.subset,
             settings,
             keypoints: request.keypoints.clone(),
             termination: request.termination,
@@ -344,6 +258,147 @@ impl EvalSpec {
             .iter()
             .any(|t| t.split_once('/') == Some((task, sequence_id)))
     }
+}
+
+/// The profile the request names, or its policy family's; one that contradicts the
+/// family is refused unless the request allows it (then a warning, and recorded), and the
+/// physics step is the request's when it gives one. Also returns the mismatch.
+fn resolve_profile(
+    request: &EvalRequest,
+    robot: &RobotModel,
+    advice: &mut Vec<Advice>,
+) -> Result<(Profile, bool), SpecError> {
+    let profile_name = request
+        .profile
+        .clone()
+        .unwrap_or_else(|| registry::family_profile(&request.policy).to_string());
+    let mut profile = registry::profile(&profile_name, robot).map_err(|e| match e {
+        RegistryError::UnknownProfile { .. } => invalid(format!("--profile {profile_name}: {e}")),
+        e => e.into(),
+    })?;
+    let mismatch = match registry::profile_fits(&request.policy, &profile) {
+        Ok(()) => false,
+        Err(why) if request.profile_mismatch_ok => {
+            advice.push(Advice::Warning(format!(
+                "{why} (--profile-mismatch-ok: run anyway, recorded in run.json)"
+            )));
+            true
+        }
+        Err(why) => return Err(invalid(format!("{why}: leave out --profile to use the family's, or pass --profile-mismatch-ok to run it anyway"))),
+    };
+    if let Some(dt) = request.physics_dt_s {
+        set_physics_dt(&mut profile, dt)?;
+    }
+    Ok((profile, mismatch))
+}
+
+/// The engine asked for, checked once by making a physics of it for the robot, so that
+/// the run's workers cannot fail to.
+fn check_engine(
+    request: &EvalRequest,
+    robot: &RobotModel,
+    profile: &Profile,
+) -> Result<Engine, SpecError> {
+    let engine = match (request.engine, &request.mjcf) {
+        (EngineChoice::Rapier, None) => Engine::Rapier,
+        (EngineChoice::Rapier, Some(_)) => {
+            return Err(invalid(
+                "--mjcf is for --engine mujoco (rapier simulates the robot model itself)",
+            ))
+        }
+        (EngineChoice::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
+    };
+    make_physics(
+        &engine,
+        Arc::new(robot.clone()),
+        PhysicsSettings {
+            dt_s: profile.physics_dt_s,
+            ..Default::default()
+        },
+        profile.gains.clone(),
+    )?;
+    Ok(engine)
+}
+
+/// The sequences a request evaluates, with the dataset's hash and the subset they are.
+struct Picked {
+    sequences: Vec<Sequence>,
+    subset: Option<Subset>,
+    sha256: String,
+}
+
+/// Opens the dataset (every file checked against its manifest) and keeps the sequences
+/// of the request's selection; an empty dataset is refused.
+fn pick_sequences(
+    request: &EvalRequest,
+    dataset: &Path,
+    robot: &RobotModel,
+) -> Result<Picked, SpecError> {
+    let ds = Dataset::open(dataset, robot)?;
+    let all = ds.load_all()?;
+    if all.is_empty() {
+        return Err(invalid(format!(
+            "{} holds no sequence: nothing to evaluate",
+            dataset.display()
+        )));
+    }
+    let selection = request.selection.clone();
+    let dataset_sequences = all.len();
+    let sequences = selection
+        .pick(all, |q| (&q.task, &q.sequence_id))
+        .map_err(|source| SpecError::Selection {
+            flags: selection.flags(),
+            dataset: dataset.to_path_buf(),
+            source,
+        })?;
+    Ok(Picked {
+        sequences,
+        subset: (!selection.is_all()).then_some(Subset {
+            selection,
+            dataset_sequences,
+        }),
+        sha256: ds.content_hash(),
+    })
+}
+
+/// Every traced sequence (`TASK/SEQUENCE_ID`) must be one of those evaluated.
+fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Result<(), SpecError> {
+    for name in trace {
+        if !sequences
+            .iter()
+            .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
+        {
+            return Err(invalid(format!(
+                "--trace: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",
+                dataset.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Worker threads (default: every core) and environment slots (default: one per worker),
+/// within their limits.
+fn threads(request: &EvalRequest) -> Result<(usize, usize), SpecError> {
+    let workers = match request.workers {
+        Some(0) => return Err(invalid("--workers must be at least 1")),
+        Some(n) if n > MAX_WORKERS => {
+            return Err(invalid(format!("--workers {n}: at most {MAX_WORKERS} threads (each one simulates its own environment slots)")))
+        }
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let envs = match request.envs {
+        Some(0) => return Err(invalid("--envs must be at least 1")),
+        Some(n) if n > MAX_ENVS => {
+            return Err(invalid(format!(
+                "--envs {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)"
+            )))
+        }
+        Some(n) => n,
+        None => workers.max(1),
+    };
+    Ok((workers, envs))
 }
 
 /// Sets the profile's physics step to `dt` s, which must divide its control step.

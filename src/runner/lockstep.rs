@@ -77,6 +77,64 @@ struct Shared<'a> {
     stop: AtomicBool,
 }
 
+/// One episode setup per setting of the plan, for a policy wanting reference frames at
+/// `offsets` s ahead.
+fn episode_setups<'a>(plan: &EvalPlan<'a>, offsets: Vec<f64>) -> Vec<EpisodeSetup<'a>> {
+    let keypoints = plan
+        .robot
+        .keypoint_set(plan.keypoints)
+        .expect("keypoint set checked by the caller");
+    plan.settings
+        .iter()
+        .map(|setting| EpisodeSetup {
+            robot: plan.robot,
+            profile: plan.profile,
+            keypoints,
+            termination: plan.termination,
+            force_coefficient: setting.coefficient,
+            push_n: setting.push_n,
+            push_heading_deg: setting.push_heading_deg,
+            reference_offsets_s: offsets.clone(),
+        })
+        .collect()
+}
+
+/// What each observed slot does with the policy's answer: act on a usable action (after
+/// the measured latency, under `--latency-mode measured`), apply the miss rule to an
+/// unusable or late one, or end its episode when the policy failed.
+fn answer_to_commands(
+    plan: &EvalPlan,
+    outcome: ActOutcome,
+    round_trip: std::time::Duration,
+    observations: &[Observation],
+    actions: &[Vec<f64>],
+    commands: &mut [SlotCommand],
+) {
+    let effect_delay_substeps = match plan.io.latency_mode {
+        LatencyMode::Ignore => 0,
+        LatencyMode::Measured => {
+            (round_trip.as_secs_f64() / plan.profile.physics_dt_s).round() as usize
+        }
+    };
+    for (obs, action) in observations.iter().zip(actions) {
+        commands[obs.env] = match outcome {
+            ActOutcome::Acted if action_is_usable(action, plan.io.max_abs_action) => {
+                SlotCommand::Act {
+                    action: action.clone(),
+                    effect_delay_substeps,
+                    fault: None,
+                }
+            }
+            ActOutcome::Acted => miss_rule(plan.io.miss_rule, PolicyFault::InvalidAction, obs),
+            ActOutcome::Missed => miss_rule(plan.io.miss_rule, PolicyFault::DeadlineMiss, obs),
+            ActOutcome::Failed => SlotCommand::Terminate {
+                why: Termination::PolicyFailed,
+                fault: None,
+            },
+        };
+    }
+}
+
 /// Runs the given jobs (from [`super::schedule`]) with one policy over `plan.envs` slots;
 /// `on_record` sees each finished episode as it ends (stream it, count it).
 pub fn run_eval(
@@ -89,25 +147,7 @@ pub fn run_eval(
     let n_slots = plan.envs.max(1);
     let n_workers = plan.workers.clamp(1, n_slots);
     let n_joints = plan.robot.n_joints();
-    let keypoints = plan
-        .robot
-        .keypoint_set(plan.keypoints)
-        .expect("keypoint set checked by the caller");
-    let offsets = policy.reference_offsets_s();
-    let setups: Vec<EpisodeSetup> = plan
-        .settings
-        .iter()
-        .map(|setting| EpisodeSetup {
-            robot: plan.robot,
-            profile: plan.profile,
-            keypoints,
-            termination: plan.termination,
-            force_coefficient: setting.coefficient,
-            push_n: setting.push_n,
-            push_heading_deg: setting.push_heading_deg,
-            reference_offsets_s: offsets.clone(),
-        })
-        .collect();
+    let setups = episode_setups(plan, policy.reference_offsets_s());
     let shared = Shared {
         plan,
         setups: &setups,
@@ -184,33 +224,14 @@ pub fn run_eval(
                 .last_round_trip()
                 .unwrap_or_else(|| started.elapsed());
             latency.record(round_trip);
-            let effect_delay_substeps = match plan.io.latency_mode {
-                LatencyMode::Ignore => 0,
-                LatencyMode::Measured => {
-                    (round_trip.as_secs_f64() / plan.profile.physics_dt_s).round() as usize
-                }
-            };
-            for (obs, action) in observations.iter().zip(&actions) {
-                commands[obs.env] = match outcome {
-                    ActOutcome::Acted if action_is_usable(action, plan.io.max_abs_action) => {
-                        SlotCommand::Act {
-                            action: action.clone(),
-                            effect_delay_substeps,
-                            fault: None,
-                        }
-                    }
-                    ActOutcome::Acted => {
-                        miss_rule(plan.io.miss_rule, PolicyFault::InvalidAction, obs)
-                    }
-                    ActOutcome::Missed => {
-                        miss_rule(plan.io.miss_rule, PolicyFault::DeadlineMiss, obs)
-                    }
-                    ActOutcome::Failed => SlotCommand::Terminate {
-                        why: Termination::PolicyFailed,
-                        fault: None,
-                    },
-                };
-            }
+            answer_to_commands(
+                plan,
+                outcome,
+                round_trip,
+                &observations,
+                &actions,
+                &mut commands,
+            );
             if outcome == ActOutcome::Failed {
                 if policy.recover() {
                     requeue_failed = true;
