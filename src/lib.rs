@@ -17,6 +17,7 @@ pub mod feet;
 pub mod metrics;
 pub mod motion;
 pub mod names;
+pub mod onnx_export;
 pub mod physics;
 pub mod policy;
 pub mod profile;

@@ -28,6 +28,7 @@ mod slurm;
 mod spec;
 mod status;
 mod text;
+mod verify;
 
 pub use array::compact_ranges;
 pub use cells::{CellFaults, CellLatency, CellResult};
@@ -40,6 +41,7 @@ pub use slurm::{sbatch_script, shell_quote, SbatchRequest};
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
 pub use text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
+pub use verify::{check_task_run, RunProblem};
 
 use std::path::PathBuf;
 

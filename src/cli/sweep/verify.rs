@@ -1,126 +1,25 @@
-//! A task's run checked against its plan entry before it counts: by `sweep task` before
-//! it writes `done.json`, and by `collect` before it scores the run under its cell's
-//! label. `eval` exits 0 when a policy died while every remaining episode was in flight
-//! (each ends `policy_failed`), and a run directory can be replaced or copied: so a run
-//! counts only when its header is the configuration the cell plans (policy, dataset and
-//! its hash, settings, shard, engine, rules) and it holds every planned episode, none
-//! cut short by a policy failure.
+//! A task's run checked against its plan entry ([`thorarena::sweep::check_task_run`]),
+//! with the task's `eval` arguments parsed as `eval` parses them.
 
 use super::plan::eval_cli;
 use std::path::Path;
 use thorarena::evaluation::EpisodeRecord;
-use thorarena::results::{Coverage, RunDir, RunHeader};
+use thorarena::results::RunDir;
+pub(super) use thorarena::sweep::RunProblem;
 use thorarena::sweep::{Plan, Task};
 
-/// Why a task's run does not count for the task.
-#[derive(Debug)]
-pub(super) enum RunProblem {
-    /// Episodes missing or cut short by a policy failure: `eval --resume` (a retried
-    /// task) runs them.
-    Incomplete(String),
-    /// The run is another configuration's: never scored under this cell.
-    NotThisTask(String),
-}
-
-/// The run's records when `run` is complete and is task `task`'s; `Err` when it cannot
-/// be read at all (a message naming the file).
+/// The run's records when `run` is complete and is task `task`'s.
 pub(super) fn check_task_run(
     plan: &Plan,
     task: &Task,
     run: &Path,
 ) -> anyhow::Result<Result<Vec<EpisodeRecord>, RunProblem>> {
-    let run = RunDir::new(run);
-    let header = run.read_header()?;
-    if let Some(problem) = header_problem(plan, task, &header)? {
-        return Ok(Err(RunProblem::NotThisTask(format!(
-            "{}: not task {}'s run: {problem}",
-            run.header_file().display(),
-            task.index
-        ))));
-    }
-    let log = run.read_log(&header)?;
-    let coverage = Coverage::of(&header, &log.records);
-    if log.torn_tail || !coverage.is_complete() || log.records.len() != task.episodes {
-        let expected: usize = coverage.cells.iter().map(|c| c.expected).sum();
-        return Ok(Err(RunProblem::Incomplete(format!(
-            "its run holds {} of {expected} planned episodes, {} of them ended policy_failed (the policy process died mid-episode){}",
-            log.records.len(),
-            coverage.policy_failed(),
-            if log.torn_tail { ", and a line cut short" } else { "" }
-        ))));
-    }
-    Ok(Ok(log.records))
-}
-
-/// The first field of `header` that is not what `task`'s cell plans.
-fn header_problem(plan: &Plan, task: &Task, header: &RunHeader) -> anyhow::Result<Option<String>> {
-    let cell = &plan.cells[task.cell];
     let args = eval_cli(task, "check")?;
-    let run = &args.run;
-    let differs = |field: &str, got: &dyn std::fmt::Debug, planned: &dyn std::fmt::Debug| {
-        Some(format!(
-            "its {field} is {got:?}, cell {} (`{}`) plans {planned:?}",
-            cell.index, cell.policy.name
-        ))
-    };
-    // A launched policy names itself; an in-process one is named by its kind.
-    if cell.policy.policy != thorarena::sweep::SESSION_POLICY {
-        let kind = cell.policy.policy.split(':').next().unwrap_or_default();
-        if header.policy != kind {
-            return Ok(differs("policy", &header.policy, &kind));
-        }
-    }
-    let dataset = cell.dataset.display().to_string();
-    let setting = thorarena::evaluation::Setting::parse(&cell.setting);
-    let termination = thorarena::evaluation::TerminationRule {
-        max_torso_height_error_m: run.max_torso_height_error,
-        max_torso_tilt_error_rad: run.max_torso_tilt_error,
-    };
-    let io = run.io.rules();
-    Ok(if header.dataset != dataset {
-        differs("dataset", &header.dataset, &dataset)
-    } else if header.dataset_sha256 != cell.dataset_sha256 {
-        differs("dataset hash", &header.dataset_sha256, &cell.dataset_sha256)
-    } else if header.subset.as_ref().map(|s| &s.selection)
-        != (!cell.selection.is_all()).then_some(&cell.selection)
-    {
-        differs("tasks/sequences", &header.subset, &cell.selection)
-    } else if header.sequences.len() != cell.episodes {
-        differs("sequence count", &header.sequences.len(), &cell.episodes)
-    } else if setting
-        .as_ref()
-        .is_none_or(|s| header.settings != [s.clone()])
-    {
-        differs("settings", &header.settings, &setting)
-    } else if header.shard != run.shard {
-        differs("shard", &header.shard, &run.shard)
-    } else if header.keypoints != run.keypoints {
-        differs("keypoint set", &header.keypoints, &run.keypoints)
-    } else if !cell.policy.profile.ends_with(".toml") && header.profile != cell.policy.profile {
-        differs("profile", &header.profile, &cell.policy.profile)
-    } else if header.io != io {
-        differs("policy I/O rules", &header.io, &io)
-    } else if header.termination != termination {
-        differs("termination rule", &header.termination, &termination)
-    } else if header.engine.name() != cell.engine.engine {
-        differs("engine", &header.engine.name(), &cell.engine.engine)
-    } else if cell
-        .engine
-        .physics_dt_s
-        .is_some_and(|dt| dt != header.physics_dt_s)
-    {
-        differs(
-            "physics step",
-            &header.physics_dt_s,
-            &cell.engine.physics_dt_s,
-        )
-    } else if header.planned_jobs().len() != task.episodes {
-        differs(
-            "planned episodes",
-            &header.planned_jobs().len(),
-            &task.episodes,
-        )
-    } else {
-        None
-    })
+    let request = args.run.request(&args.policy);
+    Ok(thorarena::sweep::check_task_run(
+        plan,
+        task,
+        &RunDir::new(run),
+        &request,
+    )?)
 }

@@ -53,8 +53,8 @@ pub fn read_onnx_motion(
         });
     }
     let model = onnx().model_for_path(path).map_err(tract_error(path))?;
-    let props = crate::policy::beyondmimic::metadata_props(&model);
-    let meta = crate::policy::beyondmimic::FileMetadata::from_props(&props)
+    let props = crate::onnx_export::metadata_props(&model);
+    let meta = crate::onnx_export::FileMetadata::from_props(&props)
         .map_err(|reason| format_error(path, reason))?;
     let probe = MotionProbe::new(model, path)?;
     let frames = probe.play(path)?;

@@ -8,7 +8,6 @@ use super::{
 };
 use crate::profile::{BeyondMimicProfile, Profile};
 use crate::robot::RobotModel;
-use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 use tract_onnx::prelude::*;
@@ -88,12 +87,12 @@ impl Network {
     fn open(path: &Path) -> Result<Self, BeyondMimicError> {
         let load_err = load_error(path);
         let model = onnx().model_for_path(path).map_err(load_err)?;
-        let meta = FileMetadata::from_props(&metadata_props(&model)).map_err(|reason| {
-            BeyondMimicError::Unusable {
+        let meta = FileMetadata::from_props(&crate::onnx_export::metadata_props(&model)).map_err(
+            |reason| BeyondMimicError::Unusable {
                 path: path.to_path_buf(),
                 reason,
-            }
-        })?;
+            },
+        )?;
         let inputs = model.input_outlets().map_err(load_err)?.to_vec();
         let outputs = model.output_outlets().map_err(load_err)?.to_vec();
         let obs_input = slot(&model, &inputs, "obs").unwrap_or(0);
@@ -168,21 +167,6 @@ fn load_error(path: &Path) -> impl Fn(TractError) -> BeyondMimicError + Copy + '
         path: path.to_path_buf(),
         message: format!("{e:#}"),
     }
-}
-
-/// The network's metadata properties as text (tract keeps them as `onnx.metadata_props.*`
-/// string scalars).
-pub(crate) fn metadata_props(model: &InferenceModel) -> HashMap<String, String> {
-    model
-        .properties
-        .iter()
-        .filter_map(|(k, v)| {
-            let key = k.strip_prefix("onnx.metadata_props.")?;
-            let plain = v.try_as_plain_ram().ok()?;
-            let text = plain.to_scalar::<String>().ok()?.clone();
-            Some((key.to_string(), text))
-        })
-        .collect()
 }
 
 /// Index of the model input or output named `name`.

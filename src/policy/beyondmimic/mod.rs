@@ -19,16 +19,13 @@
 //! against this one.
 
 mod load;
-mod metadata;
 mod observation;
 
-pub use metadata::FileMetadata;
+pub use crate::onnx_export::FileMetadata;
 pub use observation::{
     build_observation, layout_width, reference_anchor_in_robot_anchor, ObservationSpec, Scratch,
     Term, LAYOUT_154, LAYOUT_160,
 };
-
-pub(crate) use load::metadata_props;
 
 use super::{ActOutcome, Observation, Policy};
 use crate::robot::RobotModel;

@@ -4,7 +4,12 @@
 //! `observation_names`, comma-separated text) or holosoma (`policies/wbt.py:174-185`:
 //! `dof_names`, `kp`, `kd` as JSON lists).
 
+//!
+//! Shared by the policy that runs such a network (`policy::beyondmimic`) and the importer
+//! of the motion embedded in one (`motion::import::onnx_motion`), below both.
+
 use std::collections::HashMap;
+use tract_onnx::prelude::InferenceModel;
 
 /// The metadata the policy uses, every key optional (the profile fills the gaps).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -77,6 +82,21 @@ impl FileMetadata {
             }),
         })
     }
+}
+
+/// The network's metadata properties as text (tract keeps them as `onnx.metadata_props.*`
+/// string scalars).
+pub fn metadata_props(model: &InferenceModel) -> HashMap<String, String> {
+    model
+        .properties
+        .iter()
+        .filter_map(|(k, v)| {
+            let key = k.strip_prefix("onnx.metadata_props.")?;
+            let plain = v.try_as_plain_ram().ok()?;
+            let text = plain.to_scalar::<String>().ok()?.clone();
+            Some((key.to_string(), text))
+        })
+        .collect()
 }
 
 #[cfg(test)]
