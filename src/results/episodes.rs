@@ -23,7 +23,7 @@ pub struct EpisodeLog {
 
 impl EpisodeLog {
     /// Reads `path` (a missing file is an empty log) and checks every record against
-    /// `header` ([`EpisodeRecord::check`]) and against the others (no episode twice).
+    /// `header` ([`RunHeader::check_record`]) and against the others (no episode twice).
     /// Only the last line may be cut short — it is then dropped and flagged in
     /// [`Self::torn_tail`]; any other bad line is an error naming its line.
     pub fn read(path: &Path, header: &RunHeader) -> Result<Self, ResultsError> {

@@ -135,7 +135,7 @@ fn answer_to_commands(
     }
 }
 
-/// Runs the given jobs (from [`super::schedule`]) with one policy over `plan.envs` slots;
+/// Runs the given jobs (from [`crate::evaluation::schedule`]) with one policy over `plan.envs` slots;
 /// `on_record` sees each finished episode as it ends (stream it, count it).
 pub fn run_eval(
     plan: &EvalPlan,

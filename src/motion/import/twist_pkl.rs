@@ -1,7 +1,7 @@
 //! Reader for GMR / TWIST / TWIST2 / GMT motion pickles, without Python.
 //!
-//! The files are a pickled dict: `fps`, `root_pos` [T,3] (m), `root_rot` [T,4] (xyzw),
-//! `dof_pos` [T,29] (GMT: [T,23]) rad, optionally `local_body_pos` [T,38,3] and
+//! The files are a pickled dict: `fps`, `root_pos` `[T,3]` (m), `root_rot` `[T,4]` (xyzw),
+//! `dof_pos` `[T,29]` (GMT: `[T,23]`) rad, optionally `local_body_pos` `[T,38,3]` and
 //! `link_body_list`. They are decoded with `serde-pickle`, which never executes pickled code.
 //!
 //! # How numpy objects survive `serde-pickle`
