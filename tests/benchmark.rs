@@ -330,3 +330,118 @@ fn a_spec_is_checked_before_anything_runs() {
         assert!(e.to_string().contains(says), "{e}");
     }
 }
+
+#[test]
+fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
+    use thorarena::sweep::{
+        check_task_run, results_rows, CellResult, DatasetInfo, Plan, SequenceInfo, SweepSpec,
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let sample =
+        std::fs::canonicalize(concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample")).unwrap();
+    let spec_path = tmp.path().join("sweep.toml");
+    std::fs::write(
+        &spec_path,
+        format!(
+            "datasets = [{:?}]\nsettings = [\"no-force\", \"force\"]\nshards = 2\nsequences = [\"clean_table/clean_table_000\", \"push_chair/push_chair_000\"]\n[[policy]]\npolicy = \"hold\"\n",
+            sample.display().to_string()
+        ),
+    )
+    .unwrap();
+    let spec = SweepSpec::load(&spec_path).unwrap();
+    let robot = thorarena::registry::robot("g1_29dof").unwrap();
+    let ds = thorarena::motion::Dataset::open(&sample, &robot).unwrap();
+    let sequences = ds.load_all().unwrap();
+    let info = DatasetInfo {
+        dir: sample.clone(),
+        sha256: ds.content_hash(),
+        sequences: sequences
+            .iter()
+            .map(|s| SequenceInfo {
+                task: s.task.clone(),
+                sequence_id: s.sequence_id.clone(),
+                duration_s: s.duration_s(),
+                forces_recorded: s.forces_recorded,
+            })
+            .collect(),
+    };
+    let plan = Plan::expand(&spec, &spec_path, &[info]).unwrap();
+    assert_eq!((plan.cells.len(), plan.tasks.len()), (2, 4));
+    // Each task as its `eval` runs it: the cell's setting, the task's shard.
+    let task_request = |t: &thorarena::sweep::Task| {
+        let cell = &plan.cells[t.cell];
+        EvalRequest {
+            dataset: Some(cell.dataset.clone()),
+            settings: vec![cell.setting.clone()],
+            shard: (t.shard.1 > 1).then_some(t.shard),
+            ..request()
+        }
+    };
+    for t in &plan.tasks {
+        let request = task_request(t);
+        let run = tmp.path().join(format!("task{}", t.index));
+        run_into(&EvalSpec::load(&request).unwrap(), &run, false);
+        let records = check_task_run(&plan, t, &RunDir::new(&run), &request)
+            .unwrap()
+            .expect("the task's own complete run counts");
+        assert_eq!(records.len(), t.episodes);
+        // Another task's run does not count for this one.
+        let other = &plan.tasks[(t.index + 2) % plan.tasks.len()];
+        assert!(
+            check_task_run(&plan, other, &RunDir::new(&run), &task_request(other))
+                .unwrap()
+                .is_err(),
+            "task {}'s run counted for task {}",
+            t.index,
+            other.index
+        );
+    }
+    let results: Vec<Option<CellResult>> = plan
+        .cells
+        .iter()
+        .map(|cell| {
+            let shards: Vec<RunDir> = plan
+                .tasks
+                .iter()
+                .filter(|t| t.cell == cell.index)
+                .map(|t| RunDir::new(tmp.path().join(format!("task{}", t.index))))
+                .collect();
+            let out = RunDir::new(tmp.path().join(format!("cell{}", cell.index)));
+            Some(CellResult::collect(&shards, &out, &sequences, cell.episodes).unwrap())
+        })
+        .collect();
+    // Each cell scores as one unsharded run of its setting does.
+    for (cell, result) in plan.cells.iter().zip(&results) {
+        let result = result.as_ref().unwrap();
+        assert!(
+            result.complete && result.episodes == 2,
+            "cell {}",
+            cell.index
+        );
+        assert!(
+            result.latency.is_none(),
+            "two shards' latencies do not add up"
+        );
+        let whole = tmp.path().join(format!("whole{}", cell.index));
+        let (done, _) = run_into(
+            &EvalSpec::load(&EvalRequest {
+                settings: vec![cell.setting.clone()],
+                ..request()
+            })
+            .unwrap(),
+            &whole,
+            false,
+        );
+        assert_eq!(result.summary.settings, done.summary.settings);
+        assert_same_run(&result.dir, &whole, &["episodes.csv"], "a collected cell");
+    }
+    let rows = results_rows(&plan, &results);
+    let csv = thorarena::sweep::results_csv(&plan, &results);
+    assert_eq!(rows.len(), 2);
+    assert_eq!(csv.lines().count(), 3, "a header and a row per cell");
+    assert!(csv
+        .lines()
+        .next()
+        .unwrap()
+        .starts_with("cell,policy,dataset,setting,"));
+}
