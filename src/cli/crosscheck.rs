@@ -7,6 +7,7 @@ use super::eval::{check_out, evaluate, load_spec, FirstSeconds, RunArgs};
 use super::policy_arg::make_policy;
 use anyhow::{bail, Context};
 use std::path::PathBuf;
+use thorarena::evaluation::EvalSpec;
 use thorarena::report::crosscheck_tables;
 use thorarena::results::crosscheck::{compare_runs, write_crosscheck, SeriesLog};
 use thorarena::results::{RunDir, CROSSCHECK_SERIES_FILE};
@@ -42,6 +43,54 @@ pub struct Args {
 /// The most bootstrap resamples `--bootstrap` takes (10⁶ already pins a 95 % interval's
 /// ends to a fraction of a per cent of its width).
 const MAX_BOOTSTRAP: usize = 1_000_000;
+
+/// One engine's evaluation into `run`, keeping each episode's series of the first
+/// seconds and foot slip beside it as episodes finish (a resume keeps them).
+fn run_engine(
+    args: &Args,
+    run_args: &RunArgs,
+    spec: &EvalSpec,
+    run: &RunDir,
+) -> anyhow::Result<SeriesLog> {
+    eprintln!("== {} → {}", spec.engine.name(), run.path().display());
+    let mut log = SeriesLog::open(run, run_args.resume)?;
+    for (line, why) in &log.dropped_lines {
+        eprintln!(
+            "--resume: {} line {line} is unreadable ({why}); its episode's series is dropped",
+            run.crosscheck_series_file().display()
+        );
+    }
+    let mut policy = make_policy(
+        &args.policy,
+        &spec.robot,
+        &spec.profile,
+        &run_args.io,
+        spec.envs,
+    )?;
+    let seconds = args.divergence_seconds;
+    let mut write_error = None;
+    let mut sink = |r: &thorarena::evaluation::EpisodeRecord,
+                    trace: &thorarena::episode::EpisodeTrace| {
+        let q = trace
+            .steps
+            .iter()
+            .take_while(|s| s.time_s <= seconds + 1e-9)
+            .map(|s| s.q.clone())
+            .collect();
+        if let Err(e) = log.append(r.key(), q, trace.foot_slip_m.clone()) {
+            write_error.get_or_insert(e);
+        }
+    };
+    let first = FirstSeconds {
+        seconds,
+        sink: &mut sink,
+    };
+    evaluate(run_args, spec, policy.as_mut(), run.path(), Some(first))?;
+    if let Some(e) = write_error {
+        return Err(e.into());
+    }
+    Ok(log)
+}
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.policy.starts_with("ipc:") {
@@ -95,48 +144,11 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     // accumulated slip, kept on disk as episodes finish (a resume keeps them).
     let runs = dirs.clone().map(RunDir::new);
     let mut series = Vec::new();
-    for ((run_args, ctx), run) in [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
+    for ((run_args, spec), run) in [(&rapier_args, &rapier_ctx), (&mujoco_args, &mujoco_ctx)]
         .into_iter()
         .zip(&runs)
     {
-        eprintln!("== {} → {}", ctx.engine.name(), run.path().display());
-        let mut log = SeriesLog::open(run, run_args.resume)?;
-        for (line, why) in &log.dropped_lines {
-            eprintln!(
-                "--resume: {} line {line} is unreadable ({why}); its episode's series is dropped",
-                run.crosscheck_series_file().display()
-            );
-        }
-        let mut policy = make_policy(
-            &args.policy,
-            &ctx.robot,
-            &ctx.profile,
-            &run_args.io,
-            ctx.envs,
-        )?;
-        let seconds = args.divergence_seconds;
-        let mut write_error = None;
-        let mut sink = |r: &thorarena::evaluation::EpisodeRecord,
-                        trace: &thorarena::episode::EpisodeTrace| {
-            let q = trace
-                .steps
-                .iter()
-                .take_while(|s| s.time_s <= seconds + 1e-9)
-                .map(|s| s.q.clone())
-                .collect();
-            if let Err(e) = log.append(r.key(), q, trace.foot_slip_m.clone()) {
-                write_error.get_or_insert(e);
-            }
-        };
-        let first = FirstSeconds {
-            seconds,
-            sink: &mut sink,
-        };
-        evaluate(run_args, ctx, policy.as_mut(), run.path(), Some(first))?;
-        if let Some(e) = write_error {
-            return Err(e.into());
-        }
-        series.push(log);
+        series.push(run_engine(args, run_args, spec, run)?);
     }
     let check = compare_runs(
         [&runs[0], &runs[1]],

@@ -4,23 +4,26 @@
 use super::verify::{check_task_run, RunProblem};
 use super::CollectArgs;
 use anyhow::{bail, Context};
-use std::collections::BTreeMap;
-use std::path::PathBuf;
-use thorarena::motion::Dataset;
+use std::collections::{BTreeMap, HashSet};
+use std::path::{Path, PathBuf};
+use thorarena::motion::{Dataset, Sequence};
 use thorarena::report::{label_cells, sweep_charts, sweep_title};
 use thorarena::results::RunDir;
 use thorarena::sweep::{census, compact_ranges, CellResult, Plan, Task};
-pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
-    let plan = Plan::load(&args.dir)?;
-    let robot = thorarena::registry::robot(&plan.robot)?;
-    // Scores are computed against the references as they are now: they must be the
-    // ones the runs ran (`merge` and `--resume` check the same).
-    let mut datasets: BTreeMap<PathBuf, Vec<thorarena::motion::Sequence>> = BTreeMap::new();
+
+/// Each dataset of the plan, loaded, after checking it is the one planned: scores are
+/// computed against the references as they are now, so they must be the ones the runs
+/// ran (`merge` and `--resume` check the same).
+fn planned_datasets(
+    plan: &Plan,
+    robot: &thorarena::robot::RobotModel,
+) -> anyhow::Result<BTreeMap<PathBuf, Vec<Sequence>>> {
+    let mut datasets: BTreeMap<PathBuf, Vec<Sequence>> = BTreeMap::new();
     for cell in &plan.cells {
         if datasets.contains_key(&cell.dataset) {
             continue;
         }
-        let ds = Dataset::open(&cell.dataset, &robot)
+        let ds = Dataset::open(&cell.dataset, robot)
             .with_context(|| format!("dataset of cell {}", cell.index))?;
         let now = ds.content_hash();
         if now != cell.dataset_sha256 {
@@ -33,13 +36,20 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         }
         datasets.insert(cell.dataset.clone(), ds.load_all()?);
     }
-    let c = census(&args.dir, &plan)?;
+    Ok(datasets)
+}
+
+/// The done tasks that count — `done.json` there, and a run complete and the task's own
+/// — and why the others do not; a done task whose run is another configuration's is an
+/// error.
+fn counted_tasks(dir: &Path, plan: &Plan) -> anyhow::Result<(HashSet<usize>, Vec<String>)> {
+    let c = census(dir, plan)?;
     // A task counts when its done.json is there and its run is complete and its own.
-    let mut done: std::collections::HashSet<usize> = std::collections::HashSet::new();
+    let mut done: HashSet<usize> = HashSet::new();
     let mut not_counted: Vec<String> = Vec::new();
     for &i in &c.done {
-        let run = Plan::task_dir(&args.dir, i).join("run");
-        match check_task_run(&plan, &plan.tasks[i], &run)? {
+        let run = Plan::task_dir(dir, i).join("run");
+        match check_task_run(plan, &plan.tasks[i], &run)? {
             Ok(_) => {
                 done.insert(i);
             }
@@ -50,6 +60,14 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             Err(RunProblem::Incomplete(why)) => not_counted.push(format!("task {i}: {why}")),
         }
     }
+    Ok((done, not_counted))
+}
+
+pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
+    let plan = Plan::load(&args.dir)?;
+    let robot = thorarena::registry::robot(&plan.robot)?;
+    let datasets = planned_datasets(&plan, &robot)?;
+    let (done, not_counted) = counted_tasks(&args.dir, &plan)?;
     let mut by_cell: BTreeMap<usize, Vec<&Task>> = BTreeMap::new();
     for t in &plan.tasks {
         by_cell.entry(t.cell).or_default().push(t);

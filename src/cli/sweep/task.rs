@@ -14,7 +14,7 @@ use thorarena::motion::Dataset;
 use thorarena::results::RunDir;
 use thorarena::sweep::{
     log_tail as log_tail_of, printable, shell_quote, task_state, truncated, DoneRecord,
-    FailedRecord, Plan, TaskState, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
+    FailedRecord, Plan, Task, TaskState, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
 };
 /// What became of one attempt at a task.
 #[derive(Debug)]
@@ -48,34 +48,7 @@ pub(super) fn run_task(
     }
     let _ = std::fs::remove_file(tdir.join("failed.json"));
     let started = Instant::now();
-    let fail = |reason: String, logs: &[&str]| -> anyhow::Result<Outcome> {
-        // Bounded and printable however much, and whatever, the processes wrote.
-        let reason = truncated(&printable(&reason), LOG_LINE_MAX_BYTES);
-        let mut log_tail = Vec::new();
-        let mut budget = LOG_TAIL_MAX_BYTES;
-        for name in logs {
-            let mut lines = log_tail_of(&tdir.join(name), 12);
-            let mut bytes: usize = lines.iter().map(String::len).sum();
-            while bytes > budget {
-                bytes -= lines.remove(0).len();
-            }
-            if !lines.is_empty() {
-                budget -= bytes;
-                log_tail.push(format!("--- {name}"));
-                log_tail.extend(lines);
-            }
-        }
-        let record = FailedRecord {
-            task: index,
-            reason: reason.clone(),
-            log_tail,
-        };
-        write_atomic(
-            &tdir.join("failed.json"),
-            serde_json::to_string_pretty(&record)?.as_bytes(),
-        )?;
-        Ok(Outcome::Failed(reason))
-    };
+    let fail = |reason: String, logs: &[&str]| record_failure(&tdir, index, reason, logs);
 
     // The dataset must be the one planned.
     let robot = thorarena::registry::robot(&plan.robot)?;
@@ -95,38 +68,12 @@ pub(super) fn run_task(
 
     let session = format!("sweep-{index}-{}", std::process::id());
     let run_dir = tdir.join("run");
-    let eval_log = create_log(&tdir.join("eval.log"))?;
-    let mut eval_cmd = Command::new(std::env::current_exe()?);
-    eval_cmd
-        .args(task.eval_argv(&session))
-        .arg("--out")
-        .arg(&run_dir)
-        .args(["--resume", "--workers", &workers.to_string()])
-        .stdin(Stdio::null())
-        .stdout(eval_log.try_clone()?)
-        .stderr(eval_log);
-    die_with_parent(&mut eval_cmd);
-
+    let mut eval_cmd = eval_command(task, &session, &run_dir, workers, &tdir)?;
     let mut policy: Option<Child> = None;
     if let Some(command) = &cell.policy.command {
-        let line = policy_command_line(command, &session)?;
-        let log = create_log(&tdir.join("policy.log"))?;
-        let mut c = Command::new("sh");
-        c.args(["-c", &line])
-            .current_dir(&plan.workdir)
-            .stdin(Stdio::null())
-            .stdout(log.try_clone()?)
-            .stderr(log)
-            .process_group(0);
-        die_with_parent(&mut c);
-        match c.spawn() {
+        match start_policy(plan, command, &session, &tdir)? {
             Ok(child) => policy = Some(child),
-            Err(e) => {
-                return fail(
-                    format!("cannot start the policy command `{line}`: {e}"),
-                    &[],
-                )
-            }
+            Err(why) => return fail(why, &[]),
         }
     }
     let mut eval = eval_cmd.spawn().context("starting thorarena eval")?;
@@ -180,6 +127,86 @@ pub(super) fn run_task(
     )?;
     drop(lock);
     Ok(Outcome::Done)
+}
+
+/// Records why the task failed in `failed.json`, with the tails of its `logs` (bounded
+/// and printable however much, and whatever, the processes wrote).
+fn record_failure(
+    tdir: &Path,
+    index: usize,
+    reason: String,
+    logs: &[&str],
+) -> anyhow::Result<Outcome> {
+    let reason = truncated(&printable(&reason), LOG_LINE_MAX_BYTES);
+    let mut log_tail = Vec::new();
+    let mut budget = LOG_TAIL_MAX_BYTES;
+    for name in logs {
+        let mut lines = log_tail_of(&tdir.join(name), 12);
+        let mut bytes: usize = lines.iter().map(String::len).sum();
+        while bytes > budget {
+            bytes -= lines.remove(0).len();
+        }
+        if !lines.is_empty() {
+            budget -= bytes;
+            log_tail.push(format!("--- {name}"));
+            log_tail.extend(lines);
+        }
+    }
+    let record = FailedRecord {
+        task: index,
+        reason: reason.clone(),
+        log_tail,
+    };
+    write_atomic(
+        &tdir.join("failed.json"),
+        serde_json::to_string_pretty(&record)?.as_bytes(),
+    )?;
+    Ok(Outcome::Failed(reason))
+}
+
+/// The task's `eval` process: the plan's arguments into `run_dir`, resuming, its output
+/// in `eval.log`, dying with this process.
+fn eval_command(
+    task: &Task,
+    session: &str,
+    run_dir: &Path,
+    workers: usize,
+    tdir: &Path,
+) -> anyhow::Result<Command> {
+    let eval_log = create_log(&tdir.join("eval.log"))?;
+    let mut eval_cmd = Command::new(std::env::current_exe()?);
+    eval_cmd
+        .args(task.eval_argv(session))
+        .arg("--out")
+        .arg(run_dir)
+        .args(["--resume", "--workers", &workers.to_string()])
+        .stdin(Stdio::null())
+        .stdout(eval_log.try_clone()?)
+        .stderr(eval_log);
+    die_with_parent(&mut eval_cmd);
+    Ok(eval_cmd)
+}
+
+/// Starts the cell's policy command in its own process group (so the whole group can be
+/// stopped), its output in `policy.log`; the inner `Err` says why it could not start.
+fn start_policy(
+    plan: &Plan,
+    command: &str,
+    session: &str,
+    tdir: &Path,
+) -> anyhow::Result<Result<Child, String>> {
+    let line = policy_command_line(command, session)?;
+    let log = create_log(&tdir.join("policy.log"))?;
+    let mut c = Command::new("sh");
+    c.args(["-c", &line])
+        .current_dir(&plan.workdir)
+        .stdin(Stdio::null())
+        .stdout(log.try_clone()?)
+        .stderr(log)
+        .process_group(0);
+    die_with_parent(&mut c);
+    Ok(c.spawn()
+        .map_err(|e| format!("cannot start the policy command `{line}`: {e}")))
 }
 
 /// A policy command with its placeholders filled in as single shell words: the binary's
