@@ -209,7 +209,7 @@ fn shards_merge_into_the_unsharded_run() {
     match e {
         BenchmarkError::Results(ResultsError::Merge(MergeError::Missing { missing })) => {
             assert_eq!(missing.len(), 1, "{missing:?}");
-            assert!(e_display(&missing[0]).contains('/'));
+            assert!(missing[0].to_string().contains('/'));
         }
         e => panic!("not the missing-episodes refusal: {e}"),
     }
@@ -234,10 +234,6 @@ fn shards_merge_into_the_unsharded_run() {
         ),
         "{e}"
     );
-}
-
-fn e_display(key: &thorarena::evaluation::EpisodeKey) -> String {
-    key.to_string()
 }
 
 #[test]

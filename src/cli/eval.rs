@@ -255,12 +255,20 @@ struct Progress<'a, 'f> {
     policy: String,
     spec: &'a EvalSpec,
     run: &'a RunDir,
+    /// `--resume` was asked for.
+    resume: bool,
     first_seconds: Option<FirstSeconds<'f>>,
 }
 
 impl EvalObserver for Progress<'_, '_> {
     fn starting(&mut self, s: &Starting) {
         let dir = s.header.dataset.as_str();
+        if self.resume && !s.started.resumed {
+            eprintln!(
+                "--resume: nothing to resume in {}, starting afresh",
+                self.run.path().display()
+            );
+        }
         if s.started.torn_tail_dropped {
             eprintln!(
                 "--resume: {} ended in a line cut short; it is dropped",
@@ -304,12 +312,6 @@ pub(super) fn evaluate(
     first_seconds: Option<FirstSeconds>,
 ) -> anyhow::Result<()> {
     let run = RunDir::new(out);
-    if args.resume && !run.holds_run() {
-        eprintln!(
-            "--resume: nothing to resume in {}, starting afresh",
-            out.display()
-        );
-    }
     let bar = indicatif::ProgressBar::new(0);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -326,6 +328,7 @@ pub(super) fn evaluate(
         policy: policy.name().to_string(),
         spec,
         run: &run,
+        resume: args.resume,
         first_seconds,
     };
     let result = thorarena::benchmark::evaluate(spec, policy, &run, options, &mut progress);

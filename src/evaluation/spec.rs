@@ -256,8 +256,13 @@ impl EvalSpec {
     pub fn traces(&self, task: &str, sequence_id: &str) -> bool {
         self.trace
             .iter()
-            .any(|t| t.split_once('/') == Some((task, sequence_id)))
+            .any(|t| names_sequence(t, task, sequence_id))
     }
+}
+
+/// Whether `name`, spelled `TASK/SEQUENCE_ID`, is that sequence.
+fn names_sequence(name: &str, task: &str, sequence_id: &str) -> bool {
+    name.split_once('/') == Some((task, sequence_id))
 }
 
 /// The profile the request names, or its policy family's; one that contradicts the
@@ -366,7 +371,7 @@ fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Resu
     for name in trace {
         if !sequences
             .iter()
-            .any(|q| format!("{}/{}", q.task, q.sequence_id) == *name)
+            .any(|q| names_sequence(name, &q.task, &q.sequence_id))
         {
             return Err(invalid(format!(
                 "--trace: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",

@@ -262,16 +262,3 @@ pub fn joint_group(joint: &str) -> String {
         .unwrap_or(s);
     s.to_string()
 }
-
-/// The profile a policy family was trained with, by the policy argument's prefix:
-/// `twist2` for `twist2:`, `beyondmimic` for `beyondmimic:`, `default` for the built-ins
-/// and policy processes. `eval` and sweeps use it when no profile is named.
-pub fn family_profile(policy: &str) -> &'static str {
-    if policy.starts_with("twist2:") {
-        "twist2"
-    } else if policy.starts_with("beyondmimic:") {
-        "beyondmimic"
-    } else {
-        "default"
-    }
-}

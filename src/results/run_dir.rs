@@ -49,8 +49,6 @@ pub struct Started {
     pub resumed: bool,
     /// The previous attempt's last line was cut short (a killed writer) and is dropped.
     pub torn_tail_dropped: bool,
-    /// Records of the previous attempt dropped to run again (ended `policy_failed`).
-    pub rerun: usize,
 }
 
 impl RunDir {
@@ -160,13 +158,11 @@ impl RunDir {
             let log = self.read_log(header)?;
             started.resumed = true;
             started.torn_tail_dropped = log.torn_tail;
-            let before = log.records.len();
             started.kept = log
                 .records
                 .into_iter()
                 .filter(|r| r.termination != Some(Termination::PolicyFailed))
                 .collect();
-            started.rerun = before - started.kept.len();
             EpisodeLog::rewrite(&episodes, &started.kept)?;
         } else {
             std::fs::File::create(&episodes).map_err(ResultsError::io(&episodes))?;

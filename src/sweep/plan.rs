@@ -373,7 +373,7 @@ fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
         profile: match &p.profile {
             Some(f) if f.ends_with(".toml") => resolve(workdir, f).display().to_string(),
             Some(name) => name.clone(),
-            None => crate::profile::family_profile(p.policy.as_deref().unwrap_or("")).to_string(),
+            None => crate::registry::family_profile(p.policy.as_deref().unwrap_or("")).to_string(),
         },
         keypoints: p.keypoints.clone(),
         connect_timeout_s: p.connect_timeout_s,

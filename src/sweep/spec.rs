@@ -86,7 +86,7 @@ pub struct PolicySpec {
     /// Shell command starting a policy process that joins session `{session}`;
     /// `{thorarena}` is this binary.
     pub command: Option<String>,
-    /// Dynamics profile [default: the policy family's, `thorarena::profile::family_profile`].
+    /// Dynamics profile [default: the policy family's, `thorarena::registry::family_profile`].
     #[serde(default)]
     pub profile: Option<String>,
     /// Keypoint set.
