@@ -18,6 +18,7 @@ pub mod metrics;
 pub mod motion;
 pub mod names;
 pub mod onnx_export;
+pub mod perf;
 pub mod physics;
 pub mod policy;
 pub mod profile;

@@ -4,10 +4,10 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
-use thorarena::episode::{Episode, EpisodeSetup};
+use thorarena::episode::EpisodeSetup;
 use thorarena::evaluation::TerminationRule;
 use thorarena::motion::Dataset;
+use thorarena::perf::time_episode_loop;
 use thorarena::physics::{PhysicsSettings, RapierPhysics};
 use thorarena::policy::{HoldPolicy, Policy, ReplayPolicy};
 use thorarena::profile::{bundled_profile_path, load_profile};
@@ -54,34 +54,25 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         ..Default::default()
     };
     let mut physics = RapierPhysics::new(robot.clone(), settings, profile.gains.clone());
-    let (mut wall, mut in_physics, mut simulated) = (Duration::ZERO, Duration::ZERO, 0.0);
-    let mut actions = vec![vec![0.0; robot.n_joints()]];
-    for seq in &sequences {
-        let started = Instant::now();
-        let mut ep = Episode::start(&setup, seq, &mut physics);
-        let mut steps = 0usize;
-        while !ep.is_done() {
-            policy.act(&[ep.observation()], &mut actions);
-            ep.advance(&mut physics, &actions[0]);
-            steps += 1;
-        }
-        in_physics += ep.physics_wall();
-        wall += started.elapsed();
-        simulated += steps as f64 * profile.control_dt_s;
-    }
-    let rtf = simulated / wall.as_secs_f64();
-    let outside = 1.0 - in_physics.as_secs_f64() / wall.as_secs_f64();
+    let t = time_episode_loop(
+        &setup,
+        &sequences,
+        policy.as_mut(),
+        &mut physics,
+        profile.control_dt_s,
+    );
+    let (wall, in_physics) = (t.wall.as_secs_f64(), t.in_physics.as_secs_f64());
     println!(
-        "episode loop: {} episodes, {simulated:.1} s simulated in {:.2} s wall on one core = {rtf:.1} simulated s per wall s",
-        sequences.len(),
-        wall.as_secs_f64()
+        "episode loop: {} episodes, {:.1} s simulated in {wall:.2} s wall on one core = {:.1} simulated s per wall s",
+        t.episodes,
+        t.simulated_s,
+        t.real_time_factor()
     );
     println!(
-        "physics step: {:.2} s ({:.1} %); outside physics (replay, metrics, policy, bookkeeping): {:.2} s = {:.1} % (goal ≤ 3 %)",
-        in_physics.as_secs_f64(),
-        100.0 * (1.0 - outside),
-        (wall - in_physics).as_secs_f64(),
-        100.0 * outside
+        "physics step: {in_physics:.2} s ({:.1} %); outside physics (replay, metrics, policy, bookkeeping): {:.2} s = {:.1} % (goal ≤ 3 %)",
+        100.0 * (1.0 - t.outside_physics()),
+        wall - in_physics,
+        100.0 * t.outside_physics()
     );
     Ok(())
 }

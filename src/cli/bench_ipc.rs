@@ -4,22 +4,20 @@
 //!
 //! Each echo policy is a separate process answering action = q for every environment, so
 //! the figures include the policy reading the observation and writing the actions. The
-//! socket baselines (`bench_socket`) are a `thorarena` process that receives the whole
+//! socket baselines (`thorarena::perf::socket_round_trips`) are a `thorarena` process that receives the whole
 //! batch over a Unix stream socket into a buffer, answers the same way and sends the
 //! actions back: once with blocking reads, once with the shared-memory path's own wait
 //! (spin, then block), so the comparison separates what waiting costs from what copying
 //! costs.
 
-use super::bench_socket::socket_baseline;
 use anyhow::{bail, Context};
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
-use thorarena::evaluation::LatencyRecorder;
+use thorarena::evaluation::LatencySummary;
+use thorarena::perf::{answer_socket_echo, echo_round_trips, socket_round_trips};
 use thorarena::robot::RobotModel;
-use thorarena_ipc::{
-    EnvHeader, Layout, ObsBatchMut, SimConfig, SimSession, StepOutcome, WaitPolicy, FLAG_ACTIVE,
-};
+use thorarena_ipc::{Layout, SimConfig, SimSession, WaitPolicy};
 
 /// Arguments of `bench ipc`.
 #[derive(Debug, clap::Args)]
@@ -48,26 +46,53 @@ pub struct Args {
     pub python: String,
 }
 
-/// Percentiles of one series, µs.
-pub(super) struct Row {
-    p50: f64,
-    p90: f64,
-    p99: f64,
-    p999: f64,
-    max: f64,
+/// Hidden subcommand: the socket baseline's echo peer.
+#[derive(Debug, clap::Args)]
+pub struct PeerArgs {
+    /// Socket path to connect to.
+    #[arg(long)]
+    pub socket: PathBuf,
+    /// Environments per batch.
+    #[arg(long)]
+    pub envs: usize,
+    /// Joints per environment.
+    #[arg(long)]
+    pub joints: usize,
+    /// Reference frames per environment.
+    #[arg(long)]
+    pub refs: usize,
+    /// Busy-poll this many µs before blocking (0: blocking reads).
+    #[arg(long, default_value_t = 0)]
+    pub spin_us: u64,
 }
 
-impl Row {
-    pub(super) fn of(rec: &LatencyRecorder) -> Self {
-        let s = rec.summary();
-        Self {
-            p50: s.p50_us,
-            p90: s.p90_us,
-            p99: s.p99_us,
-            p999: s.p999_us,
-            max: s.max_us,
-        }
-    }
+/// `bench socket-peer`: answers each batch read from the socket with action = q.
+pub(super) fn run_peer(args: &PeerArgs) -> anyhow::Result<()> {
+    let layout = Layout {
+        n_envs: args.envs,
+        n_joints: args.joints,
+        n_refs: args.refs,
+    };
+    answer_socket_echo(&args.socket, layout, Duration::from_micros(args.spin_us))?;
+    Ok(())
+}
+
+/// The socket baseline: this binary's `bench socket-peer` answering.
+fn socket_baseline(args: &Args, layout: Layout, spin: Duration) -> anyhow::Result<LatencySummary> {
+    let mut peer = Command::new(std::env::current_exe()?);
+    peer.args(["bench", "socket-peer"])
+        .args(["--envs", &layout.n_envs.to_string()])
+        .args(["--joints", &layout.n_joints.to_string()])
+        .args(["--refs", &layout.n_refs.to_string()])
+        .args(["--spin-us", &spin.as_micros().to_string()])
+        .arg("--socket");
+    Ok(socket_round_trips(
+        peer,
+        layout,
+        args.warmup,
+        args.steps,
+        spin,
+    )?)
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -92,10 +117,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             n_refs: 1,
         };
         let spin = Duration::from_micros(args.spin_us);
-        let blocking = socket_baseline(args.warmup, args.steps, layout, Duration::ZERO)
-            .context("the Unix-socket baseline")?;
-        let spinning = socket_baseline(args.warmup, args.steps, layout, spin)
-            .context("the spinning Unix-socket baseline")?;
+        let blocking =
+            socket_baseline(args, layout, Duration::ZERO).context("the Unix-socket baseline")?;
+        let spinning =
+            socket_baseline(args, layout, spin).context("the spinning Unix-socket baseline")?;
         for client in &args.clients {
             let Some(row) = shm_round_trips(args, &robot, client, layout)? else {
                 continue;
@@ -103,17 +128,17 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             println!(
                 "| {client} | {envs} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} / {:.1} | {:.1} / {:.1} | {:.1}× / {:.1}× |",
                 (layout.obs_bytes() + layout.action_bytes()) as f64 / 1024.0,
-                row.p50,
-                row.p90,
-                row.p99,
-                row.p999,
-                row.max,
-                blocking.p50,
-                spinning.p50,
-                blocking.p999,
-                spinning.p999,
-                blocking.p50 / row.p50,
-                spinning.p50 / row.p50
+                row.p50_us,
+                row.p90_us,
+                row.p99_us,
+                row.p999_us,
+                row.max_us,
+                blocking.p50_us,
+                spinning.p50_us,
+                blocking.p999_us,
+                spinning.p999_us,
+                blocking.p50_us / row.p50_us,
+                spinning.p50_us / row.p50_us
             );
         }
     }
@@ -121,23 +146,6 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         "goals (2-core machine): Rust p50 ≤ 10 µs and p99.9 ≤ 100 µs at 1 environment; Python p50 ≤ 30 µs; ≥ 5× faster than the socket at 64 environments"
     );
     Ok(())
-}
-
-/// Fills every slot as active with a recognisable q.
-pub(super) fn fill(batch: &mut ObsBatchMut, layout: Layout, step: u64) {
-    for i in 0..layout.n_envs {
-        let mut env = batch.env(i);
-        env.set_header(&EnvHeader {
-            episode_id: i as u64,
-            step,
-            flags: FLAG_ACTIVE,
-            reserved: 0,
-            time_s: step as f64 * 0.02,
-        });
-        for (j, q) in env.array("q").iter_mut().enumerate() {
-            *q = (i * 100 + j) as f64 + step as f64;
-        }
-    }
 }
 
 /// The checkout this binary was built from: the C++ and Python echo clients live there.
@@ -208,7 +216,7 @@ fn shm_round_trips(
     robot: &RobotModel,
     client: &str,
     layout: Layout,
-) -> anyhow::Result<Option<Row>> {
+) -> anyhow::Result<Option<LatencySummary>> {
     let session = format!("bench-{client}-{}-{}", layout.n_envs, std::process::id());
     let mut sim = SimSession::create(SimConfig {
         session: session.clone(),
@@ -235,29 +243,9 @@ fn shm_round_trips(
             layout.n_refs
         );
     }
-    let mut rec = LatencyRecorder::default();
-    let mut checked = false;
-    for step in 0..(args.warmup + args.steps) as u64 {
-        let mut answer_ok = true;
-        let outcome = sim.step(
-            |b| fill(b, shape, step),
-            None,
-            |a| {
-                // action = q: check one slot, so a broken echo cannot look fast.
-                let last = shape.n_envs - 1;
-                answer_ok = a.env(last)[1] == (last * 100 + 1) as f64 + step as f64;
-            },
-        )?;
-        if outcome != StepOutcome::Answered || !answer_ok {
-            bail!("the {client} echo answered wrongly or went away at step {step} ({outcome:?})");
-        }
-        checked = true;
-        if step >= args.warmup as u64 {
-            rec.record(sim.last_round_trip());
-        }
-    }
+    let summary = echo_round_trips(&mut sim, args.warmup, args.steps)
+        .with_context(|| format!("the {client} echo"))?;
     sim.end();
     let _ = child.wait();
-    anyhow::ensure!(checked, "no step ran");
-    Ok(Some(Row::of(&rec)))
+    Ok(Some(summary))
 }

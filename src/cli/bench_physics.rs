@@ -4,12 +4,10 @@
 //! step; and MuJoCo's cost on the reference MJCF through its Python package, when
 //! installed.
 
-use anyhow::Context;
+use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Instant;
-use thorarena::physics::{
-    make_physics, standing_default_pose, Engine, Physics, PhysicsSettings, PhysicsState,
-};
+use thorarena::perf::{python_mujoco_step, time_physics_steps};
+use thorarena::physics::{make_physics, Engine, PhysicsSettings};
 
 /// Arguments of `bench physics`.
 #[derive(Debug, clap::Args)]
@@ -42,48 +40,6 @@ pub struct Args {
     pub mjcf: Option<String>,
 }
 
-/// One engine at one step: median µs per step, the repeats, pelvis height and contacts at
-/// the end of the last repeat.
-struct Timing {
-    median_us: f64,
-    repeats_us: Vec<f64>,
-    z_end: f64,
-    contacts: usize,
-}
-
-fn time_physics(physics: &mut dyn Physics, dt: f64, args: &Args) -> Timing {
-    let model = physics.model().clone();
-    let start = standing_default_pose(&model);
-    let mut repeats_us = Vec::new();
-    let (mut z_end, mut contacts) = (0.0, 0);
-    for _ in 0..args.repeats {
-        physics.reset(&start);
-        physics.set_targets(&start.q);
-        for _ in 0..(1.0 / dt).round() as usize {
-            physics.step();
-        }
-        let t0 = Instant::now();
-        for _ in 0..args.steps {
-            physics.step();
-        }
-        repeats_us.push(t0.elapsed().as_secs_f64() * 1e6 / args.steps as f64);
-        let mut state = PhysicsState::default();
-        physics.read_state(&mut state);
-        z_end = state
-            .root
-            .as_ref()
-            .map_or(0.0, |r| r.world_from_root.translation.z);
-        contacts = physics.contact_count();
-    }
-    let mut sorted = repeats_us.clone();
-    Timing {
-        median_us: median(&mut sorted),
-        repeats_us,
-        z_end,
-        contacts,
-    }
-}
-
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     anyhow::ensure!(
         args.steps > 0 && args.repeats > 0,
@@ -110,7 +66,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         let mut rapier_us = None;
         for engine in &engines {
             let mut physics = make_physics(engine, model.clone(), settings.clone(), gains.clone())?;
-            let t = time_physics(physics.as_mut(), dt, args);
+            let t = time_physics_steps(physics.as_mut(), dt, args.steps, args.repeats);
             let ratio = match rapier_us {
                 None => {
                     rapier_us = Some(t.median_us);
@@ -128,7 +84,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
                 args.steps,
                 t.repeats_us.iter().map(|x| (x * 10.0).round() / 10.0).collect::<Vec<_>>(),
                 t.contacts,
-                t.z_end,
+                t.pelvis_z_end_m,
             );
         }
     }
@@ -141,75 +97,24 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         "kd": gains.kd,
     })
     .to_string();
-    match mujoco_baseline(args, &gains_json) {
-        Ok(Some((mj_us, mj_dt, mj_z))) => {
+    let mjcf = args.mjcf.clone().map_or_else(
+        || thorarena::reference_dir().join("g1/g1_sim2sim_29dof.xml"),
+        PathBuf::from,
+    );
+    match python_mujoco_step(&args.python, &mjcf, args.repeats, &gains_json) {
+        Ok(Some(mj)) => {
             println!(
-                "python mujoco on the reference MJCF: {mj_us:8.1} µs per {:.1} ms step (its own dt, same gains), pelvis z at end {mj_z:.3} m, {:.1}× real time per core",
-                mj_dt * 1e3,
-                mj_dt / (mj_us * 1e-6)
+                "python mujoco on the reference MJCF: {:8.1} µs per {:.1} ms step (its own dt, same gains), pelvis z at end {:.3} m, {:.1}× real time per core",
+                mj.median_us,
+                mj.dt_s * 1e3,
+                mj.pelvis_z_end_m,
+                mj.dt_s / (mj.median_us * 1e-6)
             );
         }
         Ok(None) => println!(
             "python mujoco: skipped (python package `mujoco` or the reference MJCF not available)"
         ),
-        Err(e) => println!("python mujoco: failed: {e:#}"),
+        Err(e) => println!("python mujoco: failed: {e}"),
     }
     Ok(())
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// Runs `tools/mujoco_step_bench.py` with our gains; returns µs per step, its dt and the
-/// final pelvis height, or `None` when MuJoCo or the model is not available.
-fn mujoco_baseline(args: &Args, gains_json: &str) -> anyhow::Result<Option<(f64, f64, f64)>> {
-    let script =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/mujoco_step_bench.py");
-    let has_mujoco = std::process::Command::new(&args.python)
-        .args(["-c", "import mujoco"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    let mjcf = args.mjcf.clone().unwrap_or_else(|| {
-        thorarena::reference_dir()
-            .join("g1/g1_sim2sim_29dof.xml")
-            .display()
-            .to_string()
-    });
-    if !has_mujoco || !std::path::Path::new(&mjcf).is_file() {
-        return Ok(None);
-    }
-    let out = std::process::Command::new(&args.python)
-        .arg(&script)
-        .args([
-            "--mjcf",
-            &mjcf,
-            "--repeats",
-            &args.repeats.to_string(),
-            "--gains-json",
-            gains_json,
-        ])
-        .output()
-        .with_context(|| format!("running {}", script.display()))?;
-    anyhow::ensure!(
-        out.status.success(),
-        "{} failed: {}",
-        script.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value =
-        serde_json::from_slice(&out.stdout).context("parsing the MuJoCo benchmark's JSON")?;
-    if v.get("skipped").is_some() {
-        return Ok(None);
-    }
-    let us = v["median_us_per_step"]
-        .as_f64()
-        .context("no median_us_per_step in MuJoCo benchmark output")?;
-    let dt = v["dt_s"]
-        .as_f64()
-        .context("no dt_s in MuJoCo benchmark output")?;
-    let z = v["pelvis_z_end_m"].as_f64().unwrap_or(f64::NAN);
-    Ok(Some((us, dt, z)))
 }

@@ -10,7 +10,7 @@ use std::process::Command;
 use std::time::Instant;
 use thorarena::evaluation::EpisodeRecord;
 use thorarena::results::{RunDir, RunHeader};
-use thorarena::sweep::Plan;
+use thorarena::sweep::{DoneRecord, Plan, TaskDir};
 
 /// Arguments of `bench sweep`.
 #[derive(Debug, clap::Args)]
@@ -103,7 +103,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             .tasks
             .iter()
             .filter(|t| t.cell == 0)
-            .map(|t| Plan::task_dir(&first, t.index).join("run"))
+            .map(|t| TaskDir::of(&first, t.index).run_dir())
             .collect();
         if shards.len() != 2 || plan.cells[0].episodes != 12 {
             bail!("--plan-tasks needs a spec whose first cell is 2 shards of the bundled sample (sweeps/sample.toml)");
@@ -224,7 +224,8 @@ fn plan_at_scale(
         let mut header = source.clone();
         header.policy = cell.policy.policy.clone();
         header.settings = vec![setting.clone()];
-        let run = RunDir::new(Plan::task_dir(&dir, task.index).join("run"));
+        let tdir = TaskDir::of(&dir, task.index);
+        let run = RunDir::new(tdir.run_dir());
         run.start(&header, false)?;
         let mut appender = run.appender()?;
         for r in records {
@@ -236,14 +237,11 @@ fn plan_at_scale(
             })?;
         }
         appender.flush()?;
-        std::fs::write(
-            Plan::task_dir(&dir, task.index).join("done.json"),
-            format!(
-                "{{\"task\":{},\"episodes\":{},\"wall_s\":0.0}}",
-                task.index,
-                records.len()
-            ),
-        )?;
+        tdir.write_done(&DoneRecord {
+            task: task.index,
+            episodes: records.len(),
+            wall_s: 0.0,
+        })?;
         let source = RunDir::new(&shards[task.shard.0]);
         std::fs::copy(source.summary_file(), run.summary_file())?;
         std::fs::copy(source.tables_file(), run.tables_file())?;

@@ -3,7 +3,6 @@
 mod bench_eval;
 mod bench_ipc;
 mod bench_physics;
-mod bench_socket;
 mod bench_sweep;
 mod choices;
 mod client;
@@ -118,7 +117,7 @@ pub enum BenchCommand {
     Sweep(bench_sweep::Args),
     /// The socket baseline's echo peer (started by `bench ipc`).
     #[command(hide = true)]
-    SocketPeer(bench_socket::PeerArgs),
+    SocketPeer(bench_ipc::PeerArgs),
 }
 
 /// Parses the command line and runs it.
@@ -133,7 +132,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),
         Command::Bench(BenchCommand::Ipc(args)) => bench_ipc::run(&args),
         Command::Bench(BenchCommand::Sweep(args)) => bench_sweep::run(&args),
-        Command::Bench(BenchCommand::SocketPeer(args)) => bench_socket::run_peer(&args),
+        Command::Bench(BenchCommand::SocketPeer(args)) => bench_ipc::run_peer(&args),
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),

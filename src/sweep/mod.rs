@@ -22,24 +22,28 @@ mod array;
 mod axes;
 mod cells;
 mod check;
+mod k8s;
 mod plan;
 mod results_csv;
 mod slurm;
 mod spec;
 mod status;
+mod task_dir;
 mod text;
 mod verify;
 
 pub use array::compact_ranges;
 pub use cells::{CellFaults, CellLatency, CellResult};
+pub use k8s::{k8s_manifest, k8s_manifest_path, K8sRequest};
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
     PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
 };
 pub use results_csv::{results_csv, results_rows, ResultsRow, RESULTS_CSV_FILE};
-pub use slurm::{sbatch_script, shell_quote, SbatchRequest};
+pub use slurm::{sbatch_script, shell_quote, slurm_logs_dir, slurm_script_path, SbatchRequest};
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
+pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_FILE};
 pub use text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
 pub use verify::{check_task_run, RunProblem};
 

@@ -7,7 +7,17 @@
 //! (control characters, whitespace, quotes, backslash, `#`) is refused, naming the value.
 
 use super::SweepError;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Where `sweep slurm` writes the batch script in sweep directory `dir`.
+pub fn slurm_script_path(dir: &Path) -> PathBuf {
+    dir.join("slurm").join("sweep.sbatch")
+}
+
+/// Where the array's tasks write their logs (`task-<index>.log`), as the script says.
+pub fn slurm_logs_dir(dir: &Path) -> PathBuf {
+    dir.join("slurm").join("logs")
+}
 
 /// What the script runs and asks for.
 #[derive(Debug, Clone)]

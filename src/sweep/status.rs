@@ -1,10 +1,9 @@
 //! What has run: each task's directory holds `done.json` (written last, atomically, once
-//! its results are complete and flushed) or `failed.json` (why the last attempt failed).
-//! A record is read as what its location says: the directory names the task, and a
-//! record claiming another task (copied, misplaced) is an error naming the file — it
-//! would otherwise count one task twice and drop another from `--array`.
+//! its results are complete and flushed) or `failed.json` (why the last attempt failed);
+//! [`TaskDir`] reads and writes them, this module counts them.
 
 use super::plan::Plan;
+use super::task_dir::TaskDir;
 use super::SweepError;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -44,69 +43,9 @@ pub enum TaskState {
     NotStarted,
 }
 
-/// Largest task record read, bytes: a written one is far smaller (its log tail is
-/// capped at [`super::LOG_TAIL_MAX_BYTES`]).
-const RECORD_MAX_BYTES: u64 = 1 << 20;
-
-/// Reads task `index`'s state from sweep directory `dir`.
+/// Reads task `index`'s state from sweep directory `dir` (see [`TaskDir::state`]).
 pub fn task_state(dir: &Path, index: usize) -> Result<TaskState, SweepError> {
-    let tdir = Plan::task_dir(dir, index);
-    let read = |name: &str| -> Result<Option<String>, SweepError> {
-        let path = tdir.join(name);
-        let f = match std::fs::File::open(&path) {
-            Ok(f) => f,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
-            Err(source) => return Err(SweepError::Io { path, source }),
-        };
-        let mut text = String::new();
-        use std::io::Read;
-        f.take(RECORD_MAX_BYTES + 1)
-            .read_to_string(&mut text)
-            .map_err(|source| SweepError::Io {
-                path: path.clone(),
-                source,
-            })?;
-        if text.len() as u64 > RECORD_MAX_BYTES {
-            return Err(SweepError::BadRecord {
-                path,
-                message: format!("larger than {RECORD_MAX_BYTES} bytes: not a task record"),
-            });
-        }
-        Ok(Some(text))
-    };
-    let bad = |name: &str, message: String| SweepError::BadRecord {
-        path: tdir.join(name),
-        message,
-    };
-    let misplaced = |name: &str, claimed: usize| {
-        bad(
-            name,
-            format!(
-                "says it is task {claimed}'s but lies in task {index}'s directory (moved or copied?): remove it, and `sweep run` redoes the task"
-            ),
-        )
-    };
-    if let Some(t) = read("done.json")? {
-        let r: DoneRecord =
-            serde_json::from_str(&t).map_err(|e| bad("done.json", e.to_string()))?;
-        if r.task != index {
-            return Err(misplaced("done.json", r.task));
-        }
-        return Ok(TaskState::Done(r));
-    }
-    if let Some(t) = read("failed.json")? {
-        let r: FailedRecord =
-            serde_json::from_str(&t).map_err(|e| bad("failed.json", e.to_string()))?;
-        if r.task != index {
-            return Err(misplaced("failed.json", r.task));
-        }
-        return Ok(TaskState::Failed(r));
-    }
-    Ok(if tdir.join("run").exists() {
-        TaskState::Started
-    } else {
-        TaskState::NotStarted
-    })
+    TaskDir::of(dir, index).state()
 }
 
 /// Tasks by state: (done, failed with reasons, started, not started). A record's

@@ -4,7 +4,10 @@ use super::{K8sArgs, SlurmArgs};
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use thorarena::sweep::{census, compact_ranges, Plan};
+use thorarena::sweep::{
+    census, compact_ranges, k8s_manifest, k8s_manifest_path, slurm_logs_dir, slurm_script_path,
+    K8sRequest, Plan,
+};
 pub(super) fn absolute(p: &Path) -> anyhow::Result<PathBuf> {
     std::fs::canonicalize(p).with_context(|| format!("{} does not exist", p.display()))
 }
@@ -40,10 +43,9 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
         partition: args.partition.as_deref(),
         time: args.time.as_deref(),
     })?;
-    let sdir = dir.join("slurm");
-    let logs = sdir.join("logs");
+    let logs = slurm_logs_dir(&dir);
     std::fs::create_dir_all(&logs).with_context(|| format!("creating {}", logs.display()))?;
-    let script = sdir.join("sweep.sbatch");
+    let script = slurm_script_path(&dir);
     std::fs::write(&script, &s).with_context(|| format!("writing {}", script.display()))?;
     println!(
         "wrote {} ({} tasks: --array={array})",
@@ -86,71 +88,6 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A YAML scalar: JSON's string syntax is YAML's double-quoted style.
-pub(super) fn yaml_str(s: &str) -> String {
-    serde_json::to_string(s).expect("a string serializes")
-}
-
-/// The Indexed Job manifest running every task of `plan` (done ones are skipped by
-/// `sweep task` itself, so the manifest never needs regenerating).
-pub(super) fn k8s_manifest(
-    plan: &Plan,
-    dir: &Path,
-    image: &str,
-    claim: &str,
-    sub_path: Option<&str>,
-    parallelism: usize,
-    cpus: usize,
-) -> String {
-    let name = format!(
-        "thorarena-sweep-{}",
-        &sha_hex(dir.display().to_string().as_bytes())[..10]
-    );
-    let n = plan.tasks.len();
-    let mount = dir.display().to_string();
-    let mut y = String::new();
-    y += "# ThorArena sweep as a Kubernetes Indexed Job: pod I runs `thorarena sweep task DIR`\n";
-    y += "# with JOB_COMPLETION_INDEX = I. The claim holds the sweep directory, mounted at the\n";
-    y += "# same absolute path as where it was planned (datasets likewise).\n";
-    y += "apiVersion: batch/v1\nkind: Job\nmetadata:\n";
-    y += &format!("  name: {name}\n");
-    y += "spec:\n  completionMode: Indexed\n";
-    y += &format!("  completions: {n}\n  parallelism: {parallelism}\n");
-    y += &format!("  backoffLimitPerIndex: 2\n  maxFailedIndexes: {n}\n");
-    y += "  template:\n    spec:\n      restartPolicy: Never\n      containers:\n";
-    y += "        - name: task\n";
-    y += &format!("          image: {}\n", yaml_str(image));
-    y += &format!(
-        "          command: [{}, {}, {}, {}, {}, {}]\n",
-        yaml_str("thorarena"),
-        yaml_str("sweep"),
-        yaml_str("task"),
-        yaml_str(&mount),
-        yaml_str("--workers"),
-        yaml_str(&cpus.to_string())
-    );
-    y += &format!(
-        "          resources:\n            requests:\n              cpu: {}\n",
-        yaml_str(&cpus.to_string())
-    );
-    y += "          volumeMounts:\n            - name: sweep\n";
-    y += &format!("              mountPath: {}\n", yaml_str(&mount));
-    if let Some(sp) = sub_path {
-        y += &format!("              subPath: {}\n", yaml_str(sp));
-    }
-    y += "      volumes:\n        - name: sweep\n          persistentVolumeClaim:\n";
-    y += &format!("            claimName: {}\n", yaml_str(claim));
-    y
-}
-
-pub(super) fn sha_hex(bytes: &[u8]) -> String {
-    use sha2::{Digest, Sha256};
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
 pub(super) fn k8s(args: &K8sArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.dir)?;
     let dir = absolute(&args.dir)?;
@@ -163,16 +100,18 @@ pub(super) fn k8s(args: &K8sArgs) -> anyhow::Result<()> {
     }
     let y = k8s_manifest(
         &plan,
-        &dir,
-        &args.image,
-        &args.claim,
-        args.sub_path.as_deref(),
-        parallelism,
-        args.cpus_per_task,
+        &K8sRequest {
+            dir: &dir,
+            image: &args.image,
+            claim: &args.claim,
+            sub_path: args.sub_path.as_deref(),
+            parallelism,
+            cpus_per_task: args.cpus_per_task,
+        },
     );
-    let kdir = dir.join("k8s");
-    std::fs::create_dir_all(&kdir).with_context(|| format!("creating {}", kdir.display()))?;
-    let path = kdir.join("job.yaml");
+    let path = k8s_manifest_path(&dir);
+    let kdir = path.parent().expect("the manifest is in a directory");
+    std::fs::create_dir_all(kdir).with_context(|| format!("creating {}", kdir.display()))?;
     std::fs::write(&path, y).with_context(|| format!("writing {}", path.display()))?;
     println!(
         "wrote {} ({} tasks); run with: kubectl apply -f {}",

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use thorarena::motion::{Dataset, Sequence};
 use thorarena::report::{label_cells, sweep_charts, sweep_title};
 use thorarena::results::RunDir;
-use thorarena::sweep::{census, compact_ranges, CellResult, Plan, Task};
+use thorarena::sweep::{census, compact_ranges, CellResult, Plan, Task, TaskDir};
 
 /// Each dataset of the plan, loaded, after checking it is the one planned: scores are
 /// computed against the references as they are now, so they must be the ones the runs
@@ -48,7 +48,7 @@ fn counted_tasks(dir: &Path, plan: &Plan) -> anyhow::Result<(HashSet<usize>, Vec
     let mut done: HashSet<usize> = HashSet::new();
     let mut not_counted: Vec<String> = Vec::new();
     for &i in &c.done {
-        let run = Plan::task_dir(dir, i).join("run");
+        let run = TaskDir::of(dir, i).run_dir();
         match check_task_run(plan, &plan.tasks[i], &run)? {
             Ok(_) => {
                 done.insert(i);
@@ -117,7 +117,7 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         let runs: Vec<PathBuf> = tasks
             .iter()
             .filter(|t| done.contains(&t.index))
-            .map(|t| Plan::task_dir(&args.dir, t.index).join("run"))
+            .map(|t| TaskDir::of(&args.dir, t.index).run_dir())
             .collect();
         if runs.is_empty() {
             results.push(None);

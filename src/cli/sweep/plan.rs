@@ -1,12 +1,11 @@
 //! `sweep plan`: a spec expanded, validated with `eval`'s own parser and loader, written.
 
-use super::task::write_atomic;
 use super::PlanArgs;
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::path::Path;
 use thorarena::motion::Dataset;
-use thorarena::sweep::{diff_plans, DatasetInfo, Plan, SweepSpec, Task, PLAN_FILE};
+use thorarena::sweep::{diff_plans, write_atomic, DatasetInfo, Plan, SweepSpec, Task, PLAN_FILE};
 pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
     let spec_path = std::fs::canonicalize(&args.spec)
         .with_context(|| format!("reading the sweep spec {}", args.spec.display()))?;

@@ -7,7 +7,8 @@ use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use thorarena::sweep::{printable, task_state, Plan, TaskState};
+use thorarena::results::RunDir;
+use thorarena::sweep::{printable, task_state, Plan, TaskDir, TaskState};
 pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
     let plan = Arc::new(Plan::load(&args.dir)?);
     let jobs = match args.jobs {
@@ -75,7 +76,8 @@ pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
             }
         }
         for &i in running.lock().expect("running").iter() {
-            episodes += count_lines(&Plan::task_dir(&args.dir, i).join("run/episodes.jsonl"));
+            episodes +=
+                count_lines(&RunDir::new(TaskDir::of(&args.dir, i).run_dir()).episodes_file());
         }
         bar.set_position(episodes as u64);
         bar.set_message(format!(

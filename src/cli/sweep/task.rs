@@ -4,18 +4,13 @@
 use super::verify::{check_task_run, RunProblem};
 use super::TaskArgs;
 use anyhow::{bail, Context};
-use std::fs::File;
-use std::io::Write;
 use std::os::unix::process::CommandExt;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 use thorarena::motion::Dataset;
 use thorarena::results::RunDir;
-use thorarena::sweep::{
-    log_tail as log_tail_of, printable, shell_quote, task_state, truncated, DoneRecord,
-    FailedRecord, Plan, Task, TaskState, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
-};
+use thorarena::sweep::{shell_quote, DoneRecord, Plan, Task, TaskDir, TaskLog, TaskState};
 /// What became of one attempt at a task.
 #[derive(Debug)]
 pub(super) enum Outcome {
@@ -39,16 +34,17 @@ pub(super) fn run_task(
         .get(index)
         .with_context(|| format!("task {index}: the plan has tasks 0..{}", plan.tasks.len()))?;
     let cell = &plan.cells[task.cell]; // in range: the plan was checked when loaded
-    let tdir = Plan::task_dir(dir, index);
-    std::fs::create_dir_all(&tdir).with_context(|| format!("creating {}", tdir.display()))?;
+    let tdir = TaskDir::of(dir, index);
     // One copy at a time; a second one waits, then finds the task done.
-    let lock = lock_task(&tdir)?;
-    if let TaskState::Done(_) = task_state(dir, index)? {
+    let lock = tdir.lock()?;
+    if let TaskState::Done(_) = tdir.state()? {
         return Ok(Outcome::AlreadyDone);
     }
-    let _ = std::fs::remove_file(tdir.join("failed.json"));
+    tdir.clear_failed();
     let started = Instant::now();
-    let fail = |reason: String, logs: &[&str]| record_failure(&tdir, index, reason, logs);
+    let fail = |reason: String, logs: &[TaskLog]| -> anyhow::Result<Outcome> {
+        Ok(Outcome::Failed(tdir.write_failed(&reason, logs)?))
+    };
 
     // The dataset must be the one planned.
     let robot = thorarena::registry::robot(&plan.robot)?;
@@ -67,7 +63,7 @@ pub(super) fn run_task(
     }
 
     let session = format!("sweep-{index}-{}", std::process::id());
-    let run_dir = tdir.join("run");
+    let run_dir = tdir.run_dir();
     let mut eval_cmd = eval_command(task, &session, &run_dir, workers, &tdir)?;
     let mut policy: Option<Child> = None;
     if let Some(command) = &cell.policy.command {
@@ -86,14 +82,14 @@ pub(super) fn run_task(
         EvalEnd::PolicyGone(ps) => {
             return fail(
                 format!("the policy command exited ({ps}) before the evaluation finished"),
-                &["policy.log", "eval.log"],
+                &[TaskLog::Policy, TaskLog::Eval],
             )
         }
     };
     if !eval_status.success() {
         return fail(
             format!("thorarena eval failed ({eval_status})"),
-            &["eval.log", "policy.log"],
+            &[TaskLog::Eval, TaskLog::Policy],
         );
     }
     // Complete, this task's, and on disk before it counts as done: `eval` exits 0 when
@@ -103,13 +99,13 @@ pub(super) fn run_task(
         Err(RunProblem::Incomplete(why)) => {
             return fail(
                 format!("{why}; `sweep run` again resumes the task"),
-                &["eval.log", "policy.log"],
+                &[TaskLog::Eval, TaskLog::Policy],
             )
         }
         Err(RunProblem::NotThisTask(why)) => {
             return fail(
                 format!("{why}; remove {} and run the task again", run_dir.display()),
-                &["eval.log"],
+                &[TaskLog::Eval],
             )
         }
     };
@@ -121,47 +117,9 @@ pub(super) fn run_task(
         episodes: records.len(),
         wall_s: started.elapsed().as_secs_f64(),
     };
-    write_atomic(
-        &tdir.join("done.json"),
-        serde_json::to_string_pretty(&done)?.as_bytes(),
-    )?;
+    tdir.write_done(&done)?;
     drop(lock);
     Ok(Outcome::Done)
-}
-
-/// Records why the task failed in `failed.json`, with the tails of its `logs` (bounded
-/// and printable however much, and whatever, the processes wrote).
-fn record_failure(
-    tdir: &Path,
-    index: usize,
-    reason: String,
-    logs: &[&str],
-) -> anyhow::Result<Outcome> {
-    let reason = truncated(&printable(&reason), LOG_LINE_MAX_BYTES);
-    let mut log_tail = Vec::new();
-    let mut budget = LOG_TAIL_MAX_BYTES;
-    for name in logs {
-        let mut lines = log_tail_of(&tdir.join(name), 12);
-        let mut bytes: usize = lines.iter().map(String::len).sum();
-        while bytes > budget {
-            bytes -= lines.remove(0).len();
-        }
-        if !lines.is_empty() {
-            budget -= bytes;
-            log_tail.push(format!("--- {name}"));
-            log_tail.extend(lines);
-        }
-    }
-    let record = FailedRecord {
-        task: index,
-        reason: reason.clone(),
-        log_tail,
-    };
-    write_atomic(
-        &tdir.join("failed.json"),
-        serde_json::to_string_pretty(&record)?.as_bytes(),
-    )?;
-    Ok(Outcome::Failed(reason))
 }
 
 /// The task's `eval` process: the plan's arguments into `run_dir`, resuming, its output
@@ -171,9 +129,9 @@ fn eval_command(
     session: &str,
     run_dir: &Path,
     workers: usize,
-    tdir: &Path,
+    tdir: &TaskDir,
 ) -> anyhow::Result<Command> {
-    let eval_log = create_log(&tdir.join("eval.log"))?;
+    let eval_log = tdir.create_log(TaskLog::Eval)?;
     let mut eval_cmd = Command::new(std::env::current_exe()?);
     eval_cmd
         .args(task.eval_argv(session))
@@ -193,10 +151,10 @@ fn start_policy(
     plan: &Plan,
     command: &str,
     session: &str,
-    tdir: &Path,
+    tdir: &TaskDir,
 ) -> anyhow::Result<Result<Child, String>> {
     let line = policy_command_line(command, session)?;
-    let log = create_log(&tdir.join("policy.log"))?;
+    let log = tdir.create_log(TaskLog::Policy)?;
     let mut c = Command::new("sh");
     c.args(["-c", &line])
         .current_dir(&plan.workdir)
@@ -290,50 +248,6 @@ pub(super) fn stop_group(child: &mut Child) {
     let _ = child.wait();
 }
 
-/// An exclusive advisory lock on `tdir/lock`, waiting for another holder to finish.
-pub(super) fn lock_task(tdir: &Path) -> anyhow::Result<File> {
-    let path = tdir.join("lock");
-    let file = File::create(&path).with_context(|| format!("creating {}", path.display()))?;
-    use std::os::fd::AsRawFd;
-    loop {
-        // SAFETY: flock on a descriptor we own.
-        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX) } == 0 {
-            return Ok(file);
-        }
-        let e = std::io::Error::last_os_error();
-        if e.kind() != std::io::ErrorKind::Interrupted {
-            return Err(e).with_context(|| format!("locking {}", path.display()));
-        }
-    }
-}
-
-/// A task's log file, created (truncated) for an attempt; the error names it.
-fn create_log(path: &Path) -> anyhow::Result<File> {
-    File::create(path).with_context(|| format!("creating {}", path.display()))
-}
-
-/// Writes `bytes` to `path` through a temporary sibling, synced and renamed; the
-/// temporary file is removed if any step fails (a full disk leaves nothing behind).
-pub(super) fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    let written = (|| -> std::io::Result<()> {
-        let mut f = File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e).with_context(|| format!("writing {}", path.display()));
-    }
-    if let Some(parent) = path.parent() {
-        if let Ok(d) = File::open(parent) {
-            let _ = d.sync_all();
-        }
-    }
-    Ok(())
-}
-
 pub(super) fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
@@ -376,9 +290,7 @@ pub(super) fn task(args: &TaskArgs) -> anyhow::Result<()> {
         }
         Outcome::Failed(reason) => bail!(
             "task {index} failed: {reason} (details: {})",
-            Plan::task_dir(&args.dir, index)
-                .join("failed.json")
-                .display()
+            TaskDir::of(&args.dir, index).failed_file().display()
         ),
     }
 }

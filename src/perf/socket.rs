@@ -1,36 +1,21 @@
-//! The baseline of `bench ipc`: the same observation and action batches through a Unix
-//! stream socket to a peer process that answers action = q, with either blocking reads or
-//! the shared-memory path's wait (busy-poll a non-blocking socket, then `poll(2)`).
+//! The baseline of the IPC round trip: the same observation and action batches through a
+//! Unix stream socket to a peer process that answers action = q, with either blocking
+//! reads or the shared-memory path's own wait (busy-poll a non-blocking socket, then
+//! `poll(2)`), so a comparison separates what waiting costs from what copying costs.
 
-use super::bench_ipc::{fill, Row};
+use super::round_trip::fill_echo_observations;
+use super::PerfError;
+use crate::evaluation::{LatencyRecorder, LatencySummary};
 use std::io::{BufRead, BufReader, ErrorKind, Read, Write};
 use std::os::fd::AsRawFd;
 use std::os::unix::net::{UnixListener, UnixStream};
-use std::path::PathBuf;
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-use thorarena::evaluation::LatencyRecorder;
 use thorarena_ipc::{ActionBatchMut, Layout, ObsBatch, ObsBatchMut};
 
-/// Hidden subcommand: the socket baseline's echo peer.
-#[derive(Debug, clap::Args)]
-pub struct PeerArgs {
-    /// Socket path to connect to.
-    #[arg(long)]
-    pub socket: PathBuf,
-    /// Environments per batch.
-    #[arg(long)]
-    pub envs: usize,
-    /// Joints per environment.
-    #[arg(long)]
-    pub joints: usize,
-    /// Reference frames per environment.
-    #[arg(long)]
-    pub refs: usize,
-    /// Busy-poll this many µs before blocking (0: blocking reads).
-    #[arg(long, default_value_t = 0)]
-    pub spin_us: u64,
-}
+/// The line a peer prints once connected.
+const READY: &str = "ready";
 
 /// A stream socket read and written either blocking or spin-then-block.
 struct Stream {
@@ -97,13 +82,16 @@ impl Stream {
     }
 }
 
-/// Round trips of `steps` batches (after `warmup`) through a socket peer process.
-pub(super) fn socket_baseline(
+/// `warmup` untimed and `steps` timed round trips through a socket peer: `peer` is the
+/// command of a process that connects to the socket path given as its last argument and
+/// calls [`answer_socket_echo`] (for `thorarena`, `bench socket-peer … --socket`).
+pub fn socket_round_trips(
+    mut peer: Command,
+    layout: Layout,
     warmup: usize,
     steps: usize,
-    layout: Layout,
     spin: Duration,
-) -> anyhow::Result<Row> {
+) -> Result<LatencySummary, PerfError> {
     let path = std::env::temp_dir().join(format!(
         "thorarena-bench-{}-{}-{}.sock",
         std::process::id(),
@@ -111,31 +99,34 @@ pub(super) fn socket_baseline(
         spin.as_micros()
     ));
     let _ = std::fs::remove_file(&path);
-    let listener = UnixListener::bind(&path)?;
-    let mut peer = Command::new(std::env::current_exe()?)
-        .args(["bench", "socket-peer", "--socket"])
+    let listener = UnixListener::bind(&path).map_err(PerfError::io("binding the socket"))?;
+    let mut peer = peer
         .arg(&path)
-        .args(["--envs", &layout.n_envs.to_string()])
-        .args(["--joints", &layout.n_joints.to_string()])
-        .args(["--refs", &layout.n_refs.to_string()])
-        .args(["--spin-us", &spin.as_micros().to_string()])
         .stdout(Stdio::piped())
-        .spawn()?;
-    let (stream, _) = listener.accept()?;
-    let mut stream = Stream::new(stream, spin)?;
+        .spawn()
+        .map_err(PerfError::io("starting the socket peer"))?;
+    let io = |what: &'static str| PerfError::io(what);
+    let (stream, _) = listener.accept().map_err(io("accepting the peer"))?;
+    let mut stream = Stream::new(stream, spin).map_err(io("configuring the socket"))?;
     let mut ready = String::new();
-    BufReader::new(peer.stdout.take().expect("piped")).read_line(&mut ready)?;
+    BufReader::new(peer.stdout.take().expect("piped"))
+        .read_line(&mut ready)
+        .map_err(io("reading the peer's ready line"))?;
     let mut obs = vec![0u64; layout.obs_words()];
     let mut actions = vec![0u64; layout.action_words()];
     let mut rec = LatencyRecorder::default();
     for step in 0..(warmup + steps) as u64 {
         {
             let mut b = ObsBatchMut::new(layout, bytemuck::cast_slice_mut(&mut obs), 0, step);
-            fill(&mut b, layout, step);
+            fill_echo_observations(&mut b, layout, step);
         }
         let started = Instant::now();
-        stream.write_all(bytemuck::cast_slice(&obs))?;
-        stream.read_exact(bytemuck::cast_slice_mut(&mut actions))?;
+        stream
+            .write_all(bytemuck::cast_slice(&obs))
+            .map_err(io("sending a batch"))?;
+        stream
+            .read_exact(bytemuck::cast_slice_mut(&mut actions))
+            .map_err(io("receiving the actions"))?;
         let took = started.elapsed();
         if step >= warmup as u64 {
             rec.record(took);
@@ -144,22 +135,19 @@ pub(super) fn socket_baseline(
     drop(stream);
     let _ = peer.wait();
     let _ = std::fs::remove_file(&path);
-    Ok(Row::of(&rec))
+    Ok(rec.summary())
 }
 
-/// `bench socket-peer`: answers each batch read from the socket with action = q.
-pub(super) fn run_peer(args: &PeerArgs) -> anyhow::Result<()> {
-    use anyhow::Context;
-    let layout = Layout {
-        n_envs: args.envs,
-        n_joints: args.joints,
-        n_refs: args.refs,
-    };
-    let stream = UnixStream::connect(&args.socket)
-        .with_context(|| format!("connecting to {}", args.socket.display()))?;
-    let mut stream = Stream::new(stream, Duration::from_micros(args.spin_us))?;
-    println!("ready");
-    std::io::stdout().flush()?;
+/// The peer side: connects to `socket`, prints a ready line on standard output, and
+/// answers each batch with action = q until the other side closes the socket.
+pub fn answer_socket_echo(socket: &Path, layout: Layout, spin: Duration) -> Result<(), PerfError> {
+    let stream = UnixStream::connect(socket)
+        .map_err(PerfError::io(format!("connecting to {}", socket.display())))?;
+    let mut stream = Stream::new(stream, spin).map_err(PerfError::io("configuring the socket"))?;
+    let mut stdout = std::io::stdout();
+    writeln!(stdout, "{READY}")
+        .and_then(|()| stdout.flush())
+        .map_err(PerfError::io("writing the ready line"))?;
     let mut obs = vec![0u64; layout.obs_words()];
     let mut actions = vec![0u64; layout.action_words()];
     loop {
@@ -181,6 +169,8 @@ pub(super) fn run_peer(args: &PeerArgs) -> anyhow::Result<()> {
                 out.env(i).copy_from_slice(env.array("q"));
             }
         }
-        stream.write_all(bytemuck::cast_slice(&actions))?;
+        stream
+            .write_all(bytemuck::cast_slice(&actions))
+            .map_err(PerfError::io("sending the actions"))?;
     }
 }

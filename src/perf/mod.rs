@@ -1,0 +1,67 @@
+//! What ThorArena costs, measured: one physics step per engine, the whole episode loop on
+//! one core, and the policy round trip over shared memory next to a Unix-socket baseline
+//! moving the same bytes. Each function returns figures; `thorarena bench …` prints them
+//! with the ratio to the baseline measured in the same run.
+
+mod episode_loop;
+mod physics_step;
+mod round_trip;
+mod socket;
+
+pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
+pub use physics_step::{python_mujoco_step, time_physics_steps, PythonMujocoTiming, StepTiming};
+pub use round_trip::{echo_round_trips, fill_echo_observations};
+pub use socket::{answer_socket_echo, socket_round_trips};
+
+use std::path::PathBuf;
+
+/// Why a measurement could not be taken.
+#[derive(Debug, thiserror::Error)]
+pub enum PerfError {
+    /// A file, socket or process could not be used.
+    #[error("{what}: {source}")]
+    Io {
+        /// What was being done.
+        what: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The shared-memory transport failed.
+    #[error(transparent)]
+    Ipc(#[from] thorarena_ipc::IpcError),
+    /// A batch did not match its layout.
+    #[error(transparent)]
+    Layout(#[from] thorarena_ipc::LayoutError),
+    /// An echo peer answered something other than action = q, or went away.
+    #[error("the echo answered wrongly or went away at step {step} ({outcome})")]
+    WrongEcho {
+        /// The step.
+        step: u64,
+        /// What the transport said.
+        outcome: String,
+    },
+    /// The Python MuJoCo baseline failed or wrote something unreadable.
+    #[error("{}: {message}", script.display())]
+    Baseline {
+        /// The baseline's script.
+        script: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+impl PerfError {
+    fn io(what: impl Into<String>) -> impl FnOnce(std::io::Error) -> Self {
+        let what = what.into();
+        move |source| PerfError::Io { what, source }
+    }
+}
+
+/// The median of `v` (sorted in place); NaN for none.
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}

@@ -1,0 +1,83 @@
+//! The Kubernetes Indexed Job manifest of a sweep: pod I runs `thorarena sweep task DIR`
+//! with `JOB_COMPLETION_INDEX = I`. Every value written into it is a YAML double-quoted
+//! scalar (JSON's string syntax), so a path or an image name is data whatever it holds.
+
+use super::plan::Plan;
+use std::path::{Path, PathBuf};
+
+/// What the manifest runs and asks for.
+#[derive(Debug, Clone)]
+pub struct K8sRequest<'a> {
+    /// The sweep directory (absolute): mounted at this same path in every pod.
+    pub dir: &'a Path,
+    /// The container image holding `thorarena`.
+    pub image: &'a str,
+    /// The PersistentVolumeClaim holding the sweep directory.
+    pub claim: &'a str,
+    /// The claim's sub-path to mount, if the sweep is not at its root.
+    pub sub_path: Option<&'a str>,
+    /// Pods at a time.
+    pub parallelism: usize,
+    /// CPUs each pod requests (and `--workers` of its task).
+    pub cpus_per_task: usize,
+}
+
+/// Where `sweep k8s` writes the manifest in sweep directory `dir`.
+pub fn k8s_manifest_path(dir: &Path) -> PathBuf {
+    dir.join("k8s").join("job.yaml")
+}
+
+/// The Indexed Job running every task of `plan` (done ones are skipped by `sweep task`
+/// itself, so the manifest never needs regenerating). Its name is derived from the sweep
+/// directory, so two sweeps in one namespace do not collide.
+pub fn k8s_manifest(plan: &Plan, r: &K8sRequest) -> String {
+    let name = format!(
+        "thorarena-sweep-{}",
+        &sha_hex(r.dir.display().to_string().as_bytes())[..10]
+    );
+    let n = plan.tasks.len();
+    let mount = r.dir.display().to_string();
+    let cpus = r.cpus_per_task.to_string();
+    let mut y = String::new();
+    y += "# ThorArena sweep as a Kubernetes Indexed Job: pod I runs `thorarena sweep task DIR`\n";
+    y += "# with JOB_COMPLETION_INDEX = I. The claim holds the sweep directory, mounted at the\n";
+    y += "# same absolute path as where it was planned (datasets likewise).\n";
+    y += "apiVersion: batch/v1\nkind: Job\nmetadata:\n";
+    y += &format!("  name: {name}\n");
+    y += "spec:\n  completionMode: Indexed\n";
+    y += &format!("  completions: {n}\n  parallelism: {}\n", r.parallelism);
+    y += &format!("  backoffLimitPerIndex: 2\n  maxFailedIndexes: {n}\n");
+    y += "  template:\n    spec:\n      restartPolicy: Never\n      containers:\n";
+    y += "        - name: task\n";
+    y += &format!("          image: {}\n", yaml_str(r.image));
+    let command: Vec<String> = ["thorarena", "sweep", "task", &mount, "--workers", &cpus]
+        .iter()
+        .map(|w| yaml_str(w))
+        .collect();
+    y += &format!("          command: [{}]\n", command.join(", "));
+    y += &format!(
+        "          resources:\n            requests:\n              cpu: {}\n",
+        yaml_str(&cpus)
+    );
+    y += "          volumeMounts:\n            - name: sweep\n";
+    y += &format!("              mountPath: {}\n", yaml_str(&mount));
+    if let Some(sp) = r.sub_path {
+        y += &format!("              subPath: {}\n", yaml_str(sp));
+    }
+    y += "      volumes:\n        - name: sweep\n          persistentVolumeClaim:\n";
+    y += &format!("            claimName: {}\n", yaml_str(r.claim));
+    y
+}
+
+/// A YAML scalar: JSON's string syntax is YAML's double-quoted style.
+fn yaml_str(s: &str) -> String {
+    serde_json::to_string(s).expect("a string serializes")
+}
+
+fn sha_hex(bytes: &[u8]) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
