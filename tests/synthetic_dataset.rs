@@ -7,7 +7,7 @@
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::path::Path;
 use std::sync::OnceLock;
-use thorarena::motion::synth::{synthesize, SynthOptions, TASKS};
+use thorarena::motion::synth::{synthesize, write_synthetic, SynthOptions, TASKS};
 use thorarena::motion::{Dataset, Sequence, MANIFEST};
 use thorarena::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
 
@@ -289,16 +289,8 @@ fn unknown_tasks_are_rejected() {
 fn the_committed_sample_regenerates_bit_identically_and_loads() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
     let dir = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"))
-        .args(["data", "synth", "--per-task", "2", "--seed", "0", "--out"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    // What `data synth --per-task 2 --seed 0` writes.
+    write_synthetic(dir.path(), &g1(), &options(2, 0, &[]), false, |_, _| {}).unwrap();
     let manifest = std::fs::read(root.join(MANIFEST)).unwrap();
     assert_eq!(
         manifest,
@@ -320,25 +312,18 @@ fn the_committed_sample_regenerates_bit_identically_and_loads() {
 #[test]
 fn an_existing_dataset_is_kept_unless_forced() {
     let dir = tempfile::tempdir().unwrap();
-    let run = |extra: &[&str]| {
-        std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"))
-            .args([
-                "data",
-                "synth",
-                "--per-task",
-                "1",
-                "--tasks",
-                "clean_table",
-                "--out",
-            ])
-            .arg(dir.path())
-            .args(extra)
-            .output()
-            .unwrap()
+    // `data synth --per-task 1 --tasks clean_table`, then again, then with `--force`.
+    let run = |force: bool| {
+        write_synthetic(
+            dir.path(),
+            &g1(),
+            &options(1, 0, &["clean_table"]),
+            force,
+            |_, _| {},
+        )
     };
-    assert!(run(&[]).status.success());
-    let again = run(&[]);
-    assert!(!again.status.success());
-    assert!(String::from_utf8_lossy(&again.stderr).contains("--force"));
-    assert!(run(&["--force"]).status.success());
+    assert!(run(false).is_ok());
+    let again = run(false).unwrap_err();
+    assert!(again.to_string().contains("--force"), "{again}");
+    assert!(run(true).is_ok());
 }

@@ -1,10 +1,9 @@
 //! `thorarena data …`: import motion files, describe a dataset.
 
-use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
-use thorarena::motion::import::canonical::{to_sequence, ImportOptions};
-use thorarena::motion::import::{force_csv, lafan_csv, npz, onnx_motion, twist_pkl, RawMotion};
-use thorarena::motion::{correct_ground, ground_check, Dataset, DatasetWriter, TrimmedGlitches};
+use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
+use thorarena::motion::{Dataset, GroundCheck, Sequence, TrimmedGlitches};
+use thorarena::robot::RobotModel;
 
 /// `thorarena data …`
 #[derive(Debug, clap::Subcommand)]
@@ -154,101 +153,50 @@ pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
     }
 }
 
-fn read_raw(
-    format: Format,
-    path: &Path,
-    args: &ImportArgs,
-    robot: &thorarena::robot::RobotModel,
-) -> anyhow::Result<RawMotion> {
-    Ok(match format {
-        Format::TwistPkl => twist_pkl::read_twist_pkl(path)?,
-        Format::BeyondmimicNpz => npz::read_beyondmimic_npz(path, args.joint_names.as_deref())?,
-        Format::LafanCsv => lafan_csv::read_lafan_csv(path, args.fps)?,
+/// The reader `--format` names, with what it needs from the other flags.
+fn source_format(args: &ImportArgs, robot: &RobotModel) -> anyhow::Result<SourceFormat> {
+    Ok(match args.format {
+        Format::TwistPkl => SourceFormat::TwistPkl,
+        Format::BeyondmimicNpz => SourceFormat::BeyondMimicNpz {
+            joint_names: args.joint_names.clone(),
+        },
+        Format::LafanCsv => SourceFormat::LafanCsv { fps: args.fps },
         Format::OnnxMotion => {
             let profile = thorarena::registry::profile(&args.profile, robot)?;
-            let body = profile
-                .beyondmimic
-                .as_ref()
-                .map_or("torso_link", |b| b.anchor_body.as_str());
-            onnx_motion::read_onnx_motion(path, robot, body, profile.control_dt_s)?
+            SourceFormat::OnnxMotion {
+                anchor_body: profile
+                    .beyondmimic
+                    .as_ref()
+                    .map_or("torso_link", |b| b.anchor_body.as_str())
+                    .to_string(),
+                control_dt_s: profile.control_dt_s,
+            }
         }
     })
 }
 
-fn import(args: &ImportArgs) -> anyhow::Result<()> {
-    let robot = thorarena::registry::robot(&args.robot)?;
-    if args.forces.is_some() && args.inputs.len() != 1 {
-        bail!("--forces pairs one left and one right log with one motion; import motions with forces one at a time");
-    }
-    let forces = match &args.forces {
-        Some(files) => Some([
-            force_csv::read_force_csv(&files[0])?,
-            force_csv::read_force_csv(&files[1])?,
-        ]),
-        None => None,
-    };
-    thorarena::names::check_name("--task", &args.task)?;
-    let mut writer = DatasetWriter::append(&args.out, &robot)?;
-    // Sequence ids come from file names: check them, and that none is taken, before
-    // anything is read or written.
-    let mut ids = std::collections::HashSet::new();
-    for input in &args.inputs {
-        let stem = input
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .with_context(|| format!("{}: no file name", input.display()))?;
-        thorarena::names::check_name("sequence id (the file name)", stem)
-            .with_context(|| input.display().to_string())?;
-        if !ids.insert(stem) {
-            bail!(
-                "two inputs are named `{stem}`: sequence ids come from file names and must differ"
-            );
-        }
-        if writer.contains(&args.task, stem) {
-            bail!(
-                "{}/{stem} is already in {}: rename the file or import into another dataset",
-                args.task,
-                args.out.display()
-            );
-        }
-    }
-    // All or nothing: every input is read, checked and converted before the first file is
-    // written, so one rejected motion (a glitch, a bad field) leaves the dataset as it was.
-    let mut seqs = Vec::with_capacity(args.inputs.len());
-    for input in &args.inputs {
-        let stem = input
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .with_context(|| format!("{}: no file name", input.display()))?;
+/// Prints what an import does, file by file.
+struct ImportProgress;
+
+impl ImportObserver for ImportProgress {
+    fn reading(&mut self, input: &Path) {
         eprintln!("{}:", input.display());
-        let raw = read_raw(args.format, input, args, &robot)?;
-        let opts = ImportOptions {
-            task: args.task.clone(),
-            sequence_id: stem.to_string(),
-            renormalize_quaternions: args.renormalize_quaternions,
-            trim_glitches: args.trim_glitches,
-            forces: forces.clone(),
-            force_offset_s: args.force_offset,
-            force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
-        };
-        let mut seq = to_sequence(raw, &robot, &opts, input)?;
+    }
+
+    fn converted(&mut self, _input: &Path, seq: &Sequence, ground: Option<&GroundCheck>) {
         if let Some(trim) = TrimmedGlitches::in_provenance(&seq.provenance) {
             eprintln!("  trimmed glitch frames: {}", trim.summary());
         }
-        if let Some(g) = ground_check(&robot, &seq) {
+        if let Some(g) = ground {
             eprintln!(
                 "  ground check: median lowest sole point {:+.1} mm, lowest {:+.1} mm",
                 1e3 * g.offset_m,
                 1e3 * g.min_m
             );
-            if args.ground_correct {
-                correct_ground(&mut seq, &g);
-            }
         }
-        seqs.push((input, seq));
     }
-    for (input, seq) in &seqs {
-        writer.add(seq)?;
+
+    fn imported(&mut self, input: &Path, seq: &Sequence) {
         eprintln!(
             "imported {} → {}/{} ({} frames at {} fps, {:.1} s{})",
             input.display(),
@@ -264,7 +212,22 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
             }
         );
     }
-    let ds = writer.finish()?;
+}
+
+fn import(args: &ImportArgs) -> anyhow::Result<()> {
+    let robot = thorarena::registry::robot(&args.robot)?;
+    let batch = ImportBatch {
+        inputs: args.inputs.clone(),
+        format: source_format(args, &robot)?,
+        task: args.task.clone(),
+        force_logs: args.forces.as_ref().map(|f| [f[0].clone(), f[1].clone()]),
+        force_offset_s: args.force_offset,
+        force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
+        renormalize_quaternions: args.renormalize_quaternions,
+        trim_glitches: args.trim_glitches,
+        ground_correct: args.ground_correct,
+    };
+    let ds = import_batch(&args.out, &robot, &batch, &mut ImportProgress)?;
     eprintln!(
         "{}: {}",
         ds.dir.display(),
@@ -280,7 +243,7 @@ fn fps_text(fps: f64) -> String {
 }
 
 fn export(args: &ExportArgs) -> anyhow::Result<()> {
-    super::overwrite::check_dir(
+    thorarena::results::check_dir(
         &args.out,
         args.overwrite,
         std::slice::from_ref(&args.dataset),

@@ -23,7 +23,7 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    super::overwrite::check_dir(&args.out, args.overwrite, &args.runs)?;
+    thorarena::results::check_dir(&args.out, args.overwrite, &args.runs)?;
     let robot = thorarena::registry::robot(&args.robot)?;
     let shards: Vec<RunDir> = args.runs.iter().map(RunDir::new).collect();
     let merged = thorarena::benchmark::merge(&shards, &RunDir::new(&args.out), &robot)?;

@@ -12,7 +12,6 @@ mod data_synth;
 mod eval;
 mod logging;
 mod merge;
-mod overwrite;
 mod policy_arg;
 mod report_html;
 mod robot_info;

@@ -80,11 +80,11 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         sibling(&args.out, "-fats.csv"),
         sibling(&args.out, "-diagnostics.csv"),
     ] {
-        super::overwrite::check_file(&path, args.overwrite, &args.runs)?;
+        thorarena::results::check_file(&path, args.overwrite, &args.runs)?;
     }
     let figures = svg_figures(&report_figures(&runs, &[]));
     let figures_dir = sibling(&args.out, "-figures");
-    super::overwrite::check_files_dir(
+    thorarena::results::check_files_dir(
         &figures_dir,
         &figures.iter().map(|f| f.file_name()).collect::<Vec<_>>(),
         args.overwrite,

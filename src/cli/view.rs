@@ -23,7 +23,7 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    super::overwrite::check_file(&args.out, args.overwrite, std::slice::from_ref(&args.trace))?;
+    thorarena::results::check_file(&args.out, args.overwrite, std::slice::from_ref(&args.trace))?;
     let bundle = WebBundle::locate()?;
     for stale in bundle.stale_sources() {
         eprintln!(

@@ -28,6 +28,7 @@ mod episode_table;
 mod episodes;
 mod header;
 mod merge;
+mod output_guard;
 mod record;
 mod run_dir;
 mod summary;
@@ -37,6 +38,7 @@ pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_C
 pub use episodes::{write_record, EpisodeLog};
 pub use header::{read_header, write_header, PlannedSequence, RunHeader};
 pub use merge::{read_shards, MergeError, Shards};
+pub use output_guard::{check_dir, check_file, check_files_dir, OutputRefused};
 pub use run_dir::{RecordAppender, RunDir, Started, CROSSCHECK_SERIES_FILE, RUN_FILES, TRACES_DIR};
 pub use summary::{
     fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,

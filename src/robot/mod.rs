@@ -2,6 +2,7 @@
 //! `data/robots/<name>/` (a URDF plus `robot.toml`), and forward kinematics on it.
 
 mod config;
+mod describe;
 mod error;
 mod kinematics;
 mod load;
@@ -10,6 +11,7 @@ mod model;
 pub use config::{
     FrameConfig, HandConfig, HandsConfig, JointConfig, KeypointSetConfig, RobotConfig,
 };
+pub use describe::describe;
 pub use error::RobotError;
 pub use kinematics::{
     center_of_mass, forward_kinematics, frame_pose, keypoint_positions, lowest_sole_point_z,

@@ -4,7 +4,8 @@
 
 use super::spec::{resolve, PolicySpec, SweepSpec};
 use super::SweepError;
-use crate::motion::SequenceSelection;
+use crate::motion::{DataError, Dataset, SequenceSelection};
+use crate::robot::RobotModel;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -165,6 +166,27 @@ pub struct DatasetInfo {
     pub sha256: String,
     /// Its sequences, in dataset order.
     pub sequences: Vec<SequenceInfo>,
+}
+
+impl DatasetInfo {
+    /// Reads what planning needs of the dataset at `dir` (absolute) for `robot`.
+    pub fn read(dir: PathBuf, robot: &RobotModel) -> Result<Self, DataError> {
+        let ds = Dataset::open(&dir, robot)?;
+        let sequences = ds.load_all()?;
+        Ok(Self {
+            sha256: ds.content_hash(),
+            sequences: sequences
+                .iter()
+                .map(|s| SequenceInfo {
+                    task: s.task.clone(),
+                    sequence_id: s.sequence_id.clone(),
+                    duration_s: s.duration_s(),
+                    forces_recorded: s.forces_recorded,
+                })
+                .collect(),
+            dir,
+        })
+    }
 }
 
 /// What planning needs to know of one sequence.

@@ -4,7 +4,6 @@ use super::PlanArgs;
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::path::Path;
-use thorarena::motion::Dataset;
 use thorarena::sweep::{diff_plans, write_atomic, DatasetInfo, Plan, SweepSpec, Task, PLAN_FILE};
 pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
     let spec_path = std::fs::canonicalize(&args.spec)
@@ -20,24 +19,11 @@ pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
                 base.display()
             )
         })?;
-        let ds = Dataset::open(&dir, &robot).with_context(|| format!("`datasets`: {d}"))?;
-        let sequences = ds.load_all().with_context(|| format!("`datasets`: {d}"))?;
-        if sequences.is_empty() {
+        let info = DatasetInfo::read(dir, &robot).with_context(|| format!("`datasets`: {d}"))?;
+        if info.sequences.is_empty() {
             bail!("`datasets`: {d} holds no sequence");
         }
-        datasets.push(DatasetInfo {
-            dir,
-            sha256: ds.content_hash(),
-            sequences: sequences
-                .iter()
-                .map(|s| thorarena::sweep::SequenceInfo {
-                    task: s.task.clone(),
-                    sequence_id: s.sequence_id.clone(),
-                    duration_s: s.duration_s(),
-                    forces_recorded: s.forces_recorded,
-                })
-                .collect(),
-        });
+        datasets.push(info);
     }
     let plan = Plan::expand(&spec, &spec_path, &datasets)?;
     validate(&plan)?;

@@ -2,6 +2,7 @@
 //! sequences. Each format reader produces a [`RawMotion`]; mapping to the robot's
 //! canonical joint order, attaching forces and validating happen once, here.
 
+mod batch;
 pub mod canonical;
 pub mod force_csv;
 pub mod lafan_csv;
@@ -9,6 +10,8 @@ pub mod npz;
 pub mod onnx_motion;
 mod pickle_depth;
 pub mod twist_pkl;
+
+pub use batch::{import_batch, BatchError, ImportBatch, ImportObserver, SourceFormat};
 
 use std::path::PathBuf;
 

@@ -15,9 +15,11 @@ mod skeleton;
 mod solve;
 mod tasks;
 mod walking;
+mod write;
 
 pub use ik::{chain_to_root, Chain, IkParams, Residual, Target};
 pub use solve::IkStats;
+pub use write::{write_synthetic, SynthWriteError};
 
 use crate::motion::{Sequence, LEFT, RIGHT};
 use crate::robot::RobotModel;
