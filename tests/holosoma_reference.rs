@@ -1,8 +1,8 @@
 //! holosoma's published G1 whole-body tracking policy
 //! (`../shared/reference/holosoma/fastsac_g1_29dof_dancing.onnx`, BeyondMimic-style, 154
 //! inputs, its motion embedded) end to end, with no Python: its motion is imported from the
-//! network (`data import --format onnx-motion`), and `--policy beyondmimic:FILE` with
-//! `--profile holosoma-wbt` tracks all 135 s of it without force — survival 1.0 and a
+//! network (what `data import --format onnx-motion` does), and `--policy beyondmimic:FILE` with
+//! `--profile holosoma-wbt` (as `eval` runs them, in process) tracks all 135 s of it without force — survival 1.0 and a
 //! keypoint error within 10 % of MuJoCo's on holosoma's own model
 //! (`tools/holosoma_mujoco.py`: 49.4 mm RMS). README's table of the two published
 //! policies under constant hand pushes is re-derived here. The Python BeyondMimic adapter
@@ -10,7 +10,12 @@
 //! `../shared/reference` (or Python's onnxruntime) is absent; never in CI.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use thorarena::benchmark::{self, EvalOptions};
+use thorarena::evaluation::{EvalRequest, EvalSpec};
+use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
+use thorarena::motion::{GroundCheck, Sequence};
+use thorarena::registry::PolicyChoice;
+use thorarena::results::RunDir;
 
 #[path = "common/dump.rs"]
 mod dump;
@@ -18,8 +23,6 @@ mod prereq;
 mod readme;
 #[path = "common/walks.rs"]
 mod walks;
-
-const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
 /// RMS keypoint error (the default 13 keypoints, re-anchored as `metrics::reanchor`) of
 /// the policy on its whole motion in MuJoCo, holosoma's MJCF at dt 2 ms:
@@ -32,28 +35,71 @@ fn onnx(test: &str) -> Option<PathBuf> {
     prereq::reference(test, "holosoma/fastsac_g1_29dof_dancing.onnx")
 }
 
-fn run(args: &[&str]) -> String {
-    let out = Command::new(BIN).args(args).output().unwrap();
-    assert!(
-        out.status.success(),
-        "thorarena {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stderr).into_owned()
+/// `data import --format onnx-motion ONNX --task dance --out OUT` (its default profile,
+/// `holosoma-wbt`), in process: the error's text if it is refused.
+fn import_motion(onnx: &Path, task: &str, out: &Path) -> Result<(), String> {
+    let robot = g1();
+    let profile = thorarena::registry::profile("holosoma-wbt", &robot).unwrap();
+    let batch = ImportBatch {
+        inputs: vec![onnx.to_path_buf()],
+        format: SourceFormat::OnnxMotion {
+            anchor_body: profile.beyondmimic.as_ref().unwrap().anchor_body.clone(),
+            control_dt_s: profile.control_dt_s,
+        },
+        task: task.into(),
+        force_logs: None,
+        force_offset_s: 0.0,
+        force_sign: 1.0,
+        renormalize_quaternions: false,
+        trim_glitches: false,
+        ground_correct: false,
+    };
+    import_batch(out, &robot, &batch, &mut Quiet)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
 }
 
 fn import_dance(onnx: &Path, out: &Path) {
-    run(&[
-        "data",
-        "import",
-        "--format",
-        "onnx-motion",
-        onnx.to_str().unwrap(),
-        "--task",
-        "dance",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    import_motion(onnx, "dance", out).unwrap();
+}
+
+/// An import that reports nothing.
+struct Quiet;
+
+impl ImportObserver for Quiet {
+    fn reading(&mut self, _: &Path) {}
+    fn converted(&mut self, _: &Path, _: &Sequence, _: Option<&GroundCheck>) {}
+    fn imported(&mut self, _: &Path, _: &Sequence) {}
+}
+
+/// `eval --dataset D --policy P --profile PROFILE --settings SETTINGS --out OUT`, in
+/// process.
+fn eval(dataset: &Path, policy: &str, profile: &str, out: &Path) {
+    let spec = EvalSpec::load(&EvalRequest {
+        policy: policy.into(),
+        dataset: Some(dataset.to_path_buf()),
+        profile: Some(profile.into()),
+        settings: SETTINGS.split(',').map(String::from).collect(),
+        ..EvalRequest::default()
+    })
+    .unwrap();
+    let PolicyChoice::InProcess(mut policy) =
+        thorarena::registry::policy(policy, &spec.robot, &spec.profile).unwrap()
+    else {
+        unreachable!("a network in process");
+    };
+    benchmark::evaluate(
+        &spec,
+        policy.as_mut(),
+        &RunDir::new(out),
+        EvalOptions::default(),
+        &mut (),
+    )
+    .unwrap();
+}
+
+fn g1() -> thorarena::robot::RobotModel {
+    thorarena::robot::load_bundled("g1_29dof").unwrap()
 }
 
 /// Per setting (`no-force`, `push-10`, …): survival and keypoint error (mm) averaged over
@@ -88,19 +134,12 @@ fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
     let dance = dir.path().join("dance");
     import_dance(&onnx, &dance);
     let holosoma_run = dir.path().join("holosoma");
-    run(&[
-        "eval",
-        "--dataset",
-        dance.to_str().unwrap(),
-        "--policy",
+    eval(
+        &dance,
         &format!("beyondmimic:{}", onnx.display()),
-        "--profile",
         "holosoma-wbt",
-        "--settings",
-        SETTINGS,
-        "--out",
-        holosoma_run.to_str().unwrap(),
-    ]);
+        &holosoma_run,
+    );
     let holosoma = averages(&holosoma_run);
     let (_, survival, kp) = &holosoma[0];
     eprintln!("holosoma without force: survival {survival:.3}, keypoint error {kp:.1} mm (MuJoCo {MUJOCO_KP_RMS_MM} mm)");
@@ -115,19 +154,12 @@ fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
     walks::import_walks(&reference.join("twist2"), &walks);
     let twist2_run = dir.path().join("twist2");
     let twist2_onnx = reference.join("twist2/twist2_1017_25k.onnx");
-    run(&[
-        "eval",
-        "--dataset",
-        walks.to_str().unwrap(),
-        "--policy",
+    eval(
+        &walks,
         &format!("twist2:{}", twist2_onnx.display()),
-        "--profile",
         "twist2",
-        "--settings",
-        SETTINGS,
-        "--out",
-        twist2_run.to_str().unwrap(),
-    ]);
+        &twist2_run,
+    );
     let twist2 = averages(&twist2_run);
 
     let table = readme::readme_table("published-policies-force");
@@ -196,15 +228,7 @@ fn the_motion_in_the_network_is_imported_and_a_network_without_one_is_refused() 
 
     // A network without an embedded motion (TWIST2's) is refused plainly.
     let twist2 = thorarena::reference_dir().join("twist2/twist2_1017_25k.onnx");
-    let out = Command::new(BIN)
-        .args(["data", "import", "--format", "onnx-motion"])
-        .arg(&twist2)
-        .args(["--task", "x", "--out"])
-        .arg(dir.path().join("none"))
-        .output()
-        .unwrap();
-    let e = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && !e.contains("panicked"), "{e}");
+    let e = import_motion(&twist2, "x", &dir.path().join("none")).unwrap_err();
     assert!(
         e.contains("no motion outputs") && e.contains("joint_pos"),
         "{e}"

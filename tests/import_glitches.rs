@@ -6,18 +6,14 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use thorarena::motion::import::twist_pkl::read_twist_pkl;
+use thorarena::motion::import::SourceFormat;
 use thorarena::motion::{scan_root_glitches, Dataset, DatasetWriter, Sequence, MANIFEST};
 
 mod common;
+#[path = "common/in_process.rs"]
+mod in_process;
 mod prereq;
 use common::{g1, sample_sequence};
-
-fn thorarena(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_thorarena"))
-        .args(args)
-        .output()
-        .expect("run thorarena")
-}
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -40,19 +36,10 @@ fn twist2_walks(test: &str) -> Option<Vec<PathBuf>> {
     }
 }
 
-/// `data import --format twist-pkl FILES --task walk --ground-correct [extra]` into `out`.
-fn import_pkl(files: &[&Path], out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec!["data", "import", "--format", "twist-pkl"];
-    args.extend(files.iter().map(|f| f.to_str().unwrap()));
-    args.extend([
-        "--out",
-        out.to_str().unwrap(),
-        "--task",
-        "walk",
-        "--ground-correct",
-    ]);
-    args.extend(extra);
-    thorarena(&args)
+/// `data import --format twist-pkl FILES --task walk --ground-correct [--trim-glitches]`
+/// into `out`, in process: what it reports of trimming, or its error.
+fn import_pkl(files: &[&Path], out: &Path, trim_glitches: bool) -> Result<String, String> {
+    in_process::import(SourceFormat::TwistPkl, files, out, trim_glitches, true)
 }
 
 /// Largest root speed between consecutive frames, m/s.
@@ -86,9 +73,9 @@ fn the_released_twist2_walks_have_no_glitch_and_import_without_the_flag() {
     }
     let dir = tempfile::tempdir().unwrap();
     let paths: Vec<&Path> = files.iter().map(PathBuf::as_path).collect();
-    let o = import_pkl(&paths, dir.path(), &[]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(!stderr(&o).contains("trimmed"), "{}", stderr(&o));
+    let o = import_pkl(&paths, dir.path(), false);
+    let log = o.unwrap();
+    assert!(!log.contains("trimmed"), "{log}");
     let ds = Dataset::open(dir.path(), &g1()).unwrap();
     for (i, f) in files.iter().enumerate() {
         let seq = ds.load(i).unwrap();
@@ -155,9 +142,8 @@ fn a_walk_with_two_teleported_leading_frames_is_refused_then_trimmed_to_the_clea
 
     // Refused without the flag, together with a clean walk: nothing is written.
     let refused = dir.path().join("refused");
-    let o = import_pkl(&[&files[1], &fixture], &refused, &[]);
-    assert!(!o.status.success());
-    let err = stderr(&o);
+    let o = import_pkl(&[&files[1], &fixture], &refused, false);
+    let err = o.unwrap_err();
     eprintln!("{err}");
     for needle in [
         "0807_yanjie_walk_001.pkl",
@@ -174,13 +160,13 @@ fn a_walk_with_two_teleported_leading_frames_is_refused_then_trimmed_to_the_clea
 
     // Accepted with it; the sequence is the clean walk without its first two frames.
     let trimmed_dir = dir.path().join("trimmed");
-    let o = import_pkl(&[&fixture], &trimmed_dir, &["--trim-glitches"]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    eprintln!("{}", stderr(&o));
-    assert!(stderr(&o).contains("trimmed glitch frames: 2 leading, 0 trailing"));
+    let o = import_pkl(&[&fixture], &trimmed_dir, true);
+    let log = o.unwrap();
+    eprintln!("{log}");
+    assert!(log.contains("trimmed glitch frames: 2 leading, 0 trailing"));
     let clean_dir = dir.path().join("clean");
-    let o = import_pkl(&[walk], &clean_dir, &[]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let o = import_pkl(&[walk], &clean_dir, false);
+    o.unwrap();
     let trimmed = Dataset::open(&trimmed_dir, &g1()).unwrap().load(0).unwrap();
     let clean = Dataset::open(&clean_dir, &g1()).unwrap().load(0).unwrap();
     assert_eq!(trimmed.n_frames(), clean.n_frames() - 2);
@@ -205,9 +191,7 @@ fn a_walk_with_two_teleported_leading_frames_is_refused_then_trimmed_to_the_clea
     assert_eq!((&p["leading"], &p["trailing"]), (&2.into(), &0.into()));
 
     // `data info` finds nothing left to report.
-    let o = thorarena(&["data", "info", trimmed_dir.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let info = String::from_utf8_lossy(&o.stdout);
+    let info = in_process::data_info(&trimmed_dir);
     assert!(info.contains("between consecutive frames): none"), "{info}");
 }
 
@@ -227,12 +211,16 @@ fn write_lafan(path: &Path, glitch: Option<usize>) {
     std::fs::write(path, text).unwrap();
 }
 
-fn import_csv(files: &[&Path], out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec!["data", "import", "--format", "lafan-csv"];
-    args.extend(files.iter().map(|f| f.to_str().unwrap()));
-    args.extend(["--out", out.to_str().unwrap(), "--task", "walk"]);
-    args.extend(extra);
-    thorarena(&args)
+/// `data import --format lafan-csv FILES --task walk [--trim-glitches]` into `out`, in
+/// process.
+fn import_csv(files: &[&Path], out: &Path, trim_glitches: bool) -> Result<String, String> {
+    in_process::import(
+        SourceFormat::LafanCsv { fps: 30.0 },
+        files,
+        out,
+        trim_glitches,
+        false,
+    )
 }
 
 #[test]
@@ -242,9 +230,8 @@ fn an_interior_glitch_is_refused_even_with_the_flag_and_nothing_is_imported() {
     write_lafan(&clean, None);
     write_lafan(&interior, Some(22));
     let out = dir.path().join("ds");
-    let o = import_csv(&[&clean, &interior], &out, &["--trim-glitches"]);
-    assert!(!o.status.success());
-    let err = stderr(&o);
+    let o = import_csv(&[&clean, &interior], &out, true);
+    let err = o.unwrap_err();
     for needle in [
         "mid.csv",
         "frame 21→22: 3.00 m (90.0 m/s)",
@@ -262,11 +249,14 @@ fn a_trailing_glitch_in_a_csv_is_trimmed_with_the_flag() {
     let motion = dir.path().join("tail.csv");
     write_lafan(&motion, Some(44));
     let out = dir.path().join("ds");
-    let o = import_csv(&[&motion], &out, &[]);
-    assert!(!o.status.success());
-    assert!(stderr(&o).contains("--trim-glitches to drop 0 leading and 1 trailing"));
-    let o = import_csv(&[&motion], &out, &["--trim-glitches"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let o = import_csv(&[&motion], &out, false);
+    let err = o.unwrap_err();
+    assert!(
+        err.contains("--trim-glitches to drop 0 leading and 1 trailing"),
+        "{err}"
+    );
+    let o = import_csv(&[&motion], &out, true);
+    o.unwrap();
     let seq = Dataset::open(&out, &g1()).unwrap().load(0).unwrap();
     assert_eq!(seq.n_frames(), 44);
     assert_eq!(seq.provenance["trimmed_glitch_frames"]["trailing"], 1);
@@ -285,9 +275,7 @@ fn data_info_reports_a_glitch_in_a_dataset_written_without_import() {
     writer.add(&clean).unwrap();
     writer.add(&glitched).unwrap();
     writer.finish().unwrap();
-    let o = thorarena(&["data", "info", dir.path().to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let info = String::from_utf8_lossy(&o.stdout);
+    let info = in_process::data_info(dir.path());
     eprintln!("{info}");
     assert!(
         info.contains("between consecutive frames): 1 sequence(s)"),
@@ -347,19 +335,15 @@ fn two_teleported_frames_before_a_walk_are_trimmed_to_the_same_episode() {
     std::fs::create_dir(&fixture_dir).unwrap();
     let fixture = prepended_copy(walk, &fixture_dir);
 
-    let refused = import_pkl(&[&fixture], &dir.path().join("refused"), &[]);
-    assert!(!refused.status.success());
-    assert!(
-        stderr(&refused).contains("--trim-glitches"),
-        "{}",
-        stderr(&refused)
-    );
+    let refused = import_pkl(&[&fixture], &dir.path().join("refused"), false);
+    let refused = refused.unwrap_err();
+    assert!(refused.contains("--trim-glitches"), "{refused}");
 
     let (clean, trimmed) = (dir.path().join("clean"), dir.path().join("trimmed"));
-    let o = import_pkl(&[walk], &clean, &[]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let o = import_pkl(&[&fixture], &trimmed, &["--trim-glitches"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let o = import_pkl(&[walk], &clean, false);
+    o.unwrap();
+    let o = import_pkl(&[&fixture], &trimmed, true);
+    o.unwrap();
     let a = Dataset::open(&clean, &g1()).unwrap().load(0).unwrap();
     let b = Dataset::open(&trimmed, &g1()).unwrap().load(0).unwrap();
     assert_eq!(
@@ -372,18 +356,7 @@ fn two_teleported_frames_before_a_walk_are_trimmed_to_the_same_episode() {
     // The same episode, record for record.
     let episodes = |dataset: &Path, out: &str| -> String {
         let out = dir.path().join(out);
-        let o = thorarena(&[
-            "eval",
-            "--dataset",
-            dataset.to_str().unwrap(),
-            "--policy",
-            "balance",
-            "--settings",
-            "no-force,push:20",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
+        in_process::eval(dataset, "balance", &["no-force", "push:20"], &out);
         std::fs::read_to_string(out.join("episodes.jsonl")).unwrap()
     };
     let (ea, eb) = (

@@ -2,21 +2,18 @@
 //! figure, legends map colour → policy, marker → setting and dash → sweep axis value, the
 //! scatter spreads episodes of equal survival, and every SVG is well-formed XML (parsed by
 //! quick-xml) with one `series` group — one polygon or polyline — per dataset, the legend's
-//! texts, fonts of 11 pt or more and escaped names. `report` writes the files into
+//! texts, fonts of 11 pt or more and escaped names. A report's files go into
 //! `<stem>-figures/` and never into its own input.
 
 use quick_xml::events::Event;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use thorarena::evaluation::EpisodeRecord;
 use thorarena::metrics::EpisodeSeries;
 use thorarena::report::{
-    load_runs, report_figures, svg_figures, CurveSeries, FigureKind, ReportFigures, Swatch,
-    SweepChart, MARKERS, SURVIVAL_JITTER,
+    load_runs, report_figures, svg_figures, write_comparison_report, ComparisonFiles, CurveSeries,
+    FigureKind, ReportFigures, Swatch, SweepChart, MARKERS, SURVIVAL_JITTER,
 };
-
-const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
 #[path = "common/run_dir.rs"]
 mod run_dir;
@@ -345,33 +342,25 @@ fn the_scatter_keys_markers_to_settings_and_spreads_equal_survival() {
 
 #[test]
 fn report_writes_an_svg_per_figure_beside_the_page_and_never_into_its_input() {
-    let bundle = tempfile::tempdir().unwrap();
-    std::fs::write(bundle.path().join("report.js"), "/* bundle */").unwrap();
-    std::fs::write(bundle.path().join("view.js"), "/* bundle */").unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let dirs = three_runs(tmp.path());
-    let report = |runs: &[PathBuf], out: &Path, extra: &[&str]| {
-        Command::new(BIN)
-            .env("THORARENA_WEB_DIST", bundle.path())
-            .arg("report")
-            .args(runs)
-            .arg("--out")
-            .arg(out)
-            .args(extra)
-            .output()
-            .unwrap()
+    // What `thorarena report RUNS --out OUT [--overwrite]` writes, with a stand-in bundle.
+    let report = |runs: &[PathBuf], out: &Path, overwrite: bool| {
+        let loaded = load_runs(runs).unwrap();
+        let files = ComparisonFiles::beside(out);
+        write_comparison_report(&loaded, &files, "/* bundle */", overwrite, runs)
+            .map(|written| (files, written))
     };
-    let out = report(&dirs, &tmp.path().join("paper/cmp.html"), &[]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
+    let (files, written) = report(&dirs, &tmp.path().join("paper/cmp.html"), false).unwrap();
     let figures = tmp.path().join("paper/cmp-figures");
-    assert!(stderr.contains(&figures.display().to_string()), "{stderr}");
-    let written: BTreeSet<String> = std::fs::read_dir(&figures)
+    assert_eq!(files.figures_dir, figures);
+    let on_disk: BTreeSet<String> = std::fs::read_dir(&figures)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert!(written.contains("radar-force.svg") && written.contains("latency-faults.svg"));
-    for f in &written {
+    assert_eq!(on_disk, written.figures.iter().cloned().collect());
+    assert!(on_disk.contains("radar-force.svg") && on_disk.contains("latency-faults.svg"));
+    for f in &on_disk {
         parse(&std::fs::read_to_string(figures.join(f)).unwrap());
     }
 
@@ -380,16 +369,12 @@ fn report_writes_an_svg_per_figure_beside_the_page_and_never_into_its_input() {
     let run = tmp.path().join("x-figures");
     std::fs::rename(&dirs[1], &run).unwrap();
     let before: Vec<_> = std::fs::read_dir(&run).unwrap().collect();
-    let out = report(
-        std::slice::from_ref(&run),
-        &tmp.path().join("x.html"),
-        &["--overwrite"],
-    );
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let refused = report(std::slice::from_ref(&run), &tmp.path().join("x.html"), true)
+        .unwrap_err()
+        .to_string();
     assert!(
-        stderr.contains("figures directory") && stderr.contains("input"),
-        "{stderr}"
+        refused.contains("figures directory") && refused.contains("input"),
+        "{refused}"
     );
     assert_eq!(std::fs::read_dir(&run).unwrap().count(), before.len());
     assert!(!tmp.path().join("x.html").exists(), "nothing written");

@@ -3,12 +3,10 @@
 //! the tables also as Markdown and CSV next to it, and every figure as an SVG file in
 //! `<stem>-figures/`, for papers.
 
-use anyhow::Context;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use thorarena::report::{
-    comparison_markdown, comparison_notes, comparison_warnings, diagnostics_multi_table,
-    fats_table, label_engines, load_runs, mixed_engines, report_figures, report_html, svg_figures,
-    Page, SvgFigure, WebBundle, MIXED_ENGINES_WHY,
+    label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, Page,
+    WebBundle, MIXED_ENGINES_WHY,
 };
 
 /// Arguments of `report`.
@@ -32,28 +30,6 @@ pub struct Args {
     pub overwrite: bool,
 }
 
-/// `dir/stem.html` → `dir/stem<suffix>`.
-fn sibling(html: &Path, suffix: &str) -> PathBuf {
-    let stem = html
-        .file_stem()
-        .map_or_else(|| "report".into(), |s| s.to_string_lossy().to_string());
-    html.with_file_name(format!("{stem}{suffix}"))
-}
-
-fn write(path: &Path, text: &str) -> anyhow::Result<()> {
-    std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))
-}
-
-/// Writes each figure as `dir/<id>.svg` (creating `dir`); figure files of an earlier report
-/// that this one does not draw are left as they are.
-pub(super) fn write_figures(dir: &Path, figures: &[SvgFigure]) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    for f in figures {
-        write(&dir.join(f.file_name()), &f.svg)?;
-    }
-    Ok(())
-}
-
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     // The bundle first: a missing bundle directory should fail before any file is written.
     let bundle = WebBundle::locate()?;
@@ -74,64 +50,26 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
         label_engines(&mut runs);
     }
-    for path in [
-        args.out.clone(),
-        sibling(&args.out, ".md"),
-        sibling(&args.out, "-fats.csv"),
-        sibling(&args.out, "-diagnostics.csv"),
-    ] {
-        thorarena::results::check_file(&path, args.overwrite, &args.runs)?;
-    }
-    let figures = svg_figures(&report_figures(&runs, &[]));
-    let figures_dir = sibling(&args.out, "-figures");
-    thorarena::results::check_files_dir(
-        &figures_dir,
-        &figures.iter().map(|f| f.file_name()).collect::<Vec<_>>(),
-        args.overwrite,
-        &args.runs,
-    )?;
-    if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("creating {}", parent.display()))?;
-    }
-    let warnings = comparison_warnings(&runs);
-    for w in &warnings {
+    let files = ComparisonFiles::beside(&args.out);
+    let script = bundle.script(Page::Report)?;
+    let written = write_comparison_report(&runs, &files, &script, args.overwrite, &args.runs)?;
+    for w in &written.warnings {
         eprintln!("warning: {}", w.message);
     }
-    let notes = comparison_notes(&runs);
-    for n in &notes {
+    for n in &written.notes {
         eprintln!("note: {n}");
     }
-    let fats = fats_table(&runs);
-    let diagnostics = diagnostics_multi_table(&runs);
-    let md = comparison_markdown(&runs, &warnings, &notes);
-    let outputs = [
-        (sibling(&args.out, ".md"), md),
-        (sibling(&args.out, "-fats.csv"), fats.csv()),
-        (sibling(&args.out, "-diagnostics.csv"), diagnostics.csv()),
-        (
-            args.out.clone(),
-            report_html(&runs, &bundle.script(Page::Report)?),
-        ),
-    ];
-    for (path, text) in &outputs {
-        write(path, text)?;
-    }
-    write_figures(&figures_dir, &figures)?;
     eprintln!(
         "wrote {}, and {} SVG figures in {}: {}",
-        outputs
+        written
+            .files
             .iter()
-            .map(|(p, _)| p.display().to_string())
+            .map(|p| p.display().to_string())
             .collect::<Vec<_>>()
             .join(", "),
-        figures.len(),
-        figures_dir.display(),
-        figures
-            .iter()
-            .map(|f| f.file_name())
-            .collect::<Vec<_>>()
-            .join(", ")
+        written.figures.len(),
+        files.figures_dir.display(),
+        written.figures.join(", ")
     );
     Ok(())
 }

@@ -13,6 +13,7 @@
 //! marker per other axis, legends) and drawn twice: by the page script with Chart.js, and
 //! as SVG files for papers ([`svg_figures`]).
 
+mod comparison_files;
 mod crosscheck_tables;
 mod figures;
 mod html;
@@ -24,6 +25,9 @@ mod svg;
 mod sweep_figures;
 mod tables;
 
+pub use comparison_files::{
+    write_comparison_report, write_figures, ComparisonFiles, WrittenReport,
+};
 pub use crosscheck_tables::crosscheck_tables;
 pub use figures::{
     report_figures, CurveSeries, Dataset, Figure, FigureKind, LegendEntry, ReportFigures, Swatch,
@@ -83,6 +87,17 @@ pub enum ReportError {
         /// What is wrong.
         reason: String,
     },
+    /// A file or directory could not be written.
+    #[error("writing {path}: {source}")]
+    Write {
+        /// The file or directory.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// An output would replace an input, or a run's or a dataset's file unasked.
+    #[error(transparent)]
+    Refused(#[from] crate::results::OutputRefused),
     /// A run directory's files are unreadable or do not hold a valid run.
     #[error(transparent)]
     Results(#[from] crate::results::ResultsError),

@@ -4,7 +4,8 @@
 #![allow(dead_code)]
 
 use std::path::Path;
-use std::process::Command;
+use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
+use thorarena::motion::{GroundCheck, Sequence};
 
 /// MuJoCo's mean TWIST9 keypoint error per walk in TWIST2's harness, mm (SOURCES.md, TWIST2 in MuJoCo).
 pub const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
@@ -16,25 +17,32 @@ pub const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
 /// Imports the three walks from `twist2_dir` (the reference's `twist2/`) into the dataset
 /// `out`, task `walk`, feet put onto the ground as TWIST2's harness does.
 pub fn import_walks(twist2_dir: &Path, out: &Path) {
-    let files: Vec<String> = MUJOCO_TWIST9_MM
-        .iter()
-        .map(|(w, _)| {
-            twist2_dir
-                .join(format!("motions/{w}.pkl"))
-                .display()
-                .to_string()
-        })
-        .collect();
-    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
-        .args(["data", "import", "--format", "twist-pkl"])
-        .args(&files)
-        .args(["--task", "walk", "--ground-correct", "--out"])
-        .arg(out)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "importing the walks: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    // What `data import --format twist-pkl FILES --task walk --ground-correct` does.
+    let batch = ImportBatch {
+        inputs: MUJOCO_TWIST9_MM
+            .iter()
+            .map(|(w, _)| twist2_dir.join(format!("motions/{w}.pkl")))
+            .collect(),
+        format: SourceFormat::TwistPkl,
+        task: "walk".into(),
+        force_logs: None,
+        force_offset_s: 0.0,
+        force_sign: 1.0,
+        renormalize_quaternions: false,
+        trim_glitches: false,
+        ground_correct: true,
+    };
+    let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
+    if let Err(e) = import_batch(out, &robot, &batch, &mut Quiet) {
+        panic!("importing the walks: {e}");
+    }
+}
+
+/// An import that reports nothing.
+struct Quiet;
+
+impl ImportObserver for Quiet {
+    fn reading(&mut self, _: &Path) {}
+    fn converted(&mut self, _: &Path, _: &Sequence, _: Option<&GroundCheck>) {}
+    fn imported(&mut self, _: &Path, _: &Sequence) {}
 }

@@ -145,7 +145,7 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     let figures_dir = args.dir.join("report-figures");
     let figures =
         thorarena::report::svg_figures(&thorarena::report::report_figures(&runs, &charts));
-    crate::cli::report_html::write_figures(&figures_dir, &figures)?;
+    thorarena::report::write_figures(&figures_dir, &figures)?;
     eprintln!(
         "collected {} cells{}: {}, {} and {} SVG figures in {}",
         results.iter().flatten().count(),

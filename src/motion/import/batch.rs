@@ -121,10 +121,16 @@ pub enum BatchError {
     },
     /// A file could not be read or converted.
     #[error(transparent)]
-    Import(#[from] ImportError),
+    Import(Box<ImportError>),
     /// The dataset could not be opened or written.
     #[error(transparent)]
     Data(#[from] DataError),
+}
+
+impl From<ImportError> for BatchError {
+    fn from(e: ImportError) -> Self {
+        BatchError::Import(Box::new(e))
+    }
 }
 
 /// Imports `batch` into the dataset at `out` (created if absent) for `robot`, all or

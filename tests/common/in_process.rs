@@ -1,0 +1,86 @@
+//! What `data import`, `data info` and `eval` compute, called through the library as
+//! those commands call it, for tests about the results rather than the command line
+//! (`tests/cli.rs` and the other binary tests keep the end-to-end checks).
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use thorarena::benchmark::{self, EvalOptions};
+use thorarena::evaluation::{EvalRequest, EvalSpec};
+use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
+use thorarena::motion::{describe, Dataset, GroundCheck, Sequence, TrimmedGlitches};
+use thorarena::registry::PolicyChoice;
+use thorarena::results::RunDir;
+
+/// What an import reports, a line per trimmed input.
+#[derive(Default)]
+struct TrimLog(Vec<String>);
+
+impl ImportObserver for TrimLog {
+    fn reading(&mut self, _: &Path) {}
+    fn converted(&mut self, _: &Path, seq: &Sequence, _: Option<&GroundCheck>) {
+        if let Some(trim) = TrimmedGlitches::in_provenance(&seq.provenance) {
+            self.0
+                .push(format!("trimmed glitch frames: {}", trim.summary()));
+        }
+    }
+    fn imported(&mut self, _: &Path, _: &Sequence) {}
+}
+
+/// `data import --format F FILES --out OUT --task walk` with `--trim-glitches` and
+/// `--ground-correct` as given: the trim lines on success, the error's text otherwise.
+pub fn import(
+    format: SourceFormat,
+    files: &[&Path],
+    out: &Path,
+    trim_glitches: bool,
+    ground_correct: bool,
+) -> Result<String, String> {
+    let batch = ImportBatch {
+        inputs: files.iter().map(|f| f.to_path_buf()).collect(),
+        format,
+        task: "walk".into(),
+        force_logs: None,
+        force_offset_s: 0.0,
+        force_sign: 1.0,
+        renormalize_quaternions: false,
+        trim_glitches,
+        ground_correct,
+    };
+    let mut log = TrimLog::default();
+    import_batch(out, &crate::common::g1(), &batch, &mut log)
+        .map(|_| log.0.join("\n"))
+        .map_err(|e| e.to_string())
+}
+
+/// What `data info DIR` prints.
+pub fn data_info(dir: &Path) -> String {
+    let robot = crate::common::g1();
+    let ds = Dataset::open(dir, &robot).unwrap();
+    let seqs = ds.load_all().unwrap();
+    describe(&ds, &seqs, &robot)
+}
+
+/// `eval --dataset D --policy P --settings S --out OUT` in process; returns the run.
+pub fn eval(dataset: &Path, policy: &str, settings: &[&str], out: &Path) -> PathBuf {
+    let spec = EvalSpec::load(&EvalRequest {
+        policy: policy.into(),
+        dataset: Some(dataset.to_path_buf()),
+        settings: settings.iter().map(|s| s.to_string()).collect(),
+        ..EvalRequest::default()
+    })
+    .unwrap();
+    let PolicyChoice::InProcess(mut policy) =
+        thorarena::registry::policy(policy, &spec.robot, &spec.profile).unwrap()
+    else {
+        panic!("{policy} is not an in-process policy");
+    };
+    benchmark::evaluate(
+        &spec,
+        policy.as_mut(),
+        &RunDir::new(out),
+        EvalOptions::default(),
+        &mut (),
+    )
+    .unwrap();
+    out.to_path_buf()
+}
