@@ -293,6 +293,16 @@ pub fn comparison_notes(runs: &[Run]) -> Vec<String> {
 /// keypoints, policy I/O rules, settings, version) and every partial run. Empty when the
 /// runs are comparable.
 pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
+    let mut out = configuration_warnings(runs);
+    out.extend(setting_warnings(runs));
+    for r in runs {
+        out.extend(partial_warnings(r));
+    }
+    out
+}
+
+/// Header fields that differ between the runs, one warning per kind.
+fn configuration_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
     let mut out = Vec::new();
     let mut flag = |kind, what: &str, value: &dyn Fn(&Run) -> String| {
         if let Some(groups) = grouped(runs.iter().map(|r| (r.label.as_str(), value(r)))) {
@@ -313,24 +323,11 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
             r.header.profile, r.header.control_dt_s
         )
     });
-    flag(WarningKind::Physics, "Physics engines or steps", &|r| {
-        let model = match &r.header.engine {
-            crate::physics::Engine::Rapier => String::new(),
-            crate::physics::Engine::Mujoco {
-                mjcf: Some(mjcf),
-                mjcf_sha256,
-            } => match mjcf_sha256 {
-                Some(hash) => format!(" on an MJCF with sha256 {}", short_hash(hash)),
-                None => format!(" on {}", mjcf.display()),
-            },
-            crate::physics::Engine::Mujoco { mjcf: None, .. } => " on the generated MJCF".into(),
-        };
-        format!(
-            "{}{model} at {} ms",
-            r.header.engine.name(),
-            r.header.physics_dt_s * 1e3
-        )
-    });
+    flag(
+        WarningKind::Physics,
+        "Physics engines or steps",
+        &physics_of,
+    );
     flag(WarningKind::Termination, "Termination rules", &|r| {
         let t = r.header.termination;
         format!(
@@ -355,6 +352,32 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
     flag(WarningKind::Version, "ThorArena versions", &|r| {
         r.header.version.clone()
     });
+    out
+}
+
+/// The engine, its model and step of a run, as the physics warning compares them.
+fn physics_of(r: &Run) -> String {
+    let model = match &r.header.engine {
+        crate::physics::Engine::Rapier => String::new(),
+        crate::physics::Engine::Mujoco {
+            mjcf: Some(mjcf),
+            mjcf_sha256,
+        } => match mjcf_sha256 {
+            Some(hash) => format!(" on an MJCF with sha256 {}", short_hash(hash)),
+            None => format!(" on {}", mjcf.display()),
+        },
+        crate::physics::Engine::Mujoco { mjcf: None, .. } => " on the generated MJCF".into(),
+    };
+    format!(
+        "{}{model} at {} ms",
+        r.header.engine.name(),
+        r.header.physics_dt_s * 1e3
+    )
+}
+
+/// Setting names that mean different coefficients or pushes in different runs.
+fn setting_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
+    let mut out = Vec::new();
     // A setting name must mean the same coefficient and push in every run that has it.
     let mut names: Vec<&str> = runs
         .iter()
@@ -375,56 +398,60 @@ pub fn comparison_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
             });
         }
     }
-    for r in runs {
-        if let Some(sentence) = r.coverage.sentence() {
-            let cells: Vec<String> = r
-                .coverage
-                .cells
-                .iter()
-                .filter(|c| c.present != c.expected || c.policy_failed > 0)
-                .map(|c| {
-                    format!(
-                        "{}/{}: {} of {} present, {} cut short by a policy failure",
-                        c.setting, c.task, c.present, c.expected, c.policy_failed
-                    )
-                })
-                .collect();
-            let torn = if r.torn_tail {
-                " (episodes.jsonl ends in a line cut short)"
-            } else {
-                ""
-            };
-            out.push(ComparisonWarning {
-                kind: WarningKind::Partial,
-                message: format!(
-                    "{} ({}) is a {sentence}{torn} — {}",
-                    r.label,
-                    r.dir.display(),
-                    cells.join("; ")
-                ),
-            });
-        }
-        if let Some(subset) = &r.header.subset {
-            out.push(ComparisonWarning {
-                kind: WarningKind::Partial,
-                message: format!(
-                    "{} ({}) ran part of its dataset: {}",
-                    r.label,
-                    r.dir.display(),
-                    subset.describe(r.header.sequences.len())
-                ),
-            });
-        }
-        if let Some((i, n)) = r.header.shard {
-            out.push(ComparisonWarning {
-                kind: WarningKind::Partial,
-                message: format!(
-                    "{} is shard {i}/{n} of a run ({}): partial results; `thorarena merge` the shards first",
-                    r.label,
-                    r.dir.display()
-                ),
-            });
-        }
+    out
+}
+
+/// What a run lacks: episodes missing or cut short, a subset of its dataset, a shard.
+fn partial_warnings(r: &Run) -> Vec<ComparisonWarning> {
+    let mut out = Vec::new();
+    if let Some(sentence) = r.coverage.sentence() {
+        let cells: Vec<String> = r
+            .coverage
+            .cells
+            .iter()
+            .filter(|c| c.present != c.expected || c.policy_failed > 0)
+            .map(|c| {
+                format!(
+                    "{}/{}: {} of {} present, {} cut short by a policy failure",
+                    c.setting, c.task, c.present, c.expected, c.policy_failed
+                )
+            })
+            .collect();
+        let torn = if r.torn_tail {
+            " (episodes.jsonl ends in a line cut short)"
+        } else {
+            ""
+        };
+        out.push(ComparisonWarning {
+            kind: WarningKind::Partial,
+            message: format!(
+                "{} ({}) is a {sentence}{torn} — {}",
+                r.label,
+                r.dir.display(),
+                cells.join("; ")
+            ),
+        });
+    }
+    if let Some(subset) = &r.header.subset {
+        out.push(ComparisonWarning {
+            kind: WarningKind::Partial,
+            message: format!(
+                "{} ({}) ran part of its dataset: {}",
+                r.label,
+                r.dir.display(),
+                subset.describe(r.header.sequences.len())
+            ),
+        });
+    }
+    if let Some((i, n)) = r.header.shard {
+        out.push(ComparisonWarning {
+            kind: WarningKind::Partial,
+            message: format!(
+                "{} is shard {i}/{n} of a run ({}): partial results; `thorarena merge` the shards first",
+                r.label,
+                r.dir.display()
+            ),
+        });
     }
     out
 }

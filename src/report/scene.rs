@@ -265,6 +265,60 @@ pub fn view_scene(
             && s.reference_root_pos.is_some()
             && s.reference_root_quat_wxyz.is_some()
     });
+    let posed = pose_trace(robot, trace, with_reference);
+    let round3 = |v: &[f64; 3]| v.map(r4);
+    let points = |v: &[[f64; 3]]| v.iter().map(round3).collect::<Vec<_>>();
+    let stem = trace_path
+        .file_stem()
+        .map_or_else(|| "trace".to_string(), |s| s.to_string_lossy().to_string());
+    let info = scene_info(robot, trace, context, with_reference);
+    Ok(ViewScene {
+        title: format!("ThorArena replay — {stem}"),
+        info,
+        robot: robot.name.clone(),
+        bodies: robot
+            .bodies
+            .iter()
+            .map(|b| BodyShapes {
+                name: b.name.clone(),
+                shapes: b.shapes.iter().map(shape_view).collect(),
+            })
+            .collect(),
+        time_s: trace.iter().map(|s| r4(s.time_s)).collect(),
+        robot_poses: posed.robot,
+        reference_poses: with_reference.then_some(posed.reference),
+        anchor: with_reference.then_some(posed.anchor),
+        hand_points_w: posed.hand_points_w,
+        hand_force_w: trace
+            .iter()
+            .map(|s| s.hand_force_w.map(|f| f.map(r4)))
+            .collect(),
+        keypoints_w: trace.iter().map(|s| points(&s.keypoints_w)).collect(),
+        reference_keypoints_w: trace
+            .iter()
+            .map(|s| points(&s.reference_keypoints_w))
+            .collect(),
+        kp_err_mm: trace
+            .iter()
+            .map(|s| (s.kp_err_m * 1e5).round() / 1e2)
+            .collect(),
+        feet: feet_view(trace),
+    })
+}
+
+/// A trace's bodies posed by forward kinematics, step by step.
+struct PosedTrace {
+    /// The robot's body poses (7 numbers each: position, quaternion).
+    robot: Vec<Vec<f64>>,
+    /// The hands' force points, world frame, m.
+    hand_points_w: Vec<[[f64; 3]; 2]>,
+    /// The reference's body poses (empty without reference joints).
+    reference: Vec<Vec<f64>>,
+    /// Robot root from reference root (empty without reference joints).
+    anchor: Vec<[f64; 7]>,
+}
+
+fn pose_trace(robot: &RobotModel, trace: &[TraceStep], with_reference: bool) -> PosedTrace {
     let mut poses = Vec::new();
     let mut robot_poses = Vec::with_capacity(trace.len());
     let mut hand_points_w = Vec::with_capacity(trace.len());
@@ -290,11 +344,21 @@ pub fn view_scene(
             anchor.push(pose7(&(root * ref_root.inverse())));
         }
     }
-    let round3 = |v: &[f64; 3]| v.map(r4);
-    let points = |v: &[[f64; 3]]| v.iter().map(round3).collect::<Vec<_>>();
-    let stem = trace_path
-        .file_stem()
-        .map_or_else(|| "trace".to_string(), |s| s.to_string_lossy().to_string());
+    PosedTrace {
+        robot: robot_poses,
+        hand_points_w,
+        reference: reference_poses,
+        anchor,
+    }
+}
+
+/// The replay's side panel: the run, the episode and how it ended.
+fn scene_info(
+    robot: &RobotModel,
+    trace: &[TraceStep],
+    context: &TraceContext,
+    with_reference: bool,
+) -> Vec<(String, String)> {
     let mut info = Vec::new();
     if let Some(h) = &context.header {
         info.push(("policy".to_string(), h.policy.clone()));
@@ -336,36 +400,5 @@ pub fn view_scene(
             "keypoints only (trace written before traces carried reference joints)".into(),
         ));
     }
-    Ok(ViewScene {
-        title: format!("ThorArena replay — {stem}"),
-        info,
-        robot: robot.name.clone(),
-        bodies: robot
-            .bodies
-            .iter()
-            .map(|b| BodyShapes {
-                name: b.name.clone(),
-                shapes: b.shapes.iter().map(shape_view).collect(),
-            })
-            .collect(),
-        time_s: trace.iter().map(|s| r4(s.time_s)).collect(),
-        robot_poses,
-        reference_poses: with_reference.then_some(reference_poses),
-        anchor: with_reference.then_some(anchor),
-        hand_points_w,
-        hand_force_w: trace
-            .iter()
-            .map(|s| s.hand_force_w.map(|f| f.map(r4)))
-            .collect(),
-        keypoints_w: trace.iter().map(|s| points(&s.keypoints_w)).collect(),
-        reference_keypoints_w: trace
-            .iter()
-            .map(|s| points(&s.reference_keypoints_w))
-            .collect(),
-        kp_err_mm: trace
-            .iter()
-            .map(|s| (s.kp_err_m * 1e5).round() / 1e2)
-            .collect(),
-        feet: feet_view(trace),
-    })
+    info
 }

@@ -154,81 +154,15 @@ pub fn label_cells(plan: &Plan, results: &[Option<CellResult>], runs: &mut [Run]
 /// two values is not plotted; labels name only the axes that vary.
 pub fn sweep_charts(plan: &Plan, results: &[Option<CellResult>]) -> Vec<crate::report::SweepChart> {
     let axes = VaryingAxes::of(plan);
-    let variant = |c: &Cell, policy: &str, with_latency: bool, with_setting: bool| {
-        axes.variant(c, policy, with_latency, with_setting)
-    };
-    // (cell, its runs' policy, fats, survival) of every cell with results.
-    let points: Vec<(&Cell, &str, f64, f64)> = plan
-        .cells
-        .iter()
-        .zip(results)
-        .filter_map(|(c, r)| {
-            let r = r.as_ref()?;
-            let avg = &r.summary.settings.values().next()?.average;
-            (avg.fats.is_finite() && avg.survival.is_finite()).then_some((
-                c,
-                r.summary.header.policy.as_str(),
-                avg.fats,
-                avg.survival,
-            ))
-        })
-        .collect();
-    // Lines of (label → sorted points) for the cells `x` maps to a value.
+    let points = cell_points(plan, results);
     let lines = |x: &dyn Fn(&Cell) -> Option<f64>,
-                 y: &dyn Fn(f64, f64) -> f64,
+                 y: &dyn Fn(&CellPoint) -> f64,
                  with_latency: bool,
                  with_setting: bool| {
-        let mut by_line: BTreeMap<(String, String), Vec<[f64; 2]>> = BTreeMap::new();
-        let mut xs = BTreeSet::new();
-        for &(c, policy, fats, survival) in &points {
-            if let Some(xv) = x(c) {
-                xs.insert(xv.to_bits());
-                by_line
-                    .entry((
-                        policy.to_string(),
-                        variant(c, policy, with_latency, with_setting),
-                    ))
-                    .or_default()
-                    .push([xv, y(fats, survival)]);
-            }
-        }
-        let series: Vec<CurveSeries> = by_line
-            .into_iter()
-            .map(|((policy, variant), mut points)| {
-                points.sort_by(|a, b| a[0].total_cmp(&b[0]));
-                let label = if variant.is_empty() {
-                    policy.clone()
-                } else {
-                    format!("{policy} · {variant}")
-                };
-                CurveSeries {
-                    label,
-                    policy,
-                    variant,
-                    points,
-                }
-            })
-            .collect();
-        (xs.len() >= 2).then_some(series)
+        curve_lines(&points, &axes, x, y, with_latency, with_setting)
     };
-    let setting = |c: &Cell| crate::evaluation::Setting::parse(&c.setting);
-    let coefficient = |c: &Cell| {
-        setting(c)
-            .filter(|s| s.push_n == 0.0)
-            .map(|s| s.coefficient)
-    };
-    let push = |c: &Cell| {
-        setting(c)
-            .filter(|s| s.coefficient == 0.0)
-            .map(|s| s.push_n)
-    };
-    let budget = |c: &Cell| {
-        (c.latency.mode == "measured")
-            .then(|| budget_ms(&c.latency.budget))
-            .flatten()
-    };
-    let fats = |f: f64, _s: f64| f;
-    let survival = |_f: f64, s: f64| s;
+    let fats = |p: &CellPoint| p.fats;
+    let survival = |p: &CellPoint| p.survival;
     let mut charts = Vec::new();
     let mut chart =
         |id: &str, title: &str, x_label: &str, y_label: &str, series: Option<Vec<CurveSeries>>| {
@@ -247,32 +181,32 @@ pub fn sweep_charts(plan: &Plan, results: &[Option<CellResult>]) -> Vec<crate::r
         "FATS against the force replay coefficient (0 = no force, 1 = the recorded forces)",
         "force replay coefficient",
         "FATS",
-        lines(&coefficient, &fats, true, false),
+        lines(&coefficient_of, &fats, true, false),
     );
     chart(
         "sweep-survival-vs-coefficient",
         "Survival against the force replay coefficient",
         "force replay coefficient",
         "survival",
-        lines(&coefficient, &survival, true, false),
+        lines(&coefficient_of, &survival, true, false),
     );
     if points
         .iter()
-        .any(|(c, _, _, _)| push(c).is_some_and(|p| p > 0.0))
+        .any(|p| push_of(p.cell).is_some_and(|n| n > 0.0))
     {
         chart(
             "sweep-fats-vs-push",
             "FATS against a constant push on each hand",
             "push per hand (N)",
             "FATS",
-            lines(&push, &fats, true, false),
+            lines(&push_of, &fats, true, false),
         );
         chart(
             "sweep-survival-vs-push",
             "Survival against a constant push on each hand",
             "push per hand (N)",
             "survival",
-            lines(&push, &survival, true, false),
+            lines(&push_of, &survival, true, false),
         );
     }
     chart(
@@ -280,7 +214,100 @@ pub fn sweep_charts(plan: &Plan, results: &[Option<CellResult>]) -> Vec<crate::r
         "FATS against the latency budget (latency mode measured: the policy's latency delays its action)",
         "latency budget (ms)",
         "FATS",
-        lines(&budget, &fats, false, true),
+        lines(&budget_of, &fats, false, true),
     );
     charts
+}
+
+/// A cell with results, as the curves plot it.
+struct CellPoint<'a> {
+    cell: &'a Cell,
+    /// The policy its run names.
+    policy: &'a str,
+    fats: f64,
+    survival: f64,
+}
+
+/// Every cell with finite results.
+fn cell_points<'a>(plan: &'a Plan, results: &'a [Option<CellResult>]) -> Vec<CellPoint<'a>> {
+    plan.cells
+        .iter()
+        .zip(results)
+        .filter_map(|(cell, r)| {
+            let r = r.as_ref()?;
+            let avg = &r.summary.settings.values().next()?.average;
+            (avg.fats.is_finite() && avg.survival.is_finite()).then_some(CellPoint {
+                cell,
+                policy: r.summary.header.policy.as_str(),
+                fats: avg.fats,
+                survival: avg.survival,
+            })
+        })
+        .collect()
+}
+
+/// One curve per (policy, variant of the other varying axes), its points sorted by the
+/// value `x` maps a cell to (cells it maps to nothing are left out); `None` when fewer
+/// than two x values are there to draw a curve through.
+fn curve_lines(
+    points: &[CellPoint],
+    axes: &VaryingAxes,
+    x: &dyn Fn(&Cell) -> Option<f64>,
+    y: &dyn Fn(&CellPoint) -> f64,
+    with_latency: bool,
+    with_setting: bool,
+) -> Option<Vec<CurveSeries>> {
+    let mut by_line: BTreeMap<(String, String), Vec<[f64; 2]>> = BTreeMap::new();
+    let mut xs = BTreeSet::new();
+    for p in points {
+        if let Some(xv) = x(p.cell) {
+            xs.insert(xv.to_bits());
+            by_line
+                .entry((
+                    p.policy.to_string(),
+                    axes.variant(p.cell, p.policy, with_latency, with_setting),
+                ))
+                .or_default()
+                .push([xv, y(p)]);
+        }
+    }
+    let series: Vec<CurveSeries> = by_line
+        .into_iter()
+        .map(|((policy, variant), mut points)| {
+            points.sort_by(|a, b| a[0].total_cmp(&b[0]));
+            let label = if variant.is_empty() {
+                policy.clone()
+            } else {
+                format!("{policy} · {variant}")
+            };
+            CurveSeries {
+                label,
+                policy,
+                variant,
+                points,
+            }
+        })
+        .collect();
+    (xs.len() >= 2).then_some(series)
+}
+
+/// A force-replay cell's coefficient (not a push).
+fn coefficient_of(c: &Cell) -> Option<f64> {
+    crate::evaluation::Setting::parse(&c.setting)
+        .filter(|s| s.push_n == 0.0)
+        .map(|s| s.coefficient)
+}
+
+/// A push cell's force per hand, N.
+fn push_of(c: &Cell) -> Option<f64> {
+    crate::evaluation::Setting::parse(&c.setting)
+        .filter(|s| s.coefficient == 0.0)
+        .map(|s| s.push_n)
+}
+
+/// A measured-latency cell's budget, ms.
+fn budget_of(c: &Cell) -> Option<f64> {
+    (c.latency.mode == "measured")
+        .then(|| budget_ms(&c.latency.budget))
+        .flatten()
 }
