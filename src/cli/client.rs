@@ -6,10 +6,8 @@
 use anyhow::{bail, Context};
 use std::io::Write;
 use std::time::Duration;
-use thorarena::policy::wire::read_observation;
-use thorarena::policy::{
-    BalanceGains, BalancePolicy, HoldPolicy, Observation, Policy, ReplayPolicy,
-};
+use thorarena::policy::wire::WireAnswer;
+use thorarena::policy::{BalanceGains, BalancePolicy, HoldPolicy, Policy, ReplayPolicy};
 use thorarena_ipc::{Next, PolicyClient, PolicyConfig, WaitPolicy};
 
 /// Arguments of `client`.
@@ -96,8 +94,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     println!("connected");
     std::io::stdout().flush()?;
     let n_refs = info.layout.n_refs;
-    let mut observations: Vec<Observation> = Vec::new();
-    let mut actions: Vec<Vec<f64>> = Vec::new();
+    let mut wire = WireAnswer::default();
     let mut steps = 0u64;
     loop {
         let mut step = match client.next_step(Some(Duration::from_secs(1)))? {
@@ -112,25 +109,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             );
         }
         step.answer(&mut |obs, out| {
-            let active = (0..obs.n_envs()).filter(|&i| obs.env(i).is_active());
             match policy.as_mut() {
+                // The echo: action = q.
                 None => {
-                    for i in active {
+                    for i in (0..obs.n_envs()).filter(|&i| obs.env(i).is_active()) {
                         out.env(i).copy_from_slice(obs.env(i).array("q"));
                     }
                 }
-                Some(policy) => {
-                    observations.clear();
-                    observations.extend(active.map(|i| read_observation(i, &obs.env(i), n_refs)));
-                    for o in observations.iter().filter(|o| o.step == 0) {
-                        policy.reset(o.env);
-                    }
-                    actions.resize_with(observations.len(), || vec![0.0; obs_joints(obs)]);
-                    policy.act(&observations, &mut actions[..observations.len()]);
-                    for (o, a) in observations.iter().zip(&actions) {
-                        out.env(o.env).copy_from_slice(a);
-                    }
-                }
+                Some(policy) => wire.answer(policy.as_mut(), obs, out, n_refs),
             }
             if args.nan_at_step == Some(steps) {
                 out.all().fill(f64::NAN);
@@ -147,8 +133,4 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     eprintln!("the run is over after {steps} steps");
     Ok(())
-}
-
-fn obs_joints(obs: &thorarena_ipc::ObsBatch) -> usize {
-    obs.env(0).array("q").len()
 }

@@ -71,13 +71,7 @@ fn run_engine(
     let mut write_error = None;
     let mut sink = |r: &thorarena::evaluation::EpisodeRecord,
                     trace: &thorarena::episode::EpisodeTrace| {
-        let q = trace
-            .steps
-            .iter()
-            .take_while(|s| s.time_s <= seconds + 1e-9)
-            .map(|s| s.q.clone())
-            .collect();
-        if let Err(e) = log.append(r.key(), q, trace.foot_slip_m.clone()) {
+        if let Err(e) = log.append_trace(r.key(), trace, seconds) {
             write_error.get_or_insert(e);
         }
     };

@@ -10,7 +10,7 @@ use thorarena::episode::EpisodeTrace;
 use thorarena::evaluation::{EngineChoice, EpisodeRecord, EvalRequest, EvalSpec, TerminationRule};
 use thorarena::motion::SequenceSelection;
 use thorarena::policy::Policy;
-use thorarena::results::RunDir;
+use thorarena::results::{RunDir, RUN_FILES, TRACES_DIR};
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
@@ -341,8 +341,14 @@ pub(super) fn evaluate(
     })?;
     println!("{}", done.tables);
     eprintln!(
-        "wrote {}/{{run.json, episodes.jsonl, summary.json, tables.md, episodes.csv}}",
-        out.display()
+        "wrote {}/{{{}}}",
+        out.display(),
+        RUN_FILES
+            .iter()
+            .filter(|f| **f != TRACES_DIR)
+            .copied()
+            .collect::<Vec<_>>()
+            .join(", ")
     );
     if !spec.trace.is_empty() {
         eprintln!(

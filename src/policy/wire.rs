@@ -7,7 +7,9 @@ use super::Observation;
 use crate::motion::ReferenceFrame;
 use crate::physics::RootState;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
-use thorarena_ipc::{EnvHeader, EnvObs, EnvObsMut, FLAG_ACTIVE, FLAG_RESET};
+use thorarena_ipc::{
+    ActionBatchMut, EnvHeader, EnvObs, EnvObsMut, ObsBatch, FLAG_ACTIVE, FLAG_RESET,
+};
 
 fn put3(dst: &mut [f64], v: &Vector3<f64>) {
     dst.copy_from_slice(&[v.x, v.y, v.z]);
@@ -116,5 +118,43 @@ pub fn read_observation(env_index: usize, env: &EnvObs, n_refs: usize) -> Observ
         qd: env.array("qd").to_vec(),
         last_action: env.array("last_action").to_vec(),
         reference,
+    }
+}
+
+/// Answers observation batches from the wire with an in-process batched policy: each
+/// active environment's [`Observation`] is rebuilt (bit for bit what the simulator
+/// observed), the policy is reset for an environment whose episode starts, and its
+/// actions are written into the environment's slot. Inactive slots are left alone.
+#[derive(Default)]
+pub struct WireAnswer {
+    observations: Vec<Observation>,
+    actions: Vec<Vec<f64>>,
+}
+
+impl WireAnswer {
+    /// Answers `obs` (with `n_refs` reference frames per environment) into `out`.
+    pub fn answer(
+        &mut self,
+        policy: &mut dyn super::Policy,
+        obs: &ObsBatch,
+        out: &mut ActionBatchMut,
+        n_refs: usize,
+    ) {
+        let n_joints = obs.env(0).array("q").len();
+        self.observations.clear();
+        self.observations.extend(
+            (0..obs.n_envs())
+                .filter(|&i| obs.env(i).is_active())
+                .map(|i| read_observation(i, &obs.env(i), n_refs)),
+        );
+        for o in self.observations.iter().filter(|o| o.step == 0) {
+            policy.reset(o.env);
+        }
+        let n = self.observations.len();
+        self.actions.resize_with(n, || vec![0.0; n_joints]);
+        policy.act(&self.observations, &mut self.actions[..n]);
+        for (o, a) in self.observations.iter().zip(&self.actions) {
+            out.env(o.env).copy_from_slice(a);
+        }
     }
 }

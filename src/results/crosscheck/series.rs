@@ -85,6 +85,23 @@ impl SeriesLog {
         })
     }
 
+    /// Keeps the series of a finished episode from its trace: the joint angles of its
+    /// first `seconds` (the divergence window) and its feet's accumulated slip.
+    pub fn append_trace(
+        &mut self,
+        key: EpisodeKey,
+        trace: &crate::episode::EpisodeTrace,
+        seconds: f64,
+    ) -> Result<(), ResultsError> {
+        let first_q = trace
+            .steps
+            .iter()
+            .take_while(|s| s.time_s <= seconds + 1e-9)
+            .map(|s| s.q.clone())
+            .collect();
+        self.append(key, first_q, trace.foot_slip_m.clone())
+    }
+
     /// Keeps one finished episode's series (written through at once: a kill loses none).
     pub fn append(
         &mut self,
