@@ -9,11 +9,14 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use thorarena::motion::ReferenceFrame;
 use thorarena::physics::RootState;
 use thorarena::policy::beyondmimic::{
-    build_observation, layout_width, ObservationSpec, Scratch, Term, LAYOUT_154, LAYOUT_160,
+    build_observation, layout_width, ObservationSpec, Scratch, Term, KNOWN_LAYOUTS, LAYOUT_154,
+    LAYOUT_154_MJLAB, LAYOUT_160,
 };
 use thorarena::policy::Observation;
 use thorarena::robot::RobotModel;
 
+#[path = "common/onnx_model.rs"]
+mod onnx_model;
 mod prereq;
 
 fn g1() -> RobotModel {
@@ -256,4 +259,59 @@ fn a_network_whose_metadata_contradicts_the_profile_is_reported() {
     let d = differs.disagreements();
     assert_eq!(d.len(), 1, "{d:?}");
     assert!(d[0].starts_with("kp:") && d[0].contains("knee"), "{d:?}");
+}
+
+/// A network `width` inputs wide with no metadata, loaded under bundled profile `profile`.
+fn load_bare(width: i64, profile: &str) -> Result<thorarena::policy::BeyondMimicPolicy, String> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bare.onnx");
+    let net = onnx_model::Network {
+        inputs: vec![("obs", vec![1, width])],
+        outputs: vec![("actions", "obs", 29, 0.0)],
+        metadata: Vec::new(),
+    };
+    std::fs::write(&path, net.bytes()).unwrap();
+    let robot = std::sync::Arc::new(g1());
+    let profile = thorarena::profile::load_profile(
+        &thorarena::profile::bundled_profile_path(profile),
+        &robot,
+    )
+    .unwrap();
+    thorarena::policy::BeyondMimicPolicy::load(&path, robot, &profile).map_err(|e| e.to_string())
+}
+
+#[test]
+fn a_width_two_known_layouts_fit_is_refused_unless_the_profile_names_the_terms() {
+    // 154 inputs and nothing saying which 154: both candidates named, nothing guessed.
+    let e = load_bare(154, "beyondmimic").err().expect("refused");
+    assert!(e.contains("fits 2 known layouts"), "{e}");
+    for (name, terms) in KNOWN_LAYOUTS
+        .iter()
+        .filter(|(_, l)| layout_width(l, 29) == 154)
+    {
+        let listed: Vec<&str> = terms.iter().map(|t| t.name()).collect();
+        assert!(
+            e.contains(name) && e.contains(&listed.join(", ")),
+            "{name}: {e}"
+        );
+    }
+    assert!(e.contains("observation_names"), "{e}");
+    // The holosoma profile names its terms: the same file loads, in holosoma's order.
+    let named = load_bare(154, "holosoma-wbt").unwrap();
+    assert_eq!(named.terms(), LAYOUT_154);
+    // 160 wide: one known layout fits, and it is taken.
+    assert_eq!(load_bare(160, "beyondmimic").unwrap().terms(), LAYOUT_160);
+    // A width no layout has names every known width.
+    let e = load_bare(150, "beyondmimic").err().expect("refused");
+    assert!(e.contains("160") && e.contains("154"), "{e}");
+}
+
+#[test]
+fn every_term_name_parses_back_to_its_term() {
+    for (_, terms) in KNOWN_LAYOUTS {
+        for &t in terms {
+            assert_eq!(Term::parse(t.name()), Some(t));
+        }
+    }
+    assert_eq!(layout_width(&LAYOUT_154_MJLAB, 29), 154);
 }

@@ -60,15 +60,24 @@ pub fn python_agrees(
     });
     let path = dir.join(format!("{adapter}-dump.json"));
     std::fs::write(&path, dump.to_string()).unwrap();
-    let out = std::process::Command::new("python3")
+    let mut command = std::process::Command::new("python3");
+    command
         .arg(root.join("adapters/python/examples/check_against_dump.py"))
         .args(["--adapter", adapter, "--dump"])
         .arg(&path)
         .arg("--onnx")
         .arg(onnx)
-        .env("PYTHONPATH", root.join("adapters/python"))
-        .output()
-        .unwrap();
+        .env("PYTHONPATH", root.join("adapters/python"));
+    // The terms the Rust side took from the profile, for a file that names none.
+    if let Some(bm) = setup
+        .profile
+        .beyondmimic
+        .as_ref()
+        .filter(|b| !b.observation_names.is_empty())
+    {
+        command.args(["--observation-names", &bm.observation_names.join(",")]);
+    }
+    let out = command.output().unwrap();
     let report = String::from_utf8_lossy(&out.stdout).into_owned();
     eprintln!("{report}{}", String::from_utf8_lossy(&out.stderr));
     (out.status.success(), report)

@@ -20,11 +20,15 @@ from thorarena.adapters.base import Adapter
 from thorarena.adapters.dump import ACTION_TOLERANCE, OBS_TOLERANCE, compare_dump, load_dump
 
 
-def make_adapter(kind: str, onnx: str, threads: int) -> Adapter:
+def make_adapter(
+    kind: str, onnx: str, threads: int, observation_names: list[str] | None
+) -> Adapter:
     """The Python adapter matching the Rust policy the dump was made with."""
     if kind == "twist2":
         return Twist2Adapter(OnnxPolicy(onnx, intra_op_threads=threads))
-    return BeyondMimicAdapter.from_onnx(onnx, intra_op_threads=threads)
+    return BeyondMimicAdapter.from_onnx(
+        onnx, intra_op_threads=threads, observation_names=observation_names
+    )
 
 
 def main() -> int:
@@ -33,10 +37,16 @@ def main() -> int:
     parser.add_argument("--dump", required=True, help="JSON dump of one episode (Rust side)")
     parser.add_argument("--onnx", required=True, help="the ONNX the dump was made with")
     parser.add_argument("--threads", type=int, default=1, help="ONNX Runtime intra-op threads")
+    parser.add_argument(
+        "--observation-names",
+        type=lambda v: v.split(","),
+        help="beyondmimic: the observation terms in order, comma separated, for a file that "
+        "names none (the profile's [beyondmimic] observation_names)",
+    )
     args = parser.parse_args()
 
     dump = load_dump(args.dump)
-    adapter = make_adapter(args.adapter, args.onnx, args.threads)
+    adapter = make_adapter(args.adapter, args.onnx, args.threads, args.observation_names)
     result = compare_dump(dump, adapter)
     worst_obs = max(result.steps, key=lambda s: s.obs_max_abs)
     print(

@@ -7,6 +7,7 @@ test (skipped without the `onnx` package or onnxruntime), checks the file path e
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import json
 import math
@@ -18,7 +19,7 @@ import pytest
 
 import thorarena as ta
 from thorarena.adapters import BeyondMimicAdapter, BeyondMimicMetadata, canonical_indices
-from thorarena.adapters.beyondmimic import WAIST_ROLL_ORIGIN
+from thorarena.adapters.beyondmimic import DEFAULT_TERMS, HOLOSOMA_TERMS, WAIST_ROLL_ORIGIN
 
 ISAACLAB_ORDER = [
     "left_hip_pitch_joint",
@@ -139,7 +140,7 @@ def test_metadata_is_read_as_the_exporter_writes_it() -> None:
 
 def test_holosoma_metadata_json_lists_and_no_layout_keys() -> None:
     """holosoma writes `dof_names`, `kp`, `kd` as JSON and nothing else the adapter reads:
-    the default pose and scale are then the session's, the terms chosen by width."""
+    the default pose and scale are then the session's, the terms named by the caller."""
     names = json.dumps(list(ISAACLAB_ORDER))
     meta = BeyondMimicMetadata.from_onnx({"dof_names": names, "kp": json.dumps([14.0] * 29)})
     assert meta.joint_names == tuple(ISAACLAB_ORDER)
@@ -330,3 +331,28 @@ def test_an_export_with_metadata_runs_one_row_at_a_time_with_its_time_step(
         want = np.empty(29)
         want[PERM] = DEFAULT_POLICY + SCALE_POLICY * policy_action
         np.testing.assert_allclose(target, want, atol=1e-5)
+
+
+class Wide:
+    """A stand-in network `input_dim` inputs wide."""
+
+    output_dim = 29
+
+    def __init__(self, input_dim: int) -> None:
+        self.input_dim = input_dim
+
+    def __call__(self, inputs: np.ndarray, *, steps: np.ndarray) -> np.ndarray:
+        return np.zeros((len(inputs), 29))
+
+
+def test_a_width_two_known_layouts_fit_is_refused_unless_the_terms_are_named() -> None:
+    names = json.dumps(list(ISAACLAB_ORDER))
+    bare = BeyondMimicMetadata.from_onnx({"dof_names": names})
+    with pytest.raises(ValueError, match="fits 2 known layouts") as refused:
+        BeyondMimicAdapter(Wide(154), bare)
+    assert "holosoma" in str(refused.value) and "without state estimation" in str(refused.value)
+    named = dataclasses.replace(bare, observation_names=HOLOSOMA_TERMS)
+    assert BeyondMimicAdapter(Wide(154), named).terms == HOLOSOMA_TERMS
+    assert BeyondMimicAdapter(Wide(160), bare).terms == DEFAULT_TERMS
+    with pytest.raises(ValueError, match="no known layout is 150"):
+        BeyondMimicAdapter(Wide(150), bare)

@@ -4,7 +4,7 @@
 
 use super::{
     layout_width, BeyondMimicError, BeyondMimicPolicy, FileMetadata, ObservationSpec, Scratch,
-    Term, LAYOUT_154, LAYOUT_160,
+    Term, KNOWN_LAYOUTS,
 };
 use crate::profile::{BeyondMimicProfile, Profile};
 use crate::robot::RobotModel;
@@ -343,9 +343,9 @@ fn compare(
     ))
 }
 
-/// The observation terms: the file's, the profile's, or the known layout whose width is
-/// the network's input (`obs_width` for `n` joints); whichever is used must make exactly
-/// that width.
+/// The observation terms: the file's, the profile's, or the one known layout whose width
+/// is the network's input (`obs_width` for `n` joints); whichever is used must make
+/// exactly that width.
 fn observation_terms(
     meta: &FileMetadata,
     profile_bm: Option<&BeyondMimicProfile>,
@@ -359,17 +359,11 @@ fn observation_terms(
             parse_terms(&bm.observation_names)?,
             "the profile's [beyondmimic] observation_names",
         )
-    } else if let Some(l) = [&LAYOUT_160[..], &LAYOUT_154[..]]
-        .into_iter()
-        .find(|l| layout_width(l, n) == obs_width)
-    {
-        (l.to_vec(), "the known layout of that width")
     } else {
-        return Err(format!(
-            "no observation_names in the file or the profile, and its input width {obs_width} is neither {} nor {}",
-            layout_width(&LAYOUT_160, n),
-            layout_width(&LAYOUT_154, n)
-        ));
+        (
+            known_layout_of_width(n, obs_width)?,
+            "the known layout of that width",
+        )
     };
     if layout_width(&terms, n) != obs_width {
         return Err(format!(
@@ -404,4 +398,35 @@ fn parse_terms(names: &[String]) -> Result<Vec<Term>, String> {
         .iter()
         .map(|n| Term::parse(n).ok_or_else(|| format!("observation term `{n}` is not one of the BeyondMimic family's (command, motion_anchor_pos_b, motion_anchor_ori_b, base_lin_vel, base_ang_vel, joint_pos, joint_vel, actions)")))
         .collect()
+}
+
+/// The one known layout `obs_width` wide for `n` joints. A width that none or several fit
+/// is an error naming them: two layouts of the same width order the same numbers
+/// differently, and a network fed the other one still runs — a wiring bug that would
+/// score as a bad policy.
+fn known_layout_of_width(n: usize, obs_width: usize) -> Result<Vec<Term>, String> {
+    let fits: Vec<&(&str, &[Term])> = KNOWN_LAYOUTS
+        .iter()
+        .filter(|(_, l)| layout_width(l, n) == obs_width)
+        .collect();
+    let describe = |(name, terms): &(&str, &[Term])| {
+        let names: Vec<&str> = terms.iter().map(|t| t.name()).collect();
+        format!("{name}: [{}]", names.join(", "))
+    };
+    match fits.as_slice() {
+        [(_, terms)] => Ok(terms.to_vec()),
+        [] => Err(format!(
+            "no observation_names in the file or the profile, and no known layout is {obs_width} inputs wide for {n} joints ({})",
+            KNOWN_LAYOUTS
+                .iter()
+                .map(|(name, l)| format!("{name}: {}", layout_width(l, n)))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )),
+        several => Err(format!(
+            "no observation_names in the file or the profile, and its input width {obs_width} fits {} known layouts that order the inputs differently — {}; name the terms in order in the profile's [beyondmimic] observation_names",
+            several.len(),
+            several.iter().map(|f| describe(f)).collect::<Vec<_>>().join("; ")
+        )),
+    }
 }

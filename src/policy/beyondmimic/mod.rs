@@ -24,7 +24,7 @@ mod observation;
 pub use crate::onnx_export::FileMetadata;
 pub use observation::{
     build_observation, layout_width, reference_anchor_in_robot_anchor, ObservationSpec, Scratch,
-    Term, LAYOUT_154, LAYOUT_160,
+    Term, KNOWN_LAYOUTS, LAYOUT_154, LAYOUT_154_MJLAB, LAYOUT_160,
 };
 
 use super::{ActOutcome, Observation, Policy};

@@ -74,6 +74,28 @@ pub const LAYOUT_154: [Term; 6] = [
     Term::AnchorOri,
 ];
 
+/// mjlab's G1 tracking observation without state estimation (154 for 29 joints): the
+/// 160-term layout less the anchor position and the base linear velocity, in the same
+/// order (mjlab `src/mjlab/tasks/tracking/config/g1/env_cfgs.py`, the variant without
+/// state estimation; Unitree's mimic exports use this order too).
+pub const LAYOUT_154_MJLAB: [Term; 6] = [
+    Term::Command,
+    Term::AnchorOri,
+    Term::BaseAngVel,
+    Term::JointPos,
+    Term::JointVel,
+    Term::Actions,
+];
+
+/// Every layout a network without `observation_names` might have been trained with,
+/// named for the error that lists them. Two of them are 154 wide for 29 joints, so a
+/// width alone never picks one: the file's metadata or the profile must say.
+pub const KNOWN_LAYOUTS: [(&str, &[Term]); 3] = [
+    ("mjlab / whole_body_tracking", &LAYOUT_160),
+    ("holosoma wbt (terms sorted by name)", &LAYOUT_154),
+    ("mjlab without state estimation", &LAYOUT_154_MJLAB),
+];
+
 impl Term {
     /// The term a name in `observation_names` (mjlab's, whole_body_tracking's or
     /// holosoma's spelling) stands for.
@@ -89,6 +111,20 @@ impl Term {
             "actions" | "last_action" => Self::Actions,
             _ => return None,
         })
+    }
+
+    /// Its name in mjlab's spelling (what a profile's `observation_names` may say).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Command => "command",
+            Self::AnchorPos => "motion_anchor_pos_b",
+            Self::AnchorOri => "motion_anchor_ori_b",
+            Self::BaseLinVel => "base_lin_vel",
+            Self::BaseAngVel => "base_ang_vel",
+            Self::JointPos => "joint_pos",
+            Self::JointVel => "joint_vel",
+            Self::Actions => "actions",
+        }
     }
 
     /// Width for `n` joints.

@@ -26,6 +26,12 @@ def main() -> int:
     parser.add_argument("--onnx", required=True, help="policy.onnx with BeyondMimic metadata")
     parser.add_argument("--threads", type=int, default=1, help="ONNX Runtime intra-op threads")
     parser.add_argument(
+        "--observation-names",
+        type=lambda v: v.split(","),
+        help="the observation terms in order, comma separated, for a file that names none "
+        "(e.g. holosoma's: actions,base_ang_vel,dof_pos,dof_vel,motion_command,motion_ref_ori_b)",
+    )
+    parser.add_argument(
         "--name", default=BeyondMimicAdapter.name, help="policy name in the results"
     )
     parser.add_argument(
@@ -33,7 +39,9 @@ def main() -> int:
     )
     args = parser.parse_args()
 
-    adapter = BeyondMimicAdapter.from_onnx(args.onnx, intra_op_threads=args.threads)
+    adapter = BeyondMimicAdapter.from_onnx(
+        args.onnx, intra_op_threads=args.threads, observation_names=args.observation_names
+    )
     meta = adapter.metadata
     print(f"observation: {', '.join(adapter.terms)} ({adapter.obs_dim})", flush=True)
     print(f"anchor body: {meta.anchor_body_name}", flush=True)

@@ -57,9 +57,10 @@ metadata key, when present, may also name `pelvis`.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -95,6 +96,23 @@ HOLOSOMA_TERMS = (
 """holosoma's `wbt` observation (154 for 29 joints): its terms `actions`, `base_ang_vel`,
 `dof_pos`, `dof_vel`, `motion_command`, `motion_ref_ori_b` in alphabetical order of those
 names, as holosoma concatenates every observation group."""
+MJLAB_NO_STATE_ESTIMATION_TERMS = (
+    "command",
+    "motion_anchor_ori_b",
+    "base_ang_vel",
+    "joint_pos",
+    "joint_vel",
+    "actions",
+)
+"""mjlab's G1 tracking observation without state estimation (154 for 29 joints): the
+160-term layout less `motion_anchor_pos_b` and `base_lin_vel`, in the same order."""
+KNOWN_LAYOUTS = {
+    "mjlab / whole_body_tracking": DEFAULT_TERMS,
+    "holosoma wbt (terms sorted by name)": HOLOSOMA_TERMS,
+    "mjlab without state estimation": MJLAB_NO_STATE_ESTIMATION_TERMS,
+}
+"""Every layout a network without `observation_names` may have; two are 154 wide, so a
+width alone never picks one."""
 TERM_ALIASES = {
     "motion_ref_pos_b": "motion_anchor_pos_b",
     "motion_ref_ori_b": "motion_anchor_ori_b",
@@ -103,6 +121,31 @@ TERM_ALIASES = {
     "dof_vel": "joint_vel",
 }
 ANCHOR_BODIES = ("torso_link", "pelvis")
+
+
+def known_layout_of_width(width: int | None, sizes: Mapping[str, int]) -> tuple[str, ...]:
+    """The one known layout `width` inputs wide; none or several is an error naming them
+    (two layouts of one width order the same numbers differently, and a network fed the
+    other still runs)."""
+    fits = {
+        name: terms
+        for name, terms in KNOWN_LAYOUTS.items()
+        if sum(sizes[t] for t in terms) == width
+    }
+    if len(fits) == 1:
+        return next(iter(fits.values()))
+    if not fits:
+        widths = {name: sum(sizes[t] for t in terms) for name, terms in KNOWN_LAYOUTS.items()}
+        raise ValueError(
+            f"no observation_names in the metadata and no known layout is {width} inputs wide "
+            f"({widths})"
+        )
+    listed = "; ".join(f"{name}: [{', '.join(terms)}]" for name, terms in fits.items())
+    raise ValueError(
+        f"no observation_names in the metadata, and its input width {width} fits "
+        f"{len(fits)} known layouts that order the inputs differently — {listed}; "
+        "name the terms in order (observation_names)"
+    )
 
 
 def term_sizes(n_joints: int) -> dict[str, int]:
@@ -244,15 +287,7 @@ class BeyondMimicAdapter(Adapter):
         terms = metadata.observation_names
         if terms is None:
             width = policy.input_dim if policy is not None else None
-            known = {
-                sum(sizes[t] for t in layout): layout for layout in (DEFAULT_TERMS, HOLOSOMA_TERMS)
-            }
-            if width not in known:
-                raise ValueError(
-                    f"no observation_names in the metadata and the input width {width} is none "
-                    f"of the known layouts' ({sorted(known)})"
-                )
-            terms = known[width]
+            terms = known_layout_of_width(width, sizes)
         unknown = [t for t in terms if t not in sizes]
         if unknown:
             raise ValueError(f"observation terms the adapter cannot build: {unknown}")
@@ -262,10 +297,23 @@ class BeyondMimicAdapter(Adapter):
 
     @classmethod
     def from_onnx(
-        cls, path: str | os.PathLike[str], *, intra_op_threads: int = 1
+        cls,
+        path: str | os.PathLike[str],
+        *,
+        intra_op_threads: int = 1,
+        observation_names: Sequence[str] | None = None,
     ) -> BeyondMimicAdapter:
-        """The adapter for an exported ONNX file, metadata included."""
-        return cls(OnnxPolicy(path, intra_op_threads=intra_op_threads))
+        """The adapter for an exported ONNX file, metadata included; `observation_names`
+        names the terms of a file that does not (holosoma's exports: the
+        `[beyondmimic] observation_names` of the simulator's profile)."""
+        policy = OnnxPolicy(path, intra_op_threads=intra_op_threads)
+        metadata = BeyondMimicMetadata.from_onnx(policy.metadata)
+        if observation_names is not None:
+            metadata = dataclasses.replace(
+                metadata,
+                observation_names=tuple(TERM_ALIASES.get(t, t) for t in observation_names),
+            )
+        return cls(policy, metadata)
 
     def canonical(self, policy_order: np.ndarray) -> np.ndarray:
         """A per-joint array (last axis) from the policy's order into the canonical order."""
