@@ -9,8 +9,7 @@ use thorarena::evaluation::TerminationRule;
 use thorarena::motion::Dataset;
 use thorarena::perf::time_episode_loop;
 use thorarena::physics::{PhysicsSettings, RapierPhysics};
-use thorarena::policy::{HoldPolicy, Policy, ReplayPolicy};
-use thorarena::profile::{bundled_profile_path, load_profile};
+use thorarena::registry::{self, PolicyChoice};
 
 /// Arguments of `bench eval`.
 #[derive(Debug, clap::Args)]
@@ -18,7 +17,8 @@ pub struct Args {
     /// Dataset directory.
     #[arg(long, default_value = "data/sample")]
     pub dataset: PathBuf,
-    /// Built-in policy: hold or replay.
+    /// Policy in process: a built-in (hold, replay, balance) or a network
+    /// (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`; see `thorarena policies`).
     #[arg(long, default_value = "hold")]
     pub policy: String,
     /// Force replay coefficient.
@@ -30,14 +30,16 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let robot = Arc::new(thorarena::registry::robot(&args.robot)?);
-    let profile = load_profile(&bundled_profile_path("default"), &robot)?;
+    let robot = Arc::new(registry::robot(&args.robot)?);
+    let profile = registry::profile(registry::family_profile(&args.policy), &robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let sequences = ds.load_all()?;
-    let mut policy: Box<dyn Policy> = match args.policy.as_str() {
-        "hold" => Box::new(HoldPolicy),
-        "replay" => Box::new(ReplayPolicy::new(profile.action_offset_rad.clone())),
-        other => anyhow::bail!("unknown policy `{other}` (hold, replay)"),
+    let PolicyChoice::InProcess(mut policy) = registry::policy(&args.policy, &robot, &profile)?
+    else {
+        anyhow::bail!(
+            "bench eval times a policy in process: not `{}`",
+            args.policy
+        );
     };
     let setup = EpisodeSetup {
         robot: &robot,

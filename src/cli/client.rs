@@ -7,7 +7,7 @@ use anyhow::{bail, Context};
 use std::io::Write;
 use std::time::Duration;
 use thorarena::policy::wire::WireAnswer;
-use thorarena::policy::{BalanceGains, BalancePolicy, HoldPolicy, Policy, ReplayPolicy};
+use thorarena::policy::Policy;
 use thorarena_ipc::{Next, PolicyClient, PolicyConfig, WaitPolicy};
 
 /// Arguments of `client`.
@@ -82,14 +82,11 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let info = client.info().clone();
     let offset = info.action_offset_rad.clone();
     let mut policy: Option<Box<dyn Policy>> = match args.policy.as_str() {
-        "hold" => Some(Box::new(HoldPolicy)),
-        "replay" => Some(Box::new(ReplayPolicy::new(offset))),
-        "balance" => Some(Box::new(
-            BalancePolicy::new(&robot, offset, BalanceGains::default())
-                .context("the robot lacks the leg joints `balance` needs")?,
-        )),
         "echo" => None,
-        other => bail!("unknown policy `{other}` (balance, replay, hold, echo)"),
+        name => match thorarena::registry::builtin_policy(name, &robot, &offset) {
+            Some(policy) => Some(policy?),
+            None => bail!("unknown policy `{name}` (balance, replay, hold, echo)"),
+        },
     };
     println!("connected");
     std::io::stdout().flush()?;

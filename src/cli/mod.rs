@@ -12,6 +12,7 @@ mod data_synth;
 mod eval;
 mod logging;
 mod merge;
+mod policies;
 mod policy_arg;
 mod report_html;
 mod robot_info;
@@ -57,6 +58,8 @@ pub enum Command {
     /// Run a built-in policy as a separate process connected to a session (the Rust
     /// example client; `echo` for latency benchmarks).
     Client(client::Args),
+    /// List the policy families `--policy` can name: what each needs and its profile.
+    Policies,
     /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
     Merge(merge::Args),
     /// Run the same episodes on rapier and on MuJoCo and compare them (survival, keypoint
@@ -135,6 +138,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::Policies => policies::run(),
         Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Report(args) => report_html::run(&args),
         Command::View(args) => view::run(&args),

@@ -4,10 +4,12 @@
 //! matches nothing is an error listing what exists, with the nearest one when it looks
 //! like a typo ([`did_you_mean`]).
 
+mod families;
 mod policies;
 mod suggest;
 
-pub use policies::{ipc_session, policy, unknown_policy, PolicyChoice};
+pub use families::{policy_family, PolicyFamily, Runs, POLICY_FAMILIES};
+pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};
 pub use suggest::{closest, did_you_mean};
 
 use crate::profile::{bundled_profile_path, load_profile, Profile, ProfileError};
@@ -131,15 +133,9 @@ pub fn profile_fits(policy: &str, profile: &Profile) -> Result<(), String> {
     Ok(())
 }
 
-/// The profile a policy family was trained with, by the policy argument's prefix:
-/// `twist2` for `twist2:`, `beyondmimic` for `beyondmimic:`, `default` for the built-ins
-/// and policy processes. `eval` and sweeps use it when no profile is named.
+/// The profile a policy family was trained with (its entry in [`POLICY_FAMILIES`]):
+/// `twist2` for `twist2:`, `beyondmimic` for `beyondmimic:`, `default` for the built-ins,
+/// policy processes and anything unknown. `eval` and sweeps use it when no profile is named.
 pub fn family_profile(policy: &str) -> &'static str {
-    if policy.starts_with("twist2:") {
-        "twist2"
-    } else if policy.starts_with("beyondmimic:") {
-        "beyondmimic"
-    } else {
-        "default"
-    }
+    policy_family(policy).map_or("default", |f| f.profile)
 }

@@ -32,13 +32,10 @@ pub fn policy<'a>(
     profile: &Profile,
 ) -> Result<PolicyChoice<'a>, RegistryError> {
     let default_pose = profile.action_offset_rad.clone();
+    if let Some(builtin) = builtin_policy(spec, robot, &default_pose) {
+        return Ok(PolicyChoice::InProcess(builtin?));
+    }
     let policy: Box<dyn Policy> = match spec {
-        "hold" => Box::new(HoldPolicy),
-        "replay" => Box::new(ReplayPolicy::new(default_pose)),
-        "balance" => Box::new(
-            BalancePolicy::new(robot, default_pose, BalanceGains::default())
-                .ok_or(RegistryError::BalanceNeedsLegs)?,
-        ),
         other if other.ends_with(':') => {
             return Err(RegistryError::UnknownPolicy(unknown_policy(other)))
         }
@@ -61,6 +58,26 @@ pub fn policy<'a>(
     Ok(PolicyChoice::InProcess(policy))
 }
 
+/// The built-in policy `name` (`hold`, `replay`, `balance`) around `default_pose` (the
+/// profile's, or the session's action offset for a policy process), or `None` when `name`
+/// is not a built-in.
+pub fn builtin_policy(
+    name: &str,
+    robot: &RobotModel,
+    default_pose: &[f64],
+) -> Option<Result<Box<dyn Policy>, RegistryError>> {
+    let default_pose = default_pose.to_vec();
+    Some(Ok(match name {
+        "hold" => Box::new(HoldPolicy),
+        "replay" => Box::new(ReplayPolicy::new(default_pose)),
+        "balance" => match BalancePolicy::new(robot, default_pose, BalanceGains::default()) {
+            Some(p) => Box::new(p),
+            None => return Some(Err(RegistryError::BalanceNeedsLegs)),
+        },
+        _ => return None,
+    }))
+}
+
 /// Why `spec` names no policy, with what it probably meant.
 pub fn unknown_policy(spec: &str) -> String {
     let family = spec.trim_end_matches(':');
@@ -75,16 +92,16 @@ pub fn unknown_policy(spec: &str) -> String {
     if family == "ipc" {
         return "`--policy ipc` needs a session name: `ipc:NAME`, the name the policy process connects to".into();
     }
-    let hint = did_you_mean(
-        spec,
-        [
-            "hold",
-            "replay",
-            "balance",
-            "twist2:",
-            "beyondmimic:",
-            "ipc:",
-        ],
-    );
+    let names: Vec<String> = super::POLICY_FAMILIES
+        .iter()
+        .map(|f| {
+            if f.spelling.contains(':') {
+                format!("{}:", f.name)
+            } else {
+                f.name.to_string()
+            }
+        })
+        .collect();
+    let hint = did_you_mean(spec, names.iter().map(String::as_str));
     format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; or ipc:SESSION for a policy process")
 }

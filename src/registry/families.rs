@@ -1,0 +1,129 @@
+//! Every kind of policy a run can name, in one table: how it is spelled, what the user
+//! supplies, the profile it runs under when none is named, and where it runs.
+//! `thorarena policies` prints it; [`super::policy`] builds from it, and
+//! [`super::family_profile`] reads its profile column, so a new family is one entry here
+//! plus its builder.
+
+/// Where a family's policy runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Runs {
+    /// In the simulator's process.
+    InProcess,
+    /// In its own process, any language, over shared memory (`thorarena-ipc`).
+    OwnProcess,
+}
+
+/// One kind of policy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PolicyFamily {
+    /// Its name: the whole argument of a built-in, the prefix before `:` otherwise.
+    pub name: &'static str,
+    /// How a run names it.
+    pub spelling: &'static str,
+    /// What it is.
+    pub what: &'static str,
+    /// What the user supplies.
+    pub supplies: &'static str,
+    /// The bundled profile it runs under when none is named.
+    pub profile: &'static str,
+    /// Where it runs.
+    pub runs: Runs,
+}
+
+impl PolicyFamily {
+    /// Whether policy argument `spec` names this family.
+    pub fn names(&self, spec: &str) -> bool {
+        if self.spelling.contains(':') {
+            spec.strip_prefix(self.name)
+                .is_some_and(|rest| rest.starts_with(':'))
+        } else {
+            spec == self.name
+        }
+    }
+}
+
+/// Every policy family, built-ins first.
+pub const POLICY_FAMILIES: [PolicyFamily; 6] = [
+    PolicyFamily {
+        name: "hold",
+        spelling: "hold",
+        what: "holds the profile's default pose (a floor: no tracking at all)",
+        supplies: "nothing",
+        profile: "default",
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
+        name: "replay",
+        spelling: "replay",
+        what: "sends the reference joint angles as PD targets (open loop)",
+        supplies: "nothing",
+        profile: "default",
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
+        name: "balance",
+        spelling: "balance",
+        what: "the reference joint angles with ankle and hip feedback on the pelvis tilt (a stabiliser; it does not walk)",
+        supplies: "nothing",
+        profile: "default",
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
+        name: "twist2",
+        spelling: "twist2:FILE.onnx",
+        what: "TWIST2's general motion tracker (arXiv 2511.02832), its ONNX network",
+        supplies: "the network file (twist2_1017_25k.onnx is the released one)",
+        profile: "twist2",
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
+        name: "beyondmimic",
+        spelling: "beyondmimic:FILE.onnx",
+        what: "a BeyondMimic-style tracker exported by mjlab, whole_body_tracking or holosoma",
+        supplies: "the network file; for a file naming no observation terms, a profile that does (holosoma: --profile holosoma-wbt)",
+        profile: "beyondmimic",
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
+        name: "ipc",
+        spelling: "ipc:SESSION",
+        what: "a policy process in any language (Rust, C, C++, Python clients) joining the session",
+        supplies: "the session name the process connects to, and the process",
+        profile: "default",
+        runs: Runs::OwnProcess,
+    },
+];
+
+/// The family policy argument `spec` names, if any.
+pub fn policy_family(spec: &str) -> Option<&'static PolicyFamily> {
+    POLICY_FAMILIES.iter().find(|f| f.names(spec))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_argument_names_at_most_one_family() {
+        for (spec, family) in [
+            ("hold", Some("hold")),
+            ("twist2:a.onnx", Some("twist2")),
+            ("beyondmimic:dir/b.onnx", Some("beyondmimic")),
+            ("ipc:demo", Some("ipc")),
+            ("twist2", None),
+            ("holdx", None),
+            ("beyondmimicx:f.onnx", None),
+        ] {
+            assert_eq!(policy_family(spec).map(|f| f.name), family, "{spec}");
+            assert!(POLICY_FAMILIES.iter().filter(|f| f.names(spec)).count() <= 1);
+        }
+    }
+
+    #[test]
+    fn every_default_profile_is_bundled() {
+        let bundled = crate::registry::bundled_profile_names();
+        for f in &POLICY_FAMILIES {
+            assert!(bundled.iter().any(|b| b == f.profile), "{}", f.profile);
+        }
+    }
+}
