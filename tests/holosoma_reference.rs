@@ -6,7 +6,9 @@
 //! keypoint error within 10 % of MuJoCo's on holosoma's own model
 //! (`tools/holosoma_mujoco.py`: 49.4 mm RMS). README's table of the two published
 //! policies under constant hand pushes is re-derived here. The Python BeyondMimic adapter
-//! builds the same observation and action step by step. Skipped, saying so, when
+//! builds the same observation and action step by step. holosoma's PPO dance
+//! (`ppo_g1_29dof_dancing.onnx`) tracks its motion under the `holosoma-ppo` profile's
+//! per-joint scale and falls under scale 1.0. Skipped, saying so, when
 //! `../shared/reference` (or Python's onnxruntime) is absent; never in CI.
 
 use std::path::{Path, PathBuf};
@@ -72,14 +74,13 @@ impl ImportObserver for Quiet {
     fn imported(&mut self, _: &Path, _: &Sequence) {}
 }
 
-/// `eval --dataset D --policy P --profile PROFILE --settings SETTINGS --out OUT`, in
-/// process.
-fn eval(dataset: &Path, policy: &str, profile: &str, out: &Path) {
+/// `eval --dataset D --policy P --profile PROFILE --settings S --out OUT`, in process.
+fn eval(dataset: &Path, policy: &str, profile: &str, settings: &str, out: &Path) {
     let spec = EvalSpec::load(&EvalRequest {
         policy: policy.into(),
         dataset: Some(dataset.to_path_buf()),
         profile: Some(profile.into()),
-        settings: SETTINGS.split(',').map(String::from).collect(),
+        settings: settings.split(',').map(String::from).collect(),
         ..EvalRequest::default()
     })
     .unwrap();
@@ -138,6 +139,7 @@ fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
         &dance,
         &format!("beyondmimic:{}", onnx.display()),
         "holosoma-wbt",
+        SETTINGS,
         &holosoma_run,
     );
     let holosoma = averages(&holosoma_run);
@@ -158,6 +160,7 @@ fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
         &walks,
         &format!("twist2:{}", twist2_onnx.display()),
         "twist2",
+        SETTINGS,
         &twist2_run,
     );
     let twist2 = averages(&twist2_run);
@@ -288,4 +291,36 @@ fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
     assert_eq!(steps.len(), 150, "the episode ended early");
     let (agrees, report) = dump::python_agrees("beyondmimic", &onnx, &setup, steps, dir.path());
     assert!(agrees, "Python and Rust BeyondMimic disagree: {report}");
+}
+
+#[test]
+fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale_one() {
+    const TEST: &str = "holosoma_reference::ppo_scale";
+    let Some(onnx) = prereq::reference(TEST, "holosoma/ppo_g1_29dof_dancing.onnx") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let dance = dir.path().join("dance");
+    import_motion(&onnx, "dance", &dance).unwrap();
+    let policy = format!("beyondmimic:{}", onnx.display());
+    let survival = |profile: &str| {
+        let run = dir.path().join(profile);
+        eval(&dance, &policy, profile, "no-force", &run);
+        let (_, survival, kp) = averages(&run)[0].clone();
+        eprintln!("PPO dance under {profile}: survival {survival:.3}, keypoint error {kp:.1} mm");
+        survival
+    };
+    // The file carries no action_scale: holosoma-inference 0.1.3 scales per joint, as the
+    // holosoma-ppo profile does; the whole 131.5 s dance is tracked.
+    assert_eq!(
+        survival("holosoma-ppo"),
+        1.0,
+        "the PPO policy fell on its own motion"
+    );
+    // Under the FastSAC file's scale 1.0 it falls within a few seconds (measured: ~1 s).
+    let wrong = survival("holosoma-wbt");
+    assert!(
+        wrong < 0.05,
+        "survival {wrong} under scale 1.0: the trap is gone?"
+    );
 }
