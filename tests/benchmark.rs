@@ -330,7 +330,7 @@ fn a_spec_is_checked_before_anything_runs() {
 #[test]
 fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
     use thorarena::sweep::{
-        check_task_run, results_rows, CellResult, DatasetInfo, Plan, SequenceInfo, SweepSpec,
+        check_task_run, results_rows, CellResult, DatasetInfo, Plan, SweepSpec,
     };
     let tmp = tempfile::tempdir().unwrap();
     let sample =
@@ -346,21 +346,11 @@ fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
     .unwrap();
     let spec = SweepSpec::load(&spec_path).unwrap();
     let robot = thorarena::registry::robot("g1_29dof").unwrap();
-    let ds = thorarena::motion::Dataset::open(&sample, &robot).unwrap();
-    let sequences = ds.load_all().unwrap();
-    let info = DatasetInfo {
-        dir: sample.clone(),
-        sha256: ds.content_hash(),
-        sequences: sequences
-            .iter()
-            .map(|s| SequenceInfo {
-                task: s.task.clone(),
-                sequence_id: s.sequence_id.clone(),
-                duration_s: s.duration_s(),
-                forces_recorded: s.forces_recorded,
-            })
-            .collect(),
-    };
+    let info = DatasetInfo::read(sample.clone(), &robot).unwrap();
+    let sequences = thorarena::motion::Dataset::open(&sample, &robot)
+        .unwrap()
+        .load_all()
+        .unwrap();
     let plan = Plan::expand(&spec, &spec_path, &[info]).unwrap();
     assert_eq!((plan.cells.len(), plan.tasks.len()), (2, 4));
     // Each task as its `eval` runs it: the cell's setting, the task's shard.

@@ -12,15 +12,13 @@
 //! `../shared/reference` (or Python's onnxruntime) is absent; never in CI.
 
 use std::path::{Path, PathBuf};
-use thorarena::benchmark::{self, EvalOptions};
-use thorarena::evaluation::{EvalRequest, EvalSpec};
-use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
-use thorarena::motion::{GroundCheck, Sequence};
-use thorarena::registry::PolicyChoice;
-use thorarena::results::RunDir;
+use thorarena::motion::import::{import_batch, ImportBatch, SourceFormat};
 
+mod common;
 #[path = "common/dump.rs"]
 mod dump;
+#[path = "common/in_process.rs"]
+mod in_process;
 mod prereq;
 mod readme;
 #[path = "common/walks.rs"]
@@ -56,7 +54,7 @@ fn import_motion(onnx: &Path, task: &str, out: &Path) -> Result<(), String> {
         trim_glitches: false,
         ground_correct: false,
     };
-    import_batch(out, &robot, &batch, &mut Quiet)
+    import_batch(out, &robot, &batch, &mut in_process::Quiet)
         .map(|_| ())
         .map_err(|e| e.to_string())
 }
@@ -65,38 +63,10 @@ fn import_dance(onnx: &Path, out: &Path) {
     import_motion(onnx, "dance", out).unwrap();
 }
 
-/// An import that reports nothing.
-struct Quiet;
-
-impl ImportObserver for Quiet {
-    fn reading(&mut self, _: &Path) {}
-    fn converted(&mut self, _: &Path, _: &Sequence, _: Option<&GroundCheck>) {}
-    fn imported(&mut self, _: &Path, _: &Sequence) {}
-}
-
 /// `eval --dataset D --policy P --profile PROFILE --settings S --out OUT`, in process.
 fn eval(dataset: &Path, policy: &str, profile: &str, settings: &str, out: &Path) {
-    let spec = EvalSpec::load(&EvalRequest {
-        policy: policy.into(),
-        dataset: Some(dataset.to_path_buf()),
-        profile: Some(profile.into()),
-        settings: settings.split(',').map(String::from).collect(),
-        ..EvalRequest::default()
-    })
-    .unwrap();
-    let PolicyChoice::InProcess(mut policy) =
-        thorarena::registry::policy(policy, &spec.robot, &spec.profile).unwrap()
-    else {
-        unreachable!("a network in process");
-    };
-    benchmark::evaluate(
-        &spec,
-        policy.as_mut(),
-        &RunDir::new(out),
-        EvalOptions::default(),
-        &mut (),
-    )
-    .unwrap();
+    let settings: Vec<&str> = settings.split(',').collect();
+    in_process::eval(dataset, policy, Some(profile), &settings, out);
 }
 
 fn g1() -> thorarena::robot::RobotModel {

@@ -356,7 +356,7 @@ fn two_teleported_frames_before_a_walk_are_trimmed_to_the_same_episode() {
     // The same episode, record for record.
     let episodes = |dataset: &Path, out: &str| -> String {
         let out = dir.path().join(out);
-        in_process::eval(dataset, "balance", &["no-force", "push:20"], &out);
+        in_process::eval(dataset, "balance", None, &["no-force", "push:20"], &out);
         std::fs::read_to_string(out.join("episodes.jsonl")).unwrap()
     };
     let (ea, eb) = (

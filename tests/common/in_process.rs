@@ -11,6 +11,15 @@ use thorarena::motion::{describe, Dataset, GroundCheck, Sequence, TrimmedGlitche
 use thorarena::registry::PolicyChoice;
 use thorarena::results::RunDir;
 
+/// An import that reports nothing.
+pub struct Quiet;
+
+impl ImportObserver for Quiet {
+    fn reading(&mut self, _: &Path) {}
+    fn converted(&mut self, _: &Path, _: &Sequence, _: Option<&GroundCheck>) {}
+    fn imported(&mut self, _: &Path, _: &Sequence) {}
+}
+
 /// What an import reports, a line per trimmed input.
 #[derive(Default)]
 struct TrimLog(Vec<String>);
@@ -60,11 +69,19 @@ pub fn data_info(dir: &Path) -> String {
     describe(&ds, &seqs, &robot)
 }
 
-/// `eval --dataset D --policy P --settings S --out OUT` in process; returns the run.
-pub fn eval(dataset: &Path, policy: &str, settings: &[&str], out: &Path) -> PathBuf {
+/// `eval --dataset D --policy P [--profile PROFILE] --settings S --out OUT` in process;
+/// returns the run.
+pub fn eval(
+    dataset: &Path,
+    policy: &str,
+    profile: Option<&str>,
+    settings: &[&str],
+    out: &Path,
+) -> PathBuf {
     let spec = EvalSpec::load(&EvalRequest {
         policy: policy.into(),
         dataset: Some(dataset.to_path_buf()),
+        profile: profile.map(String::from),
         settings: settings.iter().map(|s| s.to_string()).collect(),
         ..EvalRequest::default()
     })

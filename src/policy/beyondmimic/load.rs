@@ -424,7 +424,7 @@ fn known_layout_of_width(n: usize, obs_width: usize) -> Result<Vec<Term>, String
                 .join("; ")
         )),
         several => Err(format!(
-            "no observation_names in the file or the profile, and its input width {obs_width} fits {} known layouts that order the inputs differently — {}; name the terms in order in the profile's [beyondmimic] observation_names",
+            "no observation_names in the file or the profile, and its input width {obs_width} fits {} known layouts that order the inputs differently — {}; name the terms in order in the profile's [beyondmimic] observation_names (the bundled holosoma-wbt and holosoma-ppo profiles name holosoma's)",
             several.len(),
             several.iter().map(|f| describe(f)).collect::<Vec<_>>().join("; ")
         )),
