@@ -54,7 +54,7 @@ fn import_motion(onnx: &Path, task: &str, out: &Path) -> Result<(), String> {
         trim_glitches: false,
         ground_correct: false,
     };
-    import_batch(out, &robot, &batch, &mut in_process::Quiet)
+    import_batch(out, &robot, &batch, &mut ())
         .map(|_| ())
         .map_err(|e| e.to_string())
 }

@@ -11,28 +11,17 @@ use thorarena::motion::{describe, Dataset, GroundCheck, Sequence, TrimmedGlitche
 use thorarena::registry::PolicyChoice;
 use thorarena::results::RunDir;
 
-/// An import that reports nothing.
-pub struct Quiet;
-
-impl ImportObserver for Quiet {
-    fn reading(&mut self, _: &Path) {}
-    fn converted(&mut self, _: &Path, _: &Sequence, _: Option<&GroundCheck>) {}
-    fn imported(&mut self, _: &Path, _: &Sequence) {}
-}
-
 /// What an import reports, a line per trimmed input.
 #[derive(Default)]
 struct TrimLog(Vec<String>);
 
 impl ImportObserver for TrimLog {
-    fn reading(&mut self, _: &Path) {}
     fn converted(&mut self, _: &Path, seq: &Sequence, _: Option<&GroundCheck>) {
         if let Some(trim) = TrimmedGlitches::in_provenance(&seq.provenance) {
             self.0
                 .push(format!("trimmed glitch frames: {}", trim.summary()));
         }
     }
-    fn imported(&mut self, _: &Path, _: &Sequence) {}
 }
 
 /// `data import --format F FILES --out OUT --task walk` with `--trim-glitches` and

@@ -4,8 +4,7 @@
 #![allow(dead_code)]
 
 use std::path::Path;
-use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
-use thorarena::motion::{GroundCheck, Sequence};
+use thorarena::motion::import::{import_batch, ImportBatch, SourceFormat};
 
 /// MuJoCo's mean TWIST9 keypoint error per walk in TWIST2's harness, mm (SOURCES.md, TWIST2 in MuJoCo).
 pub const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
@@ -33,16 +32,7 @@ pub fn import_walks(twist2_dir: &Path, out: &Path) {
         ground_correct: true,
     };
     let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
-    if let Err(e) = import_batch(out, &robot, &batch, &mut Quiet) {
+    if let Err(e) = import_batch(out, &robot, &batch, &mut ()) {
         panic!("importing the walks: {e}");
     }
-}
-
-/// An import that reports nothing.
-struct Quiet;
-
-impl ImportObserver for Quiet {
-    fn reading(&mut self, _: &Path) {}
-    fn converted(&mut self, _: &Path, _: &Sequence, _: Option<&GroundCheck>) {}
-    fn imported(&mut self, _: &Path, _: &Sequence) {}
 }

@@ -81,13 +81,16 @@ pub struct ImportBatch {
 /// What an import reports while it works.
 pub trait ImportObserver {
     /// About to read `input`.
-    fn reading(&mut self, input: &Path);
+    fn reading(&mut self, _input: &Path) {}
     /// `input` became `seq` (before any ground correction); `ground` is what its soles
     /// showed.
-    fn converted(&mut self, input: &Path, seq: &Sequence, ground: Option<&GroundCheck>);
+    fn converted(&mut self, _input: &Path, _seq: &Sequence, _ground: Option<&GroundCheck>) {}
     /// `seq`, from `input`, is written into the dataset.
-    fn imported(&mut self, input: &Path, seq: &Sequence);
+    fn imported(&mut self, _input: &Path, _seq: &Sequence) {}
 }
+
+/// An import that reports nothing.
+impl ImportObserver for () {}
 
 /// Why a batch was not imported; nothing was written.
 #[derive(Debug, thiserror::Error)]
