@@ -28,6 +28,9 @@ pub struct FileMetadata {
     pub observation_names: Option<Vec<String>>,
     /// The anchor body (`anchor_body_name`).
     pub anchor_body: Option<String>,
+    /// How an action becomes a joint target (`action_mode`: `default_relative` or
+    /// `reference_residual`, wbc-mjlab's spelling), as written.
+    pub action_mode: Option<String>,
 }
 
 /// A metadata value as a list of items: a JSON array, else comma-separated text.
@@ -46,6 +49,11 @@ fn items(text: &str) -> Vec<String> {
         .filter(|s| !s.is_empty())
         .map(str::to_string)
         .collect()
+}
+
+/// A metadata value as one string: a JSON string, else the trimmed text.
+fn text(v: &str) -> String {
+    serde_json::from_str::<String>(v).unwrap_or_else(|_| v.trim().to_string())
 }
 
 fn numbers(key: &str, text: &str) -> Result<Vec<f64>, String> {
@@ -77,9 +85,8 @@ impl FileMetadata {
             kp: list(&["joint_stiffness", "kp"])?,
             kd: list(&["joint_damping", "kd"])?,
             observation_names: get(&["observation_names"]).map(|(_, v)| items(v)),
-            anchor_body: get(&["anchor_body_name"]).map(|(_, v)| {
-                serde_json::from_str::<String>(v).unwrap_or_else(|_| v.trim().to_string())
-            }),
+            anchor_body: get(&["anchor_body_name"]).map(|(_, v)| text(v)),
+            action_mode: get(&["action_mode"]).map(|(_, v)| text(v)),
         })
     }
 }

@@ -74,6 +74,16 @@ const NAMES: [&str; 4] = ["joint_pos", "joint_vel", "body_pos_w", "body_quat_w"]
 /// `replace` swapping one member for another shape/data (float64).
 fn write_f64_npz(path: &Path, skip: Option<&str>, replace: Option<Member>) {
     let mut w = NpzWriter::create(path).expect("create npz");
+    write_members(&mut w, skip, replace);
+    w.zip_writer().finish().expect("finish npz");
+}
+
+/// The members of [`write_f64_npz`], into `w`.
+fn write_members(
+    w: &mut NpzWriter<std::io::BufWriter<std::fs::File>>,
+    skip: Option<&str>,
+    replace: Option<Member>,
+) {
     let members = [("fps", vec![1u64], vec![50.0])].into_iter().chain(
         NAMES
             .iter()
@@ -86,11 +96,10 @@ fn write_f64_npz(path: &Path, skip: Option<&str>, replace: Option<Member>) {
             continue;
         }
         match replace {
-            Some((r, s, d)) if r == name => put(&mut w, name, s, d),
-            _ => put(&mut w, name, &shape, &data),
+            Some((r, s, d)) if r == name => put(w, name, s, d),
+            _ => put(w, name, &shape, &data),
         }
     }
-    w.zip_writer().finish().expect("finish npz");
 }
 
 fn dir() -> tempfile::TempDir {
@@ -545,4 +554,81 @@ fn garbage_input_is_an_error_naming_the_file_never_a_panic() {
             assert!(e.to_string().contains(&name), "{e}");
         }
     }
+}
+
+/// A `.npy` member written byte by byte: the version 1.0 header for `descr` and `shape`,
+/// then `body`.
+fn npy_bytes(descr: &str, shape: &str, body: &[u8]) -> Vec<u8> {
+    let mut header = format!("{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}");
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut out = b"\x93NUMPY\x01\x00".to_vec();
+    out.extend((header.len() as u16).to_le_bytes());
+    out.extend(header.as_bytes());
+    out.extend(body);
+    out
+}
+
+/// The well-formed motion npz with a `joint_names` member of raw `.npy` bytes.
+fn write_npz_with_names(path: &Path, names_npy: &[u8]) {
+    use std::io::Write;
+    let mut w = NpzWriter::create(path).expect("create npz");
+    write_members(&mut w, None, None);
+    let opts = FileOptions::default().compression_method(CompressionMethod::Stored);
+    let zip = w.zip_writer();
+    zip.start_file("joint_names.npy", opts)
+        .expect("start member");
+    zip.write_all(names_npy).expect("write member");
+    zip.finish().expect("finish npz");
+}
+
+#[test]
+fn an_npz_naming_its_joints_is_read_in_its_own_order_and_a_contradicting_list_is_refused() {
+    let d = dir();
+    // Fixed-width unicode (what np.savez writes for a list of str): canonical order.
+    let width = 26;
+    let mut utf32 = Vec::new();
+    for name in G1_CANONICAL_JOINTS {
+        let mut chars: Vec<u32> = name.chars().map(u32::from).collect();
+        chars.resize(width, 0);
+        chars.iter().for_each(|c| utf32.extend(c.to_le_bytes()));
+    }
+    let unicode = d.path().join("unicode.npz");
+    write_npz_with_names(&unicode, &npy_bytes(&format!("<U{width}"), "(29,)", &utf32));
+    // An object array (wbc-mjlab's clips): a pickle holding the list of names, here the
+    // canonical order reversed (protocol 2: PROTO, EMPTY_LIST, MARK, BINUNICODE…, APPENDS).
+    let mut pickle = b"\x80\x02](".to_vec();
+    for name in G1_CANONICAL_JOINTS.iter().rev() {
+        pickle.push(b'X');
+        pickle.extend((name.len() as u32).to_le_bytes());
+        pickle.extend(name.as_bytes());
+    }
+    pickle.extend(b"e.");
+    let object = d.path().join("object.npz");
+    write_npz_with_names(&object, &npy_bytes("|O", "(29,)", &pickle));
+
+    let m = read_beyondmimic_npz(&unicode, None).expect("reads");
+    assert_eq!(m.joint_names, G1_CANONICAL_JOINTS.map(String::from));
+    assert_eq!(m.provenance["joint_order"], "file");
+    let m = read_beyondmimic_npz(&object, None).expect("reads");
+    let reversed: Vec<String> = G1_CANONICAL_JOINTS
+        .iter()
+        .rev()
+        .map(|s| s.to_string())
+        .collect();
+    assert_eq!(m.joint_names, reversed);
+    // Without its names this file would have been read in IsaacLab order: a different
+    // joint in every column but the first. A caller's list that contradicts the file is
+    // an error naming both, never a silent reordering.
+    let isaac: Vec<String> = ISAACLAB_G1_JOINT_ORDER.map(String::from).to_vec();
+    assert_bad_field(
+        read_beyondmimic_npz(&unicode, Some(&isaac)),
+        &unicode,
+        "joint_names",
+    );
+    // The same list as the file's is fine.
+    let canonical: Vec<String> = G1_CANONICAL_JOINTS.map(String::from).to_vec();
+    assert!(read_beyondmimic_npz(&unicode, Some(&canonical)).is_ok());
 }

@@ -88,7 +88,7 @@ fn run_engine(
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.policy.starts_with("ipc:") {
-        bail!("crosscheck runs the policy twice in process: use a built-in, twist2: or beyondmimic: policy");
+        bail!("crosscheck runs the policy twice in process: use a built-in, twist2:, beyondmimic: or wbc-mjlab: policy");
     }
     if args.run.engine != super::choices::EngineArg::Rapier {
         bail!("crosscheck runs both engines: leave out --engine");

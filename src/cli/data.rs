@@ -49,7 +49,8 @@ pub struct ExportArgs {
 pub enum Format {
     /// GMR / TWIST / TWIST2 / GMT pickles (root_rot xyzw; 29 or 23 DoF).
     TwistPkl,
-    /// BeyondMimic / mjlab npz (body 0 = root, wxyz; IsaacLab joint order by default).
+    /// BeyondMimic / mjlab npz (body 0 = root, wxyz; the file's `joint_names` when it has
+    /// them, else IsaacLab joint order).
     BeyondmimicNpz,
     /// Unitree's retargeted LAFAN1 CSV (no header, 36 columns, xyzw).
     LafanCsv,
@@ -93,7 +94,8 @@ pub struct ImportArgs {
     /// outputs).
     #[arg(long, default_value = "holosoma-wbt")]
     pub profile: String,
-    /// Joint names of npz columns, comma separated (default: the IsaacLab G1 order).
+    /// Joint names of npz columns, comma separated (default: the file's own `joint_names`,
+    /// else the IsaacLab G1 order); a list contradicting the file's names is refused.
     #[arg(long, value_delimiter = ',')]
     pub joint_names: Option<Vec<String>>,
     /// Renormalise root quaternions that are off unit norm instead of rejecting the file.

@@ -19,7 +19,8 @@ pub struct Args {
     /// joints, open loop) or `hold` (default pose); `twist2:<file.onnx>` for the TWIST2
     /// network in process (with `--profile twist2`); `beyondmimic:<file.onnx>` for a
     /// BeyondMimic-style tracking network (mjlab, whole_body_tracking, holosoma; e.g. with
-    /// `--profile holosoma-wbt`); or `ipc:<session>` to serve a session
+    /// `--profile holosoma-wbt`); `wbc-mjlab:<file.onnx>` for wbc-mjlab's general tracker;
+    /// or `ipc:<session>` to serve a session
     /// and evaluate whichever policy process connects to it (Python, C++, Rust clients).
     #[arg(long, default_value = "balance")]
     pub policy: String,
@@ -39,7 +40,8 @@ pub struct RunArgs {
     pub dataset: Option<PathBuf>,
     /// Dynamics profile (a name under data/profiles or a .toml path) [default: the one the
     /// policy family was trained with: `twist2` for twist2:, `beyondmimic` for
-    /// beyondmimic:, else `default`]. One that contradicts the family is an error.
+    /// beyondmimic:, `wbc-mjlab` for wbc-mjlab:, else `default`; `thorarena policies`
+    /// lists them]. One that contradicts the family is an error.
     #[arg(long)]
     pub profile: Option<String>,
     /// Run a policy under a profile its family was not trained with (recorded in

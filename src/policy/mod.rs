@@ -91,4 +91,27 @@ pub trait Policy {
     fn transport_stats(&self) -> Option<TransportStats> {
         None
     }
+
+    /// The raw action with which the policy adds nothing of its own — what the sanity
+    /// check's zero-action run sends in its place (`crate::sanity`). Raw zero, the
+    /// profile's offset, unless the policy's actions are relative to something else (a
+    /// residual policy: the reference's joints).
+    fn zero_action(&self, _obs: &Observation, out: &mut [f64]) {
+        out.fill(0.0);
+    }
+
+    /// What the policy says about its own wiring: facts (inputs, terms, action mode) and
+    /// where its file contradicts the profile. Empty for policies with nothing to say.
+    fn wiring(&self) -> Wiring {
+        Wiring::default()
+    }
+}
+
+/// A policy's account of its wiring, for the sanity check.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Wiring {
+    /// One sentence per fact (input width and terms, action mode, …).
+    pub facts: Vec<String>,
+    /// One sentence per quantity the file and the profile disagree on.
+    pub disagreements: Vec<String>,
 }

@@ -215,6 +215,16 @@ impl Policy for Twist2Policy {
         vec![0.0, MIMIC_LOOKAHEAD_S]
     }
 
+    fn wiring(&self) -> super::Wiring {
+        super::Wiring {
+            facts: vec![
+                format!("{OBS_LEN} inputs: TWIST2's layout (proprioception with {HISTORY_LEN} past frames, mimic frames at t and t + {MIMIC_LOOKAHEAD_S} s)"),
+                format!("{N_JOINTS} actions, relative to the default pose"),
+            ],
+            disagreements: Vec::new(),
+        }
+    }
+
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
         self.last_inputs.clear();
         for (obs, action) in observations.iter().zip(actions.iter_mut()) {

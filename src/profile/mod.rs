@@ -79,6 +79,40 @@ pub struct BeyondMimicProfile {
     /// The body whose pose anchors the reference (`torso_link` in every G1 export known).
     #[serde(default = "torso_link")]
     pub anchor_body: String,
+    /// How the network's action becomes a joint target, when the file does not say.
+    #[serde(default)]
+    pub action_mode: Option<ActionMode>,
+}
+
+/// How a BeyondMimic-family network's action becomes a joint target (wbc-mjlab's
+/// `action_mode`, wbc-g1-deploy `src/wbc_tracking_params.cpp`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActionMode {
+    /// target = default pose + scale · action (mjlab's `JointPositionAction`).
+    #[default]
+    DefaultRelative,
+    /// target = the reference's joint position at this step + scale · action (wbc-mjlab's
+    /// `ReferenceJointPositionAction`): the network learns a residual on the reference.
+    ReferenceResidual,
+}
+
+impl ActionMode {
+    /// Every mode, for parsing and for errors.
+    pub const ALL: [ActionMode; 2] = [Self::DefaultRelative, Self::ReferenceResidual];
+
+    /// Its name, as the metadata and the profile spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::DefaultRelative => "default_relative",
+            Self::ReferenceResidual => "reference_residual",
+        }
+    }
+
+    /// The mode `name` spells.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name.trim())
+    }
 }
 
 fn torso_link() -> String {

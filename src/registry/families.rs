@@ -43,7 +43,7 @@ impl PolicyFamily {
 }
 
 /// Every policy family, built-ins first.
-pub const POLICY_FAMILIES: [PolicyFamily; 6] = [
+pub const POLICY_FAMILIES: [PolicyFamily; 7] = [
     PolicyFamily {
         name: "hold",
         spelling: "hold",
@@ -85,6 +85,14 @@ pub const POLICY_FAMILIES: [PolicyFamily; 6] = [
         runs: Runs::InProcess,
     },
     PolicyFamily {
+        name: "wbc-mjlab",
+        spelling: "wbc-mjlab:FILE.onnx",
+        what: "wbc-mjlab's general G1 tracker (a residual on the reference joints, 132 inputs), run as a BeyondMimic-family network",
+        supplies: "the network file (wbc_g1_policy.onnx of wbc-mjlab/wbc-g1-deploy)",
+        profile: "wbc-mjlab",
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
         name: "ipc",
         spelling: "ipc:SESSION",
         what: "a policy process in any language (Rust, C, C++, Python clients) joining the session",
@@ -99,6 +107,13 @@ pub fn policy_family(spec: &str) -> Option<&'static PolicyFamily> {
     POLICY_FAMILIES.iter().find(|f| f.names(spec))
 }
 
+/// The family and the file of a policy argument naming a network file
+/// (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`, …), so a sweep can resolve the path.
+pub fn policy_file(spec: &str) -> Option<(&'static PolicyFamily, &str)> {
+    let family = policy_family(spec).filter(|f| f.spelling.contains(":FILE"))?;
+    Some((family, &spec[family.name.len() + 1..]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -109,6 +124,7 @@ mod tests {
             ("hold", Some("hold")),
             ("twist2:a.onnx", Some("twist2")),
             ("beyondmimic:dir/b.onnx", Some("beyondmimic")),
+            ("wbc-mjlab:w.onnx", Some("wbc-mjlab")),
             ("ipc:demo", Some("ipc")),
             ("twist2", None),
             ("holdx", None),

@@ -8,7 +8,7 @@ mod families;
 mod policies;
 mod suggest;
 
-pub use families::{policy_family, PolicyFamily, Runs, POLICY_FAMILIES};
+pub use families::{policy_family, policy_file, PolicyFamily, Runs, POLICY_FAMILIES};
 pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};
 pub use suggest::{closest, did_you_mean};
 
@@ -127,6 +127,12 @@ pub fn profile_fits(policy: &str, profile: &Profile) -> Result<(), String> {
     {
         return Err(format!(
             "BeyondMimic-style networks run on `beyondmimic` or a profile with a [beyondmimic] section (holosoma-wbt); `{}` is neither",
+            profile.name
+        ));
+    }
+    if policy.starts_with("wbc-mjlab:") && profile.beyondmimic.is_none() {
+        return Err(format!(
+            "wbc-mjlab's network runs on the `wbc-mjlab` profile (its gains, residual action scale and torque cap) or another with a [beyondmimic] section; `{}` has none",
             profile.name
         ));
     }

@@ -1,5 +1,6 @@
 //! The policies a run can name (`--policy`, a sweep's `policy`): the built-in baselines,
-//! the published networks in process (`twist2:FILE`, `beyondmimic:FILE`), and a policy
+//! the published networks in process (`twist2:FILE`, `beyondmimic:FILE`,
+//! `wbc-mjlab:FILE`), and a policy
 //! process connecting to a session (`ipc:SESSION`).
 
 use super::{did_you_mean, RegistryError};
@@ -48,6 +49,11 @@ pub fn policy<'a>(
                     Arc::new(robot.clone()),
                     profile,
                 )?)
+            } else if let Some(path) = other.strip_prefix("wbc-mjlab:") {
+                Box::new(
+                    BeyondMimicPolicy::load(Path::new(path), Arc::new(robot.clone()), profile)?
+                        .named("wbc-mjlab"),
+                )
             } else if let Some(session) = ipc_session(other) {
                 return Ok(PolicyChoice::Session(session));
             } else {
@@ -84,6 +90,7 @@ pub fn unknown_policy(spec: &str) -> String {
     let example = match family {
         "twist2" => Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
         "beyondmimic" => Some("policy.onnx, an mjlab or holosoma G1 export"),
+        "wbc-mjlab" => Some("wbc_g1_policy.onnx, wbc-mjlab's general G1 tracker"),
         _ => None,
     };
     if let Some(example) = example {
@@ -103,5 +110,5 @@ pub fn unknown_policy(spec: &str) -> String {
         })
         .collect();
     let hint = did_you_mean(spec, names.iter().map(String::as_str));
-    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; or ipc:SESSION for a policy process")
+    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; wbc-mjlab:FILE.onnx; or ipc:SESSION for a policy process")
 }

@@ -4,7 +4,7 @@
 //! check that the physics backend agrees with the model.
 
 use super::model::RobotModel;
-use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 
 /// World poses of every body for a root pose and joint angles (canonical order).
 ///
@@ -41,6 +41,41 @@ pub fn frame_pose(
     world_from_body[f.body] * f.body_from_frame
 }
 
+/// World-frame velocity of a named frame: linear (of the frame's origin, m/s) and angular
+/// (rad/s), from the root's velocity (`root_lin_vel_w` of the root frame's origin) and the
+/// joint velocities `qd` (canonical order), given the body poses of the same state.
+///
+/// The velocity of the chain from the root to the frame's body, joint by joint: each
+/// revolute joint on it adds `axis_w · q̇` to the angular velocity and
+/// `axis_w × (p − p_joint) · q̇` to the frame origin's linear velocity. Used for the
+/// reference anchor's velocities, which a motion file carries per body but the canonical
+/// format derives.
+pub fn frame_velocity_w(
+    model: &RobotModel,
+    world_from_body: &[Isometry3<f64>],
+    root_lin_vel_w: &Vector3<f64>,
+    root_ang_vel_w: &Vector3<f64>,
+    qd: &[f64],
+    frame: usize,
+) -> (Vector3<f64>, Vector3<f64>) {
+    let f = &model.frames[frame];
+    let p = (world_from_body[f.body] * f.body_from_frame)
+        .translation
+        .vector;
+    let root_p = world_from_body[0].translation.vector;
+    let mut lin = root_lin_vel_w + root_ang_vel_w.cross(&(p - root_p));
+    let mut ang = *root_ang_vel_w;
+    let mut body = f.body;
+    while let (Some(parent), Some(j)) = (model.bodies[body].parent, model.bodies[body].joint) {
+        let pose = &world_from_body[body];
+        let axis_w = pose.rotation * model.bodies[body].axis.into_inner();
+        ang += axis_w * qd[j];
+        lin += axis_w.cross(&(p - pose.translation.vector)) * qd[j];
+        body = parent;
+    }
+    (lin, ang)
+}
+
 /// World positions of a keypoint set's frames, upper-body ones first.
 pub fn keypoint_positions(
     model: &RobotModel,
@@ -58,7 +93,7 @@ pub fn keypoint_positions(
 
 /// Whole-body centre of mass in the world frame.
 pub fn center_of_mass(model: &RobotModel, world_from_body: &[Isometry3<f64>]) -> Point3<f64> {
-    let mut sum = nalgebra::Vector3::zeros();
+    let mut sum = Vector3::zeros();
     for (b, pose) in model.bodies.iter().zip(world_from_body) {
         sum += (pose * Point3::from(b.com_b)).coords * b.mass_kg;
     }

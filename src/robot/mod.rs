@@ -14,7 +14,8 @@ pub use config::{
 pub use describe::describe;
 pub use error::RobotError;
 pub use kinematics::{
-    center_of_mass, forward_kinematics, frame_pose, keypoint_positions, lowest_sole_point_z,
+    center_of_mass, forward_kinematics, frame_pose, frame_velocity_w, keypoint_positions,
+    lowest_sole_point_z,
 };
 pub use load::{build_model, bundled_robot_dir, load_robot_dir};
 pub use model::{Body, Frame, Geometry, Hand, Joint, KeypointSet, RobotModel, Shape};

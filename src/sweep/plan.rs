@@ -385,8 +385,10 @@ fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
     PolicyAxis {
         name: p.label(),
         policy: match (&p.policy, &p.command) {
-            (Some(pol), _) => match pol.strip_prefix("twist2:") {
-                Some(file) => format!("twist2:{}", resolve(workdir, file).display()),
+            (Some(pol), _) => match crate::registry::policy_file(pol) {
+                Some((family, file)) => {
+                    format!("{}:{}", family.name, resolve(workdir, file).display())
+                }
                 None => pol.clone(),
             },
             _ => SESSION_POLICY.into(),

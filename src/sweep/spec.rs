@@ -81,7 +81,9 @@ impl EngineSpec {
 pub struct PolicySpec {
     /// Label in results (default: `policy`, or `command`'s first word).
     pub name: Option<String>,
-    /// `hold`, `replay`, `balance` or `twist2:FILE.onnx`.
+    /// A policy argument as `eval --policy` takes it (`thorarena policies`): a built-in, or a
+    /// network in process (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`, `wbc-mjlab:FILE.onnx`;
+    /// relative paths against the spec's directory).
     pub policy: Option<String>,
     /// Shell command starting a policy process that joins session `{session}`;
     /// `{thorarena}` is this binary.
@@ -180,7 +182,7 @@ impl SweepSpec {
                 }
                 (None, None) => {
                     return Err(invalid(format!(
-                        "[[policy]] #{}: give `policy` (built-in or twist2:FILE) or `command`",
+                        "[[policy]] #{}: give `policy` (a built-in or a network file, e.g. twist2:FILE) or `command`",
                         i + 1
                     )))
                 }
@@ -263,9 +265,10 @@ impl PolicySpec {
             return n.clone();
         }
         match (&self.policy, &self.command) {
-            (Some(p), _) => match p.strip_prefix("twist2:") {
-                Some(file) => format!(
-                    "twist2:{}",
+            (Some(p), _) => match crate::registry::policy_file(p) {
+                Some((family, file)) => format!(
+                    "{}:{}",
+                    family.name,
                     Path::new(file)
                         .file_stem()
                         .map_or(file.into(), |s| s.to_string_lossy())

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use thorarena::benchmark::{self, EvalOptions};
-use thorarena::evaluation::{EvalRequest, EvalSpec};
+use thorarena::evaluation::{EngineChoice, EvalRequest, EvalSpec};
 use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
 use thorarena::motion::{describe, Dataset, GroundCheck, Sequence, TrimmedGlitches};
 use thorarena::registry::PolicyChoice;
@@ -67,11 +67,31 @@ pub fn eval(
     settings: &[&str],
     out: &Path,
 ) -> PathBuf {
+    eval_on(
+        EngineChoice::Rapier,
+        dataset,
+        policy,
+        profile,
+        settings,
+        out,
+    )
+}
+
+/// [`eval`] on `engine` (`--engine`, the generated MJCF for MuJoCo).
+pub fn eval_on(
+    engine: EngineChoice,
+    dataset: &Path,
+    policy: &str,
+    profile: Option<&str>,
+    settings: &[&str],
+    out: &Path,
+) -> PathBuf {
     let spec = EvalSpec::load(&EvalRequest {
         policy: policy.into(),
         dataset: Some(dataset.to_path_buf()),
         profile: profile.map(String::from),
         settings: settings.iter().map(|s| s.to_string()).collect(),
+        engine,
         ..EvalRequest::default()
     })
     .unwrap();

@@ -2,11 +2,14 @@
 //!
 //! These files hold the simulator's own view of a motion: `fps`, `joint_pos` and
 //! `joint_vel` `[T, J]` in the simulator's joint order, and per-body world poses
-//! `body_pos_w` `[T, B, 3]`, `body_quat_w` `[T, B, 4]` (**wxyz**). Names are not stored,
-//! so the caller says which joint each column is; BeyondMimic (IsaacLab) files use
-//! [`ISAACLAB_G1_JOINT_ORDER`]; mjlab runs MuJoCo, whose joint order follows the MJCF
-//! tree (for the Unitree G1 model, [`super::G1_CANONICAL_JOINTS`]), so pass that
-//! list for mjlab files. Body 0 is the pelvis, which becomes the root.
+//! `body_pos_w` `[T, B, 3]`, `body_quat_w` `[T, B, 4]` (**wxyz**). Which joint each column
+//! is: the file's own `joint_names` member where it has one (wbc-mjlab's clips: a numpy
+//! object array, i.e. a pickled list of strings, or a fixed-width unicode array), else the
+//! caller's list, else [`ISAACLAB_G1_JOINT_ORDER`] (BeyondMimic's IsaacLab files store no
+//! names); mjlab runs MuJoCo, whose joint order follows the MJCF tree (for the Unitree G1
+//! model, [`super::G1_CANONICAL_JOINTS`]), so pass that list for mjlab files without
+//! names. A caller's list that contradicts the file's names is an error, never a silent
+//! reordering. Body 0 is the pelvis, which becomes the root.
 //! `body_lin_vel_w` / `body_ang_vel_w` are ignored: velocities are re-derived downstream.
 //!
 //! npz members are zip entries at arbitrary offsets (often deflated), so every array is
@@ -97,9 +100,21 @@ pub fn read_beyondmimic_npz(
             ))
         }
     };
-    let (names, order) = match joint_names {
-        Some(given) => (given.to_vec(), "given"),
-        None => (
+    let in_file = read_names(&mut archive, path, "joint_names")?;
+    let (names, order) = match (joint_names, in_file) {
+        (Some(given), Some(file)) if given != file.as_slice() => {
+            return Err(bad(
+                "joint_names",
+                format!(
+                    "the file names its joints [{}], which contradicts the order given [{}]",
+                    file.join(", "),
+                    given.join(", ")
+                ),
+            ))
+        }
+        (_, Some(file)) => (file, "file"),
+        (Some(given), None) => (given.to_vec(), "given"),
+        (None, None) => (
             ISAACLAB_G1_JOINT_ORDER.map(String::from).to_vec(),
             "isaaclab",
         ),
@@ -196,6 +211,104 @@ fn read_required<R: io::Read + io::Seek>(
         field: name.to_string(),
         reason: "missing from the archive".into(),
     })
+}
+
+/// Member `name` as a list of strings, if the archive has it: a numpy object array (the
+/// pickle numpy writes for `np.array([...], dtype=object)`, decoded without executing
+/// anything) or a fixed-width unicode array (`<U…`, UTF-32).
+fn read_names<R: io::Read + io::Seek>(
+    archive: &mut NpzArchive<R>,
+    path: &Path,
+    name: &str,
+) -> Result<Option<Vec<String>>, ImportError> {
+    let bad = |reason: String| ImportError::BadField {
+        path: path.to_path_buf(),
+        field: name.to_string(),
+        reason,
+    };
+    let npy = match archive.by_name(name) {
+        Ok(Some(npy)) => npy,
+        Ok(None) => return Ok(None),
+        Err(e) => return Err(bad(format!("unreadable array: {e}"))),
+    };
+    let count = usize::try_from(npy.len()).map_err(|_| bad("too many names".into()))?;
+    let descr = npy.dtype().descr();
+    let pickled = npy.uses_pickled_array();
+    // Joint names are a few hundred bytes; a member far larger is not a list of names.
+    let mut raw = Vec::new();
+    io::Read::read_to_end(&mut io::Read::take(npy.into_inner(), 1 << 20), &mut raw)
+        .map_err(|e| bad(format!("unreadable array: {e}")))?;
+    let names = if pickled {
+        names_from_pickle(&raw).map_err(bad)?
+    } else if let Some(width) = unicode_width(&descr) {
+        names_from_utf32(&raw, width, count).map_err(bad)?
+    } else {
+        return Err(bad(format!(
+            "dtype {descr} is not a list of names (an object or unicode array)"
+        )));
+    };
+    if names.len() != count {
+        return Err(bad(format!("{} names for shape [{count}]", names.len())));
+    }
+    Ok(Some(names))
+}
+
+/// The strings of the one list of strings in a pickled numpy object array.
+fn names_from_pickle(raw: &[u8]) -> Result<Vec<String>, String> {
+    use serde_pickle::{DeOptions, Value as P};
+    super::pickle_depth::check_nesting(raw, super::pickle_depth::MAX_NESTING)
+        .map_err(|e| format!("not a pickled array: {e}"))?;
+    let options = DeOptions::new()
+        .replace_unresolved_globals()
+        .keep_restore_state();
+    let value = serde_pickle::value_from_slice(raw, options)
+        .map_err(|e| format!("not a pickled array: {e}"))?;
+    fn strings(v: &P) -> Option<Vec<String>> {
+        match v {
+            P::List(items) if items.iter().all(|i| matches!(i, P::String(_))) => Some(
+                items
+                    .iter()
+                    .filter_map(|i| match i {
+                        P::String(s) => Some(s.clone()),
+                        _ => None,
+                    })
+                    .collect(),
+            ),
+            P::List(items) | P::Tuple(items) => items.iter().find_map(strings),
+            _ => None,
+        }
+    }
+    strings(&value).ok_or_else(|| "the pickled array holds no list of strings".into())
+}
+
+/// The width in characters of a numpy unicode dtype (`<U22` → 22).
+fn unicode_width(descr: &str) -> Option<usize> {
+    descr
+        .trim_matches('\'')
+        .strip_prefix("<U")
+        .or_else(|| descr.trim_matches('\'').strip_prefix("|U"))
+        .and_then(|w| w.parse().ok())
+}
+
+/// `count` fixed-width UTF-32LE strings of `width` characters, NUL-padded.
+fn names_from_utf32(raw: &[u8], width: usize, count: usize) -> Result<Vec<String>, String> {
+    let item = width * 4;
+    if item == 0 || raw.len() < item * count {
+        return Err(format!(
+            "{} bytes for {count} names of {width} characters",
+            raw.len()
+        ));
+    }
+    raw.chunks(item)
+        .take(count)
+        .map(|c| {
+            c.chunks(4)
+                .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .take_while(|&u| u != 0)
+                .map(|u| char::from_u32(u).ok_or_else(|| format!("invalid character {u:#x}")))
+                .collect::<Result<String, String>>()
+        })
+        .collect()
 }
 
 /// Decodes member `name` as f64 whatever its numeric dtype, in C order, all values finite.

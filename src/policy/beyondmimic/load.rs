@@ -6,7 +6,7 @@ use super::{
     layout_width, BeyondMimicError, BeyondMimicPolicy, FileMetadata, ObservationSpec, Scratch,
     Term, KNOWN_LAYOUTS,
 };
-use crate::profile::{BeyondMimicProfile, Profile};
+use crate::profile::{ActionMode, BeyondMimicProfile, Profile};
 use crate::robot::RobotModel;
 use std::path::Path;
 use std::sync::Arc;
@@ -29,9 +29,10 @@ impl BeyondMimicPolicy {
         let (joint_names, to_canonical) = joint_order(&robot, meta).map_err(unusable)?;
         let (default_pos, action_scale) =
             action_mapping(meta, profile, &joint_names, &to_canonical).map_err(unusable)?;
-        let disagreements =
+        let mut disagreements =
             disagreements(meta, profile, &robot, &to_canonical).map_err(unusable)?;
         let profile_bm = profile.beyondmimic.as_ref();
+        let action_mode = action_mode(meta, profile, &mut disagreements).map_err(unusable)?;
         let n = robot.n_joints();
         let terms = observation_terms(meta, profile_bm, n, network.obs_width).map_err(unusable)?;
         let anchor_frame = anchor_frame(meta, profile_bm, &robot).map_err(unusable)?;
@@ -45,6 +46,7 @@ impl BeyondMimicPolicy {
             log::warn!("{}: {d}", path.display());
         }
         Ok(Self {
+            name: "beyondmimic".into(),
             plan,
             spec: ObservationSpec {
                 terms,
@@ -57,6 +59,8 @@ impl BeyondMimicPolicy {
             time_step_input,
             actions_output,
             action_scale,
+            action_mode,
+            control_dt_s: profile.control_dt_s,
             profile_offset: profile.action_offset_rad.clone(),
             profile_scale: profile.action_scale.clone(),
             disagreements,
@@ -217,7 +221,9 @@ fn joint_order(
 }
 
 /// A per-joint metadata value `what` for `n` joints: one number is spread to all joints;
-/// absent, it is `fallback`.
+/// absent, it is `fallback`. The same `n` values written several times over are read once
+/// (wbc-mjlab's export writes its `action_scale` five times); any other length is an
+/// error.
 fn per_joint(
     what: &str,
     v: Option<Vec<f64>>,
@@ -227,6 +233,9 @@ fn per_joint(
     match v {
         Some(v) if v.len() == 1 => Ok(vec![v[0]; n]),
         Some(v) if v.len() == n => Ok(v),
+        Some(v) if n > 0 && v.len() % n == 0 && v.chunks(n).all(|c| c == &v[..n]) => {
+            Ok(v[..n].to_vec())
+        }
         Some(v) => Err(format!(
             "metadata {what} has {} values for {n} joints",
             v.len()
@@ -312,8 +321,7 @@ fn disagreements(
     ] {
         let Some(file) = file else { continue };
         let file = per_joint(what, Some(file), Vec::new(), n)?;
-        // 1e-3 relative: the metadata of mjlab exports is written with 3 decimals.
-        if let Some(d) = compare(what, &canonical(&file), applied, &names, 1e-3) {
+        if let Some(d) = compare(what, &canonical(&file), applied, &names) {
             disagreements.push(format!("{d}; the profile `{}` is applied", profile.name));
         }
     }
@@ -321,26 +329,52 @@ fn disagreements(
 }
 
 /// `what` per joint, compared between file and profile (both canonical order); a sentence
-/// when they differ by more than `tolerance` (relative).
-fn compare(
-    what: &str,
-    file: &[f64],
-    profile: &[f64],
-    names: &[String],
-    tol: f64,
-) -> Option<String> {
+/// when they differ by more than the file's rounding: mjlab exports write 3 decimals, so
+/// values agree within 5e-4 absolute or 1e-3 relative, whichever is looser.
+fn compare(what: &str, file: &[f64], profile: &[f64], names: &[String]) -> Option<String> {
     let worst = file
         .iter()
         .zip(profile)
         .enumerate()
+        .filter(|(_, (f, p))| (*f - *p).abs() > 5e-4)
         .map(|(j, (f, p))| (j, (f - p).abs() / p.abs().max(1e-9)))
-        .filter(|(_, rel)| *rel > tol)
+        .filter(|(_, rel)| *rel > 1e-3)
         .max_by(|a, b| a.1.total_cmp(&b.1))?;
     let j = worst.0;
     Some(format!(
         "{what}: the file and the profile differ (largest at {}: file {}, profile {})",
         names[j], file[j], profile[j]
     ))
+}
+
+/// How the network's actions become targets: the file's `action_mode`, else the
+/// profile's, else `default_relative`. A file and a profile that name different modes are
+/// reported (the file's applies); a mode neither spelling knows is an error.
+fn action_mode(
+    meta: &FileMetadata,
+    profile: &Profile,
+    disagreements: &mut Vec<String>,
+) -> Result<ActionMode, String> {
+    let from_profile = profile.beyondmimic.as_ref().and_then(|b| b.action_mode);
+    let Some(written) = &meta.action_mode else {
+        return Ok(from_profile.unwrap_or_default());
+    };
+    let from_file = ActionMode::parse(written).ok_or_else(|| {
+        let known: Vec<&str> = ActionMode::ALL.iter().map(|m| m.name()).collect();
+        format!(
+            "metadata action_mode `{written}` is not one ThorArena knows ({})",
+            known.join(", ")
+        )
+    })?;
+    if let Some(p) = from_profile.filter(|p| *p != from_file) {
+        disagreements.push(format!(
+            "action mode: the file says {}, the profile `{}` {}; the file's is applied",
+            from_file.name(),
+            profile.name,
+            p.name()
+        ));
+    }
+    Ok(from_file)
 }
 
 /// The observation terms: the file's, the profile's, or the one known layout whose width
@@ -396,7 +430,14 @@ fn anchor_frame(
 fn parse_terms(names: &[String]) -> Result<Vec<Term>, String> {
     names
         .iter()
-        .map(|n| Term::parse(n).ok_or_else(|| format!("observation term `{n}` is not one of the BeyondMimic family's (command, motion_anchor_pos_b, motion_anchor_ori_b, base_lin_vel, base_ang_vel, joint_pos, joint_vel, actions)")))
+        .map(|n| {
+            Term::parse(n).ok_or_else(|| {
+                format!(
+                    "observation term `{n}` is not one of the BeyondMimic family's ({})",
+                    Term::ALL.map(Term::name).join(", ")
+                )
+            })
+        })
         .collect()
 }
 

@@ -11,10 +11,14 @@
 //! difference is reported ([`BeyondMimicPolicy::disagreements`], and logged). A network
 //! with a `time_step` input is fed the episode's control step.
 //!
-//! Actions: the policy means `target = default + scale · a` with its own numbers; the raw
-//! action handed to the profile is the one giving exactly that target under the profile's
-//! mapping (the same when they agree), and the `actions` term inverts the same mapping on
-//! the last action that reached the robot. The Python adapter
+//! Actions: the policy means `target = base + scale · a` with its own numbers, where the
+//! base is its default pose (`default_relative`, mjlab's and holosoma's exports) or the
+//! reference's joint positions at that step (`reference_residual`, wbc-mjlab's general
+//! tracker; the file's `action_mode`, else the profile's). The raw action handed to the
+//! profile is the one giving exactly that target under the profile's mapping (the same
+//! when they agree), and the `actions` term inverts the same mapping on the last action
+//! that reached the robot (a residual policy asks for the previous step's reference
+//! frame too, to subtract the base that action was added to). The Python adapter
 //! (`adapters/python/thorarena/adapters/beyondmimic.py`) does the same and is tested
 //! against this one.
 
@@ -23,11 +27,14 @@ mod observation;
 
 pub use crate::onnx_export::FileMetadata;
 pub use observation::{
-    build_observation, layout_width, reference_anchor_in_robot_anchor, ObservationSpec, Scratch,
-    Term, KNOWN_LAYOUTS, LAYOUT_154, LAYOUT_154_MJLAB, LAYOUT_160,
+    build_observation, layout_width, reference_anchor_in_robot_anchor, ObservationSpec,
+    ReferenceAnchor, Scratch, Term, KNOWN_LAYOUTS, LAYOUT_132_WBC, LAYOUT_154, LAYOUT_154_MJLAB,
+    LAYOUT_160,
 };
 
-use super::{ActOutcome, Observation, Policy};
+use super::{ActOutcome, Observation, Policy, Wiring};
+use crate::motion::ReferenceFrame;
+use crate::profile::ActionMode;
 use crate::robot::RobotModel;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -56,6 +63,8 @@ pub enum BeyondMimicError {
 
 /// A loaded BeyondMimic-style network and how to talk to it.
 pub struct BeyondMimicPolicy {
+    /// The name results carry (the family's).
+    name: String,
     plan: Arc<TypedRunnableModel>,
     robot: Arc<RobotModel>,
     spec: ObservationSpec,
@@ -66,6 +75,10 @@ pub struct BeyondMimicPolicy {
     actions_output: usize,
     /// The policy's action scale, policy order.
     action_scale: Vec<f64>,
+    /// What its actions are added to.
+    action_mode: ActionMode,
+    /// The control step, s (a residual policy's previous reference frame is this far back).
+    control_dt_s: f64,
     /// The profile's action offset and scale, canonical order.
     profile_offset: Vec<f64>,
     profile_scale: Vec<f64>,
@@ -86,6 +99,31 @@ impl BeyondMimicPolicy {
         &self.spec.terms
     }
 
+    /// What the network's actions are added to.
+    pub fn action_mode(&self) -> ActionMode {
+        self.action_mode
+    }
+
+    /// The same policy under another name in results (its family's, e.g. `wbc-mjlab`).
+    pub fn named(mut self, name: &str) -> Self {
+        self.name = name.to_string();
+        self
+    }
+
+    /// The target an action of zero means, policy order: the default pose, or the
+    /// reference's joint positions at `frame` for a residual policy.
+    fn action_base(&self, frame: &ReferenceFrame) -> Vec<f64> {
+        match self.action_mode {
+            ActionMode::DefaultRelative => self.spec.default_pos.clone(),
+            ActionMode::ReferenceResidual => self
+                .spec
+                .to_canonical
+                .iter()
+                .map(|&c| frame.joint_pos[c])
+                .collect(),
+        }
+    }
+
     /// The network's inputs of the last `act`, one per observation (for cross-checks).
     pub fn last_inputs(&self) -> &[Vec<f32>] {
         &self.last_inputs
@@ -94,6 +132,7 @@ impl BeyondMimicPolicy {
     /// The policy's last raw action, its order, recovered from the last action that
     /// reached the robot (0 at an episode's start).
     fn policy_last_action(&self, obs: &Observation) -> Vec<f64> {
+        let base = self.action_base(obs.reference.last().expect("a reference frame"));
         self.spec
             .to_canonical
             .iter()
@@ -103,13 +142,14 @@ impl BeyondMimicPolicy {
                     return 0.0;
                 }
                 let target = self.profile_offset[c] + self.profile_scale[c] * obs.last_action[c];
-                (target - self.spec.default_pos[i]) / self.action_scale[i]
+                (target - base[i]) / self.action_scale[i]
             })
             .collect()
     }
 
-    /// Runs the network on one observation; returns the raw action in the robot's order.
-    fn infer(&self, input: &[f32], step: usize) -> TractResult<Vec<f64>> {
+    /// Runs the network on one observation; returns the raw action in the robot's order
+    /// for targets `base + scale · a` (`base` in policy order).
+    fn infer(&self, input: &[f32], step: usize, base: &[f64]) -> TractResult<Vec<f64>> {
         let n = self.spec.to_canonical.len();
         let mut inputs: TVec<TValue> = tvec!();
         let obs = Tensor::from_shape(&[1, self.obs_width], input)?;
@@ -136,7 +176,7 @@ impl BeyondMimicPolicy {
         }
         let mut raw = vec![0.0; n];
         for (i, &c) in self.spec.to_canonical.iter().enumerate() {
-            let target = self.spec.default_pos[i] + self.action_scale[i] * f64::from(a[i]);
+            let target = base[i] + self.action_scale[i] * f64::from(a[i]);
             raw[c] = (target - self.profile_offset[c]) / self.profile_scale[c];
         }
         Ok(raw)
@@ -145,7 +185,37 @@ impl BeyondMimicPolicy {
 
 impl Policy for BeyondMimicPolicy {
     fn name(&self) -> &str {
-        "beyondmimic"
+        &self.name
+    }
+
+    fn reference_offsets_s(&self) -> Vec<f64> {
+        match self.action_mode {
+            ActionMode::DefaultRelative => vec![0.0],
+            // The frame the previous action was a residual on, for the `actions` term.
+            ActionMode::ReferenceResidual => vec![0.0, -self.control_dt_s],
+        }
+    }
+
+    fn zero_action(&self, obs: &Observation, out: &mut [f64]) {
+        let base = self.action_base(&obs.reference[0]);
+        for (i, &c) in self.spec.to_canonical.iter().enumerate() {
+            out[c] = (base[i] - self.profile_offset[c]) / self.profile_scale[c];
+        }
+    }
+
+    fn wiring(&self) -> Wiring {
+        let terms: Vec<&str> = self.spec.terms.iter().map(|t| t.name()).collect();
+        Wiring {
+            facts: vec![
+                format!("{} inputs: {}", self.obs_width, terms.join(", ")),
+                format!(
+                    "{} actions, {}",
+                    self.spec.to_canonical.len(),
+                    self.action_mode.name()
+                ),
+            ],
+            disagreements: self.disagreements.clone(),
+        }
     }
 
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
@@ -162,12 +232,13 @@ impl Policy for BeyondMimicPolicy {
                 &mut self.scratch,
                 &mut input,
             );
-            match self.infer(&input, obs.step) {
+            let base = self.action_base(&obs.reference[0]);
+            match self.infer(&input, obs.step, &base) {
                 Ok(raw) => action.copy_from_slice(&raw),
                 // A network that fails at run time answers NaN: the runner's miss rule
                 // keeps it away from the physics and counts it.
                 Err(e) => {
-                    log::warn!("beyondmimic: inference failed: {e:#}");
+                    log::warn!("{}: inference failed: {e:#}", self.name);
                     action.fill(f64::NAN);
                 }
             }
