@@ -28,6 +28,7 @@ pub mod report;
 pub mod results;
 pub mod robot;
 pub mod runner;
+pub mod sanity;
 pub mod scenario;
 pub mod sweep;
 

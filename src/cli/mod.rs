@@ -14,6 +14,7 @@ mod logging;
 mod merge;
 mod policies;
 mod policy_arg;
+mod policy_check;
 mod report_html;
 mod robot_info;
 mod serve;
@@ -60,6 +61,9 @@ pub enum Command {
     Client(client::Args),
     /// List the policy families `--policy` can name: what each needs and its profile.
     Policies,
+    /// Check a policy's wiring before scoring it (`policy check`).
+    #[command(subcommand)]
+    Policy(policy_check::PolicyCommand),
     /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
     Merge(merge::Args),
     /// Run the same episodes on rapier and on MuJoCo and compare them (survival, keypoint
@@ -139,6 +143,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
         Command::Policies => policies::run(),
+        Command::Policy(cmd) => policy_check::run(&cmd),
         Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Report(args) => report_html::run(&args),
         Command::View(args) => view::run(&args),

@@ -1,0 +1,139 @@
+//! `thorarena policy check SPEC`: the sanity check before a policy's scores count
+//! (`thorarena::sanity`), printed check by check with its numbers; a failed check makes
+//! the command fail, naming it.
+
+use anyhow::{bail, Context};
+use std::path::PathBuf;
+use thorarena::motion::Dataset;
+use thorarena::physics::Engine;
+use thorarena::registry::{self, PolicyChoice};
+use thorarena::sanity::{check_policy, walking_sequence, SanityOptions, SanityReport};
+
+/// `thorarena policy …`
+#[derive(Debug, clap::Subcommand)]
+pub enum PolicyCommand {
+    /// Check that a policy is wired right before scoring it: its file against the
+    /// profile, standing 5 s, tracking without force, and doing clearly worse with zero
+    /// action (so the network, not the PD, does the work). Exits non-zero on a failed check.
+    Check(Args),
+}
+
+/// Arguments of `policy check`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The policy, as `eval --policy` takes it (`thorarena policies`): a built-in or a
+    /// network run in process (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`,
+    /// `wbc-mjlab:FILE.onnx`).
+    pub policy: String,
+    /// Dynamics profile [default: the one the policy family was trained with].
+    #[arg(long)]
+    pub profile: Option<String>,
+    /// Dataset holding the tracking reference [default: the bundled sample]; for a
+    /// single-clip policy, its own clip (e.g. the dance imported from holosoma's network).
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Sequence id to track [default: the dataset's sequence whose root travels farthest
+    /// in the first --track-seconds, a walk].
+    #[arg(long)]
+    pub sequence: Option<String>,
+    /// Seconds of the tracking reference to run.
+    #[arg(long, default_value_t = 10.0)]
+    pub track_seconds: f64,
+    /// Largest RMS keypoint error tracking may have, mm.
+    #[arg(long, default_value_t = 100.0)]
+    pub max_kp_error_mm: f64,
+    /// Robot.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+    /// Physics engine (as for `eval`).
+    #[arg(long, value_enum, default_value = "rapier")]
+    pub engine: super::choices::EngineArg,
+    /// A user's MJCF for `--engine mujoco` (as for `eval`).
+    #[arg(long)]
+    pub mjcf: Option<PathBuf>,
+    /// Print the report as one JSON object instead of lines.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub(super) fn run(cmd: &PolicyCommand) -> anyhow::Result<()> {
+    let PolicyCommand::Check(args) = cmd;
+    let report = check(args)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print(&report);
+    }
+    if !report.passed() {
+        bail!(
+            "policy check failed ({}): under `{}` this policy is wired wrong, or cannot track at all; its scores would not say how it handles force",
+            report.failed().join(", "),
+            report.profile
+        );
+    }
+    Ok(())
+}
+
+fn check(args: &Args) -> anyhow::Result<SanityReport> {
+    let robot = registry::robot(&args.robot)?;
+    let profile_name = args
+        .profile
+        .clone()
+        .unwrap_or_else(|| registry::family_profile(&args.policy).to_string());
+    let profile = registry::profile(&profile_name, &robot)?;
+    let engine = match (args.engine, &args.mjcf) {
+        (super::choices::EngineArg::Rapier, None) => Engine::Rapier,
+        (super::choices::EngineArg::Rapier, Some(_)) => {
+            bail!("--mjcf is for --engine mujoco")
+        }
+        (super::choices::EngineArg::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
+    };
+    let dataset_dir = args
+        .dataset
+        .clone()
+        .unwrap_or_else(|| thorarena::data_dir().join("sample"));
+    let dataset = Dataset::open(&dataset_dir, &robot)?;
+    let sequences = dataset.load_all()?;
+    let index = match &args.sequence {
+        Some(id) => sequences
+            .iter()
+            .position(|s| &s.sequence_id == id)
+            .with_context(|| format!("{} has no sequence `{id}`", dataset_dir.display()))?,
+        None => walking_sequence(&sequences, args.track_seconds)
+            .with_context(|| format!("{} has no sequences", dataset_dir.display()))?,
+    };
+    let PolicyChoice::InProcess(mut policy) = registry::policy(&args.policy, &robot, &profile)?
+    else {
+        bail!("policy check runs a policy in process; `{}` is a policy process (check it by running its network in process, e.g. beyondmimic:FILE)", args.policy);
+    };
+    let options = SanityOptions {
+        track_s: args.track_seconds,
+        max_kp_rms_mm: args.max_kp_error_mm,
+        engine,
+        ..SanityOptions::default()
+    };
+    Ok(check_policy(
+        policy.as_mut(),
+        &robot,
+        &profile,
+        &sequences[index],
+        &options,
+    )?)
+}
+
+fn print(report: &SanityReport) {
+    println!(
+        "policy check: {} under profile `{}` on {}, tracking {}",
+        report.policy, report.profile, report.engine, report.tracking_reference
+    );
+    for fact in &report.facts {
+        println!("  {fact}");
+    }
+    for c in &report.checks {
+        let mark = if c.passed { "pass" } else { "FAIL" };
+        println!("  {mark} {:<12} {}", c.name, c.detail);
+    }
+    if report.passed() {
+        println!("passed: every check holds, its scores can count");
+    }
+}
