@@ -100,11 +100,7 @@ fn wbc_mjlab_tracks_the_five_shared_clips_in_rapier_and_mujoco() {
         .iter()
         .zip([0.025, 0.058, 0.167, 0.172, -0.257, -0.043])
     {
-        assert!(
-            (got - want).abs() < 1e-3,
-            "{:?}",
-            &idle.joint_pos[0][..6]
-        );
+        assert!((got - want).abs() < 1e-3, "{:?}", &idle.joint_pos[0][..6]);
     }
 
     let policy = format!("wbc-mjlab:{}", onnx.display());
