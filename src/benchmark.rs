@@ -6,7 +6,7 @@
 //! tasks) only parse, call these and print.
 
 use crate::episode::EpisodeTrace;
-use crate::evaluation::{task_thresholds, EpisodeRecord, EvalSpec, Termination};
+use crate::evaluation::{task_thresholds, EpisodeRecord, EvalSpec, SanityRecord, Termination};
 use crate::motion::{DataError, Dataset};
 use crate::policy::Policy;
 use crate::results::{
@@ -14,6 +14,7 @@ use crate::results::{
 };
 use crate::robot::RobotModel;
 use crate::runner::{run_eval, EvalPlan};
+use crate::sanity::{check_policy, walking_sequence, SanityError, SanityOptions, SanityReport};
 use std::collections::HashSet;
 
 /// Why an evaluation or a merge could not finish.
@@ -31,6 +32,17 @@ pub enum BenchmarkError {
     DatasetChanged {
         /// The dataset directory.
         dataset: String,
+    },
+    /// The sanity check could not run.
+    #[error("the sanity check could not run: {0}")]
+    Sanity(#[from] SanityError),
+    /// The policy failed its sanity check: it is refused, its report says why.
+    #[error("{policy} failed its sanity check before the run ({}), so its scores would not say how it tracks under force:\n{}\nCheck the policy, its profile and its file (`thorarena policy check`), or pass --unchecked to score it anyway (recorded in run.json)", report.failed().join(", "), report.checks.iter().map(|c| format!("  {} {}: {}", if c.passed { "pass" } else { "FAIL" }, c.name, c.detail)).collect::<Vec<_>>().join("\n"))]
+    SanityFailed {
+        /// The policy's name.
+        policy: String,
+        /// The check's report.
+        report: Box<SanityReport>,
     },
 }
 
@@ -91,6 +103,44 @@ impl Evaluated {
     }
 }
 
+/// The sanity check of `policy` before it is scored (`crate::sanity`), on the walk of
+/// the sequences `spec` evaluates (for a single-clip policy: its clip), the run's engine
+/// and keypoints: passed, exempt, or not run under `--unchecked`; a failure refuses the run.
+fn sanity(spec: &EvalSpec, policy: &mut dyn Policy) -> Result<SanityRecord, BenchmarkError> {
+    if let Some(why) = policy.sanity_exempt() {
+        return Ok(SanityRecord::Exempt { why: why.into() });
+    }
+    if spec.unchecked {
+        return Ok(SanityRecord::Unchecked);
+    }
+    let options = SanityOptions {
+        engine: spec.engine.clone(),
+        keypoints: spec.keypoints.clone(),
+        ..SanityOptions::default()
+    };
+    let Some(walk) = walking_sequence(&spec.sequences, options.track_s) else {
+        return Ok(SanityRecord::Exempt {
+            why: "no sequence to track".into(),
+        });
+    };
+    let report = check_policy(
+        policy,
+        &spec.robot,
+        &spec.profile,
+        &spec.sequences[walk],
+        &options,
+    )?;
+    if !report.passed() {
+        return Err(BenchmarkError::SanityFailed {
+            policy: policy.name().to_string(),
+            report: Box::new(report),
+        });
+    }
+    Ok(SanityRecord::Passed {
+        tracking_reference: report.tracking_reference,
+    })
+}
+
 /// Runs the evaluation `spec` for one connected policy into `run`: starts the directory
 /// (resuming with [`EvalOptions::resume`]), runs every planned episode not already
 /// finished, appends each record as it finishes, writes the traces asked for, and writes
@@ -102,7 +152,8 @@ pub fn evaluate(
     options: EvalOptions,
     observer: &mut dyn EvalObserver,
 ) -> Result<Evaluated, BenchmarkError> {
-    let header = RunHeader::of(spec, policy.name());
+    let mut header = RunHeader::of(spec, policy.name());
+    header.sanity = Some(sanity(spec, policy)?);
     let started = run.start(&header, options.resume)?;
     let finished: HashSet<_> = started.kept.iter().map(EpisodeRecord::key).collect();
     let jobs: Vec<(usize, usize)> = header

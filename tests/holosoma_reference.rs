@@ -273,9 +273,17 @@ fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale
     let dance = dir.path().join("dance");
     import_motion(&onnx, "dance", &dance).unwrap();
     let policy = format!("beyondmimic:{}", onnx.display());
-    let survival = |profile: &str| {
+    let request = |profile: &str, unchecked: bool| thorarena::evaluation::EvalRequest {
+        policy: policy.clone(),
+        dataset: Some(dance.clone()),
+        profile: Some(profile.into()),
+        settings: vec!["no-force".into()],
+        unchecked,
+        ..Default::default()
+    };
+    let survival = |profile: &str, unchecked: bool| {
         let run = dir.path().join(profile);
-        eval(&dance, &policy, profile, "no-force", &run);
+        in_process::evaluate(&request(profile, unchecked), &run).unwrap();
         let (_, survival, kp) = averages(&run)[0].clone();
         eprintln!("PPO dance under {profile}: survival {survival:.3}, keypoint error {kp:.1} mm");
         survival
@@ -283,12 +291,21 @@ fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale
     // The file carries no action_scale: holosoma-inference 0.1.3 scales per joint, as the
     // holosoma-ppo profile does; the whole 131.5 s dance is tracked.
     assert_eq!(
-        survival("holosoma-ppo"),
+        survival("holosoma-ppo", false),
         1.0,
         "the PPO policy fell on its own motion"
     );
-    // Under the FastSAC file's scale 1.0 it falls within a few seconds (measured: ~1 s).
-    let wrong = survival("holosoma-wbt");
+    // Under the FastSAC file's scale 1.0 its sanity check fails and `eval` refuses it,
+    // naming the checks; scored anyway (`--unchecked`), it falls within a few seconds
+    // (measured: ~1 s).
+    let refused =
+        in_process::evaluate(&request("holosoma-wbt", false), &dir.path().join("refused"))
+            .expect_err("a policy failing its sanity check was scored");
+    assert!(
+        refused.contains("failed its sanity check") && refused.contains("track"),
+        "{refused}"
+    );
+    let wrong = survival("holosoma-wbt", true);
     assert!(
         wrong < 0.05,
         "survival {wrong} under scale 1.0: the trap is gone?"

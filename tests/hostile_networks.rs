@@ -45,9 +45,12 @@ fn beyondmimic(dir: &Path, name: &str, width: i64, metadata: Vec<(&str, String)>
     format!("beyondmimic:{}", path.display())
 }
 
+/// `eval` of a zero-weight network (it cannot stand, so `--unchecked`: these tests are
+/// about loading, not tracking).
 fn eval(dir: &Path, policy: &str) -> Output {
     thorarena(&[
         "eval",
+        "--unchecked",
         "--dataset",
         SAMPLE,
         "--policy",
@@ -185,6 +188,7 @@ fn the_profile_follows_the_policy_family_and_a_contradiction_is_an_error() {
     let eval = |extra: &[&str]| {
         let mut a = vec![
             "eval",
+            "--unchecked",
             "--dataset",
             SAMPLE,
             "--policy",
@@ -208,6 +212,8 @@ fn the_profile_follows_the_policy_family_and_a_contradiction_is_an_error() {
     let o = eval(&[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(header()["profile"], "beyondmimic");
+    // Scored without its sanity check, and run.json says so.
+    assert_eq!(header()["sanity"]["status"], "unchecked");
     assert!(header().get("profile_mismatch_ok").is_none());
     // A profile the family was not trained with: refused, unless asked for (recorded).
     let e = error_of(&eval(&["--profile", "default"]));

@@ -3,7 +3,9 @@
 //! sample's walk, holosoma's FastSAC and PPO dances on their own clips — and mis-wired
 //! variants fail it, naming the check: holosoma's 154 inputs fed in mjlab's order, its PPO
 //! under scale 1.0, wbc-mjlab under a profile calling its action absolute. A baseline that
-//! cannot walk fails `track` from the command line too. The published networks are
+//! cannot walk fails `track` from the command line too. `eval` runs the same check first:
+//! its verdict is in `run.json` (`passed`, `exempt` for a baseline, `unchecked` under
+//! `--unchecked`), and a network failing it is refused. The published networks are
 //! skipped, saying so, when `../shared/reference` is absent; never in CI.
 
 use std::path::{Path, PathBuf};
@@ -16,6 +18,8 @@ use thorarena::sanity::{check_policy, walking_sequence, SanityOptions, SanityRep
 mod common;
 #[path = "common/in_process.rs"]
 mod in_process;
+#[path = "common/onnx_model.rs"]
+mod onnx_model;
 mod prereq;
 
 /// `policy check POLICY --profile PROFILE` tracking `tracking`, in process.
@@ -167,4 +171,68 @@ fn a_baseline_that_cannot_walk_fails_track_from_the_command_line() {
     assert_eq!(report.checks[1].survival, Some(1.0));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("policy check failed (track)"), "{stderr}");
+}
+
+/// `eval` of the bundled sample's `push_chair_001` without force, in process: the run's
+/// `run.json` `sanity`, or the error's text.
+fn sanity_of_eval(policy: &str, unchecked: bool, out: &Path) -> Result<serde_json::Value, String> {
+    let request = thorarena::evaluation::EvalRequest {
+        policy: policy.into(),
+        settings: vec!["no-force".into()],
+        selection: thorarena::motion::SequenceSelection {
+            tasks: Vec::new(),
+            sequences: vec!["push_chair_001".into()],
+        },
+        unchecked,
+        ..Default::default()
+    };
+    let run = in_process::evaluate(&request, out)?;
+    let header: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+    Ok(header["sanity"].clone())
+}
+
+#[test]
+fn eval_records_the_check_in_run_json_and_refuses_a_network_failing_it() {
+    let dir = tempfile::tempdir().unwrap();
+    // A BeyondMimic-shaped network answering zero: it loads, and cannot stand.
+    let zero = dir.path().join("zero.onnx");
+    let net = onnx_model::Network {
+        inputs: vec![("obs", vec![1, 160])],
+        outputs: vec![("actions", "obs", 29, 0.0)],
+        metadata: Vec::new(),
+    };
+    std::fs::write(&zero, net.bytes()).unwrap();
+    let zero = format!("beyondmimic:{}", zero.display());
+    let e = sanity_of_eval(&zero, false, &dir.path().join("refused")).unwrap_err();
+    assert!(
+        e.contains("failed its sanity check")
+            && e.contains("FAIL stand")
+            && e.contains("--unchecked"),
+        "{e}"
+    );
+    assert!(
+        !dir.path().join("refused/run.json").exists(),
+        "a refused run left a run.json"
+    );
+    // Scored anyway when asked, and the run says so.
+    let s = sanity_of_eval(&zero, true, &dir.path().join("unchecked")).unwrap();
+    assert_eq!(s["status"], "unchecked");
+    // A built-in baseline is a floor, not a tracker: exempt, with the reason.
+    let s = sanity_of_eval("balance", false, &dir.path().join("balance")).unwrap();
+    assert_eq!(s["status"], "exempt");
+    assert!(s["why"].as_str().unwrap().contains("baseline"), "{s}");
+    // A published network passes on the walk of the data evaluated.
+    let Some(wbc) = prereq::reference("policy_check::eval_records", "wbc-mjlab/wbc_g1_policy.onnx")
+    else {
+        return;
+    };
+    let s = sanity_of_eval(
+        &format!("wbc-mjlab:{}", wbc.display()),
+        false,
+        &dir.path().join("wbc"),
+    )
+    .unwrap();
+    assert_eq!(s["status"], "passed");
+    assert_eq!(s["tracking_reference"], "push_chair/push_chair_001");
 }

@@ -48,6 +48,12 @@ pub struct RunArgs {
     /// run.json): a TWIST2 network on the default profile scores 2 instead of 86.
     #[arg(long)]
     pub profile_mismatch_ok: bool,
+    /// Score a network policy without its sanity check (recorded in run.json). Without
+    /// it, a policy run in process (twist2:, beyondmimic:, wbc-mjlab:) is first checked as
+    /// `thorarena policy check` does, on the walk of the dataset evaluated (a single-clip
+    /// policy: its clip), and refused if it fails.
+    #[arg(long)]
+    pub unchecked: bool,
     /// Settings, comma separated: `force`, `no-force`, a replay coefficient, or
     /// `push:<N>` (no replay; a constant world +x push of N newtons on each hand, ramped
     /// in over 1 s — the sensitivity probe of SOURCES.md, TWIST2 in MuJoCo), or `push:<N>@<deg>` with the
@@ -137,6 +143,7 @@ impl RunArgs {
             robot: self.robot.clone(),
             profile: self.profile.clone(),
             profile_mismatch_ok: self.profile_mismatch_ok,
+            unchecked: self.unchecked,
             settings: self.settings.clone(),
             replay_without_force_logs: self.replay_without_force_logs,
             selection: SequenceSelection {
@@ -291,6 +298,9 @@ impl EvalObserver for Progress<'_, '_> {
             self.spec.envs,
             self.spec.workers
         );
+        if let Some(sanity) = &s.header.sanity {
+            eprintln!("sanity check: {}", sanity.label());
+        }
         self.bar.set_length(s.to_run as u64);
     }
 

@@ -11,6 +11,7 @@
 mod latency;
 mod record;
 mod rules;
+mod sanity;
 mod schedule;
 mod setting;
 mod spec;
@@ -19,6 +20,7 @@ mod thresholds;
 pub use latency::{LatencyRecorder, LatencySummary};
 pub use record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
 pub use rules::{parse_budget, Budget, LatencyMode, MissRule, PolicyIoRules, TerminationRule};
+pub use sanity::SanityRecord;
 pub use schedule::{reference_steps, schedule};
 pub use setting::Setting;
 pub use spec::{

@@ -47,6 +47,8 @@ pub struct EvalRequest {
     pub profile: Option<String>,
     /// Run under a profile the policy family was not trained with.
     pub profile_mismatch_ok: bool,
+    /// Score the policy without its sanity check (recorded in `run.json`).
+    pub unchecked: bool,
     /// Settings as spelled (empty: [`DEFAULT_SETTINGS`], or `no-force` alone on a dataset
     /// without force logs).
     pub settings: Vec<String>,
@@ -84,6 +86,7 @@ impl Default for EvalRequest {
             robot: "g1_29dof".into(),
             profile: None,
             profile_mismatch_ok: false,
+            unchecked: false,
             settings: Vec::new(),
             replay_without_force_logs: false,
             selection: SequenceSelection::default(),
@@ -160,6 +163,8 @@ pub struct EvalSpec {
     pub profile: Profile,
     /// The profile contradicts the policy family and the request allowed it.
     pub profile_mismatch: bool,
+    /// The policy is scored without its sanity check (`--unchecked`).
+    pub unchecked: bool,
     /// The engine (checked: it makes a physics for the robot).
     pub engine: Engine,
     /// Dataset directory.
@@ -225,6 +230,7 @@ impl EvalSpec {
         let (workers, envs) = threads(request)?;
         Ok(Self {
             profile_mismatch,
+            unchecked: request.unchecked,
             dataset_sha256: picked.sha256,
             robot,
             profile,

@@ -100,6 +100,13 @@ pub trait Policy {
         out.fill(0.0);
     }
 
+    /// Why the sanity check before a run does not apply to this policy, or `None` when it
+    /// does (the published networks in process). By default a policy is a built-in
+    /// baseline: a floor, not a tracker, that need not track a walk.
+    fn sanity_exempt(&self) -> Option<&'static str> {
+        Some("a built-in baseline (a floor, not a tracker)")
+    }
+
     /// What the policy says about its own wiring: facts (inputs, terms, action mode) and
     /// where its file contradicts the profile. Empty for policies with nothing to say.
     fn wiring(&self) -> Wiring {

@@ -92,6 +92,10 @@ impl Policy for RemotePolicy {
         self.offsets_s.clone()
     }
 
+    fn sanity_exempt(&self) -> Option<&'static str> {
+        Some("a policy process (check its network in process with `thorarena policy check`)")
+    }
+
     fn episode_ended(&mut self, env: usize, terminated: bool) {
         if let Some(t) = self.previous_terminated.get_mut(env) {
             *t = terminated;

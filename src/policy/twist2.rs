@@ -215,6 +215,10 @@ impl Policy for Twist2Policy {
         vec![0.0, MIMIC_LOOKAHEAD_S]
     }
 
+    fn sanity_exempt(&self) -> Option<&'static str> {
+        None
+    }
+
     fn wiring(&self) -> super::Wiring {
         super::Wiring {
             facts: vec![

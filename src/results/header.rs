@@ -2,7 +2,7 @@
 
 use super::{ResultsError, HEADER_FILE, RESULTS_VERSION};
 use crate::evaluation::{
-    reference_steps, EpisodeKey, EvalSpec, PolicyIoRules, Setting, TerminationRule,
+    reference_steps, EpisodeKey, EvalSpec, PolicyIoRules, SanityRecord, Setting, TerminationRule,
 };
 use crate::motion::{Reference, Sequence};
 use serde::{Deserialize, Serialize};
@@ -76,10 +76,15 @@ pub struct RunHeader {
     /// Rules of the policy's answers (miss rule, latency mode, budget).
     #[serde(default)]
     pub io: PolicyIoRules,
+    /// What the sanity check said about the policy before the run (`None`: a run written
+    /// before the check existed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sanity: Option<SanityRecord>,
 }
 
 impl RunHeader {
-    /// The header of evaluating `spec` with the policy named `policy`.
+    /// The header of evaluating `spec` with the policy named `policy` (its sanity record
+    /// is the caller's to set).
     pub fn of(spec: &EvalSpec, policy: &str) -> Self {
         Self {
             results_version: RESULTS_VERSION,
@@ -99,6 +104,7 @@ impl RunHeader {
             subset: spec.subset.clone(),
             shard: spec.shard,
             io: spec.io,
+            sanity: None,
         }
     }
 
@@ -190,6 +196,7 @@ impl RunHeader {
         );
         check("sequences", self.sequences == other.sequences);
         check("subset", self.subset == other.subset);
+        check("sanity", self.sanity == other.sanity);
         check("shard", self.shard == other.shard);
         check("io", self.io == other.io);
         d

@@ -86,19 +86,26 @@ pub fn eval_on(
     settings: &[&str],
     out: &Path,
 ) -> PathBuf {
-    let spec = EvalSpec::load(&EvalRequest {
+    let request = EvalRequest {
         policy: policy.into(),
         dataset: Some(dataset.to_path_buf()),
         profile: profile.map(String::from),
         settings: settings.iter().map(|s| s.to_string()).collect(),
         engine,
         ..EvalRequest::default()
-    })
-    .unwrap();
+    };
+    evaluate(&request, out).unwrap()
+}
+
+/// `eval` of a whole request into `out`, in process: the run, or the error's text (a
+/// policy refused by its sanity check, …).
+pub fn evaluate(request: &EvalRequest, out: &Path) -> Result<PathBuf, String> {
+    let spec = EvalSpec::load(request).map_err(|e| e.to_string())?;
     let PolicyChoice::InProcess(mut policy) =
-        thorarena::registry::policy(policy, &spec.robot, &spec.profile).unwrap()
+        thorarena::registry::policy(&request.policy, &spec.robot, &spec.profile)
+            .map_err(|e| e.to_string())?
     else {
-        panic!("{policy} is not an in-process policy");
+        panic!("{} is not an in-process policy", request.policy);
     };
     benchmark::evaluate(
         &spec,
@@ -107,6 +114,6 @@ pub fn eval_on(
         EvalOptions::default(),
         &mut (),
     )
-    .unwrap();
-    out.to_path_buf()
+    .map_err(|e| e.to_string())?;
+    Ok(out.to_path_buf())
 }

@@ -45,6 +45,7 @@ pub fn header(policy: &str) -> RunHeader {
         subset: None,
         shard: None,
         io: PolicyIoRules::default(),
+        sanity: None,
     }
 }
 

@@ -203,6 +203,10 @@ impl Policy for BeyondMimicPolicy {
         }
     }
 
+    fn sanity_exempt(&self) -> Option<&'static str> {
+        None
+    }
+
     fn wiring(&self) -> Wiring {
         let terms: Vec<&str> = self.spec.terms.iter().map(|t| t.name()).collect();
         Wiring {
