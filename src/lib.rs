@@ -14,6 +14,7 @@ pub mod embedded_data;
 pub mod episode;
 pub mod evaluation;
 pub mod feet;
+pub mod leaderboard;
 pub mod metrics;
 pub mod motion;
 pub mod names;

@@ -10,6 +10,7 @@ mod crosscheck;
 mod data;
 mod data_synth;
 mod eval;
+mod leaderboard;
 mod logging;
 mod merge;
 mod policies;
@@ -72,6 +73,9 @@ pub enum Command {
     Crosscheck(crosscheck::Args),
     /// Compare runs in one self-contained HTML report with plots (+ Markdown and CSV tables).
     Report(report_html::Args),
+    /// Every policy given on the synthetic dataset, force and no-force, on each engine:
+    /// one eval run per (policy, engine), one table, the paper's tables and figures.
+    Leaderboard(leaderboard::Args),
     /// Replay one episode's trace (`eval --trace`) in 3D in a self-contained HTML page.
     View(view::Args),
     /// Inspect a robot model.
@@ -143,6 +147,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => merge::run(&args),
         Command::Policies => policies::run(),
+        Command::Leaderboard(args) => leaderboard::run(&args),
         Command::Policy(cmd) => policy_check::run(&cmd),
         Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Report(args) => report_html::run(&args),

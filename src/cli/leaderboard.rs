@@ -1,0 +1,184 @@
+//! `thorarena leaderboard`: every policy given on the synthetic dataset (or yours), force
+//! and no-force, on each engine — one `eval` run per (policy, engine), resumed when the
+//! command is run again — then one table (`leaderboard.md`, printed) and the paper's
+//! tables and figures over the same runs (`report.html`, `report.md`, CSVs, SVGs).
+
+use anyhow::{bail, Context};
+use std::path::PathBuf;
+use std::time::Instant;
+use thorarena::benchmark::{EvalObserver, Starting};
+use thorarena::evaluation::{EngineChoice, EpisodeRecord};
+use thorarena::leaderboard::{
+    leaderboard_table, run_leaderboard, LeaderboardObserver, LeaderboardRequest,
+};
+use thorarena::motion::synth::{write_synthetic, SynthOptions, TASKS};
+use thorarena::motion::Dataset;
+use thorarena::report::{
+    label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, Page,
+    WebBundle,
+};
+
+/// Arguments of `leaderboard`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// A policy, as `eval --policy` takes it, run in process (`twist2:FILE.onnx`,
+    /// `wbc-mjlab:FILE.onnx`, `beyondmimic:FILE.onnx`, a built-in); repeat for each.
+    #[arg(long = "policy", required = true)]
+    pub policies: Vec<String>,
+    /// Engines, comma separated; every policy runs on each [default: rapier, and mujoco
+    /// in a build with the `mujoco` feature].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub engines: Vec<super::choices::EngineArg>,
+    /// Dataset [default: the synthetic six-task dataset, generated once into
+    /// OUT/synthetic with --per-task sequences per task].
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Sequences per task of the generated synthetic dataset (60: the paper's).
+    #[arg(long, default_value_t = 60)]
+    pub per_task: usize,
+    /// Settings, comma separated, as for `eval`.
+    #[arg(long, value_delimiter = ',', default_value = "force,no-force")]
+    pub settings: Vec<String>,
+    /// Directory of the runs, the dataset it generates and the tables.
+    #[arg(long, default_value = "results/leaderboard")]
+    pub out: PathBuf,
+    /// Score policies without their sanity check (recorded in each run.json).
+    #[arg(long)]
+    pub unchecked: bool,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let bundle = WebBundle::locate()?;
+    let dataset = match &args.dataset {
+        Some(d) => d.clone(),
+        None => synthetic(args)?,
+    };
+    let engines: Vec<EngineChoice> = if args.engines.is_empty() {
+        if cfg!(feature = "mujoco") {
+            vec![EngineChoice::Rapier, EngineChoice::Mujoco]
+        } else {
+            vec![EngineChoice::Rapier]
+        }
+    } else {
+        args.engines
+            .iter()
+            .map(|e| match e {
+                super::choices::EngineArg::Rapier => EngineChoice::Rapier,
+                super::choices::EngineArg::Mujoco => EngineChoice::Mujoco,
+            })
+            .collect()
+    };
+    let request = LeaderboardRequest {
+        policies: args.policies.clone(),
+        engines,
+        dataset: dataset.clone(),
+        settings: args.settings.clone(),
+        out: args.out.clone(),
+        unchecked: args.unchecked,
+    };
+    let entries = run_leaderboard(&request, &mut Progress::default())?;
+    let table = leaderboard_table(&entries, &args.settings);
+    let md_path = args.out.join("leaderboard.md");
+    let text = format!(
+        "# Leaderboard\n\nDataset `{}`, settings {}; one `eval` run per row in `{}`. Command: `thorarena {}`. Wall time of this invocation: {:.0} s.\n\n{table}",
+        dataset.display(),
+        args.settings.join(", "),
+        args.out.join("runs").display(),
+        std::env::args().skip(1).collect::<Vec<_>>().join(" "),
+        started.elapsed().as_secs_f64()
+    );
+    std::fs::write(&md_path, &text).with_context(|| format!("writing {}", md_path.display()))?;
+    print!("{table}");
+    let dirs: Vec<PathBuf> = entries.iter().map(|e| e.run.clone()).collect();
+    let mut runs = load_runs(&dirs)?;
+    if mixed_engines(&runs).is_some() {
+        label_engines(&mut runs);
+    }
+    let files = ComparisonFiles::beside(&args.out.join("report.html"));
+    let written =
+        write_comparison_report(&runs, &files, &bundle.script(Page::Report)?, true, &dirs)?;
+    eprintln!(
+        "wrote {}, {} and {} SVG figures in {} ({:.0} s in all)",
+        md_path.display(),
+        written
+            .files
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", "),
+        written.figures.len(),
+        files.figures_dir.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// OUT/synthetic: generated with --per-task sequences per task, or reused when it holds
+/// exactly that many.
+fn synthetic(args: &Args) -> anyhow::Result<PathBuf> {
+    let dir = args.out.join("synthetic");
+    let robot = thorarena::registry::robot("g1_29dof")?;
+    let want = args.per_task * TASKS.len();
+    if dir.join("manifest.json").exists() {
+        let have = Dataset::open(&dir, &robot)?.len();
+        if have != want {
+            bail!(
+                "{} holds {have} sequences, not {want} (--per-task {}): remove it, or pass that --per-task",
+                dir.display(),
+                args.per_task
+            );
+        }
+        return Ok(dir);
+    }
+    let opts = SynthOptions {
+        per_task: args.per_task,
+        ..SynthOptions::default()
+    };
+    eprintln!(
+        "generating the synthetic dataset into {} ({want} sequences)",
+        dir.display()
+    );
+    write_synthetic(&dir, &robot, &opts, false, |_, _| {})?;
+    Ok(dir)
+}
+
+/// One line per run, and one per tenth of its episodes.
+#[derive(Default)]
+struct Progress {
+    to_run: usize,
+    done: usize,
+}
+
+impl LeaderboardObserver for Progress {
+    fn run_starting(&mut self, index: usize, total: usize, policy: &str, engine: &str) {
+        eprintln!("[{}/{total}] {policy} on {engine}", index + 1);
+    }
+
+    fn eval_observer(&mut self) -> &mut dyn EvalObserver {
+        self
+    }
+}
+
+impl EvalObserver for Progress {
+    fn starting(&mut self, s: &Starting) {
+        self.to_run = s.to_run;
+        self.done = 0;
+        if let Some(sanity) = &s.header.sanity {
+            eprintln!("  sanity check: {}", sanity.label());
+        }
+        eprintln!(
+            "  {} episodes to run ({} already done)",
+            s.to_run,
+            s.started.kept.len()
+        );
+    }
+
+    fn episode(&mut self, _: &EpisodeRecord, _: Option<&thorarena::episode::EpisodeTrace>) {
+        self.done += 1;
+        let step = (self.to_run / 10).max(1);
+        if self.done % step == 0 || self.done == self.to_run {
+            eprintln!("  {}/{} episodes", self.done, self.to_run);
+        }
+    }
+}

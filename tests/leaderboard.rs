@@ -1,0 +1,100 @@
+//! `thorarena leaderboard` end to end on a small synthetic dataset (one sequence per task):
+//! one run per (policy, engine), the table and the paper's tables and figures written, its
+//! numbers those of a separate `eval` of the same policy and data, and a second
+//! invocation resumes instead of running again.
+
+use std::path::Path;
+use std::process::Command;
+
+mod common;
+#[path = "common/in_process.rs"]
+mod in_process;
+
+fn summary(run: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap()
+}
+
+#[test]
+fn the_leaderboard_writes_its_tables_and_equals_separate_eval_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lb");
+    let run = || {
+        Command::new(env!("CARGO_BIN_EXE_thorarena"))
+            .args([
+                "leaderboard",
+                "--policy",
+                "balance",
+                "--policy",
+                "replay",
+                "--engines",
+                "rapier",
+                "--per-task",
+                "1",
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap()
+    };
+    let o = run();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{stderr}");
+    let table = String::from_utf8_lossy(&o.stdout).into_owned();
+    // One row per policy, each setting's FATS, survival and keypoint error.
+    assert!(
+        table.contains("| balance | rapier |") && table.contains("| replay | rapier |"),
+        "{table}"
+    );
+    assert!(
+        table.contains("FATS force") && table.contains("FATS no-force"),
+        "{table}"
+    );
+    for file in [
+        "leaderboard.md",
+        "report.html",
+        "report.md",
+        "report-fats.csv",
+        "report-diagnostics.csv",
+    ] {
+        assert!(out.join(file).is_file(), "{file} missing: {stderr}");
+    }
+    let figures = std::fs::read_dir(out.join("report-figures"))
+        .unwrap()
+        .count();
+    assert!(figures >= 3, "{figures} figures");
+    // The paper's tables: task-level FATS under force and the diagnostics.
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("push_chair") && md.contains("Survival"), "{md}");
+
+    // A separate `eval` of balance on the same data gives the same scores.
+    let runs = out.join("runs");
+    let board = summary(&runs.join("balance-rapier"));
+    let separate = in_process::eval(
+        &out.join("synthetic"),
+        "balance",
+        None,
+        &["force", "no-force"],
+        &dir.path().join("separate"),
+    );
+    let separate = summary(&separate);
+    for setting in ["force", "no-force"] {
+        let avg = |s: &serde_json::Value| s["settings"][setting]["average"].clone();
+        assert_eq!(avg(&board), avg(&separate), "{setting}");
+    }
+    let fats = board["settings"]["force"]["average"]["fats"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        table.contains(&format!("{fats:.1}")),
+        "{fats:.1} not in {table}"
+    );
+
+    // Run again: every run is complete, nothing runs twice.
+    let o = run();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("0 episodes to run (12 already done)"),
+        "{stderr}"
+    );
+}
