@@ -236,3 +236,35 @@ fn eval_records_the_check_in_run_json_and_refuses_a_network_failing_it() {
     assert_eq!(s["status"], "passed");
     assert_eq!(s["tracking_reference"], "push_chair/push_chair_001");
 }
+
+#[test]
+fn a_published_network_runs_under_its_own_profile_whatever_its_file_is_called() {
+    let Some(ppo) = prereq::reference(
+        "policy_check::own_profile",
+        "holosoma/ppo_g1_29dof_dancing.onnx",
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    // Renamed: still holosoma's PPO dance, and its profile is the per-joint scale's.
+    let renamed = dir.path().join("my_policy.onnx");
+    std::fs::copy(&ppo, &renamed).unwrap();
+    let policy = format!("beyondmimic:{}", renamed.display());
+    assert_eq!(registry::family_profile(&policy), "holosoma-ppo");
+    let spec = thorarena::evaluation::EvalSpec::load(&thorarena::evaluation::EvalRequest {
+        policy: policy.clone(),
+        ..Default::default()
+    })
+    .unwrap();
+    assert_eq!(spec.profile.name, "holosoma-ppo");
+    // One byte changed: another network, the family's profile.
+    let mut bytes = std::fs::read(&ppo).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    let edited = dir.path().join("edited.onnx");
+    std::fs::write(&edited, bytes).unwrap();
+    assert_eq!(
+        registry::family_profile(&format!("beyondmimic:{}", edited.display())),
+        "beyondmimic"
+    );
+}

@@ -5,10 +5,12 @@
 //! like a typo ([`did_you_mean`]).
 
 mod families;
+mod networks;
 mod policies;
 mod suggest;
 
 pub use families::{policy_family, policy_file, PolicyFamily, Runs, POLICY_FAMILIES};
+pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
 pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};
 pub use suggest::{closest, did_you_mean};
 
@@ -139,9 +141,14 @@ pub fn profile_fits(policy: &str, profile: &Profile) -> Result<(), String> {
     Ok(())
 }
 
-/// The profile a policy family was trained with (its entry in [`POLICY_FAMILIES`]):
-/// `twist2` for `twist2:`, `beyondmimic` for `beyondmimic:`, `default` for the built-ins,
-/// policy processes and anything unknown. `eval` and sweeps use it when no profile is named.
+/// The profile a policy was trained with, used by `eval`, sweeps, `policy check` and the
+/// leaderboard when no profile is named: a published network's own ([`KNOWN_NETWORKS`],
+/// by the file's content), else its family's (its entry in [`POLICY_FAMILIES`]: `twist2`
+/// for `twist2:`, `beyondmimic` for `beyondmimic:`, …), else `default` (the built-ins,
+/// policy processes, anything unknown).
 pub fn family_profile(policy: &str) -> &'static str {
+    if let Some(known) = policy_file(policy).and_then(|(_, file)| known_network(Path::new(file))) {
+        return known.profile;
+    }
     policy_family(policy).map_or("default", |f| f.profile)
 }

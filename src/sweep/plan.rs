@@ -380,25 +380,28 @@ fn check_shards(spec: &SweepSpec, durations: &[Vec<f64>]) -> Result<(), String> 
 }
 
 /// The policy `p` as planned: paths made absolute against `workdir`, a launched policy's
-/// `--policy` the session placeholder, the profile defaulting to the policy family's.
+/// `--policy` the session placeholder, the profile defaulting to the policy's own
+/// (`registry::family_profile`).
 fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
+    let policy = match (&p.policy, &p.command) {
+        (Some(pol), _) => match crate::registry::policy_file(pol) {
+            Some((family, file)) => {
+                format!("{}:{}", family.name, resolve(workdir, file).display())
+            }
+            None => pol.clone(),
+        },
+        _ => SESSION_POLICY.into(),
+    };
     PolicyAxis {
         name: p.label(),
-        policy: match (&p.policy, &p.command) {
-            (Some(pol), _) => match crate::registry::policy_file(pol) {
-                Some((family, file)) => {
-                    format!("{}:{}", family.name, resolve(workdir, file).display())
-                }
-                None => pol.clone(),
-            },
-            _ => SESSION_POLICY.into(),
-        },
         command: p.command.clone(),
         profile: match &p.profile {
             Some(f) if f.ends_with(".toml") => resolve(workdir, f).display().to_string(),
             Some(name) => name.clone(),
-            None => crate::registry::family_profile(p.policy.as_deref().unwrap_or("")).to_string(),
+            // The resolved path: a published network's own profile is found by content.
+            None => crate::registry::family_profile(&policy).to_string(),
         },
+        policy,
         keypoints: p.keypoints.clone(),
         connect_timeout_s: p.connect_timeout_s,
     }
