@@ -69,3 +69,12 @@ pub enum EngineArg {
     /// MuJoCo on the MJCF given by --mjcf (a build with the `mujoco` feature).
     Mujoco,
 }
+
+impl From<EngineArg> for thorarena::evaluation::EngineChoice {
+    fn from(a: EngineArg) -> Self {
+        match a {
+            EngineArg::Rapier => Self::Rapier,
+            EngineArg::Mujoco => Self::Mujoco,
+        }
+    }
+}

@@ -7,7 +7,7 @@ use anyhow::bail;
 use std::path::{Path, PathBuf};
 use thorarena::benchmark::{EvalObserver, EvalOptions, Starting};
 use thorarena::episode::EpisodeTrace;
-use thorarena::evaluation::{EngineChoice, EpisodeRecord, EvalRequest, EvalSpec, TerminationRule};
+use thorarena::evaluation::{EpisodeRecord, EvalRequest, EvalSpec, TerminationRule};
 use thorarena::motion::SequenceSelection;
 use thorarena::policy::Policy;
 use thorarena::results::{RunDir, RUN_FILES, TRACES_DIR};
@@ -158,10 +158,7 @@ impl RunArgs {
                 max_torso_tilt_error_rad: self.max_torso_tilt_error,
             },
             trace: self.trace.clone(),
-            engine: match self.engine {
-                super::choices::EngineArg::Rapier => EngineChoice::Rapier,
-                super::choices::EngineArg::Mujoco => EngineChoice::Mujoco,
-            },
+            engine: self.engine.into(),
             mjcf: self.mjcf.clone(),
             physics_dt_s: self.physics_dt,
             io: self.io.rules(),

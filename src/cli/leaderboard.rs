@@ -61,13 +61,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             vec![EngineChoice::Rapier]
         }
     } else {
-        args.engines
-            .iter()
-            .map(|e| match e {
-                super::choices::EngineArg::Rapier => EngineChoice::Rapier,
-                super::choices::EngineArg::Mujoco => EngineChoice::Mujoco,
-            })
-            .collect()
+        args.engines.iter().map(|&e| e.into()).collect()
     };
     let request = LeaderboardRequest {
         policies: args.policies.clone(),

@@ -213,6 +213,16 @@ fn read_required<R: io::Read + io::Seek>(
     })
 }
 
+/// Member `name` of the archive, if it has one; the reason when it cannot be opened.
+fn member<'a, R: io::Read + io::Seek>(
+    archive: &'a mut NpzArchive<R>,
+    name: &str,
+) -> Result<Option<NpyFile<npyz::zip::read::ZipFile<'a>>>, String> {
+    archive
+        .by_name(name)
+        .map_err(|e| format!("unreadable array: {e}"))
+}
+
 /// Member `name` as a list of strings, if the archive has it: a numpy object array (the
 /// pickle numpy writes for `np.array([...], dtype=object)`, decoded without executing
 /// anything) or a fixed-width unicode array (`<U…`, UTF-32).
@@ -226,10 +236,8 @@ fn read_names<R: io::Read + io::Seek>(
         field: name.to_string(),
         reason,
     };
-    let npy = match archive.by_name(name) {
-        Ok(Some(npy)) => npy,
-        Ok(None) => return Ok(None),
-        Err(e) => return Err(bad(format!("unreadable array: {e}"))),
+    let Some(npy) = member(archive, name).map_err(bad)? else {
+        return Ok(None);
     };
     let count = usize::try_from(npy.len()).map_err(|_| bad("too many names".into()))?;
     let descr = npy.dtype().descr();
@@ -322,10 +330,8 @@ fn read_optional<R: io::Read + io::Seek>(
         field: name.to_string(),
         reason,
     };
-    let npy = match archive.by_name(name) {
-        Ok(Some(npy)) => npy,
-        Ok(None) => return Ok(None),
-        Err(e) => return Err(bad(format!("unreadable array: {e}"))),
+    let Some(npy) = member(archive, name).map_err(bad)? else {
+        return Ok(None);
     };
     let shape: Vec<usize> = npy
         .shape()
