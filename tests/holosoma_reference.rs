@@ -8,7 +8,8 @@
 //! policies under constant hand pushes is re-derived here. The Python BeyondMimic adapter
 //! builds the same observation and action step by step. holosoma's PPO dance
 //! (`ppo_g1_29dof_dancing.onnx`) tracks its motion under the `holosoma-ppo` profile's
-//! per-joint scale and falls under scale 1.0. Skipped, saying so, when
+//! per-joint scale, in rapier and in MuJoCo; under scale 1.0 `eval` refuses it (its sanity
+//! check fails) and, scored anyway, it falls. Skipped, saying so, when
 //! `../shared/reference` (or Python's onnxruntime) is absent; never in CI.
 
 use std::path::{Path, PathBuf};
@@ -281,6 +282,26 @@ fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale
         unchecked,
         ..Default::default()
     };
+    // In MuJoCo too (generated MJCF): measured 34.4 mm against rapier's 34.5 mm.
+    if cfg!(feature = "mujoco") {
+        let run = dir.path().join("mujoco");
+        let mujoco = thorarena::evaluation::EvalRequest {
+            engine: thorarena::evaluation::EngineChoice::Mujoco,
+            ..request("holosoma-ppo", false)
+        };
+        in_process::evaluate(&mujoco, &run).unwrap();
+        let (_, survival, kp) = averages(&run)[0].clone();
+        eprintln!("PPO dance in MuJoCo: survival {survival:.3}, keypoint error {kp:.1} mm");
+        assert_eq!(
+            survival, 1.0,
+            "the PPO policy fell on its own motion in MuJoCo"
+        );
+    } else {
+        prereq::skip(
+            "holosoma_reference::ppo_scale (MuJoCo half)",
+            "built without the `mujoco` feature",
+        );
+    }
     let survival = |profile: &str, unchecked: bool| {
         let run = dir.path().join(profile);
         in_process::evaluate(&request(profile, unchecked), &run).unwrap();

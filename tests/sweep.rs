@@ -679,3 +679,29 @@ fn spec_text_with(dir: &Path, line: &str) -> PathBuf {
         &format!("datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\n{line}\n[[policy]]\npolicy = \"hold\"\n"),
     )
 }
+
+#[test]
+fn a_policy_marked_unchecked_is_planned_with_eval_unchecked() {
+    let d = tempfile::tempdir().unwrap();
+    let body = format!(
+        "datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\n[[policy]]\npolicy = \"hold\"\nunchecked = true\n[[policy]]\npolicy = \"balance\"\n"
+    );
+    let out = d.path().join("sweep");
+    plan(&spec(d.path(), &body), &out);
+    let planned: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("plan.json")).unwrap()).unwrap();
+    let unchecked: Vec<bool> = planned["tasks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| {
+            t["eval_args"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|a| a == "--unchecked")
+        })
+        .collect();
+    // The first policy's task says --unchecked, the second's does not.
+    assert_eq!(unchecked, [true, false], "{planned}");
+}

@@ -83,6 +83,9 @@ pub struct PolicyAxis {
     pub keypoints: String,
     /// Seconds a launched policy has to connect.
     pub connect_timeout_s: f64,
+    /// `eval --unchecked`.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub unchecked: bool,
 }
 
 /// A physics engine as planned.
@@ -404,6 +407,7 @@ fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
         policy,
         keypoints: p.keypoints.clone(),
         connect_timeout_s: p.connect_timeout_s,
+        unchecked: p.unchecked,
     }
 }
 
@@ -469,6 +473,9 @@ pub(super) fn eval_args(robot: &str, cell: &Cell, shard: (usize, usize)) -> Vec<
             "connect-timeout",
             &cell.policy.connect_timeout_s.to_string(),
         );
+    }
+    if cell.policy.unchecked {
+        a.push("--unchecked".into());
     }
     a
 }

@@ -97,6 +97,10 @@ pub struct PolicySpec {
     /// Seconds a launched policy has to connect.
     #[serde(default = "default_connect_timeout")]
     pub connect_timeout_s: f64,
+    /// Score the policy without its sanity check (`eval --unchecked`, recorded in each
+    /// run); without it every task's `eval` checks a network in process first.
+    #[serde(default)]
+    pub unchecked: bool,
 }
 
 /// One latency rule: `eval`'s `--budget`, `--latency-mode` and `--miss-rule`.
