@@ -1,6 +1,7 @@
 //! The leaderboard (`thorarena leaderboard`): every policy given, on one dataset, with and
 //! without force, on each engine asked — one ordinary `eval` run per (policy, engine),
-//! resumed where it stopped — summarised in one table. The paper's tables and figures over
+//! resumed where it stopped — summarised in one table; and single-clip policies, each on
+//! its own clip under pushes of increasing force, in a table of their own. The paper's tables and figures over
 //! the same runs are `report`'s (the command writes them beside the table).
 //!
 //! Each run is exactly what `eval` with the same flags writes (the same `EvalSpec`, the
@@ -53,18 +54,43 @@ pub enum LeaderboardError {
     Empty,
 }
 
+/// A single-clip policy and the dataset of its own clip.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OwnClip {
+    /// The policy argument.
+    pub policy: String,
+    /// The dataset holding its clip.
+    pub dataset: PathBuf,
+}
+
+impl OwnClip {
+    /// `POLICY@DATASET` (split at the last `@`).
+    pub fn parse(text: &str) -> Option<Self> {
+        let (policy, dataset) = text.rsplit_once('@')?;
+        (!policy.is_empty() && !dataset.is_empty()).then(|| Self {
+            policy: policy.to_string(),
+            dataset: PathBuf::from(dataset),
+        })
+    }
+}
+
 /// What to put on the leaderboard.
 #[derive(Debug, Clone)]
 pub struct LeaderboardRequest {
     /// Policy arguments as `eval --policy` takes them (in process).
     pub policies: Vec<String>,
+    /// Single-clip policies, each on its own clip under [`Self::clip_settings`].
+    pub clips: Vec<OwnClip>,
+    /// The settings of the single-clip table.
+    pub clip_settings: Vec<String>,
     /// The engines, each policy running on every one.
     pub engines: Vec<EngineChoice>,
     /// The dataset.
     pub dataset: PathBuf,
     /// Settings, as `eval --settings` spells them.
     pub settings: Vec<String>,
-    /// Directory of the runs (`<out>/runs/<policy>-<engine>`).
+    /// Directory of the runs (`<out>/runs/<policy>-<engine>`, `…-own-clip` for a
+    /// single-clip policy).
     pub out: PathBuf,
     /// Score policies without their sanity check (recorded in each run).
     pub unchecked: bool,
@@ -75,6 +101,8 @@ pub struct LeaderboardRequest {
 pub struct Entry {
     /// The policy argument.
     pub policy: String,
+    /// Whether it is a single-clip policy on its own clip.
+    pub own_clip: bool,
     /// The engine's name.
     pub engine: &'static str,
     /// The run directory.
@@ -132,20 +160,46 @@ pub fn run_leaderboard(
     request: &LeaderboardRequest,
     observer: &mut dyn LeaderboardObserver,
 ) -> Result<Vec<Entry>, LeaderboardError> {
-    if request.policies.is_empty() || request.engines.is_empty() {
+    if (request.policies.is_empty() && request.clips.is_empty()) || request.engines.is_empty() {
         return Err(LeaderboardError::Empty);
     }
-    let total = request.policies.len() * request.engines.len();
+    let general = request.policies.iter().map(|p| OwnClip {
+        policy: p.clone(),
+        dataset: request.dataset.clone(),
+    });
+    let runs: Vec<(OwnClip, bool)> = general
+        .map(|g| (g, false))
+        .chain(request.clips.iter().map(|c| (c.clone(), true)))
+        .collect();
+    let total = runs.len() * request.engines.len();
     let mut entries = Vec::new();
     for &engine in &request.engines {
-        for policy in &request.policies {
+        for (what, own_clip) in &runs {
             let engine_name = engine_name(engine);
-            let run = request.out.join("runs").join(run_name(policy, engine));
-            observer.run_starting(entries.len(), total, policy, engine_name);
+            let name = run_name(&what.policy, engine);
+            let run = request.out.join("runs").join(if *own_clip {
+                format!("{name}-own-clip")
+            } else {
+                name
+            });
+            observer.run_starting(entries.len(), total, &what.policy, engine_name);
             let started = Instant::now();
-            let summary = run_one(request, policy, engine, &run, observer.eval_observer())?;
+            let settings = if *own_clip {
+                &request.clip_settings
+            } else {
+                &request.settings
+            };
+            let summary = run_one(
+                request,
+                what,
+                settings,
+                engine,
+                &run,
+                observer.eval_observer(),
+            )?;
             entries.push(Entry {
-                policy: policy.clone(),
+                policy: what.policy.clone(),
+                own_clip: *own_clip,
                 engine: engine_name,
                 run,
                 summary,
@@ -158,16 +212,18 @@ pub fn run_leaderboard(
 
 fn run_one(
     request: &LeaderboardRequest,
-    policy: &str,
+    what: &OwnClip,
+    settings: &[String],
     engine: EngineChoice,
     run: &Path,
     observer: &mut dyn EvalObserver,
 ) -> Result<Summary, LeaderboardError> {
+    let policy = what.policy.as_str();
     let engine_name = engine_name(engine);
     let spec = EvalSpec::load(&EvalRequest {
         policy: policy.to_string(),
-        dataset: Some(request.dataset.clone()),
-        settings: request.settings.clone(),
+        dataset: Some(what.dataset.clone()),
+        settings: settings.to_vec(),
         engine,
         unchecked: request.unchecked,
         ..EvalRequest::default()
@@ -202,11 +258,24 @@ fn run_one(
 }
 
 /// The leaderboard as one Markdown table: per (policy, engine), FATS with its 95 %
-/// interval, survival and keypoint error under each setting, and the wall time.
-pub fn leaderboard_table(entries: &[Entry], settings: &[String]) -> String {
+/// interval, survival and keypoint error under each setting of the runs (the first
+/// entry's, in its order), and the wall time. Give it the general entries, or the
+/// own-clip ones.
+pub fn leaderboard_table(entries: &[&Entry]) -> String {
+    let settings: Vec<String> = entries
+        .first()
+        .map(|e| {
+            e.summary
+                .header
+                .settings
+                .iter()
+                .map(|s| s.name.clone())
+                .collect()
+        })
+        .unwrap_or_default();
     let mut out = String::from("| policy | engine |");
     let mut rule = String::from("|---|---|");
-    for s in settings {
+    for s in &settings {
         out.push_str(&format!(
             " FATS {s} (95 % CI) | survival {s} | keypoint error {s} (mm) |"
         ));
@@ -216,8 +285,8 @@ pub fn leaderboard_table(entries: &[Entry], settings: &[String]) -> String {
     rule.push_str("---:|\n");
     out.push_str(&rule);
     for e in entries {
-        out.push_str(&format!("| {} | {} |", e.summary.header.policy, e.engine));
-        for s in settings {
+        out.push_str(&format!("| {} | {} |", policy_label(&e.policy), e.engine));
+        for s in &settings {
             match e.summary.settings.get(s.as_str()) {
                 Some(r) => {
                     let ci = r
@@ -235,6 +304,21 @@ pub fn leaderboard_table(entries: &[Entry], settings: &[String]) -> String {
         out.push_str(&format!(" {} |\n", minutes(e.wall_s)));
     }
     out
+}
+
+/// A policy argument as a table names it: `family (file stem)` for a network
+/// (`twist2 (twist2_1017_25k)`), the argument itself otherwise.
+pub fn policy_label(policy: &str) -> String {
+    match registry::policy_file(policy) {
+        Some((family, file)) => format!(
+            "{} ({})",
+            family.name,
+            Path::new(file)
+                .file_stem()
+                .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned())
+        ),
+        None => policy.to_string(),
+    }
 }
 
 fn minutes(s: f64) -> String {

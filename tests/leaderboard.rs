@@ -1,7 +1,8 @@
 //! `thorarena leaderboard` end to end on a small synthetic dataset (one sequence per task):
 //! one run per (policy, engine), the table and the paper's tables and figures written, its
 //! numbers those of a separate `eval` of the same policy and data, and a second
-//! invocation resumes instead of running again.
+//! invocation resumes instead of running again. A single-clip entry (`--clip
+//! POLICY@DATASET`) runs on its own dataset under pushes, in a table and report of its own.
 
 use std::path::Path;
 use std::process::Command;
@@ -30,6 +31,10 @@ fn the_leaderboard_writes_its_tables_and_equals_separate_eval_runs() {
                 "rapier",
                 "--per-task",
                 "1",
+                "--clip",
+                &format!("hold@{}", out.join("synthetic").display()),
+                "--clip-settings",
+                "no-force,push:20",
                 "--out",
                 out.to_str().unwrap(),
             ])

@@ -1,7 +1,9 @@
 //! `thorarena leaderboard`: every policy given on the synthetic dataset (or yours), force
 //! and no-force, on each engine — one `eval` run per (policy, engine), resumed when the
 //! command is run again — then one table (`leaderboard.md`, printed) and the paper's
-//! tables and figures over the same runs (`report.html`, `report.md`, CSVs, SVGs).
+//! tables and figures over the same runs (`report.html`, `report.md`, CSVs, SVGs); single-
+//! clip policies on their own clips under pushes in a table and a report of their own
+//! (`single-clip.html`, …).
 
 use anyhow::{bail, Context};
 use std::path::PathBuf;
@@ -9,7 +11,7 @@ use std::time::Instant;
 use thorarena::benchmark::{EvalObserver, Starting};
 use thorarena::evaluation::{EngineChoice, EpisodeRecord};
 use thorarena::leaderboard::{
-    leaderboard_table, run_leaderboard, LeaderboardObserver, LeaderboardRequest,
+    leaderboard_table, run_leaderboard, LeaderboardObserver, LeaderboardRequest, OwnClip,
 };
 use thorarena::motion::synth::{write_synthetic, SynthOptions, TASKS};
 use thorarena::motion::Dataset;
@@ -21,10 +23,22 @@ use thorarena::report::{
 /// Arguments of `leaderboard`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A policy, as `eval --policy` takes it, run in process (`twist2:FILE.onnx`,
+    /// A general policy, as `eval --policy` takes it, run in process (`twist2:FILE.onnx`,
     /// `wbc-mjlab:FILE.onnx`, `beyondmimic:FILE.onnx`, a built-in); repeat for each.
-    #[arg(long = "policy", required = true)]
+    #[arg(long = "policy", required_unless_present = "clips")]
     pub policies: Vec<String>,
+    /// A single-clip policy on its own clip, `POLICY@DATASET` (e.g.
+    /// `beyondmimic:fastsac_g1_29dof_dancing.onnx@dance`, the dance imported from the
+    /// network); each runs under --clip-settings in a table of its own. Repeat for each.
+    #[arg(long = "clip", value_parser = parse_clip)]
+    pub clips: Vec<OwnClip>,
+    /// Settings of the single-clip table, comma separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "no-force,push:10,push:20,push:30"
+    )]
+    pub clip_settings: Vec<String>,
     /// Engines, comma separated; every policy runs on each [default: rapier, and mujoco
     /// in a build with the `mujoco` feature].
     #[arg(long, value_enum, value_delimiter = ',')]
@@ -52,6 +66,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let bundle = WebBundle::locate()?;
     let dataset = match &args.dataset {
         Some(d) => d.clone(),
+        None if args.policies.is_empty() => PathBuf::new(),
         None => synthetic(args)?,
     };
     let engines: Vec<EngineChoice> = if args.engines.is_empty() {
@@ -65,6 +80,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     };
     let request = LeaderboardRequest {
         policies: args.policies.clone(),
+        clips: args.clips.clone(),
+        clip_settings: args.clip_settings.clone(),
         engines,
         dataset: dataset.clone(),
         settings: args.settings.clone(),
@@ -72,7 +89,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         unchecked: args.unchecked,
     };
     let entries = run_leaderboard(&request, &mut Progress::default())?;
-    let table = leaderboard_table(&entries, &args.settings);
+    let general: Vec<_> = entries.iter().filter(|e| !e.own_clip).collect();
+    let own: Vec<_> = entries.iter().filter(|e| e.own_clip).collect();
+    let mut table = String::new();
+    if !general.is_empty() {
+        table.push_str(&leaderboard_table(&general));
+    }
+    if !own.is_empty() {
+        if !table.is_empty() {
+            table.push('\n');
+        }
+        table.push_str("Single-clip policies, each on its own clip:\n\n");
+        table.push_str(&leaderboard_table(&own));
+    }
     let md_path = args.out.join("leaderboard.md");
     let text = format!(
         "# Leaderboard\n\nDataset `{}`, settings {}; one `eval` run per row in `{}`. Command: `thorarena {}`. Wall time of this invocation: {:.0} s.\n\n{table}",
@@ -84,28 +113,44 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     );
     std::fs::write(&md_path, &text).with_context(|| format!("writing {}", md_path.display()))?;
     print!("{table}");
-    let dirs: Vec<PathBuf> = entries.iter().map(|e| e.run.clone()).collect();
-    let mut runs = load_runs(&dirs)?;
-    if mixed_engines(&runs).is_some() {
-        label_engines(&mut runs);
-    }
-    let files = ComparisonFiles::beside(&args.out.join("report.html"));
-    let written =
-        write_comparison_report(&runs, &files, &bundle.script(Page::Report)?, true, &dirs)?;
-    eprintln!(
-        "wrote {}, {} and {} SVG figures in {} ({:.0} s in all)",
-        md_path.display(),
-        written
-            .files
+    let script = bundle.script(Page::Report)?;
+    for (own_clip, page) in [(false, "report.html"), (true, "single-clip.html")] {
+        let dirs: Vec<PathBuf> = entries
             .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
-        written.figures.len(),
-        files.figures_dir.display(),
+            .filter(|e| e.own_clip == own_clip)
+            .map(|e| e.run.clone())
+            .collect();
+        if dirs.is_empty() {
+            continue;
+        }
+        let mut runs = load_runs(&dirs)?;
+        if mixed_engines(&runs).is_some() {
+            label_engines(&mut runs);
+        }
+        let files = ComparisonFiles::beside(&args.out.join(page));
+        let written = write_comparison_report(&runs, &files, &script, true, &dirs)?;
+        eprintln!(
+            "wrote {} and {} SVG figures in {}",
+            written
+                .files
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", "),
+            written.figures.len(),
+            files.figures_dir.display()
+        );
+    }
+    eprintln!(
+        "wrote {} ({:.0} s in all)",
+        md_path.display(),
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+fn parse_clip(text: &str) -> Result<OwnClip, String> {
+    OwnClip::parse(text).ok_or_else(|| format!("`{text}`: give POLICY@DATASET"))
 }
 
 /// OUT/synthetic: generated with --per-task sequences per task, or reused when it holds
