@@ -231,13 +231,17 @@ connect_timeout_s = 30
     let reference = separate_evals(tmp.path(), "balance");
     let dir = tmp.path().join("ipc");
     plan(&spec_path, &dir);
-    ok(thorarena(&[
-        "sweep",
-        "run",
-        dir.to_str().unwrap(),
-        "--jobs",
-        "2",
-    ]));
+    let run = thorarena(&["sweep", "run", dir.to_str().unwrap(), "--jobs", "2"]);
+    if !run.status.success() {
+        // Why a task failed is in its logs: `sweep status` shows their tails.
+        let status = thorarena(&["sweep", "status", dir.to_str().unwrap()]);
+        panic!(
+            "sweep run failed:\n{}\nsweep status:\n{}{}",
+            String::from_utf8_lossy(&run.stderr),
+            String::from_utf8_lossy(&status.stdout),
+            String::from_utf8_lossy(&status.stderr)
+        );
+    }
     assert_same(&collected(&dir), &reference, "policy process");
 
     // A policy command that exits at once: its tasks fail, named by status, the others
