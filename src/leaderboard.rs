@@ -124,14 +124,8 @@ pub trait LeaderboardObserver {
 /// The run directory's name of `policy` on `engine`: the family and the network's file
 /// stem (`wbc-mjlab-wbc_g1_policy-rapier`), or the built-in's name.
 pub fn run_name(policy: &str, engine: EngineChoice) -> String {
-    let base = match registry::policy_file(policy) {
-        Some((family, file)) => format!(
-            "{}-{}",
-            family.name,
-            Path::new(file)
-                .file_stem()
-                .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned())
-        ),
+    let base = match registry::policy_file_stem(policy) {
+        Some((family, stem)) => format!("{family}-{stem}"),
         None => policy.to_string(),
     };
     let clean: String = base
@@ -309,14 +303,8 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
 /// A policy argument as a table names it: `family (file stem)` for a network
 /// (`twist2 (twist2_1017_25k)`), the argument itself otherwise.
 pub fn policy_label(policy: &str) -> String {
-    match registry::policy_file(policy) {
-        Some((family, file)) => format!(
-            "{} ({})",
-            family.name,
-            Path::new(file)
-                .file_stem()
-                .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned())
-        ),
+    match registry::policy_file_stem(policy) {
+        Some((family, stem)) => format!("{family} ({stem})"),
         None => policy.to_string(),
     }
 }

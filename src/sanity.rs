@@ -312,14 +312,9 @@ fn run_episode(
     }
     let (series, termination) = episode.finish();
     policy.episode_ended(0, termination.is_some());
-    let steps = series.kp_err_m.len();
-    let survival = (steps as f64 / series.steps_ref.max(1) as f64).min(1.0);
-    let kp_rms_mm = (steps > 0).then(|| {
-        (series.kp_err_m.iter().map(|e| e * e).sum::<f64>() / steps as f64).sqrt() * 1000.0
-    });
     Ok(Run {
-        survival,
-        kp_rms_mm,
+        survival: series.survival(),
+        kp_rms_mm: series.kp_rms_m().map(|e| 1e3 * e),
     })
 }
 

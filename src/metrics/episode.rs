@@ -26,6 +26,23 @@ pub struct EpisodeSeries {
     pub steps_ref: usize,
 }
 
+impl EpisodeSeries {
+    /// Survival `s_i = min(T_i / T_ref, 1)` (0 for a reference without steps).
+    pub fn survival(&self) -> f64 {
+        if self.steps_ref == 0 {
+            0.0
+        } else {
+            (self.kp_err_m.len() as f64 / self.steps_ref as f64).min(1.0)
+        }
+    }
+
+    /// RMS of the keypoint error over the recorded steps, m; `None` without a step.
+    pub fn kp_rms_m(&self) -> Option<f64> {
+        let e = &self.kp_err_m;
+        (!e.is_empty()).then(|| (e.iter().map(|x| x * x).sum::<f64>() / e.len() as f64).sqrt())
+    }
+}
+
 /// An episode's score and its parts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeScore {
@@ -74,11 +91,7 @@ pub fn score_episode(series: &EpisodeSeries, thresholds: &RegimeThresholds) -> E
         }
     }
     let error_m = (weights > 0.0).then(|| (weighted / weights).sqrt());
-    let survival = if series.steps_ref == 0 {
-        0.0
-    } else {
-        (n as f64 / series.steps_ref as f64).min(1.0)
-    };
+    let survival = series.survival();
     let score = error_m.map_or(0.0, |e| 100.0 * (-e / SIGMA_M).exp() * survival);
     let mean_root_drift_m = if series.root_drift_m.is_empty() {
         0.0

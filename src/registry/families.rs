@@ -114,6 +114,17 @@ pub fn policy_file(spec: &str) -> Option<(&'static PolicyFamily, &str)> {
     Some((family, &spec[family.name.len() + 1..]))
 }
 
+/// The family name and the network file's stem of a policy argument naming a network
+/// file (`twist2:dir/twist2_1017_25k.onnx` → `("twist2", "twist2_1017_25k")`): how
+/// labels and run directories name it.
+pub fn policy_file_stem(spec: &str) -> Option<(&'static str, String)> {
+    let (family, file) = policy_file(spec)?;
+    let stem = std::path::Path::new(file)
+        .file_stem()
+        .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned());
+    Some((family.name, stem))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,7 +9,9 @@ mod networks;
 mod policies;
 mod suggest;
 
-pub use families::{policy_family, policy_file, PolicyFamily, Runs, POLICY_FAMILIES};
+pub use families::{
+    policy_family, policy_file, policy_file_stem, PolicyFamily, Runs, POLICY_FAMILIES,
+};
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
 pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};
 pub use suggest::{closest, did_you_mean};

@@ -46,15 +46,12 @@ pub fn episode_rows(
             let th = RegimeThresholds::of_task(thresholds, &r.task);
             let score = score_episode(&r.series, &th);
             let e = &r.series.kp_err_m;
-            let n = e.len() as f64;
-            let (mean, rms) = if e.is_empty() {
-                (f64::NAN, f64::NAN)
+            let mean = if e.is_empty() {
+                f64::NAN
             } else {
-                (
-                    1e3 * e.iter().sum::<f64>() / n,
-                    1e3 * (e.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
-                )
+                1e3 * e.iter().sum::<f64>() / e.len() as f64
             };
+            let rms = r.series.kp_rms_m().map_or(f64::NAN, |rms| 1e3 * rms);
             EpisodeRow {
                 task: r.task.clone(),
                 sequence_id: r.sequence_id.clone(),

@@ -269,14 +269,8 @@ impl PolicySpec {
             return n.clone();
         }
         match (&self.policy, &self.command) {
-            (Some(p), _) => match crate::registry::policy_file(p) {
-                Some((family, file)) => format!(
-                    "{}:{}",
-                    family.name,
-                    Path::new(file)
-                        .file_stem()
-                        .map_or(file.into(), |s| s.to_string_lossy())
-                ),
+            (Some(p), _) => match crate::registry::policy_file_stem(p) {
+                Some((family, stem)) => format!("{family}:{stem}"),
                 None => p.clone(),
             },
             (None, Some(c)) => c.split_whitespace().next().unwrap_or("command").to_string(),

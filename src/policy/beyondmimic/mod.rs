@@ -110,18 +110,18 @@ impl BeyondMimicPolicy {
         self
     }
 
-    /// The target an action of zero means, policy order: the default pose, or the
-    /// reference's joint positions at `frame` for a residual policy.
-    fn action_base(&self, frame: &ReferenceFrame) -> Vec<f64> {
+    /// The target an action of zero means for policy joint `i` (canonical `c`): its
+    /// default pose, or the reference's joint position at `frame` for a residual policy.
+    fn action_base(&self, i: usize, c: usize, frame: &ReferenceFrame) -> f64 {
         match self.action_mode {
-            ActionMode::DefaultRelative => self.spec.default_pos.clone(),
-            ActionMode::ReferenceResidual => self
-                .spec
-                .to_canonical
-                .iter()
-                .map(|&c| frame.joint_pos[c])
-                .collect(),
+            ActionMode::DefaultRelative => self.spec.default_pos[i],
+            ActionMode::ReferenceResidual => frame.joint_pos[c],
         }
+    }
+
+    /// The raw action giving `target` on canonical joint `c` under the profile's mapping.
+    fn raw_for_target(&self, c: usize, target: f64) -> f64 {
+        (target - self.profile_offset[c]) / self.profile_scale[c]
     }
 
     /// The network's inputs of the last `act`, one per observation (for cross-checks).
@@ -132,7 +132,7 @@ impl BeyondMimicPolicy {
     /// The policy's last raw action, its order, recovered from the last action that
     /// reached the robot (0 at an episode's start).
     fn policy_last_action(&self, obs: &Observation) -> Vec<f64> {
-        let base = self.action_base(obs.reference.last().expect("a reference frame"));
+        let frame = obs.reference.last().expect("a reference frame");
         self.spec
             .to_canonical
             .iter()
@@ -142,14 +142,14 @@ impl BeyondMimicPolicy {
                     return 0.0;
                 }
                 let target = self.profile_offset[c] + self.profile_scale[c] * obs.last_action[c];
-                (target - base[i]) / self.action_scale[i]
+                (target - self.action_base(i, c, frame)) / self.action_scale[i]
             })
             .collect()
     }
 
     /// Runs the network on one observation; returns the raw action in the robot's order
-    /// for targets `base + scale · a` (`base` in policy order).
-    fn infer(&self, input: &[f32], step: usize, base: &[f64]) -> TractResult<Vec<f64>> {
+    /// for targets `base + scale · a`, the base taken at `frame`.
+    fn infer(&self, input: &[f32], step: usize, frame: &ReferenceFrame) -> TractResult<Vec<f64>> {
         let n = self.spec.to_canonical.len();
         let mut inputs: TVec<TValue> = tvec!();
         let obs = Tensor::from_shape(&[1, self.obs_width], input)?;
@@ -176,8 +176,8 @@ impl BeyondMimicPolicy {
         }
         let mut raw = vec![0.0; n];
         for (i, &c) in self.spec.to_canonical.iter().enumerate() {
-            let target = base[i] + self.action_scale[i] * f64::from(a[i]);
-            raw[c] = (target - self.profile_offset[c]) / self.profile_scale[c];
+            let target = self.action_base(i, c, frame) + self.action_scale[i] * f64::from(a[i]);
+            raw[c] = self.raw_for_target(c, target);
         }
         Ok(raw)
     }
@@ -197,9 +197,8 @@ impl Policy for BeyondMimicPolicy {
     }
 
     fn zero_action(&self, obs: &Observation, out: &mut [f64]) {
-        let base = self.action_base(&obs.reference[0]);
         for (i, &c) in self.spec.to_canonical.iter().enumerate() {
-            out[c] = (base[i] - self.profile_offset[c]) / self.profile_scale[c];
+            out[c] = self.raw_for_target(c, self.action_base(i, c, &obs.reference[0]));
         }
     }
 
@@ -236,8 +235,7 @@ impl Policy for BeyondMimicPolicy {
                 &mut self.scratch,
                 &mut input,
             );
-            let base = self.action_base(&obs.reference[0]);
-            match self.infer(&input, obs.step, &base) {
+            match self.infer(&input, obs.step, &obs.reference[0]) {
                 Ok(raw) => action.copy_from_slice(&raw),
                 // A network that fails at run time answers NaN: the runner's miss rule
                 // keeps it away from the physics and counts it.
