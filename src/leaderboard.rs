@@ -6,10 +6,14 @@
 //!
 //! Each run is exactly what `eval` with the same flags writes (the same `EvalSpec`, the
 //! same `benchmark::evaluate`, the sanity check first), so a leaderboard row can be
-//! re-derived by one `eval`.
+//! re-derived by one `eval`. A policy in its own process ([`PolicyProcess`], any
+//! language) is started and connected by the caller
+//! ([`LeaderboardObserver::policy_process`]) for each of its runs, then scored like the
+//! others.
 
 use crate::benchmark::{evaluate, BenchmarkError, EvalObserver, EvalOptions};
 use crate::evaluation::{EngineChoice, EvalRequest, EvalSpec, SpecError};
+use crate::policy::Policy;
 use crate::registry::{self, PolicyChoice, RegistryError};
 use crate::results::{RunDir, Summary};
 use std::path::{Path, PathBuf};
@@ -36,9 +40,20 @@ pub enum LeaderboardError {
         /// Why.
         source: Box<RegistryError>,
     },
-    /// A policy that runs in its own process: the leaderboard runs networks in process.
-    #[error("{0} is a policy process; the leaderboard runs policies in process (a network file: twist2:, beyondmimic:, wbc-mjlab:, or a built-in)")]
+    /// A policy argument naming a session (`ipc:`): a policy process joins the leaderboard
+    /// as a [`PolicyProcess`], started by the leaderboard for each run.
+    #[error("{0} names a session no one starts: give the policy process as a command that joins {{session}} (`leaderboard --spec`, [[policy]] command = …)")]
     NotInProcess(String),
+    /// A policy process could not be started or did not connect.
+    #[error("{policy} on {engine}: {why}")]
+    Process {
+        /// The process's name.
+        policy: String,
+        /// The engine.
+        engine: &'static str,
+        /// Why.
+        why: String,
+    },
     /// An evaluation failed (its sanity check, its run directory, …).
     #[error("{policy} on {engine}: {source}")]
     Eval {
@@ -48,6 +63,14 @@ pub enum LeaderboardError {
         engine: &'static str,
         /// Why.
         source: Box<BenchmarkError>,
+    },
+    /// A policy file is unreadable or invalid.
+    #[error("{path}: {message}")]
+    PolicyFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
     },
     /// No policy or no engine.
     #[error("the leaderboard needs at least one policy and one engine")]
@@ -74,11 +97,108 @@ impl OwnClip {
     }
 }
 
+/// A policy in its own process: a shell command that joins session `{session}` (and
+/// `{thorarena}`, this binary), started for each of its runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PolicyProcess {
+    /// Its name in the table and run directories.
+    pub name: String,
+    /// The command.
+    pub command: String,
+    /// Dynamics profile [default: `default`].
+    pub profile: Option<String>,
+    /// Seconds it has to connect.
+    pub connect_timeout_s: f64,
+    /// Where the command runs.
+    pub workdir: PathBuf,
+}
+
+/// `[[policy]]` tables, as a sweep spec writes them.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PolicyFile {
+    #[serde(rename = "policy", default)]
+    policies: Vec<crate::sweep::PolicySpec>,
+}
+
+/// Reads the `[[policy]]` tables of `path` (a sweep spec's format): `policy = …`, a
+/// policy argument run in process (a network's path taken against the file's
+/// directory), or `command = …` with `{session}`, a [`PolicyProcess`] run in that
+/// directory. Returns the policy arguments and the processes, in the file's order.
+pub fn load_policy_file(
+    path: &Path,
+) -> Result<(Vec<String>, Vec<PolicyProcess>), LeaderboardError> {
+    let invalid = |message: String| LeaderboardError::PolicyFile {
+        path: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| invalid(e.to_string()))?;
+    let file: PolicyFile = toml::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+    if file.policies.is_empty() {
+        return Err(invalid("no [[policy]] table".into()));
+    }
+    let workdir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
+    let (mut arguments, mut processes) = (Vec::new(), Vec::new());
+    for (i, p) in file.policies.iter().enumerate() {
+        let at = |m: &str| invalid(format!("[[policy]] #{}: {m}", i + 1));
+        if p.unchecked {
+            return Err(at("`unchecked` is the leaderboard's --unchecked here"));
+        }
+        match (&p.policy, &p.command) {
+            (Some(arg), None) if registry::ipc_session(arg).is_some() => {
+                return Err(at("`policy = \"ipc:…\"` names a session no one starts: give `command` (with {session}) that starts the policy process for each run"))
+            }
+            (Some(arg), None) => {
+                if p.name.is_some() || p.profile.is_some() {
+                    return Err(at("an in-process policy runs under its own family's profile and name: drop `name` and `profile`"));
+                }
+                arguments.push(match registry::policy_file(arg) {
+                    Some((family, file)) => format!(
+                        "{}:{}",
+                        family.name,
+                        crate::sweep::resolve(&workdir, file).display()
+                    ),
+                    None => arg.clone(),
+                });
+            }
+            (None, Some(command)) if command.contains("{session}") => {
+                if !(p.connect_timeout_s.is_finite() && p.connect_timeout_s > 0.0) {
+                    return Err(at("`connect_timeout_s` must be > 0"));
+                }
+                processes.push(PolicyProcess {
+                    name: p.label(),
+                    command: command.clone(),
+                    profile: p.profile.as_ref().map(|f| {
+                        if f.ends_with(".toml") {
+                            crate::sweep::resolve(&workdir, f).display().to_string()
+                        } else {
+                            f.clone()
+                        }
+                    }),
+                    connect_timeout_s: p.connect_timeout_s,
+                    workdir: workdir.clone(),
+                });
+            }
+            (None, Some(_)) => {
+                return Err(at("`command` must contain {session}, the session each run serves"))
+            }
+            _ => return Err(at("give `policy` (in process) or `command` (a policy process), one of them")),
+        }
+    }
+    Ok((arguments, processes))
+}
+
 /// What to put on the leaderboard.
 #[derive(Debug, Clone)]
 pub struct LeaderboardRequest {
     /// Policy arguments as `eval --policy` takes them (in process).
     pub policies: Vec<String>,
+    /// General policies in their own processes, after [`Self::policies`].
+    pub processes: Vec<PolicyProcess>,
     /// Single-clip policies, each on its own clip under [`Self::clip_settings`].
     pub clips: Vec<OwnClip>,
     /// The settings of the single-clip table.
@@ -119,6 +239,38 @@ pub trait LeaderboardObserver {
     fn run_starting(&mut self, _index: usize, _total: usize, _policy: &str, _engine: &str) {}
     /// The observer of that run's evaluation.
     fn eval_observer(&mut self) -> &mut dyn EvalObserver;
+    /// Starts `process` on session `session` for a run of `spec` into `run`, and returns
+    /// it connected (it ends when the returned policy is dropped); `Err` says why not.
+    fn policy_process(
+        &mut self,
+        process: &PolicyProcess,
+        session: &str,
+        spec: &EvalSpec,
+        run: &Path,
+    ) -> Result<Box<dyn Policy>, String> {
+        let _ = (session, spec, run);
+        Err(format!(
+            "{}: this caller cannot start policy processes",
+            process.name
+        ))
+    }
+}
+
+/// Who plays a leaderboard run: a policy argument (in process), or a policy process.
+#[derive(Debug, Clone)]
+enum Player {
+    Argument(String),
+    Process(PolicyProcess),
+}
+
+impl Player {
+    /// The policy argument, or the process's name.
+    fn name(&self) -> &str {
+        match self {
+            Self::Argument(a) => a,
+            Self::Process(p) => &p.name,
+        }
+    }
 }
 
 /// The run directory's name of `policy` on `engine`: the family and the network's file
@@ -154,45 +306,43 @@ pub fn run_leaderboard(
     request: &LeaderboardRequest,
     observer: &mut dyn LeaderboardObserver,
 ) -> Result<Vec<Entry>, LeaderboardError> {
-    if (request.policies.is_empty() && request.clips.is_empty()) || request.engines.is_empty() {
+    if (request.policies.is_empty() && request.processes.is_empty() && request.clips.is_empty())
+        || request.engines.is_empty()
+    {
         return Err(LeaderboardError::Empty);
     }
-    let general = request.policies.iter().map(|p| OwnClip {
-        policy: p.clone(),
-        dataset: request.dataset.clone(),
-    });
-    let runs: Vec<(OwnClip, bool)> = general
-        .map(|g| (g, false))
-        .chain(request.clips.iter().map(|c| (c.clone(), true)))
-        .collect();
+    let general = request
+        .policies
+        .iter()
+        .map(|p| Player::Argument(p.clone()))
+        .chain(request.processes.iter().cloned().map(Player::Process))
+        .map(|player| (player, request.dataset.clone(), false));
+    let own = request
+        .clips
+        .iter()
+        .map(|c| (Player::Argument(c.policy.clone()), c.dataset.clone(), true));
+    let runs: Vec<(Player, PathBuf, bool)> = general.chain(own).collect();
     let total = runs.len() * request.engines.len();
     let mut entries = Vec::new();
     for &engine in &request.engines {
-        for (what, own_clip) in &runs {
+        for (player, dataset, own_clip) in &runs {
             let engine_name = engine_name(engine);
-            let name = run_name(&what.policy, engine);
+            let name = run_name(player.name(), engine);
             let run = request.out.join("runs").join(if *own_clip {
                 format!("{name}-own-clip")
             } else {
                 name
             });
-            observer.run_starting(entries.len(), total, &what.policy, engine_name);
+            observer.run_starting(entries.len(), total, player.name(), engine_name);
             let started = Instant::now();
             let settings = if *own_clip {
                 &request.clip_settings
             } else {
                 &request.settings
             };
-            let summary = run_one(
-                request,
-                what,
-                settings,
-                engine,
-                &run,
-                observer.eval_observer(),
-            )?;
+            let summary = run_one(request, player, dataset, settings, engine, &run, observer)?;
             entries.push(Entry {
-                policy: what.policy.clone(),
+                policy: player.name().to_string(),
                 own_clip: *own_clip,
                 engine: engine_name,
                 run,
@@ -206,47 +356,75 @@ pub fn run_leaderboard(
 
 fn run_one(
     request: &LeaderboardRequest,
-    what: &OwnClip,
+    player: &Player,
+    dataset: &Path,
     settings: &[String],
     engine: EngineChoice,
     run: &Path,
-    observer: &mut dyn EvalObserver,
+    observer: &mut dyn LeaderboardObserver,
 ) -> Result<Summary, LeaderboardError> {
-    let policy = what.policy.as_str();
+    let name = player.name();
     let engine_name = engine_name(engine);
+    // A policy process serves a session of its own, named after it and this process.
+    let session = format!(
+        "leaderboard-{}-{}",
+        run.file_name()
+            .map_or("run".into(), |f| f.to_string_lossy()),
+        std::process::id()
+    );
+    let (policy_arg, profile) = match player {
+        Player::Argument(a) => (a.clone(), None),
+        Player::Process(p) => (format!("ipc:{session}"), p.profile.clone()),
+    };
     let spec = EvalSpec::load(&EvalRequest {
-        policy: policy.to_string(),
-        dataset: Some(what.dataset.clone()),
+        policy: policy_arg.clone(),
+        dataset: Some(dataset.to_path_buf()),
+        profile,
         settings: settings.to_vec(),
         engine,
         unchecked: request.unchecked,
         ..EvalRequest::default()
     })
     .map_err(|source| LeaderboardError::Spec {
-        policy: policy.to_string(),
+        policy: name.to_string(),
         engine: engine_name,
         source: Box::new(source),
     })?;
-    let choice = registry::policy(policy, &spec.robot, &spec.profile).map_err(|source| {
-        LeaderboardError::Policy {
-            policy: policy.to_string(),
-            source: Box::new(source),
-        }
-    })?;
-    let PolicyChoice::InProcess(mut p) = choice else {
-        return Err(LeaderboardError::NotInProcess(policy.to_string()));
+    let mut policy: Box<dyn Policy> = match player {
+        Player::Argument(a) => match registry::policy(a, &spec.robot, &spec.profile) {
+            Ok(PolicyChoice::InProcess(p)) => p,
+            Ok(PolicyChoice::Session(_)) => return Err(LeaderboardError::NotInProcess(a.clone())),
+            Err(source) => {
+                return Err(LeaderboardError::Policy {
+                    policy: a.clone(),
+                    source: Box::new(source),
+                })
+            }
+        },
+        Player::Process(p) => observer
+            .policy_process(p, &session, &spec, run)
+            .map_err(|why| LeaderboardError::Process {
+                policy: p.name.clone(),
+                engine: engine_name,
+                why,
+            })?,
     };
     let dir = RunDir::new(run);
     let options = EvalOptions {
         resume: dir.header_file().exists(),
         trace_first_s: None,
     };
-    let evaluated = evaluate(&spec, p.as_mut(), &dir, options, observer).map_err(|source| {
-        LeaderboardError::Eval {
-            policy: policy.to_string(),
-            engine: engine_name,
-            source: Box::new(source),
-        }
+    let evaluated = evaluate(
+        &spec,
+        policy.as_mut(),
+        &dir,
+        options,
+        observer.eval_observer(),
+    )
+    .map_err(|source| LeaderboardError::Eval {
+        policy: name.to_string(),
+        engine: engine_name,
+        source: Box::new(source),
     })?;
     Ok(evaluated.summary)
 }

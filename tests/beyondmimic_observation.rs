@@ -306,6 +306,86 @@ fn a_width_two_known_layouts_fit_is_refused_unless_the_profile_names_the_terms()
     assert!(e.contains("160") && e.contains("154"), "{e}");
 }
 
+/// A 154-wide network with `metadata`, under the holosoma-wbt profile with
+/// `[beyondmimic] joint_names` set to `profile_order` (none when empty).
+fn load_ordered(
+    metadata: Vec<(&str, String)>,
+    profile_order: &[String],
+) -> Result<thorarena::policy::BeyondMimicPolicy, String> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bare.onnx");
+    let net = onnx_model::Network {
+        inputs: vec![("obs", vec![1, 154])],
+        outputs: vec![("actions", "obs", 29, 0.0)],
+        metadata,
+    };
+    std::fs::write(&path, net.bytes()).unwrap();
+    let robot = std::sync::Arc::new(g1());
+    let mut text =
+        std::fs::read_to_string(thorarena::profile::bundled_profile_path("holosoma-wbt")).unwrap();
+    if !profile_order.is_empty() {
+        let quoted: Vec<String> = profile_order.iter().map(|n| format!("\"{n}\"")).collect();
+        text = text.replace(
+            "[beyondmimic]\n",
+            &format!("[beyondmimic]\njoint_names = [{}]\n", quoted.join(", ")),
+        );
+    }
+    let profile_path = dir.path().join("profile.toml");
+    std::fs::write(&profile_path, text).unwrap();
+    let profile = thorarena::profile::load_profile(&profile_path, &robot).unwrap();
+    thorarena::policy::BeyondMimicPolicy::load(&path, robot, &profile).map_err(|e| e.to_string())
+}
+
+#[test]
+fn a_bare_export_takes_its_joint_order_from_the_profile_and_a_contradiction_is_refused() {
+    use thorarena::policy::beyondmimic::JointOrderFrom;
+    use thorarena::policy::Policy as _;
+    let robot = g1();
+    let canonical: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
+    // Isaac Lab's breadth-first order interleaves left, right and waist joints: here any
+    // order not the robot's will do, so the robot's reversed.
+    let reversed: Vec<String> = canonical.iter().rev().cloned().collect();
+
+    // Nothing names an order: the robot's is assumed, and policy check says so.
+    let bare = load_ordered(Vec::new(), &[]).unwrap();
+    assert_eq!(bare.joint_order_from(), JointOrderFrom::Robot);
+    assert_eq!(bare.joint_order(), (0..29).collect::<Vec<_>>());
+    assert!(
+        bare.wiring()
+            .facts
+            .iter()
+            .any(|f| f.contains("joint order: the robot's")),
+        "{:?}",
+        bare.wiring().facts
+    );
+
+    // The profile names it: policy joint i is the robot's joint 28 - i.
+    let ordered = load_ordered(Vec::new(), &reversed).unwrap();
+    assert_eq!(ordered.joint_order_from(), JointOrderFrom::Profile);
+    assert_eq!(ordered.joint_order(), (0..29).rev().collect::<Vec<_>>());
+
+    // The file names the same order: it agrees, and the file is credited.
+    let file_meta = vec![("joint_names", reversed.join(","))];
+    let both = load_ordered(file_meta, &reversed).unwrap();
+    assert_eq!(both.joint_order_from(), JointOrderFrom::File);
+
+    // The file names another order than the profile: refused, naming the first joint
+    // where they part.
+    let e = load_ordered(vec![("joint_names", canonical.join(","))], &reversed)
+        .err()
+        .expect("refused");
+    assert!(
+        e.contains("different orders") && e.contains(&canonical[0]) && e.contains(&reversed[0]),
+        "{e}"
+    );
+
+    // A profile order that names a joint twice is refused.
+    let mut twice = reversed.clone();
+    twice[1] = twice[0].clone();
+    let e = load_ordered(Vec::new(), &twice).err().expect("refused");
+    assert!(e.contains("named twice in the profile"), "{e}");
+}
+
 #[test]
 fn every_term_name_parses_back_to_its_term() {
     for (_, terms) in KNOWN_LAYOUTS {

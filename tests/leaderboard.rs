@@ -103,3 +103,114 @@ fn the_leaderboard_writes_its_tables_and_equals_separate_eval_runs() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_policy_process_from_a_policy_file_is_scored_like_the_same_policy_in_process() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lb");
+    // The same controller twice: in process, and as a policy process over shared memory
+    // (`thorarena client`), which a lock-step run makes bit-identical.
+    let file = dir.path().join("policies.toml");
+    std::fs::write(
+        &file,
+        r#"
+[[policy]]
+policy = "balance"
+
+[[policy]]
+name = "balance-process"
+command = "{thorarena} client --session {session} --policy balance"
+connect_timeout_s = 60
+"#,
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["leaderboard", "--policy-file"])
+        .arg(&file)
+        .args([
+            "--engines",
+            "rapier",
+            "--per-task",
+            "1",
+            "--settings",
+            "force",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{stderr}");
+    let table = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        table.contains("| balance | rapier |") && table.contains("| balance-process | rapier |"),
+        "{table}"
+    );
+    let runs = out.join("runs");
+    let in_proc = summary(&runs.join("balance-rapier"));
+    let process = summary(&runs.join("balance-process-rapier"));
+    let avg = |s: &serde_json::Value| s["settings"]["force"]["average"].clone();
+    assert_eq!(avg(&in_proc), avg(&process));
+    assert!(runs.join("balance-process-rapier.policy.log").is_file());
+    // The process's run records why it was not sanity-checked.
+    let header: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(runs.join("balance-process-rapier/run.json")).unwrap(),
+    )
+    .unwrap();
+    assert!(
+        header["sanity"].to_string().contains("policy process"),
+        "{}",
+        header["sanity"]
+    );
+}
+
+#[test]
+fn a_policy_process_that_never_connects_fails_the_leaderboard_quoting_its_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("policies.toml");
+    std::fs::write(
+        &file,
+        r#"
+[[policy]]
+name = "broken"
+command = "echo 'cannot load the network' >&2; exit 3 # {session}"
+connect_timeout_s = 2
+"#,
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["leaderboard", "--policy-file"])
+        .arg(&file)
+        .args([
+            "--engines",
+            "rapier",
+            "--per-task",
+            "1",
+            "--settings",
+            "no-force",
+            "--out",
+        ])
+        .arg(dir.path().join("lb"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("broken on rapier") && stderr.contains("cannot load the network"),
+        "{stderr}"
+    );
+    // A file naming a session no one starts is refused, saying what to give instead.
+    std::fs::write(&file, "[[policy]]\npolicy = \"ipc:mine\"\n").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["leaderboard", "--policy-file"])
+        .arg(&file)
+        .args(["--engines", "rapier", "--per-task", "1", "--out"])
+        .arg(dir.path().join("lb2"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(
+        !o.status.success() && stderr.contains("{session}"),
+        "{stderr}"
+    );
+}

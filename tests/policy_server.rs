@@ -174,10 +174,19 @@ fn a_policy_killed_mid_episode_fails_its_episodes_and_resume_completes_the_run()
     let run = eval_cmd(&format!("ipc:{s}"), &out, &[]).spawn().unwrap();
     let client = rust_client(&s, "replay", &["--die-after-steps", "40"]);
     let run = run.wait_with_output().unwrap();
-    let _ = client.wait_with_output();
+    let client = client.wait_with_output().unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(!run.status.success(), "the run must report the failure");
-    assert!(stderr.contains("did not run"), "{stderr}");
+    // The policy process's own account, for a run that never met it.
+    let client_said = format!(
+        "policy process ({}): {}",
+        client.status,
+        String::from_utf8_lossy(&client.stderr)
+    );
+    assert!(
+        !run.status.success(),
+        "the run must report the failure; {client_said}"
+    );
+    assert!(stderr.contains("did not run"), "{stderr}\n{client_said}");
     let partial = episodes(&out);
     assert!(
         partial.contains("\"termination\":\"policy_failed\""),

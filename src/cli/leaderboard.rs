@@ -9,12 +9,15 @@ use anyhow::{bail, Context};
 use std::path::PathBuf;
 use std::time::Instant;
 use thorarena::benchmark::{EvalObserver, Starting};
+use thorarena::evaluation::EvalSpec;
 use thorarena::evaluation::{EngineChoice, EpisodeRecord};
 use thorarena::leaderboard::{
-    leaderboard_table, run_leaderboard, LeaderboardObserver, LeaderboardRequest, OwnClip,
+    leaderboard_table, load_policy_file, run_leaderboard, LeaderboardObserver, LeaderboardRequest,
+    OwnClip, PolicyProcess,
 };
 use thorarena::motion::synth::{write_synthetic, SynthOptions, TASKS};
 use thorarena::motion::Dataset;
+use thorarena::policy::Policy;
 use thorarena::report::{
     label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, Page,
     WebBundle,
@@ -25,8 +28,16 @@ use thorarena::report::{
 pub struct Args {
     /// A general policy, as `eval --policy` takes it, run in process (`twist2:FILE.onnx`,
     /// `wbc-mjlab:FILE.onnx`, `beyondmimic:FILE.onnx`, a built-in); repeat for each.
-    #[arg(long = "policy", required_unless_present = "clips")]
+    #[arg(long = "policy", required_unless_present_any = ["clips", "policy_file"])]
     pub policies: Vec<String>,
+    /// More general policies from a TOML file of `[[policy]]` tables, in a sweep spec's
+    /// format: `policy = "wbc-mjlab:FILE.onnx"` runs in process; `command = "…"` is a
+    /// policy process in any language, started for each run and joining session
+    /// `{session}` (`{thorarena}` is this binary), with `name`, `profile` [default:
+    /// `default`] and `connect_timeout_s` [default 30]. Paths and commands are taken in the
+    /// file's directory; a process's output goes to OUT/runs/NAME-ENGINE.policy.log.
+    #[arg(long)]
+    pub policy_file: Option<PathBuf>,
     /// A single-clip policy on its own clip, `POLICY@DATASET` (e.g.
     /// `beyondmimic:fastsac_g1_29dof_dancing.onnx@dance`, the dance imported from the
     /// network); each runs under --clip-settings in a table of its own. Repeat for each.
@@ -66,7 +77,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let bundle = WebBundle::locate()?;
     let dataset = match &args.dataset {
         Some(d) => d.clone(),
-        None if args.policies.is_empty() => PathBuf::new(),
+        None if args.policies.is_empty() && args.policy_file.is_none() => PathBuf::new(),
         None => synthetic(args)?,
     };
     let engines: Vec<EngineChoice> = if args.engines.is_empty() {
@@ -78,8 +89,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     } else {
         args.engines.iter().map(|&e| e.into()).collect()
     };
+    let (mut policies, processes) = match &args.policy_file {
+        Some(file) => load_policy_file(file)?,
+        None => Default::default(),
+    };
+    policies.splice(0..0, args.policies.iter().cloned());
     let request = LeaderboardRequest {
-        policies: args.policies.clone(),
+        policies,
+        processes,
         clips: args.clips.clone(),
         clip_settings: args.clip_settings.clone(),
         engines,
@@ -196,6 +213,27 @@ impl LeaderboardObserver for Progress {
 
     fn eval_observer(&mut self) -> &mut dyn EvalObserver {
         self
+    }
+
+    fn policy_process(
+        &mut self,
+        process: &PolicyProcess,
+        session: &str,
+        spec: &EvalSpec,
+        run: &std::path::Path,
+    ) -> Result<Box<dyn Policy>, String> {
+        let name = run
+            .file_name()
+            .map_or("run".into(), |n| n.to_string_lossy());
+        let log = run.with_file_name(format!("{name}.policy.log"));
+        eprintln!(
+            "  starting `{}` (its output: {})",
+            process.command,
+            log.display()
+        );
+        Ok(Box::new(super::launched::LaunchedPolicy::start(
+            process, session, spec, &log,
+        )?))
     }
 }
 

@@ -1,6 +1,7 @@
 //! The `thorarena` command line: the argument tree and one module per subcommand.
 
 mod bench_eval;
+mod bench_inference;
 mod bench_ipc;
 mod bench_physics;
 mod bench_sweep;
@@ -10,6 +11,7 @@ mod crosscheck;
 mod data;
 mod data_synth;
 mod eval;
+mod launched;
 mod leaderboard;
 mod logging;
 mod merge;
@@ -117,8 +119,11 @@ pub enum SimCommand {
 pub enum BenchCommand {
     /// Cost of one physics step of the standing G1, against MuJoCo when available.
     Physics(bench_physics::Args),
-    /// Cost of the whole episode loop and the share spent outside physics.
+    /// A whole evaluation of a policy in process against its physics floor measured in
+    /// the same run: simulated s per wall s, cores busy, run ÷ floor.
     Eval(bench_eval::Args),
+    /// A network's cost per environment against the batch size of one tract call.
+    Inference(bench_inference::Args),
     /// Policy round trip over shared memory (Rust, C++, Python echo policies) against a
     /// Unix-socket baseline moving the same bytes.
     Ipc(bench_ipc::Args),
@@ -140,6 +145,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),
+        Command::Bench(BenchCommand::Inference(args)) => bench_inference::run(&args),
         Command::Bench(BenchCommand::Ipc(args)) => bench_ipc::run(&args),
         Command::Bench(BenchCommand::Sweep(args)) => bench_sweep::run(&args),
         Command::Bench(BenchCommand::SocketPeer(args)) => bench_ipc::run_peer(&args),

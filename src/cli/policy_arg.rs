@@ -59,6 +59,16 @@ pub enum OnPolicyFailure {
 }
 
 impl PolicyIoArgs {
+    /// What the command line gives when none of these options is passed.
+    pub fn defaults() -> Self {
+        #[derive(clap::Parser)]
+        struct Only {
+            #[command(flatten)]
+            io: PolicyIoArgs,
+        }
+        <Only as clap::Parser>::parse_from(["thorarena"]).io
+    }
+
     /// The rules recorded in `run.json` (checked with the rest of the evaluation by
     /// [`thorarena::evaluation::EvalSpec::load`]).
     pub fn rules(&self) -> PolicyIoRules {

@@ -388,8 +388,9 @@ fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Resu
     Ok(())
 }
 
-/// Worker threads (default: every core) and environment slots (default: one per worker),
-/// within their limits.
+/// Worker threads (default: every core) and environment slots (default: one per worker,
+/// or one inference batch per worker for a network batched in process), within their
+/// limits.
 fn threads(request: &EvalRequest) -> Result<(usize, usize), SpecError> {
     let workers = match request.workers {
         Some(0) => return Err(invalid("--workers must be at least 1")),
@@ -407,7 +408,7 @@ fn threads(request: &EvalRequest) -> Result<(usize, usize), SpecError> {
             )))
         }
         Some(n) => n,
-        None => workers.max(1),
+        None => (workers.max(1) * registry::slots_per_worker(&request.policy)).min(MAX_ENVS),
     };
     Ok((workers, envs))
 }

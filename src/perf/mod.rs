@@ -1,14 +1,16 @@
 //! What ThorArena costs, measured: one physics step per engine, the whole episode loop on
-//! one core, and the policy round trip over shared memory next to a Unix-socket baseline
+//! one core, a whole evaluation on every worker against its physics floor, and the policy round trip over shared memory next to a Unix-socket baseline
 //! moving the same bytes. Each function returns figures; `thorarena bench …` prints them
 //! with the ratio to the baseline measured in the same run.
 
 mod episode_loop;
+mod full_run;
 mod physics_step;
 mod round_trip;
 mod socket;
 
 pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
+pub use full_run::{physics_floor, process_cpu_time, time_run, RunTiming};
 pub use physics_step::{python_mujoco_step, time_physics_steps, PythonMujocoTiming, StepTiming};
 pub use round_trip::{echo_round_trips, fill_echo_observations};
 pub use socket::{answer_socket_echo, socket_round_trips};

@@ -2,12 +2,14 @@
 //! and a C++ policy all see the same loop — the built-in baselines, and the remote policy
 //! that speaks `thorarena-ipc` to a policy process.
 
+mod batch_plans;
 pub mod beyondmimic;
 mod builtin;
 mod remote;
 pub mod twist2;
 pub mod wire;
 
+pub use batch_plans::BatchPlans;
 pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use remote::{RemoteConfig, RemoteError, RemotePolicy, TransportStats};
@@ -111,6 +113,17 @@ pub trait Policy {
     /// where its file contradicts the profile. Empty for policies with nothing to say.
     fn wiring(&self) -> Wiring {
         Wiring::default()
+    }
+
+    /// `n` fresh copies of this policy (no episode started), one per worker thread of
+    /// the lock-step runner, each then acting for that worker's slots only, beside its
+    /// physics: a network in process costs no core that waits for it. `None` (the
+    /// default): the policy acts on the coordinator for every slot — a policy process,
+    /// whose answers are computed elsewhere, or a built-in costing next to nothing. A
+    /// policy may offer copies only if an environment's action depends on that
+    /// environment's observations alone.
+    fn worker_copies(&self, _n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
+        None
     }
 }
 

@@ -22,11 +22,11 @@
 //! (`adapters/python/thorarena/adapters/twist2.py`) builds the same vector and is tested
 //! against this one.
 
+use super::batch_plans::BatchPlans;
 use super::{ActOutcome, Observation, Policy};
 use crate::motion::ReferenceFrame;
 use nalgebra::UnitQuaternion;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use tract_onnx::prelude::*;
 
 /// Length of `mimic(frame)`.
@@ -41,6 +41,16 @@ pub const OBS_LEN: usize = SINGLE_LEN * (HISTORY_LEN + 1) + MIMIC_LEN;
 pub const N_JOINTS: usize = 29;
 /// The mimic frame is the reference one 50 Hz step ahead.
 pub const MIMIC_LOOKAHEAD_S: f64 = 0.02;
+/// Rows of every tract call [`Twist2Policy`]'s `act` makes, padded with zeros when fewer
+/// environments observe. One call shape for every call keeps an environment's action
+/// independent of how many others share its call: tract's kernels for other row counts
+/// round differently (about 1e-6 against batch one, `tests/batched_inference.rs`), which
+/// would make records depend on `--envs`. Batches of 4 cost 0.59× batch one per
+/// environment (`thorarena bench inference`), but that rounding difference alone moves
+/// TWIST2's tracking of the released walks in MuJoCo by up to 8 % (walk_002: 33.5 mm
+/// against 31.1 mm in TWIST2's own harness, outside the 5 % `tests/mujoco_engine.rs`
+/// holds it to) and its 30 N survival by 0.08 — so the published figures keep batch one.
+pub const INFERENCE_BATCH: usize = 1;
 /// Ankle joints (canonical indices) whose velocities the observation hides.
 const ANKLES: [usize; 4] = [4, 5, 10, 11];
 
@@ -157,35 +167,34 @@ pub fn observation(obs: &Observation, default_pose: &[f64], history: &mut Histor
 
 /// TWIST2 in process: `--policy twist2:PATH.onnx` with `--profile twist2`.
 pub struct Twist2Policy {
-    plan: Arc<TypedRunnableModel>,
+    plans: BatchPlans,
     default_pose: Vec<f64>,
     histories: Vec<History>,
     last_inputs: Vec<Vec<f32>>,
+    /// The batch's inputs, row-major (kept between steps).
+    batch_input: Vec<f32>,
 }
 
 impl Twist2Policy {
-    /// Loads the network (input `[1, 1432]` float32, output `[1, 29]`); `default_pose` is
+    /// Loads the network (input `[N, 1432]` float32, output `[N, 29]`); `default_pose` is
     /// the profile's action offset (TWIST2's default joint angles).
     pub fn load(path: &Path, default_pose: Vec<f64>) -> Result<Self, Twist2Error> {
         if default_pose.len() != N_JOINTS {
             return Err(Twist2Error::Joints(default_pose.len()));
         }
-        let load = || -> TractResult<Arc<TypedRunnableModel>> {
-            onnx()
-                .model_for_path(path)?
-                .with_input_fact(0, f32::fact([1, OBS_LEN]).into())?
-                .into_optimized()?
-                .into_runnable()
-        };
-        let plan = load().map_err(|e| Twist2Error::Load {
-            path: path.to_path_buf(),
-            message: format!("{e:#}"),
-        })?;
+        let plans = onnx()
+            .model_for_path(path)
+            .and_then(|model| BatchPlans::new(model, OBS_LEN))
+            .map_err(|e| Twist2Error::Load {
+                path: path.to_path_buf(),
+                message: format!("{e:#}"),
+            })?;
         Ok(Self {
-            plan,
+            plans,
             default_pose,
             histories: Vec::new(),
             last_inputs: Vec::new(),
+            batch_input: Vec::new(),
         })
     }
 
@@ -196,13 +205,13 @@ impl Twist2Policy {
 
     /// Runs the network on one observation vector.
     pub fn infer(&self, input: &[f32]) -> TractResult<Vec<f32>> {
-        let tensor = Tensor::from_shape(&[1, OBS_LEN], input)?;
-        let out = self.plan.run(tvec!(tensor.into()))?;
-        Ok(out[0]
-            .to_plain_array_view::<f32>()?
-            .iter()
-            .copied()
-            .collect())
+        self.plans.run(input, 1)
+    }
+
+    /// Runs the network on `batch` observation vectors at once (row-major), returning
+    /// `batch` actions of [`N_JOINTS`], row-major.
+    pub fn infer_batch(&self, inputs: &[f32], batch: usize) -> TractResult<Vec<f32>> {
+        self.plans.run(inputs, batch)
     }
 }
 
@@ -229,27 +238,56 @@ impl Policy for Twist2Policy {
         }
     }
 
+    fn worker_copies(&self, n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
+        Some(
+            (0..n)
+                .map(|_| {
+                    Box::new(Self {
+                        plans: self.plans.clone(),
+                        default_pose: self.default_pose.clone(),
+                        histories: Vec::new(),
+                        last_inputs: Vec::new(),
+                        batch_input: Vec::new(),
+                    }) as Box<dyn Policy + Send>
+                })
+                .collect(),
+        )
+    }
+
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
         self.last_inputs.clear();
-        for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+        self.batch_input.clear();
+        for obs in observations {
             if self.histories.len() <= obs.env {
                 self.histories.resize_with(obs.env + 1, History::default);
             }
             let input = observation(obs, &self.default_pose, &mut self.histories[obs.env]);
-            match self.infer(&input) {
+            self.batch_input.extend_from_slice(&input);
+            self.last_inputs.push(input);
+        }
+        let rows = observations.len().div_ceil(INFERENCE_BATCH) * INFERENCE_BATCH;
+        self.batch_input.resize(rows * OBS_LEN, 0.0);
+        for (call, acts) in actions[..observations.len()]
+            .chunks_mut(INFERENCE_BATCH)
+            .enumerate()
+        {
+            let rows =
+                &self.batch_input[call * INFERENCE_BATCH * OBS_LEN..][..INFERENCE_BATCH * OBS_LEN];
+            match self.infer_batch(rows, INFERENCE_BATCH) {
                 Ok(out) => {
-                    for (a, o) in action.iter_mut().zip(out) {
-                        *a = f64::from(o);
+                    for (action, row) in acts.iter_mut().zip(out.chunks_exact(N_JOINTS)) {
+                        for (a, o) in action.iter_mut().zip(row) {
+                            *a = f64::from(*o);
+                        }
                     }
                 }
                 // A network that fails at run time answers NaN: the runner's miss rule
                 // keeps it away from the physics and counts it.
                 Err(e) => {
                     log::warn!("twist2: inference failed: {e:#}");
-                    action.fill(f64::NAN);
+                    acts.iter_mut().for_each(|a| a.fill(f64::NAN));
                 }
             }
-            self.last_inputs.push(input);
         }
         ActOutcome::Acted
     }

@@ -82,6 +82,10 @@ pub struct BeyondMimicProfile {
     /// How the network's action becomes a joint target, when the file does not say.
     #[serde(default)]
     pub action_mode: Option<ActionMode>,
+    /// The network's joint order, when the file does not say (bare exports, e.g. in Isaac
+    /// Lab's breadth-first order); empty: the file's `joint_names`, else the robot's order.
+    #[serde(default)]
+    pub joint_names: Vec<String>,
 }
 
 /// How a BeyondMimic-family network's action becomes a joint target (wbc-mjlab's

@@ -10,7 +10,8 @@ mod policies;
 mod suggest;
 
 pub use families::{
-    policy_family, policy_file, policy_file_stem, PolicyFamily, Runs, POLICY_FAMILIES,
+    policy_family, policy_file, policy_file_stem, PolicyFamily, Runs, NETWORK_SLOTS_PER_WORKER,
+    POLICY_FAMILIES,
 };
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
 pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};
@@ -141,6 +142,12 @@ pub fn profile_fits(policy: &str, profile: &Profile) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// Environment slots per worker when a run of `policy` names none (its family's
+/// [`PolicyFamily::slots_per_worker`]; 1 for a policy process).
+pub fn slots_per_worker(policy: &str) -> usize {
+    policy_family(policy).map_or(1, |f| f.slots_per_worker)
 }
 
 /// The profile a policy was trained with, used by `eval`, sweeps, `policy check` and the

@@ -7,6 +7,12 @@
 //! episode's result depends only on its sequence, setting and policy — never on which
 //! slot or worker ran it, nor on N or W — because a reset rebuilds the physics world and
 //! every slot's episode sees only its own observations.
+//!
+//! A policy that offers copies of itself ([`Policy::worker_copies`], the networks in
+//! process) acts on the workers: each worker asks its own copy for its slots' actions,
+//! in one batch, right after stepping them, so inference runs beside the physics on
+//! every core instead of on the coordinator while the workers wait. Any other policy
+//! (a policy process) acts on the coordinator for all slots at once.
 
 use super::EvalPlan;
 use crate::episode::{Episode, EpisodeSetup, EpisodeTrace};
@@ -18,7 +24,7 @@ use crate::policy::{ActOutcome, Observation, Policy, TransportStats};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// What an evaluation produced.
 #[derive(Debug, Clone)]
@@ -32,6 +38,9 @@ pub struct RunOutcome {
     pub transport: Option<TransportStats>,
     /// Jobs that never ran because the policy failed and did not come back.
     pub not_run: usize,
+    /// Per worker, the wall time its finished episodes spent inside physics steps: the
+    /// slowest worker's is the least the run could have taken (`thorarena bench eval`).
+    pub physics_wall_by_worker: Vec<std::time::Duration>,
 }
 
 /// What the coordinator tells a slot before the next observation.
@@ -53,6 +62,8 @@ enum SlotCommand {
 
 struct Finished {
     job: usize,
+    /// Wall time the episode spent inside physics steps.
+    physics_wall: Duration,
     record: EpisodeRecord,
     trace: Option<EpisodeTrace>,
 }
@@ -62,6 +73,23 @@ struct SlotReport {
     slot: usize,
     observation: Option<Observation>,
     finished: Vec<Finished>,
+}
+
+/// What a worker reports each control step.
+struct WorkerReport {
+    slots: Vec<SlotReport>,
+    /// Its own policy copy's answer to its slots' observations (which then are here, not
+    /// in `slots`); `None` when the coordinator acts, or none of its slots ran.
+    acted: Option<Acted>,
+}
+
+/// A worker's policy copy's answer for its slots.
+struct Acted {
+    observations: Vec<Observation>,
+    actions: Vec<Vec<f64>>,
+    outcome: ActOutcome,
+    /// The `act` call.
+    took: Duration,
 }
 
 /// What every worker shares (read-only, or atomics).
@@ -148,6 +176,9 @@ pub fn run_eval(
     let n_workers = plan.workers.clamp(1, n_slots);
     let n_joints = plan.robot.n_joints();
     let setups = episode_setups(plan, policy.reference_offsets_s());
+    let copies = policy.worker_copies(n_workers);
+    let on_workers = copies.is_some();
+    let mut copies = copies.map(|c| c.into_iter().map(Some).collect::<Vec<_>>());
     let shared = Shared {
         plan,
         setups: &setups,
@@ -160,10 +191,11 @@ pub fn run_eval(
     };
     let mut results: Vec<Option<EpisodeRecord>> = vec![None; jobs.len()];
     let mut latency = LatencyRecorder::default();
+    let mut physics_wall_by_worker = vec![Duration::ZERO; n_workers];
     let slots_of = |w: usize| (w..n_slots).step_by(n_workers);
 
     std::thread::scope(|scope| {
-        let (report_tx, report_rx) = mpsc::channel::<Vec<SlotReport>>();
+        let (report_tx, report_rx) = mpsc::channel::<WorkerReport>();
         let mut command_txs = Vec::with_capacity(n_workers);
         for w in 0..n_workers {
             let (command_tx, command_rx) = mpsc::channel::<Vec<SlotCommand>>();
@@ -171,7 +203,11 @@ pub fn run_eval(
             let report_tx = report_tx.clone();
             let slots: Vec<usize> = slots_of(w).collect();
             let shared = &shared;
-            scope.spawn(move || worker(shared, slots, command_rx, report_tx));
+            let local = copies
+                .as_mut()
+                .and_then(|c| c.get_mut(w))
+                .and_then(Option::take);
+            scope.spawn(move || worker(shared, slots, local, command_rx, report_tx));
         }
         drop(report_tx);
 
@@ -187,14 +223,20 @@ pub fn run_eval(
                 tx.send(mine).expect("worker alive");
             }
             let mut reports: Vec<SlotReport> = Vec::with_capacity(n_slots);
+            let mut answers: Vec<Acted> = Vec::new();
             for _ in 0..n_workers {
-                reports.extend(report_rx.recv().expect("worker alive"));
+                let report = report_rx.recv().expect("worker alive");
+                reports.extend(report.slots);
+                answers.extend(report.acted);
             }
             reports.sort_by_key(|r| r.slot);
             let mut observations = Vec::with_capacity(n_slots);
             for report in reports {
                 for f in report.finished {
-                    policy.episode_ended(report.slot, f.record.termination.is_some());
+                    physics_wall_by_worker[report.slot % n_workers] += f.physics_wall;
+                    if !on_workers {
+                        policy.episode_ended(report.slot, f.record.termination.is_some());
+                    }
                     if requeue_failed && f.record.termination == Some(Termination::PolicyFailed) {
                         // The policy came back: the episode it left runs again from its
                         // start, as `--resume` would run it, instead of being scored.
@@ -205,6 +247,24 @@ pub fn run_eval(
                     results[f.job] = Some(f.record);
                 }
                 observations.extend(report.observation);
+            }
+            if on_workers && !answers.is_empty() {
+                // The workers' copies answered: only their answers to apply. The step's
+                // latency is the slowest worker's `act`.
+                let mut slowest = Duration::ZERO;
+                for a in &answers {
+                    answer_to_commands(
+                        plan,
+                        a.outcome,
+                        a.took,
+                        &a.observations,
+                        &a.actions,
+                        &mut commands,
+                    );
+                    slowest = slowest.max(a.took);
+                }
+                latency.record(slowest);
+                continue;
             }
             if observations.is_empty() {
                 if !shared.retry.lock().expect("retry queue").is_empty()
@@ -249,6 +309,7 @@ pub fn run_eval(
         records,
         latency: latency.summary(),
         transport: policy.transport_stats(),
+        physics_wall_by_worker,
     }
 }
 
@@ -277,12 +338,14 @@ fn miss_rule(rule: MissRule, fault: PolicyFault, obs: &Observation) -> SlotComma
     }
 }
 
-/// A worker: applies its slots' commands, starts new jobs in free slots, reports.
+/// A worker: applies its slots' commands, starts new jobs in free slots, asks its own
+/// policy copy (if any) for its slots' actions, reports.
 fn worker(
     shared: &Shared,
     slots: Vec<usize>,
+    mut local: Option<Box<dyn Policy + Send>>,
     commands: mpsc::Receiver<Vec<SlotCommand>>,
-    reports: mpsc::Sender<Vec<SlotReport>>,
+    reports: mpsc::Sender<WorkerReport>,
 ) {
     let plan = shared.plan;
     let robot = Arc::new(plan.robot.clone());
@@ -333,6 +396,11 @@ fn worker(
                     finished.push(finish(shared, job, ep));
                 }
             }
+            if let Some(p) = local.as_mut() {
+                for f in &finished {
+                    p.episode_ended(slots[k], f.record.termination.is_some());
+                }
+            }
             while running[k].is_none() && !shared.stop.load(Ordering::SeqCst) {
                 let retried = shared.retry.lock().expect("retry queue").pop();
                 let j = retried.unwrap_or_else(|| shared.next_job.fetch_add(1, Ordering::SeqCst));
@@ -350,7 +418,11 @@ fn worker(
                     ep.record_trace_for(seconds);
                 }
                 if ep.is_done() {
-                    finished.push(finish(shared, j, ep)); // a reference shorter than one step
+                    let f = finish(shared, j, ep); // a reference shorter than one step
+                    if let Some(p) = local.as_mut() {
+                        p.episode_ended(slots[k], f.record.termination.is_some());
+                    }
+                    finished.push(f);
                 } else {
                     running[k] = Some((j, ep));
                 }
@@ -364,10 +436,39 @@ fn worker(
                 finished,
             });
         }
-        if reports.send(out).is_err() {
+        let acted = local.as_mut().and_then(|p| act_here(p.as_mut(), &mut out));
+        if reports.send(WorkerReport { slots: out, acted }).is_err() {
             return;
         }
     }
+}
+
+/// A worker's own policy copy acts on its slots' observations (taken out of `out`) in
+/// one batch; `None` when no slot has one.
+fn act_here(policy: &mut dyn Policy, out: &mut [SlotReport]) -> Option<Acted> {
+    let observations: Vec<Observation> = out
+        .iter_mut()
+        .filter_map(|r| r.observation.take())
+        .collect();
+    if observations.is_empty() {
+        return None;
+    }
+    for o in observations.iter().filter(|o| o.step == 0) {
+        policy.reset(o.env);
+    }
+    let n_joints = observations[0].q.len();
+    let mut actions = vec![vec![0.0; n_joints]; observations.len()];
+    let started = Instant::now();
+    let outcome = policy.act(&observations, &mut actions);
+    let took = policy
+        .last_round_trip()
+        .unwrap_or_else(|| started.elapsed());
+    Some(Acted {
+        observations,
+        actions,
+        outcome,
+        took,
+    })
 }
 
 fn finish(shared: &Shared, job: usize, mut ep: Episode) -> Finished {
@@ -376,9 +477,11 @@ fn finish(shared: &Shared, job: usize, mut ep: Episode) -> Finished {
     let setting = &shared.plan.settings[s];
     let trace = ep.take_trace();
     let faults = ep.faults();
+    let physics_wall = ep.physics_wall();
     let (series, termination) = ep.finish();
     Finished {
         job,
+        physics_wall,
         record: EpisodeRecord {
             task: seq.task.clone(),
             sequence_id: seq.sequence_id.clone(),

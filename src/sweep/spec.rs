@@ -289,7 +289,7 @@ impl LatencySpec {
 }
 
 /// `p` relative to `base` unless absolute.
-pub(super) fn resolve(base: &Path, p: &str) -> PathBuf {
+pub(crate) fn resolve(base: &Path, p: &str) -> PathBuf {
     let p = Path::new(p);
     if p.is_absolute() {
         p.to_path_buf()

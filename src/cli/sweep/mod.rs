@@ -162,7 +162,7 @@ mod collect;
 mod plan;
 mod pool;
 mod status;
-mod task;
+pub(super) mod task;
 mod verify;
 
 use cluster::{k8s, slurm};

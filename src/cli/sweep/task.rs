@@ -170,7 +170,7 @@ fn start_policy(
 /// A policy command with its placeholders filled in as single shell words: the binary's
 /// path and the session are data, whatever characters they hold (`$(…)` in a directory
 /// name is not run).
-pub(super) fn policy_command_line(command: &str, session: &str) -> anyhow::Result<String> {
+pub(in crate::cli) fn policy_command_line(command: &str, session: &str) -> anyhow::Result<String> {
     let exe = std::env::current_exe()?;
     let exe = exe.to_str().with_context(|| {
         format!(
@@ -219,7 +219,7 @@ pub(super) fn wait_eval(
 
 /// A child that is killed when the thread that started it dies (a `sweep run` killed
 /// with SIGKILL leaves no evaluation writing behind it).
-pub(super) fn die_with_parent(cmd: &mut Command) {
+pub(in crate::cli) fn die_with_parent(cmd: &mut Command) {
     // SAFETY: prctl is async-signal-safe and touches only the calling (child) process.
     unsafe {
         cmd.pre_exec(|| {
@@ -232,7 +232,7 @@ pub(super) fn die_with_parent(cmd: &mut Command) {
 }
 
 /// Ends a launched policy's whole process group: SIGTERM, then SIGKILL after 2 s.
-pub(super) fn stop_group(child: &mut Child) {
+pub(in crate::cli) fn stop_group(child: &mut Child) {
     let pgid = child.id() as libc::pid_t;
     // SAFETY: signalling a process group we created.
     unsafe { libc::kill(-pgid, libc::SIGTERM) };

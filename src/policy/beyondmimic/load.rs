@@ -3,8 +3,8 @@
 //! network runnable with the input widths they imply.
 
 use super::{
-    layout_width, BeyondMimicError, BeyondMimicPolicy, FileMetadata, ObservationSpec, Scratch,
-    Term, KNOWN_LAYOUTS,
+    layout_width, BeyondMimicError, BeyondMimicPolicy, FileMetadata, JointOrderFrom,
+    ObservationSpec, Scratch, Term, KNOWN_LAYOUTS,
 };
 use crate::profile::{ActionMode, BeyondMimicProfile, Profile};
 use crate::robot::RobotModel;
@@ -26,12 +26,13 @@ impl BeyondMimicPolicy {
         };
         let network = Network::open(path)?;
         let meta = &network.meta;
-        let (joint_names, to_canonical) = joint_order(&robot, meta).map_err(unusable)?;
+        let profile_bm = profile.beyondmimic.as_ref();
+        let (joint_names, to_canonical, joint_order_from) =
+            joint_order(&robot, meta, profile_bm).map_err(unusable)?;
         let (default_pos, action_scale) =
             action_mapping(meta, profile, &joint_names, &to_canonical).map_err(unusable)?;
         let mut disagreements =
             disagreements(meta, profile, &robot, &to_canonical).map_err(unusable)?;
-        let profile_bm = profile.beyondmimic.as_ref();
         let action_mode = action_mode(meta, profile, &mut disagreements).map_err(unusable)?;
         let n = robot.n_joints();
         let terms = observation_terms(meta, profile_bm, n, network.obs_width).map_err(unusable)?;
@@ -64,6 +65,7 @@ impl BeyondMimicPolicy {
             profile_offset: profile.action_offset_rad.clone(),
             profile_scale: profile.action_scale.clone(),
             disagreements,
+            joint_order_from,
             scratch: Scratch::default(),
             input: Vec::new(),
             last_inputs: Vec::new(),
@@ -180,17 +182,40 @@ fn slot(model: &InferenceModel, outlets: &[OutletId], name: &str) -> Option<usiz
         .position(|o| model.outlet_label(*o) == Some(name) || model.node(o.node).name == name)
 }
 
-/// The policy's joint order (the file's names, else the robot's) and, for each of its
-/// joints, the robot's canonical index: every joint must be the robot's, each once.
+/// The policy's joint order (the file's names, else the profile's `[beyondmimic]
+/// joint_names`, else the robot's), where it came from, and, for each of its joints, the
+/// robot's canonical index: every joint must be the robot's, each once. A file and a
+/// profile that both name an order must name the same one: a network fed its joints in
+/// the wrong order still runs, and only falls.
 fn joint_order(
     robot: &RobotModel,
     meta: &FileMetadata,
-) -> Result<(Vec<String>, Vec<usize>), String> {
+    profile_bm: Option<&BeyondMimicProfile>,
+) -> Result<(Vec<String>, Vec<usize>, JointOrderFrom), String> {
     let n = robot.n_joints();
-    let joint_names: Vec<String> = meta
-        .joint_names
-        .clone()
-        .unwrap_or_else(|| robot.joints.iter().map(|j| j.name.clone()).collect());
+    let from_profile = profile_bm
+        .map(|b| b.joint_names.clone())
+        .filter(|names| !names.is_empty());
+    let (joint_names, from) = match (&meta.joint_names, from_profile) {
+        (Some(file), Some(profile)) if *file != profile => {
+            let first = file
+                .iter()
+                .zip(&profile)
+                .position(|(a, b)| a != b)
+                .unwrap_or(file.len().min(profile.len()));
+            return Err(format!(
+                "the file's joint_names and the profile's [beyondmimic] joint_names name different orders (first difference at joint {first}: `{}` against `{}`)",
+                file.get(first).map_or("(none)", String::as_str),
+                profile.get(first).map_or("(none)", String::as_str)
+            ));
+        }
+        (Some(file), _) => (file.clone(), JointOrderFrom::File),
+        (None, Some(profile)) => (profile, JointOrderFrom::Profile),
+        (None, None) => (
+            robot.joints.iter().map(|j| j.name.clone()).collect(),
+            JointOrderFrom::Robot,
+        ),
+    };
     if joint_names.len() != n {
         return Err(format!(
             "the policy has {} joints, the robot {} has {n}",
@@ -213,11 +238,12 @@ fn joint_order(
     for (&c, name) in to_canonical.iter().zip(&joint_names) {
         if std::mem::replace(&mut seen[c], true) {
             return Err(format!(
-                "joint `{name}` is named twice in the file's joint order"
+                "joint `{name}` is named twice in {}'s joint order",
+                from.name()
             ));
         }
     }
-    Ok((joint_names, to_canonical))
+    Ok((joint_names, to_canonical, from))
 }
 
 /// A per-joint metadata value `what` for `n` joints: one number is spread to all joints;

@@ -4,7 +4,8 @@
 //!
 //! Everything policy-specific comes from the file where it says it, else from the profile
 //! (`[beyondmimic]` and the action mapping): joint order (`joint_names` / `dof_names`,
-//! mapped to the robot's by name), default pose and action scale, observation terms
+//! mapped to the robot's by name; a bare export's order from the profile's
+//! `[beyondmimic] joint_names`), default pose and action scale, observation terms
 //! (`observation_names`; else the profile's; else the known layout whose width is the
 //! network's input), anchor body. Gains are the profile's (the simulator applies them);
 //! where the file's kp, kd, default pose or action scale differ from the profile's, the
@@ -61,6 +62,28 @@ pub enum BeyondMimicError {
     },
 }
 
+/// Who named a network's joint order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointOrderFrom {
+    /// The file's `joint_names` (or `dof_names`) metadata.
+    File,
+    /// The profile's `[beyondmimic] joint_names`.
+    Profile,
+    /// Neither: the robot's own order is assumed (shown by `policy check`).
+    Robot,
+}
+
+impl JointOrderFrom {
+    /// How `policy check` and errors name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::File => "the file",
+            Self::Profile => "the profile",
+            Self::Robot => "the robot",
+        }
+    }
+}
+
 /// A loaded BeyondMimic-style network and how to talk to it.
 pub struct BeyondMimicPolicy {
     /// The name results carry (the family's).
@@ -83,6 +106,8 @@ pub struct BeyondMimicPolicy {
     profile_offset: Vec<f64>,
     profile_scale: Vec<f64>,
     disagreements: Vec<String>,
+    /// Who named the joint order.
+    joint_order_from: JointOrderFrom,
     scratch: Scratch,
     input: Vec<f32>,
     last_inputs: Vec<Vec<f32>>,
@@ -104,6 +129,16 @@ impl BeyondMimicPolicy {
         self.action_mode
     }
 
+    /// The robot's joint index of each of the policy's joints, in the policy's order.
+    pub fn joint_order(&self) -> &[usize] {
+        &self.spec.to_canonical
+    }
+
+    /// Who named the joint order.
+    pub fn joint_order_from(&self) -> JointOrderFrom {
+        self.joint_order_from
+    }
+
     /// The same policy under another name in results (its family's, e.g. `wbc-mjlab`).
     pub fn named(mut self, name: &str) -> Self {
         self.name = name.to_string();
@@ -122,6 +157,29 @@ impl BeyondMimicPolicy {
     /// The raw action giving `target` on canonical joint `c` under the profile's mapping.
     fn raw_for_target(&self, c: usize, target: f64) -> f64 {
         (target - self.profile_offset[c]) / self.profile_scale[c]
+    }
+
+    /// The same network and wiring with no episode started (shares the plan).
+    fn fresh_copy(&self) -> Self {
+        Self {
+            name: self.name.clone(),
+            plan: self.plan.clone(),
+            robot: self.robot.clone(),
+            spec: self.spec.clone(),
+            obs_width: self.obs_width,
+            time_step_input: self.time_step_input,
+            actions_output: self.actions_output,
+            action_scale: self.action_scale.clone(),
+            action_mode: self.action_mode,
+            control_dt_s: self.control_dt_s,
+            profile_offset: self.profile_offset.clone(),
+            profile_scale: self.profile_scale.clone(),
+            disagreements: self.disagreements.clone(),
+            joint_order_from: self.joint_order_from,
+            scratch: Scratch::default(),
+            input: Vec::new(),
+            last_inputs: Vec::new(),
+        }
     }
 
     /// The network's inputs of the last `act`, one per observation (for cross-checks).
@@ -216,9 +274,24 @@ impl Policy for BeyondMimicPolicy {
                     self.spec.to_canonical.len(),
                     self.action_mode.name()
                 ),
+                match self.joint_order_from {
+                    JointOrderFrom::Robot => {
+                        "joint order: the robot's (neither the file nor the profile names one)"
+                            .to_string()
+                    }
+                    from => format!("joint order: {}'s", from.name()),
+                },
             ],
             disagreements: self.disagreements.clone(),
         }
+    }
+
+    fn worker_copies(&self, n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
+        Some(
+            (0..n)
+                .map(|_| Box::new(self.fresh_copy()) as Box<dyn Policy + Send>)
+                .collect(),
+        )
     }
 
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
