@@ -42,7 +42,7 @@ pub enum LeaderboardError {
     },
     /// A policy argument naming a session (`ipc:`): a policy process joins the leaderboard
     /// as a [`PolicyProcess`], started by the leaderboard for each run.
-    #[error("{0} names a session no one starts: give the policy process as a command that joins {{session}} (`leaderboard --spec`, [[policy]] command = …)")]
+    #[error("{0} names a session no one starts: give the policy process as a command that joins {{session}} (`leaderboard --policy-file`, [[policy]] command = …)")]
     NotInProcess(String),
     /// A policy process could not be started or did not connect.
     #[error("{policy} on {engine}: {why}")]
@@ -145,48 +145,23 @@ pub fn load_policy_file(
     let (mut arguments, mut processes) = (Vec::new(), Vec::new());
     for (i, p) in file.policies.iter().enumerate() {
         let at = |m: &str| invalid(format!("[[policy]] #{}: {m}", i + 1));
+        p.check().map_err(|m| at(&m))?;
         if p.unchecked {
             return Err(at("`unchecked` is the leaderboard's --unchecked here"));
         }
-        match (&p.policy, &p.command) {
-            (Some(arg), None) if registry::ipc_session(arg).is_some() => {
-                return Err(at("`policy = \"ipc:…\"` names a session no one starts: give `command` (with {session}) that starts the policy process for each run"))
+        match (p.resolved_policy(&workdir), &p.command) {
+            (Some(_), _) if p.name.is_some() || p.profile.is_some() => {
+                return Err(at("an in-process policy runs under its own family's profile and name: drop `name` and `profile`"));
             }
-            (Some(arg), None) => {
-                if p.name.is_some() || p.profile.is_some() {
-                    return Err(at("an in-process policy runs under its own family's profile and name: drop `name` and `profile`"));
-                }
-                arguments.push(match registry::policy_file(arg) {
-                    Some((family, file)) => format!(
-                        "{}:{}",
-                        family.name,
-                        crate::sweep::resolve(&workdir, file).display()
-                    ),
-                    None => arg.clone(),
-                });
-            }
-            (None, Some(command)) if command.contains("{session}") => {
-                if !(p.connect_timeout_s.is_finite() && p.connect_timeout_s > 0.0) {
-                    return Err(at("`connect_timeout_s` must be > 0"));
-                }
-                processes.push(PolicyProcess {
-                    name: p.label(),
-                    command: command.clone(),
-                    profile: p.profile.as_ref().map(|f| {
-                        if f.ends_with(".toml") {
-                            crate::sweep::resolve(&workdir, f).display().to_string()
-                        } else {
-                            f.clone()
-                        }
-                    }),
-                    connect_timeout_s: p.connect_timeout_s,
-                    workdir: workdir.clone(),
-                });
-            }
-            (None, Some(_)) => {
-                return Err(at("`command` must contain {session}, the session each run serves"))
-            }
-            _ => return Err(at("give `policy` (in process) or `command` (a policy process), one of them")),
+            (Some(argument), _) => arguments.push(argument),
+            (None, Some(command)) => processes.push(PolicyProcess {
+                name: p.label(),
+                command: command.clone(),
+                profile: p.resolved_profile(&workdir),
+                connect_timeout_s: p.connect_timeout_s,
+                workdir: workdir.clone(),
+            }),
+            (None, None) => return Err(at("give `policy` or `command`")),
         }
     }
     Ok((arguments, processes))

@@ -9,7 +9,7 @@
 //! of the motion embedded in one (`motion::import::onnx_motion`), below both.
 
 use std::collections::HashMap;
-use tract_onnx::prelude::InferenceModel;
+use tract_onnx::prelude::{InferenceFact, InferenceModel};
 
 /// The metadata the policy uses, every key optional (the profile fills the gaps).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -104,6 +104,16 @@ pub fn metadata_props(model: &InferenceModel) -> HashMap<String, String> {
             Some((key.to_string(), text))
         })
         .collect()
+}
+
+/// The fixed last dimension of an input (an observation's width), if the file gives one.
+pub fn fixed_width(fact: &InferenceFact) -> Option<usize> {
+    fact.shape
+        .dims()
+        .last()
+        .and_then(tract_onnx::tract_hir::infer::Factoid::concretize)
+        .and_then(|d| d.as_i64())
+        .and_then(|d| usize::try_from(d).ok())
 }
 
 #[cfg(test)]

@@ -22,20 +22,12 @@ pub struct Args {
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let model = tract_onnx::onnx().model_for_path(&args.onnx)?;
-    let width = model
-        .input_fact(0)?
-        .shape
-        .dims()
-        .last()
-        .and_then(tract_onnx::tract_hir::infer::Factoid::concretize)
-        .and_then(|d| d.as_i64())
-        .and_then(|d| usize::try_from(d).ok())
-        .ok_or_else(|| {
-            anyhow::anyhow!(
-                "{}: the first input has no fixed width",
-                args.onnx.display()
-            )
-        })?;
+    let width = thorarena::onnx_export::fixed_width(model.input_fact(0)?).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: the first input has no fixed width",
+            args.onnx.display()
+        )
+    })?;
     let plans = BatchPlans::new(model, width)?;
     println!("{}: input width {width}; µs per tract call and per environment, {} environments per batch size", args.onnx.display(), args.envs);
     println!("| batch | µs per call | µs per environment | per environment ÷ batch one |");

@@ -146,17 +146,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
         let files = ComparisonFiles::beside(&args.out.join(page));
         let written = write_comparison_report(&runs, &files, &script, true, &dirs)?;
-        eprintln!(
-            "wrote {} and {} SVG figures in {}",
-            written
-                .files
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", "),
-            written.figures.len(),
-            files.figures_dir.display()
-        );
+        super::report_html::tell_written(&written, &files);
     }
     eprintln!(
         "wrote {} ({:.0} s in all)",

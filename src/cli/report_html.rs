@@ -6,7 +6,7 @@
 use std::path::PathBuf;
 use thorarena::report::{
     label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, Page,
-    WebBundle, MIXED_ENGINES_WHY,
+    WebBundle, WrittenReport, MIXED_ENGINES_WHY,
 };
 
 /// Arguments of `report`.
@@ -53,6 +53,13 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let files = ComparisonFiles::beside(&args.out);
     let script = bundle.script(Page::Report)?;
     let written = write_comparison_report(&runs, &files, &script, args.overwrite, &args.runs)?;
+    tell_written(&written, &files);
+    Ok(())
+}
+
+/// What a comparison report wrote, on stderr: its warnings and notes, then its files and
+/// figures.
+pub(super) fn tell_written(written: &WrittenReport, files: &ComparisonFiles) {
     for w in &written.warnings {
         eprintln!("warning: {}", w.message);
     }
@@ -71,5 +78,4 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         files.figures_dir.display(),
         written.figures.join(", ")
     );
-    Ok(())
 }

@@ -388,8 +388,8 @@ fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Resu
     Ok(())
 }
 
-/// Worker threads (default: every core) and environment slots (default: one per worker,
-/// or one inference batch per worker for a network batched in process), within their
+/// Worker threads (default: every core) and environment slots (default: the policy
+/// family's slots per worker for each worker, `registry::slots_per_worker`), within their
 /// limits.
 fn threads(request: &EvalRequest) -> Result<(usize, usize), SpecError> {
     let workers = match request.workers {

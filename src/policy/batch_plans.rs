@@ -5,9 +5,10 @@
 //!
 //! Why batch: a whole-body tracker is a small MLP whose weights do not fit in L2; one
 //! call per environment streams them once per environment, one call per batch once per
-//! batch. Each row of the output depends on its own row of the input only, so an
-//! environment's action does not depend on which others share its batch
-//! (`tests/batched_inference.rs` checks it is bit for bit the batch-one answer).
+//! batch. Within one call shape, each row of the output depends on its own row of the
+//! input only, wherever it sits (`tests/batched_inference.rs`); another call shape may
+//! round differently (tract picks kernels by shape), so a caller wanting records
+//! independent of batching keeps one shape (`twist2::INFERENCE_BATCH`).
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -54,8 +55,19 @@ impl BatchPlans {
     /// Runs `inputs` (`batch` rows of `width`, row-major) and returns the first output,
     /// row-major.
     pub fn run(&self, inputs: &[f32], batch: usize) -> TractResult<Vec<f32>> {
+        self.run_on(&self.plan(batch)?, inputs, batch)
+    }
+
+    /// [`Self::run`] on a plan taken from [`Self::plan`] beforehand: no lookup, for a
+    /// caller that runs one shape every step.
+    pub fn run_on(
+        &self,
+        plan: &Arc<TypedRunnableModel>,
+        inputs: &[f32],
+        batch: usize,
+    ) -> TractResult<Vec<f32>> {
         let tensor = Tensor::from_shape(&[batch, self.width], inputs)?;
-        let out = self.plan(batch)?.run(tvec!(tensor.into()))?;
+        let out = plan.run(tvec!(tensor.into()))?;
         Ok(out[0]
             .to_plain_array_view::<f32>()?
             .iter()

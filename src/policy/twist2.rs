@@ -27,6 +27,7 @@ use super::{ActOutcome, Observation, Policy};
 use crate::motion::ReferenceFrame;
 use nalgebra::UnitQuaternion;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use tract_onnx::prelude::*;
 
 /// Length of `mimic(frame)`.
@@ -168,6 +169,8 @@ pub fn observation(obs: &Observation, default_pose: &[f64], history: &mut Histor
 /// TWIST2 in process: `--policy twist2:PATH.onnx` with `--profile twist2`.
 pub struct Twist2Policy {
     plans: BatchPlans,
+    /// The plan of `act`'s call shape ([`INFERENCE_BATCH`] rows), taken once.
+    act_plan: Arc<TypedRunnableModel>,
     default_pose: Vec<f64>,
     histories: Vec<History>,
     last_inputs: Vec<Vec<f32>>,
@@ -182,15 +185,18 @@ impl Twist2Policy {
         if default_pose.len() != N_JOINTS {
             return Err(Twist2Error::Joints(default_pose.len()));
         }
-        let plans = onnx()
-            .model_for_path(path)
-            .and_then(|model| BatchPlans::new(model, OBS_LEN))
-            .map_err(|e| Twist2Error::Load {
-                path: path.to_path_buf(),
-                message: format!("{e:#}"),
-            })?;
+        let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
+            let plans = BatchPlans::new(onnx().model_for_path(path)?, OBS_LEN)?;
+            let act_plan = plans.plan(INFERENCE_BATCH)?;
+            Ok((plans, act_plan))
+        };
+        let (plans, act_plan) = load().map_err(|e| Twist2Error::Load {
+            path: path.to_path_buf(),
+            message: format!("{e:#}"),
+        })?;
         Ok(Self {
             plans,
+            act_plan,
             default_pose,
             histories: Vec::new(),
             last_inputs: Vec::new(),
@@ -244,6 +250,7 @@ impl Policy for Twist2Policy {
                 .map(|_| {
                     Box::new(Self {
                         plans: self.plans.clone(),
+                        act_plan: self.act_plan.clone(),
                         default_pose: self.default_pose.clone(),
                         histories: Vec::new(),
                         last_inputs: Vec::new(),
@@ -273,7 +280,7 @@ impl Policy for Twist2Policy {
         {
             let rows =
                 &self.batch_input[call * INFERENCE_BATCH * OBS_LEN..][..INFERENCE_BATCH * OBS_LEN];
-            match self.infer_batch(rows, INFERENCE_BATCH) {
+            match self.plans.run_on(&self.act_plan, rows, INFERENCE_BATCH) {
                 Ok(out) => {
                     for (action, row) in acts.iter_mut().zip(out.chunks_exact(N_JOINTS)) {
                         for (a, o) in action.iter_mut().zip(row) {

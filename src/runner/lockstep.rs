@@ -40,7 +40,7 @@ pub struct RunOutcome {
     pub not_run: usize,
     /// Per worker, the wall time its finished episodes spent inside physics steps: the
     /// slowest worker's is the least the run could have taken (`thorarena bench eval`).
-    pub physics_wall_by_worker: Vec<std::time::Duration>,
+    pub physics_wall_by_worker: Vec<Duration>,
 }
 
 /// What the coordinator tells a slot before the next observation.
@@ -396,11 +396,6 @@ fn worker(
                     finished.push(finish(shared, job, ep));
                 }
             }
-            if let Some(p) = local.as_mut() {
-                for f in &finished {
-                    p.episode_ended(slots[k], f.record.termination.is_some());
-                }
-            }
             while running[k].is_none() && !shared.stop.load(Ordering::SeqCst) {
                 let retried = shared.retry.lock().expect("retry queue").pop();
                 let j = retried.unwrap_or_else(|| shared.next_job.fetch_add(1, Ordering::SeqCst));
@@ -418,13 +413,16 @@ fn worker(
                     ep.record_trace_for(seconds);
                 }
                 if ep.is_done() {
-                    let f = finish(shared, j, ep); // a reference shorter than one step
-                    if let Some(p) = local.as_mut() {
-                        p.episode_ended(slots[k], f.record.termination.is_some());
-                    }
-                    finished.push(f);
+                    finished.push(finish(shared, j, ep)); // a reference shorter than one step
                 } else {
                     running[k] = Some((j, ep));
+                }
+            }
+            // The worker's own policy copy hears of the slot's ended episodes before it
+            // sees the slot's next observation, as the coordinator's policy would.
+            if let Some(p) = local.as_mut() {
+                for f in &finished {
+                    p.episode_ended(slots[k], f.record.termination.is_some());
                 }
             }
             let observation = running[k]

@@ -41,7 +41,6 @@ pub use plan::{
 };
 pub use results_csv::{results_csv, results_rows, ResultsRow, RESULTS_CSV_FILE};
 pub use slurm::{sbatch_script, shell_quote, slurm_logs_dir, slurm_script_path, SbatchRequest};
-pub(crate) use spec::resolve;
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
 pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_FILE};

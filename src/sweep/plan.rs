@@ -386,24 +386,16 @@ fn check_shards(spec: &SweepSpec, durations: &[Vec<f64>]) -> Result<(), String> 
 /// `--policy` the session placeholder, the profile defaulting to the policy's own
 /// (`registry::family_profile`).
 fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
-    let policy = match (&p.policy, &p.command) {
-        (Some(pol), _) => match crate::registry::policy_file(pol) {
-            Some((family, file)) => {
-                format!("{}:{}", family.name, resolve(workdir, file).display())
-            }
-            None => pol.clone(),
-        },
-        _ => SESSION_POLICY.into(),
-    };
+    let policy = p
+        .resolved_policy(workdir)
+        .unwrap_or_else(|| SESSION_POLICY.into());
     PolicyAxis {
         name: p.label(),
         command: p.command.clone(),
-        profile: match &p.profile {
-            Some(f) if f.ends_with(".toml") => resolve(workdir, f).display().to_string(),
-            Some(name) => name.clone(),
-            // The resolved path: a published network's own profile is found by content.
-            None => crate::registry::family_profile(&policy).to_string(),
-        },
+        // The resolved path: a published network's own profile is found by content.
+        profile: p
+            .resolved_profile(workdir)
+            .unwrap_or_else(|| crate::registry::family_profile(&policy).to_string()),
         policy,
         keypoints: p.keypoints.clone(),
         connect_timeout_s: p.connect_timeout_s,

@@ -177,41 +177,8 @@ impl SweepSpec {
             return Err(invalid("`shards` must be at least 1".into()));
         }
         for (i, p) in self.policies.iter().enumerate() {
-            match (&p.policy, &p.command) {
-                (Some(_), Some(_)) => {
-                    return Err(invalid(format!(
-                        "[[policy]] #{}: give `policy` or `command`, not both",
-                        i + 1
-                    )))
-                }
-                (None, None) => {
-                    return Err(invalid(format!(
-                        "[[policy]] #{}: give `policy` (a built-in or a network file, e.g. twist2:FILE) or `command`",
-                        i + 1
-                    )))
-                }
-                (None, Some(c)) if !c.contains("{session}") => {
-                    return Err(invalid(format!(
-                        "[[policy]] #{}: `command` must contain {{session}}, the session the task serves",
-                        i + 1
-                    )))
-                }
-                // A session served by a process the sweep does not start: every task would
-                // wait on the same name (and planning, which tries each policy, with them).
-                (Some(p), None) if p.starts_with("ipc:") => {
-                    return Err(invalid(format!(
-                        "[[policy]] #{}: `policy = \"{p}\"` names a policy process the sweep does not start: give `command` (with {{session}}) that starts it for each task",
-                        i + 1
-                    )))
-                }
-                _ => {}
-            }
-            if !(p.connect_timeout_s.is_finite() && p.connect_timeout_s > 0.0) {
-                return Err(invalid(format!(
-                    "[[policy]] #{}: `connect_timeout_s` must be > 0",
-                    i + 1
-                )));
-            }
+            p.check()
+                .map_err(|m| invalid(format!("[[policy]] #{}: {m}", i + 1)))?;
         }
         for (key, values) in [
             ("datasets", &self.datasets),
@@ -263,6 +230,62 @@ impl SweepSpec {
 }
 
 impl PolicySpec {
+    /// Whether the table says what to run: `policy` (not a session no one starts) or
+    /// `command` with `{session}`, one of them, and a usable connect timeout. Sweeps and
+    /// the leaderboard's policy files hold it to the same rules.
+    pub fn check(&self) -> Result<(), String> {
+        match (&self.policy, &self.command) {
+            (Some(_), Some(_)) => return Err("give `policy` or `command`, not both".into()),
+            (None, None) => {
+                return Err(
+                    "give `policy` (a built-in or a network file, e.g. twist2:FILE) or `command`"
+                        .into(),
+                )
+            }
+            (None, Some(c)) if !c.contains("{session}") => {
+                return Err(
+                    "`command` must contain {session}, the session each run serves".into(),
+                )
+            }
+            // A session served by a process nobody starts: every run would wait on the
+            // same name (and a sweep's planning, which tries each policy, with them).
+            (Some(p), None) if p.starts_with("ipc:") => {
+                return Err(format!(
+                    "`policy = \"{p}\"` names a policy process no one starts: give `command` (with {{session}}) that starts it for each run"
+                ))
+            }
+            _ => {}
+        }
+        if !(self.connect_timeout_s.is_finite() && self.connect_timeout_s > 0.0) {
+            return Err("`connect_timeout_s` must be > 0".into());
+        }
+        Ok(())
+    }
+
+    /// `policy` with a network file's path taken against `workdir` (the spec's
+    /// directory); `None` for a `command`.
+    pub fn resolved_policy(&self, workdir: &Path) -> Option<String> {
+        let policy = self.policy.as_ref()?;
+        Some(match crate::registry::policy_file(policy) {
+            Some((family, file)) => {
+                format!("{}:{}", family.name, resolve(workdir, file).display())
+            }
+            None => policy.clone(),
+        })
+    }
+
+    /// `profile` with a profile file's path taken against `workdir`; a bundled
+    /// profile's name as it is.
+    pub fn resolved_profile(&self, workdir: &Path) -> Option<String> {
+        self.profile.as_ref().map(|f| {
+            if f.ends_with(".toml") {
+                resolve(workdir, f).display().to_string()
+            } else {
+                f.clone()
+            }
+        })
+    }
+
     /// The policy's label in results.
     pub fn label(&self) -> String {
         if let Some(n) = &self.name {
@@ -289,7 +312,7 @@ impl LatencySpec {
 }
 
 /// `p` relative to `base` unless absolute.
-pub(crate) fn resolve(base: &Path, p: &str) -> PathBuf {
+pub(super) fn resolve(base: &Path, p: &str) -> PathBuf {
     let p = Path::new(p);
     if p.is_absolute() {
         p.to_path_buf()

@@ -105,14 +105,8 @@ impl Network {
         let time_step_input = slot(&model, &inputs, "time_step");
         let actions_output = slot(&model, &outputs, "actions").unwrap_or(0);
         let fact = model.input_fact(obs_input).map_err(load_err)?;
-        let obs_width = fact
-            .shape
-            .dims()
-            .last()
-            .and_then(tract_onnx::tract_hir::infer::Factoid::concretize)
-            .and_then(|d| d.as_i64())
-            .and_then(|d| usize::try_from(d).ok())
-            .ok_or_else(|| BeyondMimicError::Unusable {
+        let obs_width =
+            crate::onnx_export::fixed_width(fact).ok_or_else(|| BeyondMimicError::Unusable {
                 path: path.to_path_buf(),
                 reason: "the observation input has no fixed width".into(),
             })?;
