@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod benchmark;
+pub mod dds;
 pub mod embedded_data;
 pub mod episode;
 pub mod evaluation;

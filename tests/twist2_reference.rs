@@ -194,3 +194,55 @@ fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
     let (agrees, report) = dump::python_agrees("twist2", &onnx, &setup, steps, dir.path());
     assert!(agrees, "Python and Rust TWIST2 disagree: {report}");
 }
+
+/// `bench ipc --clients twist2` times the Python adapter with the real network and the
+/// network alone inside it, in one run: both columns are measured (a round trip holds a
+/// network call, so it is never the shorter), one row per environment count.
+#[test]
+fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
+    const TEST: &str = "twist2_reference::bench_ipc_adapter";
+    let Some(reference) = reference_dir(TEST) else {
+        return;
+    };
+    if !prereq::python_modules(
+        TEST,
+        &["onnxruntime", "iceoryx2", "numpy"],
+        "pip install './adapters/python[policies]'",
+    ) {
+        return;
+    }
+    let onnx = reference.join("twist2_1017_25k.onnx");
+    let out = run(&[
+        "bench",
+        "ipc",
+        "--clients",
+        "twist2",
+        "--onnx",
+        onnx.to_str().unwrap(),
+        "--envs",
+        "1,4",
+        "--warmup",
+        "20",
+        "--adapter-steps",
+        "200",
+        "--python",
+        "python3",
+    ]);
+    let rows: Vec<Vec<f64>> = out
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| envs"))
+        .map(|l| {
+            l.trim_matches('|')
+                .split('|')
+                .map(|c| c.trim().parse::<f64>().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 2, "one row per environment count:\n{out}");
+    for (row, envs) in rows.iter().zip([1.0, 4.0]) {
+        let (rt_p50, net_p50, diff) = (row[1], row[4], row[6]);
+        assert_eq!(row[0], envs, "{out}");
+        assert!(net_p50 > 0.0 && rt_p50 >= net_p50, "{out}");
+        assert!((rt_p50 - net_p50 - diff).abs() < 0.11, "{out}");
+    }
+}

@@ -1,6 +1,9 @@
 //! `thorarena bench ipc`: the policy round trip — observation batch published to action
 //! batch received — for echo policies in Rust, C++ and Python at 1 and 64 environments,
-//! against a Unix-domain-socket echo moving the same bytes in the same run.
+//! against a Unix-domain-socket echo moving the same bytes in the same run; and for the
+//! Python TWIST2 adapter running the real network (`--clients twist2 --onnx FILE`),
+//! against the network's own time measured inside the adapter in the same run, so what
+//! the adapter adds to the network is a printed difference.
 //!
 //! Each echo policy is a separate process answering action = q for every environment, so
 //! the figures include the policy reading the observation and writing the actions. The
@@ -15,7 +18,9 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 use thorarena::evaluation::LatencySummary;
-use thorarena::perf::{answer_socket_echo, echo_round_trips, socket_round_trips};
+use thorarena::perf::{
+    adapter_round_trips, answer_socket_echo, echo_round_trips, socket_round_trips,
+};
 use thorarena::robot::RobotModel;
 use thorarena_ipc::{Layout, SimConfig, SimSession, WaitPolicy};
 
@@ -31,9 +36,18 @@ pub struct Args {
     /// Environment counts, comma separated.
     #[arg(long, value_delimiter = ',', default_value = "1,64")]
     pub envs: Vec<usize>,
-    /// Clients, comma separated: rust, cpp, python.
+    /// Clients, comma separated: rust, cpp, python (echo policies: action = q), twist2
+    /// (the Python TWIST2 adapter with its network, `--onnx`).
     #[arg(long, value_delimiter = ',', default_value = "rust,cpp,python")]
     pub clients: Vec<String>,
+    /// TWIST2's network for the `twist2` client (twist2_1017_25k.onnx, released with
+    /// TWIST2, arXiv 2511.02832).
+    #[arg(long)]
+    pub onnx: Option<PathBuf>,
+    /// Timed round trips per environment count for the `twist2` client (a network call
+    /// each), after `--warmup` untimed ones.
+    #[arg(long, default_value_t = 3_000)]
+    pub adapter_steps: usize,
     /// Busy-poll this many µs before blocking, on both sides.
     #[arg(long, default_value_t = 50)]
     pub spin_us: u64,
@@ -96,10 +110,36 @@ fn socket_baseline(args: &Args, layout: Layout, spin: Duration) -> anyhow::Resul
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    if args.steps == 0 || args.envs.contains(&0) {
-        bail!("--steps and every --envs value must be at least 1");
+    if args.steps == 0 || args.adapter_steps == 0 || args.envs.contains(&0) {
+        bail!("--steps, --adapter-steps and every --envs value must be at least 1");
+    }
+    if let Some(other) = args
+        .clients
+        .iter()
+        .find(|c| !["rust", "cpp", "python", "twist2"].contains(&c.as_str()))
+    {
+        bail!("unknown client `{other}` (rust, cpp, python, twist2)");
+    }
+    let twist2 = args.clients.iter().any(|c| c == "twist2");
+    if twist2 && args.onnx.is_none() {
+        bail!(
+            "the twist2 client needs --onnx FILE: TWIST2's released network (twist2_1017_25k.onnx)"
+        );
     }
     let robot = thorarena::registry::robot("g1_29dof")?;
+    let echoes: Vec<&String> = args.clients.iter().filter(|c| *c != "twist2").collect();
+    if !echoes.is_empty() {
+        echo_table(args, &robot, &echoes)?;
+    }
+    if twist2 {
+        adapter_table(args, &robot)?;
+    }
+    Ok(())
+}
+
+/// The echo policies' round trips against the socket baselines, one row per client and
+/// environment count.
+fn echo_table(args: &Args, robot: &RobotModel, clients: &[&String]) -> anyhow::Result<()> {
     let n_joints = robot.n_joints();
     println!(
         "round trip, observation published → actions received, {} timed steps after {} warm-up; spin {} µs then block; µs",
@@ -121,8 +161,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             socket_baseline(args, layout, Duration::ZERO).context("the Unix-socket baseline")?;
         let spinning =
             socket_baseline(args, layout, spin).context("the spinning Unix-socket baseline")?;
-        for client in &args.clients {
-            let Some(row) = shm_round_trips(args, &robot, client, layout)? else {
+        for client in clients {
+            let Some(row) = shm_round_trips(args, robot, client, layout)? else {
                 continue;
             };
             println!(
@@ -146,6 +186,124 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         "goals (2-core machine): Rust p50 ≤ 10 µs and p99.9 ≤ 100 µs at 1 environment; Python p50 ≤ 30 µs; ≥ 5× faster than the socket at 64 environments"
     );
     Ok(())
+}
+
+/// The network's own time, as the adapter's `--time-network` prints it (µs).
+#[derive(Debug, serde::Deserialize)]
+struct NetworkTiming {
+    count: usize,
+    p50: f64,
+    p90: f64,
+}
+
+/// The Python TWIST2 adapter's round trips against its network's time in the same run.
+fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
+    println!(
+        "\nPython TWIST2 adapter (ONNX Runtime, 1 thread), standing observations: round trip {} timed steps after {} warm-up, against the network call timed inside the adapter over the same steps; µs",
+        args.adapter_steps, args.warmup
+    );
+    println!("| envs | round trip p50 | p90 | p99 | network p50 | network p90 | round trip − network, p50 |");
+    println!("|---:|---:|---:|---:|---:|---:|---:|");
+    for &envs in &args.envs {
+        let Some((rt, net)) = adapter_round_trip(args, robot, envs)? else {
+            return Ok(());
+        };
+        println!(
+            "| {envs} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
+            rt.p50_us,
+            rt.p90_us,
+            rt.p99_us,
+            net.p50,
+            net.p90,
+            rt.p50_us - net.p50
+        );
+    }
+    println!("goal: round trip − network ≤ 50 µs at 1 and at 64 environments");
+    Ok(())
+}
+
+fn adapter_round_trip(
+    args: &Args,
+    robot: &RobotModel,
+    envs: usize,
+) -> anyhow::Result<Option<(LatencySummary, NetworkTiming)>> {
+    let onnx = args.onnx.as_ref().context("--onnx")?;
+    let ok = Command::new(&args.python)
+        .args(["-c", "import iceoryx2, numpy, onnxruntime"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        eprintln!(
+            "skipping twist2: `{} -c 'import iceoryx2, numpy, onnxruntime'` fails (pip install './adapters/python[policies]')",
+            args.python
+        );
+        return Ok(None);
+    }
+    let session = format!("bench-twist2-{envs}-{}", std::process::id());
+    let mut sim = SimSession::create(sim_config(args, robot, &session, envs))?;
+    let python = repo_root().join("adapters/python");
+    let mut child = Command::new(&args.python)
+        .arg(python.join("examples/twist2/run_twist2.py"))
+        .args(["--session", &session, "--time-network", "--onnx"])
+        .arg(onnx)
+        .env("PYTHONPATH", python)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .context("starting the Python TWIST2 adapter")?;
+    let accepted = sim.accept(Some(Duration::from_secs(60)), |m| eprintln!("refused: {m}"));
+    let timed = accepted.map_err(anyhow::Error::from).and_then(|_| {
+        Ok(adapter_round_trips(
+            &mut sim,
+            args.warmup,
+            args.adapter_steps,
+        )?)
+    });
+    sim.end();
+    let timed = match timed {
+        Ok(t) => t,
+        Err(e) => {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(e.context("the Python TWIST2 adapter"));
+        }
+    };
+    let out = child.wait_with_output()?;
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    #[derive(serde::Deserialize)]
+    struct Line {
+        network_us: NetworkTiming,
+    }
+    let line = stdout
+        .lines()
+        .find_map(|l| serde_json::from_str::<Line>(l).ok())
+        .with_context(|| format!("the adapter printed no network timing; its output:\n{stdout}"))?;
+    if line.network_us.count != args.warmup + args.adapter_steps {
+        bail!(
+            "the adapter timed {} network calls, {} steps were sent",
+            line.network_us.count,
+            args.warmup + args.adapter_steps
+        );
+    }
+    Ok(Some((timed, line.network_us)))
+}
+
+/// A session of `envs` slots for the G1 with the identity action mapping.
+fn sim_config(args: &Args, robot: &RobotModel, session: &str, envs: usize) -> SimConfig {
+    let n_joints = robot.n_joints();
+    SimConfig {
+        session: session.to_string(),
+        n_envs: envs,
+        joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
+        control_dt_s: 0.02,
+        action_offset_rad: vec![0.0; n_joints],
+        action_scale: vec![1.0; n_joints],
+        budget: None,
+        wait: WaitPolicy {
+            spin: Duration::from_micros(args.spin_us),
+            ..WaitPolicy::default()
+        },
+    }
 }
 
 /// The checkout this binary was built from: the C++ and Python echo clients live there.
@@ -218,19 +376,7 @@ fn shm_round_trips(
     layout: Layout,
 ) -> anyhow::Result<Option<LatencySummary>> {
     let session = format!("bench-{client}-{}-{}", layout.n_envs, std::process::id());
-    let mut sim = SimSession::create(SimConfig {
-        session: session.clone(),
-        n_envs: layout.n_envs,
-        joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
-        control_dt_s: 0.02,
-        action_offset_rad: vec![0.0; layout.n_joints],
-        action_scale: vec![1.0; layout.n_joints],
-        budget: None,
-        wait: WaitPolicy {
-            spin: Duration::from_micros(args.spin_us),
-            ..WaitPolicy::default()
-        },
-    })?;
+    let mut sim = SimSession::create(sim_config(args, robot, &session, layout.n_envs))?;
     let Some(mut child) = spawn_client(args, client, &session)? else {
         return Ok(None);
     };

@@ -45,6 +45,12 @@ impl LatencyRecorder {
         self.histogram.saturating_record(ns);
     }
 
+    /// Adds every duration `other` recorded.
+    pub fn merge(&mut self, other: &Self) {
+        // Same bounds on both sides: adding cannot fail.
+        let _ = self.histogram.add(&other.histogram);
+    }
+
     /// The histogram itself (benchmarks print more percentiles).
     pub fn histogram(&self) -> &Histogram<u64> {
         &self.histogram

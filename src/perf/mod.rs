@@ -12,7 +12,9 @@ mod socket;
 pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
 pub use full_run::{physics_floor, process_cpu_time, time_run, RunTiming};
 pub use physics_step::{python_mujoco_step, time_physics_steps, PythonMujocoTiming, StepTiming};
-pub use round_trip::{echo_round_trips, fill_echo_observations};
+pub use round_trip::{
+    adapter_round_trips, echo_round_trips, fill_echo_observations, fill_standing_observations,
+};
 pub use socket::{answer_socket_echo, socket_round_trips};
 
 use std::path::PathBuf;
@@ -34,8 +36,9 @@ pub enum PerfError {
     /// A batch did not match its layout.
     #[error(transparent)]
     Layout(#[from] thorarena_ipc::LayoutError),
-    /// An echo peer answered something other than action = q, or went away.
-    #[error("the echo answered wrongly or went away at step {step} ({outcome})")]
+    /// An echo peer answered something other than action = q (an adapter: something not
+    /// finite), or went away.
+    #[error("the policy answered wrongly or went away at step {step} ({outcome})")]
     WrongEcho {
         /// The step.
         step: u64,

@@ -1,5 +1,6 @@
-//! The shared-memory round trip with an echo policy (action = q for every environment):
-//! observation batch published → action batch received, timed by the simulator side.
+//! The shared-memory round trip — observation batch published → action batch received,
+//! timed by the simulator side — with an echo policy (action = q for every environment)
+//! or with a network adapter on standing observations.
 
 use super::PerfError;
 use crate::evaluation::{LatencyRecorder, LatencySummary};
@@ -49,6 +50,66 @@ pub fn echo_round_trips(
             return Err(PerfError::WrongEcho {
                 step,
                 outcome: format!("{outcome:?}"),
+            });
+        }
+        if step >= warmup as u64 {
+            rec.record(sim.last_round_trip());
+        }
+    }
+    Ok(rec.summary())
+}
+
+/// Fills every slot of `batch` as active with a robot standing still on a standing
+/// reference: identity rotations, zero velocities, joints at 0 rad, at episode step `step`
+/// (0 starts the episode). What a network adapter sees on its first steps, for timing it.
+pub fn fill_standing_observations(batch: &mut ObsBatchMut, layout: Layout, step: u64) {
+    const IDENTITY_WXYZ: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
+    for i in 0..layout.n_envs {
+        let mut env = batch.env(i);
+        env.set_header(&EnvHeader {
+            episode_id: i as u64,
+            step,
+            flags: FLAG_ACTIVE,
+            reserved: 0,
+            time_s: step as f64 * 0.02,
+        });
+        env.array("root_quat_wxyz").copy_from_slice(&IDENTITY_WXYZ);
+        env.array("root_pos_w")[2] = 0.79;
+        for r in 0..layout.n_refs {
+            env.reference(r, "root_quat_wxyz")
+                .copy_from_slice(&IDENTITY_WXYZ);
+            env.reference(r, "root_pos_w")[2] = 0.79;
+        }
+    }
+}
+
+/// `warmup` untimed and `steps` timed round trips with a network adapter connected to
+/// `sim`, on standing observations ([`fill_standing_observations`]), one episode running
+/// from step 0; every answer must be finite, so an adapter that answers nothing cannot
+/// look fast.
+pub fn adapter_round_trips(
+    sim: &mut SimSession,
+    warmup: usize,
+    steps: usize,
+) -> Result<LatencySummary, PerfError> {
+    let shape = sim.layout().ok_or(PerfError::WrongEcho {
+        step: 0,
+        outcome: "no policy connected".into(),
+    })?;
+    let mut rec = LatencyRecorder::default();
+    for step in 0..(warmup + steps) as u64 {
+        let mut answer_ok = true;
+        let outcome = sim.step(
+            |b| fill_standing_observations(b, shape, step),
+            None,
+            |a| {
+                answer_ok = (0..shape.n_envs).all(|i| a.env(i).iter().all(|x| x.is_finite()));
+            },
+        )?;
+        if outcome != StepOutcome::Answered || !answer_ok {
+            return Err(PerfError::WrongEcho {
+                step,
+                outcome: format!("{outcome:?}, finite actions: {answer_ok}"),
             });
         }
         if step >= warmup as u64 {

@@ -115,13 +115,13 @@ pub trait Policy {
         Wiring::default()
     }
 
-    /// `n` fresh copies of this policy (no episode started), one per worker thread of
-    /// the lock-step runner, each then acting for that worker's slots only, beside its
-    /// physics: a network in process costs no core that waits for it. `None` (the
-    /// default): the policy acts on the coordinator for every slot — a policy process,
-    /// whose answers are computed elsewhere, or a built-in costing next to nothing. A
-    /// policy may offer copies only if an environment's action depends on that
-    /// environment's observations alone.
+    /// `n` fresh copies of this policy (no episode started), one per worker thread of the
+    /// runner (`runner/free_running.rs`), each then acting for that worker's slots only,
+    /// beside its physics: a network in process costs no core that waits for it, and no
+    /// worker waits for another. `None` (the default): the policy acts on a coordinator for
+    /// every slot, in lock-step — a policy process, whose answers are computed elsewhere,
+    /// or a built-in costing next to nothing. A policy may offer copies only if an
+    /// environment's action depends on that environment's observations alone.
     fn worker_copies(&self, _n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
         None
     }

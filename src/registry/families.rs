@@ -46,10 +46,10 @@ impl PolicyFamily {
 }
 
 /// Environment slots per worker by default for a network in process, which infers on
-/// the workers: several slots per worker amortise the per-step hand-off between the
-/// coordinator and the workers. Measured (`thorarena bench eval`, TWIST2, MuJoCo, 60
-/// synthetic sequences × 2 settings, 2 workers): 1 slot per worker 18.9 s, 4 13.8 s, 8
-/// 13.3 s.
+/// the workers (`runner/free_running.rs`): a worker's `act` call has a fixed cost that
+/// several slots share. Measured (`thorarena bench eval`, TWIST2, MuJoCo, 60 synthetic
+/// sequences × 2 settings, 2 workers, two runs each): 1 slot per worker 12.7–14.1 s,
+/// 4 slots 11.9–12.4 s.
 pub const NETWORK_SLOTS_PER_WORKER: usize = 4;
 
 /// Every policy family, built-ins first.

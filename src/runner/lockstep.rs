@@ -1,18 +1,17 @@
-//! The batched lock-step loop, the same for every policy: N environment slots, one batch
-//! of observations per control step handed to the policy (in process or over shared
-//! memory), the actions checked and applied, the slots' physics stepped on worker threads.
+//! The batched lock-step loop: N environment slots, one batch of observations per control
+//! step handed to the policy on the coordinator thread (a policy process over shared
+//! memory, or a built-in), the actions checked and applied, the slots' physics stepped on
+//! worker threads.
 //!
 //! Slot `s` belongs to worker `s mod W`; a worker owns its slots' physics and episodes
-//! and, when a slot's episode ends, starts the next job of the schedule in it. An
-//! episode's result depends only on its sequence, setting and policy — never on which
-//! slot or worker ran it, nor on N or W — because a reset rebuilds the physics world and
-//! every slot's episode sees only its own observations.
+//! ([`WorkerSlots`]) and, when a slot's episode ends, starts the next job of the schedule
+//! in it. An episode's result depends only on its sequence, setting and policy — never on
+//! which slot or worker ran it, nor on N or W — because a reset rebuilds the physics world
+//! and every slot's episode sees only its own observations.
 //!
 //! A policy that offers copies of itself ([`Policy::worker_copies`], the networks in
-//! process) acts on the workers: each worker asks its own copy for its slots' actions,
-//! in one batch, right after stepping them, so inference runs beside the physics on
-//! every core instead of on the coordinator while the workers wait. Any other policy
-//! (a policy process) acts on the coordinator for all slots at once.
+//! process) needs no coordinator: [`super::free_running`] runs it, each worker stepping
+//! and asking its own copy for its slots' actions without waiting for the others.
 
 use super::EvalPlan;
 use crate::episode::{Episode, EpisodeSetup, EpisodeTrace};
@@ -44,7 +43,7 @@ pub struct RunOutcome {
 }
 
 /// What the coordinator tells a slot before the next observation.
-enum SlotCommand {
+pub(super) enum SlotCommand {
     /// No episode ran in the slot: just report.
     Idle,
     /// Apply this action for one control step.
@@ -60,41 +59,24 @@ enum SlotCommand {
     },
 }
 
-struct Finished {
-    job: usize,
+pub(super) struct Finished {
+    pub(super) job: usize,
     /// Wall time the episode spent inside physics steps.
-    physics_wall: Duration,
-    record: EpisodeRecord,
-    trace: Option<EpisodeTrace>,
+    pub(super) physics_wall: Duration,
+    pub(super) record: EpisodeRecord,
+    pub(super) trace: Option<EpisodeTrace>,
 }
 
 /// A slot's state after its command: the finished episode(s) and the next observation.
-struct SlotReport {
-    slot: usize,
-    observation: Option<Observation>,
-    finished: Vec<Finished>,
-}
-
-/// What a worker reports each control step.
-struct WorkerReport {
-    slots: Vec<SlotReport>,
-    /// Its own policy copy's answer to its slots' observations (which then are here, not
-    /// in `slots`); `None` when the coordinator acts, or none of its slots ran.
-    acted: Option<Acted>,
-}
-
-/// A worker's policy copy's answer for its slots.
-struct Acted {
-    observations: Vec<Observation>,
-    actions: Vec<Vec<f64>>,
-    outcome: ActOutcome,
-    /// The `act` call.
-    took: Duration,
+pub(super) struct SlotReport {
+    pub(super) slot: usize,
+    pub(super) observation: Option<Observation>,
+    pub(super) finished: Vec<Finished>,
 }
 
 /// What every worker shares (read-only, or atomics).
-struct Shared<'a> {
-    plan: &'a EvalPlan<'a>,
+pub(super) struct Shared<'a> {
+    pub(super) plan: &'a EvalPlan<'a>,
     setups: &'a [EpisodeSetup<'a>],
     sequences: &'a [Sequence],
     jobs: &'a [(usize, usize)],
@@ -103,6 +85,13 @@ struct Shared<'a> {
     /// Jobs to run again from their start (cut short by a policy that then came back).
     retry: std::sync::Mutex<Vec<usize>>,
     stop: AtomicBool,
+}
+
+impl Shared<'_> {
+    /// Jobs in the schedule.
+    pub(super) fn jobs_len(&self) -> usize {
+        self.jobs.len()
+    }
 }
 
 /// One episode setup per setting of the plan, for a policy wanting reference frames at
@@ -130,13 +119,14 @@ fn episode_setups<'a>(plan: &EvalPlan<'a>, offsets: Vec<f64>) -> Vec<EpisodeSetu
 /// What each observed slot does with the policy's answer: act on a usable action (after
 /// the measured latency, under `--latency-mode measured`), apply the miss rule to an
 /// unusable or late one, or end its episode when the policy failed.
-fn answer_to_commands(
+pub(super) fn answer_to_commands(
     plan: &EvalPlan,
     outcome: ActOutcome,
     round_trip: std::time::Duration,
     observations: &[Observation],
     actions: &[Vec<f64>],
     commands: &mut [SlotCommand],
+    index_of: impl Fn(usize) -> usize,
 ) {
     let effect_delay_substeps = match plan.io.latency_mode {
         LatencyMode::Ignore => 0,
@@ -145,7 +135,7 @@ fn answer_to_commands(
         }
     };
     for (obs, action) in observations.iter().zip(actions) {
-        commands[obs.env] = match outcome {
+        commands[index_of(obs.env)] = match outcome {
             ActOutcome::Acted if action_is_usable(action, plan.io.max_abs_action) => {
                 SlotCommand::Act {
                     action: action.clone(),
@@ -176,9 +166,6 @@ pub fn run_eval(
     let n_workers = plan.workers.clamp(1, n_slots);
     let n_joints = plan.robot.n_joints();
     let setups = episode_setups(plan, policy.reference_offsets_s());
-    let copies = policy.worker_copies(n_workers);
-    let on_workers = copies.is_some();
-    let mut copies = copies.map(|c| c.into_iter().map(Some).collect::<Vec<_>>());
     let shared = Shared {
         plan,
         setups: &setups,
@@ -189,13 +176,16 @@ pub fn run_eval(
         retry: std::sync::Mutex::new(Vec::new()),
         stop: AtomicBool::new(false),
     };
+    if let Some(copies) = policy.worker_copies(n_workers) {
+        return super::free_running::run(&shared, n_slots, copies, on_record);
+    }
     let mut results: Vec<Option<EpisodeRecord>> = vec![None; jobs.len()];
     let mut latency = LatencyRecorder::default();
     let mut physics_wall_by_worker = vec![Duration::ZERO; n_workers];
     let slots_of = |w: usize| (w..n_slots).step_by(n_workers);
 
     std::thread::scope(|scope| {
-        let (report_tx, report_rx) = mpsc::channel::<WorkerReport>();
+        let (report_tx, report_rx) = mpsc::channel::<Vec<SlotReport>>();
         let mut command_txs = Vec::with_capacity(n_workers);
         for w in 0..n_workers {
             let (command_tx, command_rx) = mpsc::channel::<Vec<SlotCommand>>();
@@ -203,11 +193,7 @@ pub fn run_eval(
             let report_tx = report_tx.clone();
             let slots: Vec<usize> = slots_of(w).collect();
             let shared = &shared;
-            let local = copies
-                .as_mut()
-                .and_then(|c| c.get_mut(w))
-                .and_then(Option::take);
-            scope.spawn(move || worker(shared, slots, local, command_rx, report_tx));
+            scope.spawn(move || worker(shared, slots, command_rx, report_tx));
         }
         drop(report_tx);
 
@@ -223,20 +209,15 @@ pub fn run_eval(
                 tx.send(mine).expect("worker alive");
             }
             let mut reports: Vec<SlotReport> = Vec::with_capacity(n_slots);
-            let mut answers: Vec<Acted> = Vec::new();
             for _ in 0..n_workers {
-                let report = report_rx.recv().expect("worker alive");
-                reports.extend(report.slots);
-                answers.extend(report.acted);
+                reports.extend(report_rx.recv().expect("worker alive"));
             }
             reports.sort_by_key(|r| r.slot);
             let mut observations = Vec::with_capacity(n_slots);
             for report in reports {
                 for f in report.finished {
                     physics_wall_by_worker[report.slot % n_workers] += f.physics_wall;
-                    if !on_workers {
-                        policy.episode_ended(report.slot, f.record.termination.is_some());
-                    }
+                    policy.episode_ended(report.slot, f.record.termination.is_some());
                     if requeue_failed && f.record.termination == Some(Termination::PolicyFailed) {
                         // The policy came back: the episode it left runs again from its
                         // start, as `--resume` would run it, instead of being scored.
@@ -247,24 +228,6 @@ pub fn run_eval(
                     results[f.job] = Some(f.record);
                 }
                 observations.extend(report.observation);
-            }
-            if on_workers && !answers.is_empty() {
-                // The workers' copies answered: only their answers to apply. The step's
-                // latency is the slowest worker's `act`.
-                let mut slowest = Duration::ZERO;
-                for a in &answers {
-                    answer_to_commands(
-                        plan,
-                        a.outcome,
-                        a.took,
-                        &a.observations,
-                        &a.actions,
-                        &mut commands,
-                    );
-                    slowest = slowest.max(a.took);
-                }
-                latency.record(slowest);
-                continue;
             }
             if observations.is_empty() {
                 if !shared.retry.lock().expect("retry queue").is_empty()
@@ -291,6 +254,7 @@ pub fn run_eval(
                 &observations,
                 &actions,
                 &mut commands,
+                |slot| slot,
             );
             if outcome == ActOutcome::Failed {
                 if policy.recover() {
@@ -338,135 +302,144 @@ fn miss_rule(rule: MissRule, fault: PolicyFault, obs: &Observation) -> SlotComma
     }
 }
 
-/// A worker: applies its slots' commands, starts new jobs in free slots, asks its own
-/// policy copy (if any) for its slots' actions, reports.
+/// A worker of the lock-step loop: applies its slots' commands, starts new jobs in free
+/// slots, reports their observations to the coordinator.
 fn worker(
     shared: &Shared,
     slots: Vec<usize>,
-    mut local: Option<Box<dyn Policy + Send>>,
     commands: mpsc::Receiver<Vec<SlotCommand>>,
-    reports: mpsc::Sender<WorkerReport>,
+    reports: mpsc::Sender<Vec<SlotReport>>,
 ) {
-    let plan = shared.plan;
-    let robot = Arc::new(plan.robot.clone());
-    let settings = PhysicsSettings {
-        dt_s: plan.profile.physics_dt_s,
-        ..Default::default()
-    };
-    let mut physics: Vec<Box<dyn Physics + Send>> = slots
-        .iter()
-        .map(|_| {
-            make_physics(
-                &plan.engine,
-                robot.clone(),
-                settings.clone(),
-                plan.profile.gains.clone(),
-            )
-            .expect("the engine was checked before the run (EvalPlan::engine)")
-        })
-        .collect();
-    let mut running: Vec<Option<(usize, Episode)>> = slots.iter().map(|_| None).collect();
+    let mut mine = WorkerSlots::new(shared.plan, slots);
     while let Ok(batch) = commands.recv() {
-        let mut out = Vec::with_capacity(slots.len());
-        for (k, command) in batch.into_iter().enumerate() {
-            let mut finished = Vec::new();
-            if let Some((job, ep)) = running[k].as_mut() {
-                match command {
-                    SlotCommand::Idle => {}
-                    SlotCommand::Act {
-                        action,
-                        effect_delay_substeps,
-                        fault,
-                    } => {
-                        if let Some(f) = fault {
-                            ep.count_fault(f);
-                        }
-                        ep.advance_delayed(physics[k].as_mut(), &action, effect_delay_substeps);
-                    }
-                    SlotCommand::Terminate { why, fault } => {
-                        if let Some(f) = fault {
-                            ep.count_fault(f);
-                        }
-                        ep.terminate(why);
-                    }
-                }
-                if ep.is_done() {
-                    let job = *job;
-                    let (_, ep) = running[k].take().expect("checked above");
-                    finished.push(finish(shared, job, ep));
-                }
-            }
-            while running[k].is_none() && !shared.stop.load(Ordering::SeqCst) {
-                let retried = shared.retry.lock().expect("retry queue").pop();
-                let j = retried.unwrap_or_else(|| shared.next_job.fetch_add(1, Ordering::SeqCst));
-                let Some(&(q, s)) = shared.jobs.get(j) else {
-                    break;
-                };
-                let seq = &shared.sequences[q];
-                let mut ep = Episode::start(&shared.setups[s], seq, physics[k].as_mut());
-                if plan
-                    .trace
-                    .contains(&format!("{}/{}", seq.task, seq.sequence_id))
-                {
-                    ep.record_trace();
-                } else if let Some(seconds) = plan.trace_first_s {
-                    ep.record_trace_for(seconds);
-                }
-                if ep.is_done() {
-                    finished.push(finish(shared, j, ep)); // a reference shorter than one step
-                } else {
-                    running[k] = Some((j, ep));
-                }
-            }
-            // The worker's own policy copy hears of the slot's ended episodes before it
-            // sees the slot's next observation, as the coordinator's policy would.
-            if let Some(p) = local.as_mut() {
-                for f in &finished {
-                    p.episode_ended(slots[k], f.record.termination.is_some());
-                }
-            }
-            let observation = running[k]
-                .as_ref()
-                .map(|(job, ep)| ep.observation_in(slots[k], *job as u64));
-            out.push(SlotReport {
-                slot: slots[k],
-                observation,
-                finished,
-            });
-        }
-        let acted = local.as_mut().and_then(|p| act_here(p.as_mut(), &mut out));
-        if reports.send(WorkerReport { slots: out, acted }).is_err() {
+        let out = batch
+            .into_iter()
+            .enumerate()
+            .map(|(k, command)| mine.advance(shared, k, command, None))
+            .collect();
+        if reports.send(out).is_err() {
             return;
         }
     }
 }
 
-/// A worker's own policy copy acts on its slots' observations (taken out of `out`) in
-/// one batch; `None` when no slot has one.
-fn act_here(policy: &mut dyn Policy, out: &mut [SlotReport]) -> Option<Acted> {
-    let observations: Vec<Observation> = out
-        .iter_mut()
-        .filter_map(|r| r.observation.take())
-        .collect();
-    if observations.is_empty() {
-        return None;
+/// A worker's environment slots: their physics worlds and running episodes.
+pub(super) struct WorkerSlots<'a> {
+    /// Global slot indices, ascending.
+    pub(super) slots: Vec<usize>,
+    physics: Vec<Box<dyn Physics + Send>>,
+    running: Vec<Option<(usize, Episode<'a>)>>,
+}
+
+impl<'a> WorkerSlots<'a> {
+    pub(super) fn new(plan: &EvalPlan, slots: Vec<usize>) -> Self {
+        let robot = Arc::new(plan.robot.clone());
+        let settings = PhysicsSettings {
+            dt_s: plan.profile.physics_dt_s,
+            ..Default::default()
+        };
+        let physics = slots
+            .iter()
+            .map(|_| {
+                make_physics(
+                    &plan.engine,
+                    robot.clone(),
+                    settings.clone(),
+                    plan.profile.gains.clone(),
+                )
+                .expect("the engine was checked before the run (EvalPlan::engine)")
+            })
+            .collect();
+        let running = slots.iter().map(|_| None).collect();
+        Self {
+            slots,
+            physics,
+            running,
+        }
     }
-    for o in observations.iter().filter(|o| o.step == 0) {
-        policy.reset(o.env);
+
+    /// The local index of global slot `slot`.
+    pub(super) fn index_of(&self, slot: usize) -> usize {
+        self.slots
+            .binary_search(&slot)
+            .expect("an observation of one of this worker's slots")
     }
-    let n_joints = observations[0].q.len();
-    let mut actions = vec![vec![0.0; n_joints]; observations.len()];
-    let started = Instant::now();
-    let outcome = policy.act(&observations, &mut actions);
-    let took = policy
-        .last_round_trip()
-        .unwrap_or_else(|| started.elapsed());
-    Some(Acted {
-        observations,
-        actions,
-        outcome,
-        took,
-    })
+
+    /// Applies local slot `k`'s command, collects its episode if that ended, starts the
+    /// next jobs of the schedule in it while it is free, and reports its next observation.
+    /// `local`, the worker's own policy copy, hears of the ended episodes before it sees
+    /// the slot's next observation, as the coordinator's policy would.
+    pub(super) fn advance(
+        &mut self,
+        shared: &'a Shared<'a>,
+        k: usize,
+        command: SlotCommand,
+        local: Option<&mut dyn Policy>,
+    ) -> SlotReport {
+        let plan = shared.plan;
+        let mut finished = Vec::new();
+        if let Some((job, ep)) = self.running[k].as_mut() {
+            match command {
+                SlotCommand::Idle => {}
+                SlotCommand::Act {
+                    action,
+                    effect_delay_substeps,
+                    fault,
+                } => {
+                    if let Some(f) = fault {
+                        ep.count_fault(f);
+                    }
+                    ep.advance_delayed(self.physics[k].as_mut(), &action, effect_delay_substeps);
+                }
+                SlotCommand::Terminate { why, fault } => {
+                    if let Some(f) = fault {
+                        ep.count_fault(f);
+                    }
+                    ep.terminate(why);
+                }
+            }
+            if ep.is_done() {
+                let job = *job;
+                let (_, ep) = self.running[k].take().expect("checked above");
+                finished.push(finish(shared, job, ep));
+            }
+        }
+        while self.running[k].is_none() && !shared.stop.load(Ordering::SeqCst) {
+            let retried = shared.retry.lock().expect("retry queue").pop();
+            let j = retried.unwrap_or_else(|| shared.next_job.fetch_add(1, Ordering::SeqCst));
+            let Some(&(q, s)) = shared.jobs.get(j) else {
+                break;
+            };
+            let seq = &shared.sequences[q];
+            let mut ep = Episode::start(&shared.setups[s], seq, self.physics[k].as_mut());
+            if plan
+                .trace
+                .contains(&format!("{}/{}", seq.task, seq.sequence_id))
+            {
+                ep.record_trace();
+            } else if let Some(seconds) = plan.trace_first_s {
+                ep.record_trace_for(seconds);
+            }
+            if ep.is_done() {
+                finished.push(finish(shared, j, ep)); // a reference shorter than one step
+            } else {
+                self.running[k] = Some((j, ep));
+            }
+        }
+        if let Some(p) = local {
+            for f in &finished {
+                p.episode_ended(self.slots[k], f.record.termination.is_some());
+            }
+        }
+        let observation = self.running[k]
+            .as_ref()
+            .map(|(job, ep)| ep.observation_in(self.slots[k], *job as u64));
+        SlotReport {
+            slot: self.slots[k],
+            observation,
+            finished,
+        }
+    }
 }
 
 fn finish(shared: &Shared, job: usize, mut ep: Episode) -> Finished {

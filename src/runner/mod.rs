@@ -7,11 +7,14 @@
 //! episode), and aggregates sum in (task, id) order, so results are identical for any
 //! number of workers.
 //!
-//! One loop for every policy (`lockstep`): the runner owns N environment slots, hands
-//! the whole batch of observations to the policy each control step — in process or over
-//! shared memory — and applies the returned actions, the slots' physics spread over worker
-//! threads.
+//! Two loops over N environment slots, the slots' physics spread over worker threads.
+//! `lockstep`: the coordinator hands the whole batch of observations to the policy each
+//! control step — a policy process over shared memory, or a built-in — and applies the
+//! returned actions. `free_running`: a policy with copies for the workers (the networks in
+//! process) acts on each worker for its own slots, and the workers never wait for each
+//! other.
 
+mod free_running;
 mod lockstep;
 
 pub use lockstep::{run_eval, RunOutcome};

@@ -215,6 +215,26 @@ def test_inactive_slots_get_no_action_and_keep_no_state() -> None:
     np.testing.assert_allclose(actions[0], x[0, :29] * 0.1, rtol=1e-6)
 
 
+def test_the_history_is_float32_and_holds_the_clipped_singles() -> None:
+    obs = batch(1)
+    obs["qd"][0, 0] = 1e5
+    a = adapter(1)
+    x = step(a, obs, 0)
+    assert a.state["history"].dtype == np.float32
+    np.testing.assert_array_equal(a.state["history"][0], np.tile(x[0][:127], (10, 1)))
+    assert a.state["history"][0, 0, 35 + 34] == 100.0
+
+
+def test_a_network_timer_gets_one_entry_per_network_call() -> None:
+    a, obs = adapter(2, TakeFirst()), batch(2)
+    a.network_s = []
+    for k in range(3):
+        step(a, obs, k)
+    obs["flags"] = 0
+    step(a, obs, 3)  # no active slot: no network call
+    assert len(a.network_s) == 3 and all(t > 0 for t in a.network_s)
+
+
 def test_the_run_loop_answers_every_step_of_a_session() -> None:
     class FakeSession:
         n_envs = 2

@@ -12,7 +12,10 @@ output. Needs onnxruntime (`pip install './adapters/python[policies]'`).
 from __future__ import annotations
 
 import argparse
+import json
 import sys
+
+import numpy as np
 
 from thorarena import ThorArenaError
 from thorarena.adapters import OnnxPolicy, Twist2Adapter
@@ -27,9 +30,17 @@ def main() -> int:
     parser.add_argument(
         "--timeout", type=float, default=10.0, help="seconds to wait for the simulator"
     )
+    parser.add_argument(
+        "--time-network",
+        action="store_true",
+        help="time every network call; at the end print one JSON line "
+        '{"network_us": {"count", "p50", "p90", "p99"}} on stdout',
+    )
     args = parser.parse_args()
 
     adapter = Twist2Adapter(OnnxPolicy(args.onnx, intra_op_threads=args.threads))
+    if args.time_network:
+        adapter.network_s = []
     session = adapter.connect(args.session, name=args.name, timeout_s=args.timeout)
     print(
         f"connected: {session.n_envs} environments, control dt {session.control_dt_s} s",
@@ -37,6 +48,11 @@ def main() -> int:
     )
     steps = adapter.run(session)
     print(f"run over after {steps} steps", flush=True)
+    if adapter.network_s is not None:
+        us = np.asarray(adapter.network_s) * 1e6
+        p50, p90, p99 = (float(np.percentile(us, q)) for q in (50, 90, 99))
+        timing = {"count": len(us), "p50": p50, "p90": p90, "p99": p99}
+        print(json.dumps({"network_us": timing}), flush=True)
     return 0
 
 

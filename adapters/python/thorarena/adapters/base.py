@@ -13,6 +13,7 @@ in canonical order, how to map it (`actions_from_outputs`).
 
 from __future__ import annotations
 
+import time
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
@@ -34,6 +35,8 @@ class Adapter(ABC):
     """Reference frames to ask for, seconds ahead of each step."""
     obs_dim: int = 0
     """Width of the network input."""
+    state_dtypes: ClassVar[dict[str, type]] = {}
+    """The dtype of a per-slot state array, where it is not float64."""
 
     def __init__(self, policy: Policy | None) -> None:
         self.policy = policy
@@ -44,11 +47,15 @@ class Adapter(ABC):
         self.action_scale = np.ones(len(self.joint_names))
         self.state: dict[str, np.ndarray] = {}
         """Per-slot state, arrays of shape (n_envs, ...), zeroed when an episode starts."""
+        self.network_s: list[float] | None = None
+        """Set to a list to time the network: each call's wall time is appended, in s
+        (`thorarena bench ipc --clients twist2` compares it with the round trip)."""
 
     # --- what a subclass provides -------------------------------------------------------
 
     def slot_state(self) -> dict[str, tuple[int, ...]]:
-        """Name and per-slot shape of each state array (float64, zeros at reset)."""
+        """Name and per-slot shape of each state array (zeros at reset; float64 unless
+        `state_dtypes` says otherwise)."""
         return {}
 
     @abstractmethod
@@ -88,7 +95,10 @@ class Adapter(ABC):
         self.n_envs = n_envs
         self.action_offset_rad = offset
         self.action_scale = scale
-        self.state = {key: np.zeros((n_envs, *shape)) for key, shape in self.slot_state().items()}
+        self.state = {
+            key: np.zeros((n_envs, *shape), dtype=self.state_dtypes.get(key, np.float64))
+            for key, shape in self.slot_state().items()
+        }
 
     def reset(self, slots: np.ndarray) -> None:
         """Starts new episodes in `slots`: their per-slot state goes back to zeros."""
@@ -108,11 +118,16 @@ class Adapter(ABC):
         # All active (the usual case): the batch itself, no copy; else the active records.
         records = obs if len(slots) == len(obs) else np.take(obs, slots)
         starting = (records["step"] == 0) | ((records["flags"] & FLAG_RESET) != 0)
-        if np.any(starting):
+        if starting.any():
             self.reset(slots[starting])
         inputs = self.observe(records, slots)
         if self.policy is not None:
-            outputs = self.policy(inputs, steps=records["step"])
+            if self.network_s is None:
+                outputs = self.policy(inputs, steps=records["step"])
+            else:
+                started = time.perf_counter()
+                outputs = self.policy(inputs, steps=records["step"])
+                self.network_s.append(time.perf_counter() - started)
             actions[slots] = self.actions_from_outputs(outputs, records)
         return inputs
 

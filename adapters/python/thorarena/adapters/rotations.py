@@ -29,6 +29,48 @@ def rotate_inverse(quat_wxyz: np.ndarray, v: np.ndarray) -> np.ndarray:
     )
 
 
+def _quadratic_form_of_body_from_world() -> np.ndarray:
+    """M (16, 9) with R^T.flat = outer(q, q).flat @ M: every entry of a rotation matrix is
+    a quadratic form in the quaternion (the homogeneous form, equal to the usual one for
+    unit quaternions)."""
+    w, x, y, z = range(4)
+    # R (world from body) as {(a, b): coefficient of q_a q_b} per entry.
+    r = [
+        [{(w, w): 1, (x, x): 1, (y, y): -1, (z, z): -1}, {(x, y): 2, (w, z): -2},
+         {(x, z): 2, (w, y): 2}],
+        [{(x, y): 2, (w, z): 2}, {(w, w): 1, (x, x): -1, (y, y): 1, (z, z): -1},
+         {(y, z): 2, (w, x): -2}],
+        [{(x, z): 2, (w, y): -2}, {(y, z): 2, (w, x): 2},
+         {(w, w): 1, (x, x): -1, (y, y): -1, (z, z): 1}],
+    ]  # fmt: skip
+    m = np.zeros((16, 9))
+    for i in range(3):
+        for j in range(3):
+            for (a, b), c in r[j][i].items():  # R^T[i][j] = R[j][i]
+                m[4 * a + b, 3 * i + j] = c
+    return m
+
+
+_BODY_FROM_WORLD = _quadratic_form_of_body_from_world()
+
+
+def body_from_world(quat_wxyz: np.ndarray) -> np.ndarray:
+    """R^T of unit quaternions (…, 4): (…, 3, 3), so v_b = R^T v_w. Two numpy calls
+    whatever the batch: what per-step observation builders want at small batches."""
+    q = np.ascontiguousarray(quat_wxyz)
+    qq = (q[..., :, None] * q[..., None, :]).reshape(*q.shape[:-1], 16)
+    return (qq @ _BODY_FROM_WORLD).reshape(*q.shape[:-1], 3, 3)
+
+
+def roll_pitch_of(body_from_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Roll and pitch (as `roll_pitch`) from R^T (…, 3, 3): roll = atan2(R21, R22),
+    pitch = asin(clip(-R20, -1, 1))."""
+    rt = body_from_world
+    roll = np.arctan2(rt[..., 1, 2], rt[..., 2, 2])
+    pitch = np.arcsin(np.minimum(np.maximum(-rt[..., 0, 2], -1.0), 1.0))
+    return roll, pitch
+
+
 def roll_pitch(quat_wxyz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Roll and pitch of the intrinsic z-y-x (yaw, pitch, roll) Euler angles, rad:
     roll = atan2(2(wx + yz), 1 - 2(x² + y²)), pitch = asin(clip(2(wy - zx), -1, 1))."""

@@ -91,6 +91,7 @@ class OnnxPolicy:
         self.output_name = output_name or outputs[0]
         if self.output_name not in outputs:
             raise ValueError(f"{self.path}: no output {self.output_name!r} (has {outputs})")
+        self.output_names = [self.output_name]
         shape = inputs[self.input_name].shape
         self.batch = _dim(shape[0]) if len(shape) == 2 else None
         """Fixed batch size of the model, or None when the batch is dynamic."""
@@ -111,18 +112,17 @@ class OnnxPolicy:
 
     def __call__(self, inputs: np.ndarray, *, steps: np.ndarray) -> np.ndarray:
         x = np.ascontiguousarray(inputs, dtype=np.float32)
-        t = np.asarray(steps, dtype=np.float32).reshape(-1, 1)
         if self.batch is None or self.batch == len(x):
-            return self._run(x, t)
+            return self._run(x, steps)
         if self.batch != 1:
             raise ValueError(f"{self.path}: fixed batch of {self.batch}, got {len(x)} rows")
-        return np.concatenate([self._run(x[i : i + 1], t[i : i + 1]) for i in range(len(x))])
+        return np.concatenate([self._run(x[i : i + 1], steps[i : i + 1]) for i in range(len(x))])
 
-    def _run(self, x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    def _run(self, x: np.ndarray, steps: np.ndarray) -> np.ndarray:
         feeds = {self.input_name: x}
         if self.feeds_time_step:
-            feeds[TIME_STEP_INPUT] = t
-        (out,) = self.session.run([self.output_name], feeds)
+            feeds[TIME_STEP_INPUT] = np.asarray(steps, dtype=np.float32).reshape(-1, 1)
+        (out,) = self.session.run(self.output_names, feeds)
         return np.asarray(out, dtype=np.float32).reshape(len(x), -1)
 
 

@@ -42,7 +42,7 @@ from typing import ClassVar
 import numpy as np
 
 from .base import Adapter
-from .rotations import roll_pitch, rotate_inverse
+from .rotations import body_from_world, roll_pitch, roll_pitch_of, rotate_inverse
 
 N_JOINTS = 29
 N_MIMIC = 6 + N_JOINTS
@@ -63,12 +63,20 @@ MIMIC_LOOKAHEAD_S = 0.02
 """The mimic frame is one 50 Hz step ahead of the future frame."""
 
 
-def mimic_observation(frames: np.ndarray) -> np.ndarray:
-    """mimic (35) of reference frames (records of `Layout.ref_dtype`, any shape): (..., 35)."""
+FUTURE_START = N_SINGLE * (N_HISTORY + 1)
+"""Column of mimic(reference[0]), after single and the history."""
+
+
+def mimic_observation(
+    frames: np.ndarray, roll: np.ndarray | None = None, pitch: np.ndarray | None = None
+) -> np.ndarray:
+    """mimic (35) of reference frames (records of `Layout.ref_dtype`, any shape): (..., 35).
+    `roll`, `pitch`: the frames' roll and pitch, when already computed."""
     quat = frames["root_quat_wxyz"]
     velocities = np.stack([frames["root_lin_vel_w"], frames["root_ang_vel_w"]], axis=-2)
     body = rotate_inverse(quat[..., None, :], velocities)  # (..., 2, 3): v, w
-    roll, pitch = roll_pitch(quat)
+    if roll is None or pitch is None:
+        roll, pitch = roll_pitch(quat)
     return np.concatenate(
         [
             body[..., 0, :2],
@@ -82,45 +90,106 @@ def mimic_observation(frames: np.ndarray) -> np.ndarray:
     )
 
 
+def write_proprio(
+    out: np.ndarray,
+    records: np.ndarray,
+    roll: np.ndarray,
+    pitch: np.ndarray,
+    default_pos: np.ndarray,
+) -> None:
+    """proprio (92) of environment records into `out` (shape (n, 92)), given the robot's
+    roll and pitch. Each term is computed in float64, then stored (rounded once)."""
+    j = 5
+    out[:, 0:3] = records["root_ang_vel_b"] * ANG_VEL_SCALE
+    out[:, 3] = roll
+    out[:, 4] = pitch
+    out[:, j : j + N_JOINTS] = records["q"] - default_pos
+    j += N_JOINTS
+    out[:, j : j + N_JOINTS] = records["qd"] * DOF_VEL_SCALE
+    out[:, [j + a for a in ANKLE_JOINTS]] = 0.0
+    j += N_JOINTS
+    out[:, j : j + N_JOINTS] = records["last_action"]
+
+
 def proprio_observation(records: np.ndarray, default_pos: np.ndarray) -> np.ndarray:
-    """proprio (92) of environment records, shape (n, 92)."""
+    """proprio (92) of environment records, shape (n, 92), float64."""
+    out = np.empty((len(records), N_PROPRIO))
     roll, pitch = roll_pitch(records["root_quat_wxyz"])
-    qd = records["qd"] * DOF_VEL_SCALE
-    qd[:, list(ANKLE_JOINTS)] = 0.0
-    return np.concatenate(
-        [
-            records["root_ang_vel_b"] * ANG_VEL_SCALE,
-            roll[:, None],
-            pitch[:, None],
-            records["q"] - default_pos,
-            qd,
-            records["last_action"],
-        ],
-        axis=1,
-    )
+    write_proprio(out, records, roll, pitch, default_pos)
+    return out
+
+
+def clip_in_place(x: np.ndarray, bound: float) -> None:
+    """x = clip(x, -bound, bound), as two ufunc calls (`np.clip`'s dispatch costs more than
+    the clipping at small batches)."""
+    np.maximum(x, -bound, out=x)
+    np.minimum(x, bound, out=x)
 
 
 class Twist2Adapter(Adapter):
-    """TWIST2's observation (1432) and network (29 raw actions in canonical order)."""
+    """TWIST2's observation (1432) and network (29 raw actions in canonical order).
+
+    The observation is written block by block into one float32 array (no concatenation of
+    the whole row), and the history is kept in float32, already clipped: storing a value
+    rounded to float32 and clipped to ±100 gives the float32 the observation would hold,
+    so the result is the float64-then-round-once observation, bit for bit, at a third of
+    the memory traffic (measured with `thorarena bench ipc --clients twist2`).
+    """
 
     name: ClassVar[str] = "twist2"
     reference_offsets_s: ClassVar[tuple[float, ...]] = (0.0, MIMIC_LOOKAHEAD_S)
     obs_dim = N_OBS
 
+    state_dtypes: ClassVar[dict[str, type]] = {"history": np.float32}
+
     def slot_state(self) -> dict[str, tuple[int, ...]]:
         return {"history": (N_HISTORY, N_SINGLE)}
 
     def observe(self, records: np.ndarray, slots: np.ndarray) -> np.ndarray:
-        mimic = mimic_observation(records["reference"])  # (n, 2, 35): frames at t, t + 0.02 s
-        single = np.concatenate(
-            [mimic[:, 1], proprio_observation(records, self.action_offset_rad)], axis=1
-        )
+        n = len(slots)
+        frames = records["reference"]  # (n, 2): frames at t and t + 0.02 s
+        # One rotation matrix per reference frame and for the robot, in one product.
+        quats = np.concatenate([frames["root_quat_wxyz"], records["root_quat_wxyz"][:, None]], 1)
+        rt = body_from_world(quats)  # (n, 3, 3, 3)
+        roll, pitch = roll_pitch_of(rt)  # (n, 3)
+        velocities = np.stack([frames["root_lin_vel_w"], frames["root_ang_vel_w"]], axis=-1)
+        body = rt[:, :2] @ velocities  # (n, 2, 3, 2): columns v, w in the body frame
+        mimic = np.concatenate(
+            [
+                body[..., :2, 0],
+                frames["root_pos_w"][..., 2:3],
+                roll[:, :2, None],
+                pitch[:, :2, None],
+                body[..., 2:3, 1],
+                frames["joint_pos"],
+            ],
+            axis=-1,
+        )  # (n, 2, 35)
+        obs = np.empty((n, N_OBS), dtype=np.float32)
+        single = obs[:, :N_SINGLE]
+        single[:, :N_MIMIC] = mimic[:, 1]
+        write_proprio(single[:, N_MIMIC:], records, roll[:, 2], pitch[:, 2], self.action_offset_rad)
+        clip_in_place(single, OBS_CLIP)
+        future = obs[:, FUTURE_START:]
+        future[:] = mimic[:, 0]
+        clip_in_place(future, OBS_CLIP)
+        # The history rows (stored clipped) into the observation, then updated from it.
         history = self.state["history"]
-        obs = np.concatenate([single, history[slots].reshape(len(slots), -1), mimic[:, 0]], axis=1)
+        every = n == self.n_envs  # all slots active: plain slices, no gathers
+        rows = history if every else history[slots]
+        obs[:, N_SINGLE:FUTURE_START] = rows.reshape(n, -1)
         refill = records["step"] <= 1
-        history[slots[refill]] = single[refill, None, :]
-        shift = slots[~refill]
-        history[shift, :-1] = history[shift, 1:]
-        history[shift, -1] = single[~refill]
-        clipped: np.ndarray = np.minimum(np.maximum(obs, -OBS_CLIP), OBS_CLIP)
-        return clipped.astype(np.float32)
+        if every and not refill.any():
+            history[:, :-1] = obs[:, 2 * N_SINGLE : FUTURE_START].reshape(
+                n, N_HISTORY - 1, N_SINGLE
+            )
+            history[:, -1] = single
+        else:
+            history[slots[refill]] = single[refill, None, :]
+            keep = ~refill
+            shift = slots[keep]
+            history[shift, :-1] = obs[keep, 2 * N_SINGLE : FUTURE_START].reshape(
+                len(shift), N_HISTORY - 1, N_SINGLE
+            )
+            history[shift, -1] = single[keep]
+        return obs

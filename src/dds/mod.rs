@@ -1,0 +1,35 @@
+//! The G1's own DDS interface (Unitree's `unitree_hg` messages on `rt/lowcmd` and
+//! `rt/lowstate`), so deployment code written for the robot can drive the simulator.
+//!
+//! This module holds what the bridge needs that is not DDS itself: the message types,
+//! their CDR encoding (`cdr`) and the checksum the robot and Unitree's SDKs put in every
+//! message (`crc`), computed over the messages' C struct layout.
+
+pub mod cdr;
+pub mod crc;
+pub mod unitree_hg;
+
+pub use unitree_hg::{ImuState, LowCmd, LowState, MotorCmd, MotorState};
+
+/// A DDS message that could not be decoded.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum DecodeError {
+    /// The serialized payload ends before the message does.
+    #[error("{message}: {got} bytes of payload, the message needs {need}")]
+    Truncated {
+        /// The message type.
+        message: &'static str,
+        /// Bytes available.
+        got: usize,
+        /// Bytes needed.
+        need: usize,
+    },
+    /// The encapsulation header names an encoding this codec does not read.
+    #[error("{message}: encapsulation {kind:#06x} is not plain CDR (XCDR1 or XCDR2)")]
+    Encapsulation {
+        /// The message type.
+        message: &'static str,
+        /// The representation identifier.
+        kind: u16,
+    },
+}
