@@ -4,7 +4,9 @@
 
 use super::PerfError;
 use crate::evaluation::{LatencyRecorder, LatencySummary};
-use thorarena_ipc::{EnvHeader, Layout, ObsBatchMut, SimSession, StepOutcome, FLAG_ACTIVE};
+use thorarena_ipc::{
+    ActionBatch, EnvHeader, Layout, ObsBatchMut, SimSession, StepOutcome, FLAG_ACTIVE,
+};
 
 /// Fills every slot of `batch` as active with a recognisable q: environment `i`'s joint
 /// `j` at step `s` holds `100 i + j + s`, so an echo's answer can be checked.
@@ -31,25 +33,43 @@ pub fn echo_round_trips(
     warmup: usize,
     steps: usize,
 ) -> Result<LatencySummary, PerfError> {
+    timed_round_trips(
+        sim,
+        warmup,
+        steps,
+        fill_echo_observations,
+        |a, shape, step| {
+            let last = shape.n_envs - 1;
+            a.env(last)[1] == (last * 100 + 1) as f64 + step as f64
+        },
+    )
+}
+
+/// `warmup` untimed and `steps` timed round trips, each batch written by `fill` and each
+/// answer judged by `answer_ok` (a wrong one ends the measurement with an error).
+fn timed_round_trips(
+    sim: &mut SimSession,
+    warmup: usize,
+    steps: usize,
+    fill: impl Fn(&mut ObsBatchMut, Layout, u64),
+    answer_ok: impl Fn(&ActionBatch, Layout, u64) -> bool,
+) -> Result<LatencySummary, PerfError> {
     let shape = sim.layout().ok_or(PerfError::WrongEcho {
         step: 0,
         outcome: "no policy connected".into(),
     })?;
     let mut rec = LatencyRecorder::default();
     for step in 0..(warmup + steps) as u64 {
-        let mut answer_ok = true;
+        let mut ok = true;
         let outcome = sim.step(
-            |b| fill_echo_observations(b, shape, step),
+            |b| fill(b, shape, step),
             None,
-            |a| {
-                let last = shape.n_envs - 1;
-                answer_ok = a.env(last)[1] == (last * 100 + 1) as f64 + step as f64;
-            },
+            |a| ok = answer_ok(a, shape, step),
         )?;
-        if outcome != StepOutcome::Answered || !answer_ok {
+        if outcome != StepOutcome::Answered || !ok {
             return Err(PerfError::WrongEcho {
                 step,
-                outcome: format!("{outcome:?}"),
+                outcome: format!("{outcome:?}, answer as expected: {ok}"),
             });
         }
         if step >= warmup as u64 {
@@ -92,29 +112,11 @@ pub fn adapter_round_trips(
     warmup: usize,
     steps: usize,
 ) -> Result<LatencySummary, PerfError> {
-    let shape = sim.layout().ok_or(PerfError::WrongEcho {
-        step: 0,
-        outcome: "no policy connected".into(),
-    })?;
-    let mut rec = LatencyRecorder::default();
-    for step in 0..(warmup + steps) as u64 {
-        let mut answer_ok = true;
-        let outcome = sim.step(
-            |b| fill_standing_observations(b, shape, step),
-            None,
-            |a| {
-                answer_ok = (0..shape.n_envs).all(|i| a.env(i).iter().all(|x| x.is_finite()));
-            },
-        )?;
-        if outcome != StepOutcome::Answered || !answer_ok {
-            return Err(PerfError::WrongEcho {
-                step,
-                outcome: format!("{outcome:?}, finite actions: {answer_ok}"),
-            });
-        }
-        if step >= warmup as u64 {
-            rec.record(sim.last_round_trip());
-        }
-    }
-    Ok(rec.summary())
+    timed_round_trips(
+        sim,
+        warmup,
+        steps,
+        fill_standing_observations,
+        |a, shape, _| (0..shape.n_envs).all(|i| a.env(i).iter().all(|x| x.is_finite())),
+    )
 }
