@@ -59,7 +59,8 @@ def body_from_world(quat_wxyz: np.ndarray) -> np.ndarray:
     whatever the batch: what per-step observation builders want at small batches."""
     q = np.ascontiguousarray(quat_wxyz)
     qq = (q[..., :, None] * q[..., None, :]).reshape(*q.shape[:-1], 16)
-    return (qq @ _BODY_FROM_WORLD).reshape(*q.shape[:-1], 3, 3)
+    rt: np.ndarray = (qq @ _BODY_FROM_WORLD).reshape(*q.shape[:-1], 3, 3)
+    return rt
 
 
 def roll_pitch_of(body_from_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
