@@ -60,10 +60,10 @@ pub fn decode_c<M: Message>(bytes: &[u8]) -> Result<M, DecodeError> {
 
 impl Visit for Writer {
     fn begin_struct(&mut self) {
-        self.open();
+        self.struct_boundary();
     }
     fn end_struct(&mut self) {
-        self.close();
+        self.struct_boundary();
     }
     fn u8(&mut self, v: &mut u8) {
         self.put_u8(*v);
@@ -81,10 +81,10 @@ impl Visit for Writer {
 
 impl Visit for Reader<'_> {
     fn begin_struct(&mut self) {
-        self.open();
+        self.struct_boundary();
     }
     fn end_struct(&mut self) {
-        self.close();
+        self.struct_boundary();
     }
     fn u8(&mut self, v: &mut u8) {
         *v = self.get_u8();
@@ -154,15 +154,9 @@ impl Writer {
         }
     }
 
-    /// A struct starts (C: at its alignment of 4).
-    fn open(&mut self) {
-        if self.layout == Layout::C {
-            self.align(4);
-        }
-    }
-
-    /// A struct ends (C: padded to its alignment of 4).
-    fn close(&mut self) {
+    /// A struct starts or ends: in C, at its alignment of 4 (every struct here holds a
+    /// 32-bit field); CDR pads nowhere but before a field.
+    fn struct_boundary(&mut self) {
         if self.layout == Layout::C {
             self.align(4);
         }
@@ -278,15 +272,9 @@ impl<'a> Reader<'a> {
         out
     }
 
-    /// A struct starts.
-    fn open(&mut self) {
-        if self.layout == Layout::C {
-            self.align(4);
-        }
-    }
-
-    /// A struct ends.
-    fn close(&mut self) {
+    /// A struct starts or ends: in C, at its alignment of 4 (every struct here holds a
+    /// 32-bit field); CDR pads nowhere but before a field.
+    fn struct_boundary(&mut self) {
         if self.layout == Layout::C {
             self.align(4);
         }

@@ -8,18 +8,23 @@ use thorarena_ipc::{
     ActionBatch, EnvHeader, Layout, ObsBatchMut, SimSession, StepOutcome, FLAG_ACTIVE,
 };
 
+/// Environment `i` active at episode step `step` (50 Hz control).
+fn active_header(i: usize, step: u64) -> EnvHeader {
+    EnvHeader {
+        episode_id: i as u64,
+        step,
+        flags: FLAG_ACTIVE,
+        reserved: 0,
+        time_s: step as f64 * 0.02,
+    }
+}
+
 /// Fills every slot of `batch` as active with a recognisable q: environment `i`'s joint
 /// `j` at step `s` holds `100 i + j + s`, so an echo's answer can be checked.
 pub fn fill_echo_observations(batch: &mut ObsBatchMut, layout: Layout, step: u64) {
     for i in 0..layout.n_envs {
         let mut env = batch.env(i);
-        env.set_header(&EnvHeader {
-            episode_id: i as u64,
-            step,
-            flags: FLAG_ACTIVE,
-            reserved: 0,
-            time_s: step as f64 * 0.02,
-        });
+        env.set_header(&active_header(i, step));
         for (j, q) in env.array("q").iter_mut().enumerate() {
             *q = (i * 100 + j) as f64 + step as f64;
         }
@@ -86,13 +91,7 @@ pub fn fill_standing_observations(batch: &mut ObsBatchMut, layout: Layout, step:
     const IDENTITY_WXYZ: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
     for i in 0..layout.n_envs {
         let mut env = batch.env(i);
-        env.set_header(&EnvHeader {
-            episode_id: i as u64,
-            step,
-            flags: FLAG_ACTIVE,
-            reserved: 0,
-            time_s: step as f64 * 0.02,
-        });
+        env.set_header(&active_header(i, step));
         env.array("root_quat_wxyz").copy_from_slice(&IDENTITY_WXYZ);
         env.array("root_pos_w")[2] = 0.79;
         for r in 0..layout.n_refs {

@@ -42,7 +42,7 @@ from typing import ClassVar
 import numpy as np
 
 from .base import Adapter
-from .rotations import body_from_world, roll_pitch, roll_pitch_of, rotate_inverse
+from .rotations import body_from_world, roll_pitch_of
 
 N_JOINTS = 29
 N_MIMIC = 6 + N_JOINTS
@@ -67,29 +67,6 @@ FUTURE_START = N_SINGLE * (N_HISTORY + 1)
 """Column of mimic(reference[0]), after single and the history."""
 
 
-def mimic_observation(
-    frames: np.ndarray, roll: np.ndarray | None = None, pitch: np.ndarray | None = None
-) -> np.ndarray:
-    """mimic (35) of reference frames (records of `Layout.ref_dtype`, any shape): (..., 35).
-    `roll`, `pitch`: the frames' roll and pitch, when already computed."""
-    quat = frames["root_quat_wxyz"]
-    velocities = np.stack([frames["root_lin_vel_w"], frames["root_ang_vel_w"]], axis=-2)
-    body = rotate_inverse(quat[..., None, :], velocities)  # (..., 2, 3): v, w
-    if roll is None or pitch is None:
-        roll, pitch = roll_pitch(quat)
-    return np.concatenate(
-        [
-            body[..., 0, :2],
-            frames["root_pos_w"][..., 2:3],
-            roll[..., None],
-            pitch[..., None],
-            body[..., 1, 2:3],
-            frames["joint_pos"],
-        ],
-        axis=-1,
-    )
-
-
 def write_proprio(
     out: np.ndarray,
     records: np.ndarray,
@@ -109,14 +86,6 @@ def write_proprio(
     out[:, [j + a for a in ANKLE_JOINTS]] = 0.0
     j += N_JOINTS
     out[:, j : j + N_JOINTS] = records["last_action"]
-
-
-def proprio_observation(records: np.ndarray, default_pos: np.ndarray) -> np.ndarray:
-    """proprio (92) of environment records, shape (n, 92), float64."""
-    out = np.empty((len(records), N_PROPRIO))
-    roll, pitch = roll_pitch(records["root_quat_wxyz"])
-    write_proprio(out, records, roll, pitch, default_pos)
-    return out
 
 
 def clip_in_place(x: np.ndarray, bound: float) -> None:
