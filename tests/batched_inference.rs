@@ -118,6 +118,7 @@ fn records(
         ],
         workers,
         envs,
+        pipeline_depth: 1,
         io: PolicyIoRules::default(),
         trace: Vec::new(),
         trace_first_s: None,

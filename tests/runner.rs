@@ -1,5 +1,5 @@
 //! The evaluation runner: every (sequence, setting) runs once, results are identical for
-//! any number of workers, the force and no-force settings differ only through the replay,
+//! any number of workers, slots and pipeline depths, the force and no-force settings differ only through the replay,
 //! and every record streams out.
 
 use thorarena::evaluation::task_thresholds;
@@ -36,7 +36,19 @@ fn results_are_identical_for_any_number_of_workers() {
     let profile = load_profile(&bundled_profile_path("default"), &robot).unwrap();
     let seqs = sequences();
     let mut outputs = Vec::new();
-    for (workers, envs) in [(1, 1), (2, 2), (3, 5), (2, 8)] {
+    // (workers, slots, pipeline depth): depth 2 steps one half of the slots while the
+    // policy answers for the other.
+    let configurations = [
+        (1, 1, 1),
+        (2, 2, 1),
+        (3, 5, 1),
+        (2, 8, 1),
+        (2, 2, 2),
+        (1, 3, 2),
+        (3, 5, 2),
+        (2, 8, 2),
+    ];
+    for (workers, envs, pipeline_depth) in configurations {
         let plan = EvalPlan {
             robot: &robot,
             profile: &profile,
@@ -48,6 +60,7 @@ fn results_are_identical_for_any_number_of_workers() {
             ],
             workers,
             envs,
+            pipeline_depth,
             io: PolicyIoRules::default(),
             trace: Vec::new(),
             trace_first_s: None,
@@ -64,11 +77,12 @@ fn results_are_identical_for_any_number_of_workers() {
         let summary = summarize(&records, &task_thresholds(&seqs, profile.control_dt_s));
         outputs.push(format!("{records:?}{summary:?}"));
     }
-    assert_eq!(outputs.len(), 4);
+    assert_eq!(outputs.len(), configurations.len());
     for (i, out) in outputs.iter().enumerate().skip(1) {
         assert_eq!(
             &outputs[0], out,
-            "configuration {i} differs from one worker, one slot"
+            "configuration {:?} differs from one worker, one slot",
+            configurations[i]
         );
     }
 }
@@ -90,6 +104,7 @@ fn force_and_no_force_differ_only_by_the_replay() {
         ],
         workers: 2,
         envs: 2,
+        pipeline_depth: 1,
         io: PolicyIoRules::default(),
         trace: Vec::new(),
         trace_first_s: None,
@@ -156,6 +171,7 @@ fn the_balance_baseline_keeps_the_standing_sample_tasks_upright_without_force() 
         settings: vec![Setting::parse("no-force").unwrap()],
         workers: 2,
         envs: 3,
+        pipeline_depth: 1,
         io: PolicyIoRules::default(),
         trace: Vec::new(),
         trace_first_s: None,

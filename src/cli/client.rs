@@ -92,6 +92,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     std::io::stdout().flush()?;
     let n_refs = info.layout.n_refs;
     let mut wire = WireAnswer::default();
+    let mut episodes = EpisodeContinuity::default();
     let mut steps = 0u64;
     loop {
         let mut step = match client.next_step(Some(Duration::from_secs(1)))? {
@@ -105,7 +106,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
                 Duration::try_from_secs_f64(args.delay_ms / 1e3).unwrap_or(Duration::MAX),
             );
         }
+        let mut broken = None;
         step.answer(&mut |obs, out| {
+            broken = episodes.check(obs);
             match policy.as_mut() {
                 // The echo: action = q.
                 None => {
@@ -119,6 +122,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
                 out.all().fill(f64::NAN);
             }
         })?;
+        if let Some(why) = broken {
+            bail!("{why}");
+        }
         step.send(&client)?;
         if args.die_after_steps == Some(steps) {
             eprintln!("--die-after-steps {steps}: killing myself");
@@ -130,4 +136,31 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     eprintln!("the run is over after {steps} steps");
     Ok(())
+}
+
+/// Which episode each slot runs, as this process saw it start: the simulator never hands
+/// a policy the middle of an episode it did not begin (after a reconnect, episodes cut
+/// short run again from their start), and this client holds it to that.
+#[derive(Default)]
+struct EpisodeContinuity {
+    started: Vec<Option<u64>>,
+}
+
+impl EpisodeContinuity {
+    /// Why `obs` breaks the rule, if it does.
+    fn check(&mut self, obs: &thorarena_ipc::ObsBatch) -> Option<String> {
+        self.started.resize(obs.n_envs(), None);
+        for i in (0..obs.n_envs()).filter(|&i| obs.env(i).is_active()) {
+            let header = obs.env(i).header();
+            if header.step == 0 {
+                self.started[i] = Some(header.episode_id);
+            } else if self.started[i] != Some(header.episode_id) {
+                return Some(format!(
+                    "slot {i}: episode {} at step {}, but this process never saw it start (the simulator continued an episode begun with another policy)",
+                    header.episode_id, header.step
+                ));
+            }
+        }
+        None
+    }
 }

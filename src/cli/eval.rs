@@ -152,6 +152,7 @@ impl RunArgs {
             },
             workers: self.workers,
             envs: self.io.envs,
+            pipeline_depth: self.io.pipeline_depth,
             keypoints: self.keypoints.clone(),
             termination: TerminationRule {
                 max_torso_height_error_m: self.max_torso_height_error,

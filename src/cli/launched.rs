@@ -78,6 +78,13 @@ impl LaunchedPolicy {
     }
 }
 
+impl LaunchedPolicy {
+    /// CPU time of the policy's process group so far (the shell and what it started).
+    pub fn cpu_time(&self) -> Duration {
+        thorarena::perf::process_group_cpu_time(self.child.id())
+    }
+}
+
 impl Drop for LaunchedPolicy {
     fn drop(&mut self) {
         stop_group(&mut self.child);

@@ -18,6 +18,13 @@ pub struct PolicyIoArgs {
     /// the policy each control step [default: the number of workers].
     #[arg(long)]
     pub envs: Option<usize>,
+    /// 2: split the slots in two halves and step one half's physics while the policy
+    /// answers for the other, so neither the cores nor the policy wait (records are the
+    /// same as with 1, lock-step). Not with --budget or --latency-mode measured: the
+    /// policy then shares the cores with physics and its timing is not its own. Networks
+    /// run in process already overlap (each worker runs its own copy).
+    #[arg(long, default_value_t = 1)]
+    pub pipeline_depth: usize,
     /// Latency budget per control step for a remote policy, from publishing the
     /// observations to receiving the actions: `2ms`, `500us`, `0.004s`, or `none` for pure
     /// lock-step (wait as long as the policy process lives).

@@ -25,6 +25,6 @@ pub use schedule::{reference_steps, schedule};
 pub use setting::Setting;
 pub use spec::{
     parse_settings, Advice, EngineChoice, EvalRequest, EvalSpec, SpecError, DEFAULT_SETTINGS,
-    MAX_ENVS, MAX_SUBSTEPS, MAX_WORKERS,
+    MAX_ENVS, MAX_PIPELINE_DEPTH, MAX_SUBSTEPS, MAX_WORKERS,
 };
 pub use thresholds::task_thresholds;

@@ -16,6 +16,8 @@ use std::sync::Arc;
 pub const MAX_WORKERS: usize = 1024;
 /// Most environment slots a run may ask for.
 pub const MAX_ENVS: usize = 4096;
+/// The deepest slot pipeline: two groups, one stepping while the policy answers the other.
+pub const MAX_PIPELINE_DEPTH: usize = 2;
 /// The most physics steps per control step a physics step may ask for (0.02 ms at 50 Hz
 /// control: far finer than any engine's validated step; 10⁻⁹ s asked for 2·10⁷).
 pub const MAX_SUBSTEPS: usize = 1000;
@@ -60,6 +62,9 @@ pub struct EvalRequest {
     pub workers: Option<usize>,
     /// Environment slots (`None`: one per worker).
     pub envs: Option<usize>,
+    /// Slot groups in the pipeline (1: lock-step; 2: the workers step one half of the
+    /// slots while the policy answers for the other half). See [`MAX_PIPELINE_DEPTH`].
+    pub pipeline_depth: usize,
     /// Keypoint set of the tracking error.
     pub keypoints: String,
     /// When an episode has failed.
@@ -92,6 +97,7 @@ impl Default for EvalRequest {
             selection: SequenceSelection::default(),
             workers: None,
             envs: None,
+            pipeline_depth: 1,
             keypoints: "default".into(),
             termination: TerminationRule::default(),
             trace: Vec::new(),
@@ -191,6 +197,9 @@ pub struct EvalSpec {
     pub workers: usize,
     /// Environment slots.
     pub envs: usize,
+    /// Slot groups in the pipeline (checked: 1, or 2 under lock-step rules with at least
+    /// two slots).
+    pub pipeline_depth: usize,
     /// What the caller should tell the user.
     pub advice: Vec<Advice>,
 }
@@ -228,6 +237,7 @@ impl EvalSpec {
         )?;
         check_trace(&request.trace, &picked.sequences, &dataset)?;
         let (workers, envs) = threads(request)?;
+        check_pipeline(request.pipeline_depth, envs, &request.io)?;
         Ok(Self {
             profile_mismatch,
             unchecked: request.unchecked,
@@ -246,6 +256,7 @@ impl EvalSpec {
             trace: request.trace.clone(),
             workers,
             envs,
+            pipeline_depth: request.pipeline_depth,
             advice,
         })
     }
@@ -411,6 +422,37 @@ fn threads(request: &EvalRequest) -> Result<(usize, usize), SpecError> {
         None => (workers.max(1) * registry::slots_per_worker(&request.policy)).min(MAX_ENVS),
     };
     Ok((workers, envs))
+}
+
+/// A pipeline of `depth` slot groups over `envs` slots: deeper than one, the policy's
+/// answer overlaps the physics of the other group, so it shares the cores with it and its
+/// measured latency is no longer the one it would have alone — a budget or measured latency
+/// would then judge the run's timing, not the policy's, and are refused.
+fn check_pipeline(depth: usize, envs: usize, io: &PolicyIoRules) -> Result<(), SpecError> {
+    if !(1..=MAX_PIPELINE_DEPTH).contains(&depth) {
+        return Err(invalid(format!(
+            "--pipeline-depth {depth}: 1 (lock-step) or {MAX_PIPELINE_DEPTH} (the physics of one half of the slots overlaps the policy's answer for the other)"
+        )));
+    }
+    if depth == 1 {
+        return Ok(());
+    }
+    if envs < depth {
+        return Err(invalid(format!(
+            "--pipeline-depth {depth} needs at least {depth} environment slots (--envs {envs})"
+        )));
+    }
+    if let Some(b) = io.budget_s {
+        return Err(invalid(format!(
+            "--pipeline-depth {depth} with --budget {b}s: overlapped with physics, the policy's round trip is not what it would be alone, so a deadline would judge the run, not the policy (use --pipeline-depth 1)"
+        )));
+    }
+    if io.latency_mode == crate::evaluation::LatencyMode::Measured {
+        return Err(invalid(format!(
+            "--pipeline-depth {depth} with --latency-mode measured: overlapped with physics, the measured latency is not the policy's alone (use --pipeline-depth 1)"
+        )));
+    }
+    Ok(())
 }
 
 /// Sets the profile's physics step to `dt` s, which must divide its control step.

@@ -32,6 +32,9 @@ pub struct RunTiming {
     /// The slowest worker's wall time inside the physics steps of its episodes: the run's
     /// floor, measured in the run on its own steps.
     pub physics_wall_slowest_worker: Duration,
+    /// A hash of the records (JSON, in job order): equal between runs whose every episode
+    /// is the same.
+    pub records_fingerprint: u64,
 }
 
 impl RunTiming {
@@ -88,7 +91,45 @@ pub fn time_run(spec: &EvalSpec, policy: &mut dyn Policy) -> RunTiming {
             .copied()
             .max()
             .unwrap_or_default(),
+        records_fingerprint: fingerprint(&outcome.records),
     }
+}
+
+/// A hash of `records` as JSON, in their order.
+fn fingerprint(records: &[crate::evaluation::EpisodeRecord]) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    for r in records {
+        serde_json::to_string(r).unwrap_or_default().hash(&mut h);
+    }
+    h.finish()
+}
+
+/// CPU time (user + system) of the live processes of process group `pgid` (Linux
+/// `/proc`; zero elsewhere): what a policy process started in its own group costs.
+pub fn process_group_cpu_time(pgid: u32) -> Duration {
+    // SAFETY: sysconf reads a constant of the system.
+    let ticks_per_s = unsafe { libc::sysconf(libc::_SC_CLK_TCK) }.max(1) as f64;
+    let Ok(dir) = std::fs::read_dir("/proc") else {
+        return Duration::ZERO;
+    };
+    let mut ticks = 0u64;
+    for entry in dir.flatten() {
+        let Ok(stat) = std::fs::read_to_string(entry.path().join("stat")) else {
+            continue;
+        };
+        // Fields after the command name (which may hold spaces, inside parentheses):
+        // state ppid pgrp … utime (14th field overall) stime (15th).
+        let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+            continue;
+        };
+        let fields: Vec<&str> = rest.split_whitespace().collect();
+        if fields.len() > 12 && fields[2].parse::<u32>() == Ok(pgid) {
+            ticks +=
+                fields[11].parse::<u64>().unwrap_or(0) + fields[12].parse::<u64>().unwrap_or(0);
+        }
+    }
+    Duration::from_secs_f64(ticks as f64 / ticks_per_s)
 }
 
 /// Wall time of `physics_steps` steps of `spec`'s engine, robot and gains spread evenly

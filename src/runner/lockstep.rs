@@ -9,6 +9,11 @@
 //! which slot or worker ran it, nor on N or W — because a reset rebuilds the physics world
 //! and every slot's episode sees only its own observations.
 //!
+//! With a pipeline depth of 2 the slots form two halves: the coordinator sends one half's
+//! commands, then waits on the policy's answer for the other half while the workers step
+//! the first, so the policy's time hides behind physics. One request is in flight at a
+//! time; an episode sees the same observations and actions as in lock-step.
+//!
 //! A policy that offers copies of itself ([`Policy::worker_copies`], the networks in
 //! process) needs no coordinator: [`super::free_running`] runs it, each worker stepping
 //! and asking its own copy for its slots' actions without waiting for the others.
@@ -182,38 +187,46 @@ pub fn run_eval(
     let mut results: Vec<Option<EpisodeRecord>> = vec![None; jobs.len()];
     let mut latency = LatencyRecorder::default();
     let mut physics_wall_by_worker = vec![Duration::ZERO; n_workers];
-    let slots_of = |w: usize| (w..n_slots).step_by(n_workers);
+    let groups = slot_groups(n_slots, plan.pipeline_depth.max(1));
 
     std::thread::scope(|scope| {
-        let (report_tx, report_rx) = mpsc::channel::<Vec<SlotReport>>();
+        let (report_tx, report_rx) = mpsc::channel::<(usize, Vec<SlotReport>)>();
         let mut command_txs = Vec::with_capacity(n_workers);
         for w in 0..n_workers {
-            let (command_tx, command_rx) = mpsc::channel::<Vec<SlotCommand>>();
+            let (command_tx, command_rx) = mpsc::channel::<GroupCommands>();
             command_txs.push(command_tx);
             let report_tx = report_tx.clone();
-            let slots: Vec<usize> = slots_of(w).collect();
+            let slots: Vec<usize> = (w..n_slots).step_by(n_workers).collect();
             let shared = &shared;
             scope.spawn(move || worker(shared, slots, command_rx, report_tx));
         }
         drop(report_tx);
+        let mut pipe = Pipeline {
+            n_workers,
+            command_txs,
+            report_rx,
+            replies_due: vec![0; groups.len()],
+            reports: (0..groups.len()).map(|_| Vec::new()).collect(),
+        };
 
         let mut commands: Vec<SlotCommand> = (0..n_slots).map(|_| SlotCommand::Idle).collect();
         // Set once a failed policy has been replaced (`--on-policy-failure wait`).
         let mut requeue_failed = false;
+        // Groups whose episodes the policy was answering when it failed in another group:
+        // they end without asking it (a replacement must never continue them).
+        let mut fails_unasked = vec![false; groups.len()];
+        // Whether a group's last round had no episode running.
+        let mut idle = vec![false; groups.len()];
         let mut actions: Vec<Vec<f64>> = Vec::new();
-        loop {
-            for (w, tx) in command_txs.iter().enumerate() {
-                let mine = slots_of(w)
-                    .map(|s| std::mem::replace(&mut commands[s], SlotCommand::Idle))
-                    .collect();
-                tx.send(mine).expect("worker alive");
-            }
-            let mut reports: Vec<SlotReport> = Vec::with_capacity(n_slots);
-            for _ in 0..n_workers {
-                reports.extend(report_rx.recv().expect("worker alive"));
-            }
+        for (g, group) in groups.iter().enumerate() {
+            pipe.dispatch(g, group, &mut commands); // every slot takes its first job
+        }
+        // Group g's reports are collected, its policy call made and its commands sent
+        // while the workers step the other group (the group sent last round).
+        for g in (0..groups.len()).cycle() {
+            let mut reports = pipe.collect(g);
             reports.sort_by_key(|r| r.slot);
-            let mut observations = Vec::with_capacity(n_slots);
+            let mut observations = Vec::with_capacity(groups[g].len());
             for report in reports {
                 for f in report.finished {
                     physics_wall_by_worker[report.slot % n_workers] += f.physics_wall;
@@ -230,41 +243,63 @@ pub fn run_eval(
                 observations.extend(report.observation);
             }
             if observations.is_empty() {
-                if !shared.retry.lock().expect("retry queue").is_empty()
-                    && !shared.stop.load(Ordering::SeqCst)
-                {
-                    continue; // idle slots take the jobs to run again next round
+                fails_unasked[g] = false;
+                idle[g] = true;
+                let retrying = !shared.retry.lock().expect("retry queue").is_empty()
+                    && !shared.stop.load(Ordering::SeqCst);
+                if retrying {
+                    pipe.dispatch(g, &groups[g], &mut commands); // its slots take the jobs to run again
+                } else if idle.iter().all(|i| *i) && pipe.replies_due.iter().all(|d| *d == 0) {
+                    break; // every job ran (or the policy failed for good)
                 }
-                break; // every job ran (or the policy failed for good)
+                continue;
             }
-            for o in observations.iter().filter(|o| o.step == 0) {
-                policy.reset(o.env);
-            }
-            actions.resize_with(observations.len(), || vec![0.0; n_joints]);
-            let started = Instant::now();
-            let outcome = policy.act(&observations, &mut actions[..observations.len()]);
-            let round_trip = policy
-                .last_round_trip()
-                .unwrap_or_else(|| started.elapsed());
-            latency.record(round_trip);
-            answer_to_commands(
-                plan,
-                outcome,
-                round_trip,
-                &observations,
-                &actions,
-                &mut commands,
-                |slot| slot,
-            );
+            idle[g] = false;
+            let outcome = if std::mem::take(&mut fails_unasked[g]) {
+                ActOutcome::Failed
+            } else {
+                for o in observations.iter().filter(|o| o.step == 0) {
+                    policy.reset(o.env);
+                }
+                actions.resize_with(observations.len(), || vec![0.0; n_joints]);
+                let started = Instant::now();
+                let outcome = policy.act(&observations, &mut actions[..observations.len()]);
+                let round_trip = policy
+                    .last_round_trip()
+                    .unwrap_or_else(|| started.elapsed());
+                latency.record(round_trip);
+                answer_to_commands(
+                    plan,
+                    outcome,
+                    round_trip,
+                    &observations,
+                    &actions,
+                    &mut commands,
+                    |slot| slot,
+                );
+                if outcome == ActOutcome::Failed {
+                    for (other, fails) in fails_unasked.iter_mut().enumerate() {
+                        *fails = other != g && !idle[other];
+                    }
+                    if policy.recover() {
+                        requeue_failed = true;
+                    } else {
+                        shared.stop.store(true, Ordering::SeqCst);
+                    }
+                }
+                outcome
+            };
             if outcome == ActOutcome::Failed {
-                if policy.recover() {
-                    requeue_failed = true;
-                } else {
-                    shared.stop.store(true, Ordering::SeqCst);
+                for o in &observations {
+                    commands[o.env] = SlotCommand::Terminate {
+                        why: Termination::PolicyFailed,
+                        fault: None,
+                    };
                 }
             }
+            pipe.dispatch(g, &groups[g], &mut commands);
         }
-        drop(command_txs); // the workers' loops end
+        drop(pipe); // the workers' loops end
     });
 
     let records: Vec<EpisodeRecord> = results.into_iter().flatten().collect();
@@ -302,24 +337,76 @@ fn miss_rule(rule: MissRule, fault: PolicyFault, obs: &Observation) -> SlotComma
     }
 }
 
-/// A worker of the lock-step loop: applies its slots' commands, starts new jobs in free
-/// slots, reports their observations to the coordinator.
+/// A worker of the lock-step loop: applies the commands of its slots in one group (local
+/// slot index, command), starts new jobs in free slots, reports their observations to the
+/// coordinator under the group's number.
 fn worker(
     shared: &Shared,
     slots: Vec<usize>,
-    commands: mpsc::Receiver<Vec<SlotCommand>>,
-    reports: mpsc::Sender<Vec<SlotReport>>,
+    commands: mpsc::Receiver<GroupCommands>,
+    reports: mpsc::Sender<(usize, Vec<SlotReport>)>,
 ) {
     let mut mine = WorkerSlots::new(shared.plan, slots);
-    while let Ok(batch) = commands.recv() {
+    while let Ok((group, batch)) = commands.recv() {
         let out = batch
             .into_iter()
-            .enumerate()
             .map(|(k, command)| mine.advance(shared, k, command, None))
             .collect();
-        if reports.send(out).is_err() {
+        if reports.send((group, out)).is_err() {
             return;
         }
+    }
+}
+
+/// The slots in `depth` contiguous groups of (nearly) equal size: with slot `s` on worker
+/// `s mod W`, each group spans the workers as evenly as the counts allow.
+fn slot_groups(n_slots: usize, depth: usize) -> Vec<Vec<usize>> {
+    let depth = depth.clamp(1, n_slots.max(1));
+    (0..depth)
+        .map(|g| (g * n_slots / depth..(g + 1) * n_slots / depth).collect())
+        .collect()
+}
+
+/// A group's commands to one worker: (group, [(local slot index, command)]).
+type GroupCommands = (usize, Vec<(usize, SlotCommand)>);
+
+/// The coordinator's channels to the workers, and the groups' reports on their way.
+struct Pipeline {
+    n_workers: usize,
+    command_txs: Vec<mpsc::Sender<GroupCommands>>,
+    report_rx: mpsc::Receiver<(usize, Vec<SlotReport>)>,
+    /// Per group, the workers that have not answered its last dispatch.
+    replies_due: Vec<usize>,
+    /// Per group, reports that arrived while another group's were awaited.
+    reports: Vec<Vec<SlotReport>>,
+}
+
+impl Pipeline {
+    /// Sends group `g`'s commands (taken from `commands`, leaving `Idle`) to the workers
+    /// that own its slots.
+    fn dispatch(&mut self, g: usize, group: &[usize], commands: &mut [SlotCommand]) {
+        let mut per_worker: Vec<Vec<(usize, SlotCommand)>> =
+            (0..self.n_workers).map(|_| Vec::new()).collect();
+        for &slot in group {
+            let command = std::mem::replace(&mut commands[slot], SlotCommand::Idle);
+            per_worker[slot % self.n_workers].push((slot / self.n_workers, command));
+        }
+        for (w, batch) in per_worker.into_iter().enumerate() {
+            if !batch.is_empty() {
+                self.command_txs[w].send((g, batch)).expect("worker alive");
+                self.replies_due[g] += 1;
+            }
+        }
+    }
+
+    /// Group `g`'s reports, once every worker it was sent to has answered.
+    fn collect(&mut self, g: usize) -> Vec<SlotReport> {
+        while self.replies_due[g] > 0 {
+            let (from, reports) = self.report_rx.recv().expect("worker alive");
+            self.reports[from].extend(reports);
+            self.replies_due[from] -= 1;
+        }
+        std::mem::take(&mut self.reports[g])
     }
 }
 

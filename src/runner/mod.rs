@@ -39,6 +39,10 @@ pub struct EvalPlan<'a> {
     pub workers: usize,
     /// Environment slots stepped in lock-step (one batch per control step to the policy).
     pub envs: usize,
+    /// Slot groups of the lock-step loop: 1, one batch of every slot per control step; 2,
+    /// the slots split in two halves, the workers stepping one while the policy answers
+    /// for the other (checked by [`EvalSpec`]; the free-running loop has no groups).
+    pub pipeline_depth: usize,
     /// What a missed deadline or an unusable action does, and when actions take effect.
     pub io: PolicyIoRules,
     /// Record rollout traces of the sequences with these `task/sequence_id` names.
@@ -63,6 +67,7 @@ impl<'a> EvalPlan<'a> {
             settings: spec.settings.clone(),
             workers: spec.workers,
             envs: spec.envs,
+            pipeline_depth: spec.pipeline_depth,
             io: spec.io,
             trace: spec.trace.clone(),
             trace_first_s,
