@@ -13,8 +13,23 @@
 #     (tools/mujoco-lib.sh), so the tests build with the `mujoco` feature (the MuJoCo
 #     backend); without it they build without, and its tests count as skipped.
 # A test whose prerequisite is missing is counted as skipped here; under CI=true it fails.
+#
+# `./test.sh --reference-tests-only` runs only the test files that use the published
+# reference artifacts (those naming `prereq::reference`, `reference_dir`, `THORARENA_REFERENCE` or
+# `shared/reference`): CI runs them a second time without the artifacts, to show they skip.
 set -uo pipefail
 cd "$(dirname "$0")"
+rust_targets=(--workspace)
+py_targets=(tools/tests adapters/python/tests)
+if [ "${1:-}" = --reference-tests-only ]; then
+    rust_targets=()
+    for f in $(grep -lE 'prereq::reference|reference_dir|THORARENA_REFERENCE|shared/reference' tests/*.rs); do
+        rust_targets+=(--test "$(basename "$f" .rs)")
+    done
+    mapfile -t py_targets < <(grep -lE 'THORARENA_REFERENCE|shared.*reference|reference MJCF' tools/tests/*.py adapters/python/tests/*.py)
+elif [ $# != 0 ]; then
+    echo "usage: ./test.sh [--reference-tests-only]"; exit 2
+fi
 root=$PWD
 logs=$root/target/test-logs
 mkdir -p "$logs"
@@ -71,14 +86,14 @@ else
     say "no MuJoCo 3.17.0 library: building without the mujoco feature (its tests count as skipped)"
 fi
 
-say "rust tests (cargo test --release --workspace ${features[*]}; the first build takes ~15 min on 2 cores)"
+say "rust tests (cargo test --release ${rust_targets[*]} ${features[*]}; the first build takes ~15 min on 2 cores)"
 export THORARENA_SKIP_LOG=$logs/skipped.tsv
 : > "$THORARENA_SKIP_LOG"
-cargo test --release --workspace "${features[@]}" --no-fail-fast 2>&1 | tee "$logs/cargo-test.log"
+cargo test --release "${rust_targets[@]}" "${features[@]}" --no-fail-fast 2>&1 | tee "$logs/cargo-test.log"
 rust_rc=${PIPESTATUS[0]}
 
-say "python tests (pytest tools/tests adapters/python/tests)"
-python -m pytest -q -rsfE --confcutdir=. tools/tests adapters/python/tests 2>&1 | tee "$logs/pytest.log"
+say "python tests (pytest ${py_targets[*]})"
+python -m pytest -q -rsfE --confcutdir=. "${py_targets[@]}" 2>&1 | tee "$logs/pytest.log"
 py_rc=${PIPESTATUS[0]}
 
 # One closing line for both suites. Rust tests that skipped ran as passed: take them out.
