@@ -49,6 +49,15 @@ pub fn decode_cdr<M: Message>(payload: &[u8]) -> Result<M, DecodeError> {
     Ok(m)
 }
 
+/// A message from CDR data without the encapsulation header, which said `kind`.
+pub fn decode_cdr_body<M: Message>(body: &[u8], kind: u16) -> Result<M, DecodeError> {
+    let mut r = Reader::cdr_body(body, kind, M::TYPE_NAME)?;
+    let mut m = M::default();
+    m.walk(&mut r);
+    r.finish()?;
+    Ok(m)
+}
+
 /// A message from its C struct bytes.
 pub fn decode_c<M: Message>(bytes: &[u8]) -> Result<M, DecodeError> {
     let mut r = Reader::c_struct(bytes, M::TYPE_NAME);
@@ -214,7 +223,6 @@ impl<'a> Reader<'a> {
     /// A CDR payload with its encapsulation header (XCDR1 or plain XCDR2, either byte
     /// order) of message type `message`.
     pub fn cdr(bytes: &'a [u8], message: &'static str) -> Result<Self, DecodeError> {
-        use encapsulation::*;
         if bytes.len() < 4 {
             return Err(DecodeError::Truncated {
                 message,
@@ -223,6 +231,19 @@ impl<'a> Reader<'a> {
             });
         }
         let kind = u16::from_be_bytes([bytes[0], bytes[1]]);
+        let mut r = Self::cdr_body(bytes, kind, message)?;
+        (r.at, r.origin) = (4, 4);
+        Ok(r)
+    }
+
+    /// CDR data without its encapsulation header, which said `kind` (a DDS library that
+    /// parsed the header hands over the rest).
+    pub fn cdr_body(
+        bytes: &'a [u8],
+        kind: u16,
+        message: &'static str,
+    ) -> Result<Self, DecodeError> {
+        use encapsulation::*;
         let big_endian = match kind {
             CDR_LE | CDR2_LE => false,
             CDR_BE | CDR2_BE => true,
@@ -231,8 +252,8 @@ impl<'a> Reader<'a> {
         Ok(Self {
             layout: Layout::Cdr,
             bytes,
-            at: 4,
-            origin: 4,
+            at: 0,
+            origin: 0,
             big_endian,
             message,
             short: false,

@@ -1,14 +1,16 @@
 //! The G1's own DDS interface (Unitree's `unitree_hg` messages on `rt/lowcmd` and
 //! `rt/lowstate`), so deployment code written for the robot can drive the simulator.
 //!
-//! This module holds what the bridge needs that is not DDS itself: the message types,
-//! their CDR encoding (`cdr`) and the checksum the robot and Unitree's SDKs put in every
-//! message (`crc`), computed over the messages' C struct layout.
+//! The message types (`unitree_hg`), their CDR encoding (`cdr`) and the checksum the robot
+//! and Unitree's SDKs put in every message (`crc`, computed over the messages' C struct
+//! layout) are ours; DDS itself is `rustdds` (`transport`: the robot's topics).
 
 pub mod cdr;
 pub mod crc;
+pub mod transport;
 pub mod unitree_hg;
 
+pub use transport::{DdsError, RobotEndpoints};
 pub use unitree_hg::{ImuState, LowCmd, LowState, MotorCmd, MotorState};
 
 /// A DDS message that could not be decoded.

@@ -181,7 +181,9 @@ impl Message for LowCmd {
     }
 }
 
-impl ImuState {
+impl Message for ImuState {
+    /// Also a topic of its own: the G1's torso IMU on `rt/secondary_imu`.
+    const TYPE_NAME: &'static str = "unitree_hg::msg::dds_::IMUState_";
     fn walk(&mut self, v: &mut impl Visit) {
         v.begin_struct();
         f32s(v, &mut self.quaternion);

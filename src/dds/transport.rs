@@ -1,0 +1,253 @@
+//! The robot's end of Unitree's DDS interface on `rustdds`: `rt/lowstate` and
+//! `rt/secondary_imu` written, `rt/lowcmd` read, each message through this module's own
+//! codec ([`UnitreeCdr`], plugged into rustdds as its serializer adapter).
+//!
+//! QoS: the writers offer reliable delivery and the reader asks for best effort, so they
+//! match whatever the deployment code's CycloneDDS asks or offers (a reader may not ask for
+//! more than a writer offers). History keeps the last message: a robot's state is only
+//! ever wanted fresh, and a command only as the latest.
+
+use super::cdr::{self, Layout, Message};
+use super::{DecodeError, ImuState, LowCmd, LowState};
+use rustdds::no_key::{DataReader, DataWriter, Decode, DefaultDecoder};
+use rustdds::no_key::{DeserializerAdapter, SerializerAdapter};
+use rustdds::policy::{History, Reliability};
+use rustdds::{
+    DomainParticipant, DomainParticipantBuilder, QosPolicies, QosPolicyBuilder,
+    RepresentationIdentifier, TopicKind,
+};
+use std::marker::PhantomData;
+
+/// The robot's state, at the robot's rate.
+pub const LOW_STATE_TOPIC: &str = "rt/lowstate";
+/// The torso IMU's state.
+pub const SECONDARY_IMU_TOPIC: &str = "rt/secondary_imu";
+/// Motor commands from the deployment code.
+pub const LOW_COMMAND_TOPIC: &str = "rt/lowcmd";
+
+/// Why the DDS interface failed.
+#[derive(Debug, thiserror::Error)]
+pub enum DdsError {
+    /// A participant, topic, reader or writer could not be created.
+    #[error("DDS: creating the {what}: {detail}")]
+    Create {
+        /// What was being created.
+        what: &'static str,
+        /// rustdds' account.
+        detail: String,
+    },
+    /// A message could not be written.
+    #[error("DDS: writing {topic}: {detail}")]
+    Write {
+        /// The topic.
+        topic: &'static str,
+        /// rustdds' account.
+        detail: String,
+    },
+    /// The command reader failed (not a bad message: those are counted).
+    #[error("DDS: reading {LOW_COMMAND_TOPIC}: {0}")]
+    Read(String),
+}
+
+/// rustdds' serializer and deserializer adapter for the `unitree_hg` messages: XCDR1
+/// little-endian out; XCDR1 and plain XCDR2, either byte order, in.
+pub struct UnitreeCdr<M>(PhantomData<M>);
+
+impl<M: Message + Clone> SerializerAdapter<M> for UnitreeCdr<M> {
+    type Error = std::convert::Infallible;
+
+    fn output_encoding() -> RepresentationIdentifier {
+        RepresentationIdentifier::CDR_LE
+    }
+
+    fn to_bytes(value: &M) -> Result<rustdds::bytes::Bytes, Self::Error> {
+        // rustdds writes the encapsulation header itself.
+        let mut bytes = cdr::encode(value, Layout::Cdr);
+        bytes.drain(..4);
+        Ok(bytes.into())
+    }
+}
+
+const READ_ENCODINGS: [RepresentationIdentifier; 4] = [
+    RepresentationIdentifier::CDR_LE,
+    RepresentationIdentifier::CDR_BE,
+    RepresentationIdentifier::XCDR2_LE,
+    RepresentationIdentifier::XCDR2_BE,
+];
+
+impl<M: Message> DeserializerAdapter<M> for UnitreeCdr<M> {
+    type Error = DecodeError;
+    type Decoded = M;
+
+    fn supported_encodings() -> &'static [RepresentationIdentifier] {
+        &READ_ENCODINGS
+    }
+
+    fn transform_decoded(decoded: M) -> M {
+        decoded
+    }
+}
+
+/// The decoder rustdds calls with the data after the encapsulation header.
+pub struct UnitreeDecoder<M>(PhantomData<M>);
+
+impl<M> Clone for UnitreeDecoder<M> {
+    fn clone(&self) -> Self {
+        Self(PhantomData)
+    }
+}
+
+impl<'de, M: Message> Decode<'de, M> for UnitreeDecoder<M> {
+    type Error = DecodeError;
+
+    fn decode_bytes(
+        self,
+        input_bytes: &'de [u8],
+        encoding: RepresentationIdentifier,
+    ) -> Result<M, DecodeError> {
+        cdr::decode_cdr_body(input_bytes, u16::from_be_bytes(encoding.to_bytes()))
+    }
+}
+
+impl<M: Message> DefaultDecoder<M> for UnitreeCdr<M> {
+    type Decoder = UnitreeDecoder<M>;
+    const DECODER: Self::Decoder = UnitreeDecoder(PhantomData);
+}
+
+/// The robot's side of the interface on one DDS domain.
+pub struct RobotEndpoints {
+    low_state: DataWriter<LowState, UnitreeCdr<LowState>>,
+    secondary_imu: DataWriter<ImuState, UnitreeCdr<ImuState>>,
+    low_command: DataReader<LowCmd, UnitreeCdr<LowCmd>>,
+    /// Commands that arrived and could not be decoded.
+    undecodable: u64,
+    // Last: the readers and writers go before their participant.
+    _participant: DomainParticipant,
+}
+
+impl RobotEndpoints {
+    /// Joins DDS domain `domain` (Unitree's scripts use 0) as the robot; with
+    /// `only_address` (e.g. 127.0.0.1, what `lo` carries) discovery and multicast use that
+    /// interface alone, so nothing leaves the machine.
+    pub fn join(domain: u16, only_address: Option<std::net::IpAddr>) -> Result<Self, DdsError> {
+        let create = |what: &'static str| {
+            move |e: rustdds::dds::CreateError| DdsError::Create {
+                what,
+                detail: e.to_string(),
+            }
+        };
+        let mut builder = DomainParticipantBuilder::new(domain);
+        if let Some(address) = only_address {
+            builder = builder.with_only_networks([address]);
+        }
+        let participant = builder.build().map_err(create("domain participant"))?;
+        let writer_qos = QosPolicyBuilder::new()
+            .reliability(Reliability::Reliable {
+                max_blocking_time: rustdds::Duration::ZERO,
+            })
+            .history(History::KeepLast { depth: 1 })
+            .build();
+        let reader_qos = QosPolicyBuilder::new()
+            .reliability(Reliability::BestEffort)
+            .history(History::KeepLast { depth: 1 })
+            .build();
+        let topic = |name: &str, type_name: &str, qos: &QosPolicies| {
+            participant
+                .create_topic(name.into(), type_name.into(), qos, TopicKind::NoKey)
+                .map_err(create("topic"))
+        };
+        let publisher = participant
+            .create_publisher(&writer_qos)
+            .map_err(create("publisher"))?;
+        let subscriber = participant
+            .create_subscriber(&reader_qos)
+            .map_err(create("subscriber"))?;
+        let low_state = publisher
+            .create_datawriter_no_key::<LowState, UnitreeCdr<LowState>>(
+                &topic(LOW_STATE_TOPIC, LowState::TYPE_NAME, &writer_qos)?,
+                None,
+            )
+            .map_err(create("rt/lowstate writer"))?;
+        let secondary_imu = publisher
+            .create_datawriter_no_key::<ImuState, UnitreeCdr<ImuState>>(
+                &topic(SECONDARY_IMU_TOPIC, ImuState::TYPE_NAME, &writer_qos)?,
+                None,
+            )
+            .map_err(create("rt/secondary_imu writer"))?;
+        let low_command = subscriber
+            .create_datareader_no_key::<LowCmd, UnitreeCdr<LowCmd>>(
+                &topic(LOW_COMMAND_TOPIC, LowCmd::TYPE_NAME, &reader_qos)?,
+                None,
+            )
+            .map_err(create("rt/lowcmd reader"))?;
+        Ok(Self {
+            low_state,
+            secondary_imu,
+            low_command,
+            undecodable: 0,
+            _participant: participant,
+        })
+    }
+
+    /// Publishes the robot's state (its checksum as given) and the torso IMU's.
+    pub fn publish(&self, state: &LowState, torso_imu: &ImuState) -> Result<(), DdsError> {
+        self.low_state
+            .write(state.clone(), None)
+            .map_err(|e| DdsError::Write {
+                topic: LOW_STATE_TOPIC,
+                detail: e.to_string(),
+            })?;
+        self.secondary_imu
+            .write(*torso_imu, None)
+            .map_err(|e| DdsError::Write {
+                topic: SECONDARY_IMU_TOPIC,
+                detail: e.to_string(),
+            })
+    }
+
+    /// Every command that arrived since the last call, oldest first (checksums not yet
+    /// checked: that is the robot's business, [`LowCmd::crc_ok`]).
+    pub fn commands(&mut self) -> Result<Vec<LowCmd>, DdsError> {
+        let mut out = Vec::new();
+        loop {
+            match self.low_command.take_next_sample() {
+                Ok(Some(sample)) => out.push(sample.into_value()),
+                Ok(None) => return Ok(out),
+                Err(rustdds::dds::ReadError::Deserialization { .. }) => self.undecodable += 1,
+                Err(e) => return Err(DdsError::Read(e.to_string())),
+            }
+        }
+    }
+
+    /// Commands that arrived and could not be decoded, so far.
+    pub fn undecodable_commands(&self) -> u64 {
+        self.undecodable
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_adapter_writes_the_codecs_bytes_without_the_header_and_reads_them_back() {
+        let mut cmd = LowCmd {
+            mode_machine: 5,
+            ..Default::default()
+        };
+        cmd.motor_cmd[4].q = 0.5;
+        cmd.crc = cmd.crc_of();
+        let body = <UnitreeCdr<LowCmd> as SerializerAdapter<LowCmd>>::to_bytes(&cmd).unwrap();
+        assert_eq!(&body[..], &cmd.to_cdr()[4..]);
+        let back = UnitreeCdr::<LowCmd>::DECODER
+            .decode_bytes(&body, RepresentationIdentifier::CDR_LE)
+            .unwrap();
+        assert_eq!(back, cmd);
+        assert!(UnitreeCdr::<LowCmd>::DECODER
+            .decode_bytes(&body, RepresentationIdentifier::PL_CDR_LE)
+            .is_err());
+        assert!(UnitreeCdr::<LowCmd>::DECODER
+            .decode_bytes(&body[..100], RepresentationIdentifier::CDR_LE)
+            .is_err());
+    }
+}
