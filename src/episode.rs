@@ -62,6 +62,11 @@ pub struct EpisodeTrace {
     pub foot_slip_m: Vec<Vec<f64>>,
 }
 
+/// What commands an episode's physics step by step ([`Episode::advance_driven`]): called
+/// before each physics step with the physics, the state after the previous step and the
+/// PD targets to record, rad.
+pub type PhysicsDriver<'d> = dyn FnMut(&mut dyn Physics, &PhysicsState, &mut Vec<f64>) + 'd;
+
 /// Everything fixed across the episodes of a run.
 pub struct EpisodeSetup<'a> {
     /// The robot.
@@ -251,33 +256,7 @@ impl<'a> Episode<'a> {
                 std::mem::swap(&mut self.targets, &mut new_targets);
                 physics.set_targets(&self.targets);
             }
-            self.last_hand_force_w =
-                self.replay
-                    .apply(physics, &self.reference, &self.state.world_from_body);
-            let metering = self.foot_slip_m.is_some();
-            if metering {
-                self.poses_before_step
-                    .clone_from(&self.state.world_from_body);
-            }
-            let started = std::time::Instant::now();
-            physics.step();
-            self.physics_wall += started.elapsed();
-            physics.read_state(&mut self.state);
-            if metering {
-                self.feet.after_step(
-                    physics,
-                    &self.poses_before_step,
-                    &self.state.world_from_body,
-                    physics.settings().dt_s,
-                );
-            }
-            power += self
-                .state
-                .applied_torque_nm
-                .iter()
-                .zip(&self.state.qd)
-                .map(|(t, v)| (t * v).abs())
-                .sum::<f64>();
+            power += self.physics_step(physics);
         }
         if effect_delay_substeps >= profile.substeps {
             // Too late for this step: the targets act from the next one's start.
@@ -285,6 +264,56 @@ impl<'a> Episode<'a> {
             physics.set_targets(&self.targets);
         }
         self.next_targets = new_targets;
+        self.end_control_step(power);
+    }
+
+    /// One control step whose physics `drive` commands: before each physics step it may
+    /// set gains and targets (as a robot applies its latest motor command), seeing the
+    /// state after the previous step. Forces, metrics and termination are as in
+    /// [`Episode::advance`]; `targets` records the PD targets in force at the step's end.
+    pub fn advance_driven(&mut self, physics: &mut dyn Physics, drive: &mut PhysicsDriver) {
+        let mut power = 0.0;
+        for _ in 0..self.setup.profile.substeps {
+            drive(physics, &self.state, &mut self.targets);
+            power += self.physics_step(physics);
+        }
+        self.end_control_step(power);
+    }
+
+    /// One physics step with the replayed forces; returns the mechanical power of the PD
+    /// torques over it, W.
+    fn physics_step(&mut self, physics: &mut dyn Physics) -> f64 {
+        self.last_hand_force_w =
+            self.replay
+                .apply(physics, &self.reference, &self.state.world_from_body);
+        let metering = self.foot_slip_m.is_some();
+        if metering {
+            self.poses_before_step
+                .clone_from(&self.state.world_from_body);
+        }
+        let started = std::time::Instant::now();
+        physics.step();
+        self.physics_wall += started.elapsed();
+        physics.read_state(&mut self.state);
+        if metering {
+            self.feet.after_step(
+                physics,
+                &self.poses_before_step,
+                &self.state.world_from_body,
+                physics.settings().dt_s,
+            );
+        }
+        self.state
+            .applied_torque_nm
+            .iter()
+            .zip(&self.state.qd)
+            .map(|(t, v)| (t * v).abs())
+            .sum::<f64>()
+    }
+
+    /// After a control step's physics: divergence, the step's metrics, termination.
+    fn end_control_step(&mut self, power: f64) {
+        let profile = self.setup.profile;
         if !(power.is_finite() && state_is_finite(&self.state)) {
             self.termination = Some(Termination::PhysicsDiverged);
             return;

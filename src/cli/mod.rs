@@ -10,6 +10,7 @@ mod client;
 mod crosscheck;
 mod data;
 mod data_synth;
+mod dds;
 mod eval;
 mod launched;
 mod leaderboard;
@@ -62,6 +63,9 @@ pub enum Command {
     /// Run a built-in policy as a separate process connected to a session (the Rust
     /// example client; `echo` for latency benchmarks).
     Client(client::Args),
+    /// Serve the G1's own DDS interface (rt/lowstate, rt/lowcmd) for one episode in real
+    /// time, so deployment code written for the robot drives it; scored like `eval`.
+    Dds(dds::Args),
     /// List the policy families `--policy` can name: what each needs and its profile.
     Policies,
     /// Check a policy's wiring before scoring it (`policy check`).
@@ -160,6 +164,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::View(args) => view::run(&args),
         Command::Serve(args) => serve::run(&args),
         Command::Client(args) => client::run(&args),
+        Command::Dds(args) => dds::run(&args),
         Command::Sweep(cmd) => sweep::run(&cmd),
     }
 }

@@ -5,6 +5,7 @@
 //! and Unitree's SDKs put in every message (`crc`, computed over the messages' C struct
 //! layout) are ours; DDS itself is `rustdds` (`transport`: the robot's topics).
 
+pub mod bridge;
 pub mod cdr;
 pub mod crc;
 pub mod transport;

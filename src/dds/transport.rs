@@ -44,6 +44,9 @@ pub enum DdsError {
         /// rustdds' account.
         detail: String,
     },
+    /// No usable command arrived in time to start the episode.
+    #[error("no valid command on {LOW_COMMAND_TOPIC} within {0:?}: is the deployment code running on the same DDS domain and network interface?")]
+    NoCommand(std::time::Duration),
     /// The command reader failed (not a bad message: those are counted).
     #[error("DDS: reading {LOW_COMMAND_TOPIC}: {0}")]
     Read(String),

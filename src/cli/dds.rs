@@ -1,0 +1,217 @@
+//! `thorarena dds`: the simulated G1 on its own DDS interface (`rt/lowstate`,
+//! `rt/secondary_imu` out, `rt/lowcmd` in), so deployment code written for the robot
+//! drives one episode of a sequence in real time, with its hand forces replayed, and the
+//! episode is scored into a normal run directory (plus `realtime.json`).
+
+use super::choices::EngineArg;
+use anyhow::{bail, Context};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+use thorarena::dds::bridge::{run_episode, BridgeOptions, RealTimeReport};
+use thorarena::dds::RobotEndpoints;
+use thorarena::episode::{Episode, EpisodeSetup};
+use thorarena::evaluation::{task_thresholds, EpisodeRecord, EvalRequest, EvalSpec};
+use thorarena::motion::SequenceSelection;
+use thorarena::physics::{make_physics, PhysicsSettings};
+use thorarena::results::{RunDir, RunHeader};
+
+/// Arguments of `dds`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Dataset directory.
+    #[arg(long, default_value = "data/sample")]
+    pub dataset: PathBuf,
+    /// The sequence of the episode, `TASK/SEQUENCE_ID`.
+    #[arg(long)]
+    pub sequence: String,
+    /// Setting: `force` (the recorded hand forces replayed), `no-force`, or one of
+    /// `eval --settings`' other forms.
+    #[arg(long, default_value = "force")]
+    pub setting: String,
+    /// Dynamics profile (its physics step, torque limits and control period for the
+    /// metrics; the gains are the commands').
+    #[arg(long, default_value = "default")]
+    pub profile: String,
+    /// Physics engine.
+    #[arg(long, value_enum, default_value = "rapier")]
+    pub engine: EngineArg,
+    /// MJCF of the robot for `--engine mujoco` [default: generated from the robot model].
+    #[arg(long)]
+    pub mjcf: Option<PathBuf>,
+    /// DDS domain (Unitree's scripts use 0).
+    #[arg(long, default_value_t = 0)]
+    pub domain: u16,
+    /// Use only the network interface with this address for DDS (127.0.0.1: loopback,
+    /// nothing leaves the machine; the deployment code must then use `lo`).
+    #[arg(long, default_value = "127.0.0.1")]
+    pub address: std::net::IpAddr,
+    /// Seconds to wait for the first command (the reference clock starts with it).
+    #[arg(long, default_value_t = 60.0)]
+    pub start_timeout: f64,
+    /// The policy's name in the results.
+    #[arg(long, default_value = "dds")]
+    pub name: String,
+    /// Run directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Replace a run already in `--out`.
+    #[arg(long)]
+    pub overwrite: bool,
+}
+
+pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    thorarena::names::check_name("policy name", &args.name)?;
+    if !(args.start_timeout.is_finite() && args.start_timeout > 0.0) {
+        bail!("--start-timeout must be > 0 s");
+    }
+    let Some((task, _)) = args.sequence.split_once('/') else {
+        bail!("--sequence {}: give TASK/SEQUENCE_ID", args.sequence);
+    };
+    let spec = EvalSpec::load(&EvalRequest {
+        policy: args.name.clone(),
+        dataset: Some(args.dataset.clone()),
+        profile: Some(args.profile.clone()),
+        settings: vec![args.setting.clone()],
+        selection: SequenceSelection {
+            tasks: vec![task.to_string()],
+            sequences: vec![args.sequence.clone()],
+        },
+        workers: Some(1),
+        envs: Some(1),
+        engine: args.engine.into(),
+        mjcf: args.mjcf.clone(),
+        trace: vec![args.sequence.clone()],
+        ..EvalRequest::default()
+    })?;
+    for advice in &spec.advice {
+        eprintln!("{advice}");
+    }
+    let [seq] = spec.sequences.as_slice() else {
+        bail!(
+            "--sequence {} names {} sequences",
+            args.sequence,
+            spec.sequences.len()
+        );
+    };
+    let run = RunDir::new(&args.out);
+    if run.holds_run() && !args.overwrite {
+        bail!(
+            "{} already holds a run: pass --overwrite to replace it, or choose another --out",
+            args.out.display()
+        );
+    }
+    run.check_writable()?;
+    let robot = Arc::new(spec.robot.clone());
+    let mut physics = make_physics(
+        &spec.engine,
+        robot.clone(),
+        PhysicsSettings {
+            dt_s: spec.profile.physics_dt_s,
+            ..Default::default()
+        },
+        spec.profile.gains.clone(),
+    )?;
+    let setting = &spec.settings[0];
+    let setup = EpisodeSetup {
+        robot: &spec.robot,
+        profile: &spec.profile,
+        keypoints: spec
+            .robot
+            .keypoint_set(&spec.keypoints)
+            .context("keypoint set")?,
+        termination: spec.termination,
+        force_coefficient: setting.coefficient,
+        push_n: setting.push_n,
+        push_heading_deg: setting.push_heading_deg,
+        reference_offsets_s: vec![0.0],
+    };
+    let mut endpoints = RobotEndpoints::join(args.domain, Some(args.address))?;
+    let mut episode = Episode::start(&setup, seq, physics.as_mut());
+    episode.record_trace();
+    eprintln!(
+        "{}/{} ({}, {:.1} s): rt/lowstate at 500 Hz on DDS domain {} ({}); the episode starts with the first valid rt/lowcmd…",
+        seq.task,
+        seq.sequence_id,
+        setting.name,
+        seq.duration_s(),
+        args.domain,
+        args.address
+    );
+    let options = BridgeOptions {
+        state_period: Duration::from_millis(2),
+        start_timeout: Duration::from_secs_f64(args.start_timeout),
+        torso_body: spec.robot.frame_index("torso_link").unwrap_or(0),
+    };
+    let realtime = run_episode(
+        &mut endpoints,
+        &mut episode,
+        physics.as_mut(),
+        &spec.profile.gains,
+        &options,
+    )?;
+    let trace = episode.take_trace();
+    let faults = episode.faults();
+    let (series, termination) = episode.finish();
+    let record = EpisodeRecord {
+        task: seq.task.clone(),
+        sequence_id: seq.sequence_id.clone(),
+        setting: setting.name.clone(),
+        coefficient: setting.coefficient,
+        policy: args.name.clone(),
+        termination,
+        faults,
+        series,
+    };
+    // Started only now: a bridge that got no command leaves no empty run behind.
+    let header = RunHeader::of(&spec, &args.name);
+    run.start(&header, false)?;
+    let mut appender = run.appender()?;
+    appender.append(&record)?;
+    appender.flush()?;
+    if let Some(trace) = trace {
+        run.write_trace(&record.key(), &trace.steps)?;
+    }
+    let thresholds = task_thresholds(&spec.sequences, spec.profile.control_dt_s);
+    let summary = run.finish(&header, &mut [record], thresholds, None)?;
+    let mut tables = thorarena::report::write_run_tables(run.path(), &summary)?;
+    write_realtime(&run, &realtime, &mut tables)?;
+    println!("{tables}");
+    eprintln!("results in {}", args.out.display());
+    Ok(())
+}
+
+/// `realtime.json`, and a line in `tables.md` saying whether the run kept real time.
+fn write_realtime(
+    run: &RunDir,
+    report: &RealTimeReport,
+    tables: &mut String,
+) -> anyhow::Result<()> {
+    let path = run.path().join("realtime.json");
+    std::fs::write(&path, serde_json::to_string_pretty(report)?)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let c = &report.commands;
+    let line = format!(
+        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (not simulated); inter-arrival p50 {:.2} ms, p99 {:.2} ms; reference clock started {:.2} s after the bridge.\n",
+        if report.kept_real_time { "kept" } else { "NOT KEPT — these scores are not those of a real-time run" },
+        report.real_time_factor,
+        report.late_steps,
+        report.physics_steps,
+        report.max_lateness_ms,
+        c.received,
+        c.bad_crc,
+        c.unusable,
+        c.with_feedforward,
+        report.command_interarrival.p50_ms,
+        report.command_interarrival.p99_ms,
+        report.start_offset_s,
+    );
+    tables.push_str(&line);
+    let tables_path = run.path().join("tables.md");
+    std::fs::write(&tables_path, tables.as_bytes())
+        .with_context(|| format!("writing {}", tables_path.display()))?;
+    if !report.kept_real_time {
+        eprintln!("warning: the run did not keep real time (realtime.json)");
+    }
+    Ok(())
+}

@@ -1,0 +1,424 @@
+//! The real-time bridge: one episode of a sequence, its physics driven by whatever
+//! `rt/lowcmd` says, as the G1's motor controllers would apply it, while `rt/lowstate`
+//! and `rt/secondary_imu` go out at the robot's rate.
+//!
+//! DDS has no lock-step: the simulation paces itself by the wall clock (physics step `k`
+//! is due `k · dt` after the first valid command, the moment the reference clock starts)
+//! and records how well it kept to it. Each physics step applies the newest command whose
+//! checksum holds, with the robot's law per motor, `τ = kp (q* − q) + kd (0 − q̇)`,
+//! clamped to the motor's limit (the simulator's PD law with the command's gains); a
+//! command that also asks for a feed-forward torque or a target velocity is counted,
+//! since the simulator's PD law has neither.
+
+use super::transport::{DdsError, RobotEndpoints};
+use super::unitree_hg::{MODE_MACHINE_G1_29DOF, MOTOR_SLOTS};
+use super::{ImuState, LowCmd, LowState};
+use crate::episode::Episode;
+use crate::physics::{PdGains, Physics, PhysicsState};
+use nalgebra::{UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::time::{Duration, Instant};
+
+/// How the bridge runs an episode.
+#[derive(Debug, Clone)]
+pub struct BridgeOptions {
+    /// Period of `rt/lowstate` (the G1 publishes at 500 Hz).
+    pub state_period: Duration,
+    /// How long to wait for the first command before giving up.
+    pub start_timeout: Duration,
+    /// Index of the torso body in the robot model (its IMU is `rt/secondary_imu`).
+    pub torso_body: usize,
+}
+
+/// Percentiles of a duration sample, ms.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Percentiles {
+    /// Median.
+    pub p50_ms: f64,
+    /// 90th percentile.
+    pub p90_ms: f64,
+    /// 99th percentile.
+    pub p99_ms: f64,
+    /// Largest.
+    pub max_ms: f64,
+}
+
+impl Percentiles {
+    fn of(mut sample: Vec<f64>) -> Self {
+        if sample.is_empty() {
+            return Self::default();
+        }
+        sample.sort_by(f64::total_cmp);
+        let at = |p: f64| sample[((sample.len() - 1) as f64 * p).round() as usize];
+        Self {
+            p50_ms: at(0.5),
+            p90_ms: at(0.9),
+            p99_ms: at(0.99),
+            max_ms: at(1.0),
+        }
+    }
+}
+
+/// Commands as they arrived.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CommandCounts {
+    /// Every decoded command.
+    pub received: u64,
+    /// Commands whose checksum failed: ignored, as the robot ignores them.
+    pub bad_crc: u64,
+    /// Commands that could not be decoded: ignored.
+    pub undecodable: u64,
+    /// Commands with a non-finite or negative gain, or a non-finite target: ignored.
+    pub unusable: u64,
+    /// Applied commands that asked for a feed-forward torque or a target velocity, which
+    /// the simulator's PD law does not have (applied without them).
+    pub with_feedforward: u64,
+}
+
+/// How well a run kept real time (`realtime.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RealTimeReport {
+    /// Wall time from the bridge's start to the first valid command, which started the
+    /// reference clock, s.
+    pub start_offset_s: f64,
+    /// Physics steps run.
+    pub physics_steps: u64,
+    /// Simulated time, s.
+    pub simulated_s: f64,
+    /// Wall time of the episode, s.
+    pub wall_s: f64,
+    /// Simulated seconds per wall second (1: real time).
+    pub real_time_factor: f64,
+    /// Physics steps that started more than one physics period after they were due.
+    pub late_steps: u64,
+    /// The latest a physics step started after it was due, ms.
+    pub max_lateness_ms: f64,
+    /// `rt/lowstate` messages published.
+    pub states_published: u64,
+    /// The commands.
+    pub commands: CommandCounts,
+    /// Time between consecutive commands, ms.
+    pub command_interarrival: Percentiles,
+    /// Whether the run kept real time: at most 1 % of the physics steps late and a
+    /// real-time factor of at least 0.98. Scores of a run that did not are marked so.
+    pub kept_real_time: bool,
+}
+
+/// Runs `episode` in real time from `rt/lowcmd`, publishing the robot's state: waits up
+/// to [`BridgeOptions::start_timeout`] for a valid command (publishing the initial state
+/// meanwhile), then steps the physics on the wall clock until the episode is done.
+pub fn run_episode(
+    endpoints: &mut RobotEndpoints,
+    episode: &mut Episode,
+    physics: &mut dyn Physics,
+    gains: &PdGains,
+    options: &BridgeOptions,
+) -> Result<RealTimeReport, DdsError> {
+    let dt = Duration::from_secs_f64(physics.settings().dt_s);
+    let mut io = RobotIo::new(options.clone(), gains.clone());
+    let bridge_start = Instant::now();
+    io.state.read_from(physics);
+    // Before the first command the robot stands still and says so.
+    let first = loop {
+        io.publish_due(endpoints)?;
+        if let Some(command) = io.take_commands(endpoints)? {
+            break command;
+        }
+        if bridge_start.elapsed() > options.start_timeout {
+            return Err(DdsError::NoCommand(options.start_timeout));
+        }
+        std::thread::sleep(Duration::from_micros(500));
+    };
+    let start = Instant::now();
+    let start_offset_s = (start - bridge_start).as_secs_f64();
+    io.apply(&first, physics, None);
+    let mut steps = 0u64;
+    let mut late_steps = 0u64;
+    let mut max_lateness = Duration::ZERO;
+    let mut failure = None;
+    while !episode.is_done() && failure.is_none() {
+        episode.advance_driven(physics, &mut |physics, state, targets| {
+            let due = start + dt * steps as u32;
+            loop {
+                if let Err(e) = io.publish_state(endpoints, state) {
+                    failure.get_or_insert(e);
+                }
+                match io.take_commands(endpoints) {
+                    Ok(Some(command)) => io.apply(&command, physics, Some(targets)),
+                    Ok(None) => {}
+                    Err(e) => {
+                        failure.get_or_insert(e);
+                    }
+                }
+                let now = Instant::now();
+                if now >= due {
+                    let lateness = now - due;
+                    max_lateness = max_lateness.max(lateness);
+                    if lateness > dt {
+                        late_steps += 1;
+                    }
+                    break;
+                }
+                std::thread::sleep((due - now).min(io.until_next_state()));
+            }
+            if let Some(t) = &io.targets {
+                targets.clone_from(t);
+            }
+            steps += 1;
+        });
+    }
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let simulated_s = steps as f64 * dt.as_secs_f64();
+    let real_time_factor = simulated_s / wall_s.max(f64::MIN_POSITIVE);
+    io.counts.undecodable = endpoints.undecodable_commands();
+    Ok(RealTimeReport {
+        start_offset_s,
+        physics_steps: steps,
+        simulated_s,
+        wall_s,
+        real_time_factor,
+        late_steps,
+        max_lateness_ms: max_lateness.as_secs_f64() * 1e3,
+        states_published: io.published,
+        commands: io.counts,
+        command_interarrival: Percentiles::of(io.interarrival_ms),
+        kept_real_time: late_steps * 100 <= steps && real_time_factor >= 0.98,
+    })
+}
+
+/// The robot's side of the wire: the state it publishes, the commands it takes.
+struct RobotIo {
+    options: BridgeOptions,
+    /// The profile's gains, whose torque limits every command keeps.
+    limits: PdGains,
+    state: StateMessages,
+    published: u64,
+    next_state_at: Instant,
+    started: Instant,
+    counts: CommandCounts,
+    last_command_at: Option<Instant>,
+    interarrival_ms: Vec<f64>,
+    /// Targets of the command in force, rad.
+    targets: Option<Vec<f64>>,
+    gains_in_force: Option<PdGains>,
+}
+
+impl RobotIo {
+    fn new(options: BridgeOptions, limits: PdGains) -> Self {
+        let now = Instant::now();
+        Self {
+            state: StateMessages::new(options.torso_body),
+            options,
+            limits,
+            published: 0,
+            next_state_at: now,
+            started: now,
+            counts: CommandCounts::default(),
+            last_command_at: None,
+            interarrival_ms: Vec::new(),
+            targets: None,
+            gains_in_force: None,
+        }
+    }
+
+    fn until_next_state(&self) -> Duration {
+        self.next_state_at.saturating_duration_since(Instant::now())
+    }
+
+    /// Publishes the last state read when its period has come.
+    fn publish_due(&mut self, endpoints: &RobotEndpoints) -> Result<(), DdsError> {
+        let now = Instant::now();
+        if now < self.next_state_at {
+            return Ok(());
+        }
+        // On the period's grid; after a stall of more than a period, from now on.
+        self.next_state_at += self.options.state_period;
+        if self.next_state_at < now {
+            self.next_state_at = now + self.options.state_period;
+        }
+        self.published += 1;
+        let tick = (now - self.started).as_millis() as u32;
+        self.state.low.tick = tick.max(1);
+        self.state.low.crc = self.state.low.crc_of();
+        endpoints.publish(&self.state.low, &self.state.torso)
+    }
+
+    /// Reads `state` into the messages and publishes them when due.
+    fn publish_state(
+        &mut self,
+        endpoints: &RobotEndpoints,
+        state: &PhysicsState,
+    ) -> Result<(), DdsError> {
+        if Instant::now() >= self.next_state_at {
+            self.state.read(state);
+        }
+        self.publish_due(endpoints)
+    }
+
+    /// The newest usable command among those that arrived, counting the rest.
+    fn take_commands(
+        &mut self,
+        endpoints: &mut RobotEndpoints,
+    ) -> Result<Option<LowCmd>, DdsError> {
+        let mut newest = None;
+        for command in endpoints.commands()? {
+            let now = Instant::now();
+            if let Some(before) = self.last_command_at.replace(now) {
+                self.interarrival_ms
+                    .push((now - before).as_secs_f64() * 1e3);
+            }
+            self.counts.received += 1;
+            if !command.crc_ok() {
+                self.counts.bad_crc += 1;
+            } else if !usable(&command, self.limits.kp.len()) {
+                self.counts.unusable += 1;
+            } else {
+                newest = Some(command);
+            }
+        }
+        Ok(newest)
+    }
+
+    /// Puts `command` in force: gains (a disabled motor, mode 0, has none) and targets.
+    fn apply(
+        &mut self,
+        command: &LowCmd,
+        physics: &mut dyn Physics,
+        targets: Option<&mut Vec<f64>>,
+    ) {
+        let n = self.limits.kp.len();
+        let motors = &command.motor_cmd[..n];
+        let enabled = |m: &super::MotorCmd| m.mode != 0;
+        let gains = PdGains {
+            kp: motors
+                .iter()
+                .map(|m| if enabled(m) { f64::from(m.kp) } else { 0.0 })
+                .collect(),
+            kd: motors
+                .iter()
+                .map(|m| if enabled(m) { f64::from(m.kd) } else { 0.0 })
+                .collect(),
+            effort_limit_nm: self.limits.effort_limit_nm.clone(),
+        };
+        if self.gains_in_force.as_ref() != Some(&gains) {
+            physics.set_gains(&gains);
+            self.gains_in_force = Some(gains);
+        }
+        if motors
+            .iter()
+            .any(|m| enabled(m) && (m.tau != 0.0 || m.dq != 0.0))
+        {
+            self.counts.with_feedforward += 1;
+        }
+        let q: Vec<f64> = motors.iter().map(|m| f64::from(m.q)).collect();
+        physics.set_targets(&q);
+        if let Some(t) = targets {
+            t.clone_from(&q);
+        }
+        self.targets = Some(q);
+    }
+}
+
+/// Finite gains ≥ 0 and finite targets on the robot's motors.
+fn usable(command: &LowCmd, n_joints: usize) -> bool {
+    command.motor_cmd[..n_joints.min(MOTOR_SLOTS)]
+        .iter()
+        .all(|m| {
+            m.q.is_finite() && m.kp.is_finite() && m.kd.is_finite() && m.kp >= 0.0 && m.kd >= 0.0
+        })
+}
+
+/// The messages the robot publishes, read from the simulation.
+struct StateMessages {
+    low: LowState,
+    torso: ImuState,
+    torso_body: usize,
+    /// Pelvis velocity (world) and torso orientation at the previous read, for the
+    /// accelerometer and the torso's gyroscope.
+    previous: Option<(Vector3<f64>, UnitQuaternion<f64>, f64)>,
+}
+
+impl StateMessages {
+    fn new(torso_body: usize) -> Self {
+        Self {
+            low: LowState {
+                mode_machine: MODE_MACHINE_G1_29DOF,
+                ..Default::default()
+            },
+            torso: ImuState::default(),
+            torso_body,
+            previous: None,
+        }
+    }
+
+    fn read_from(&mut self, physics: &dyn Physics) {
+        let mut state = PhysicsState::default();
+        physics.read_state(&mut state);
+        self.read(&state);
+    }
+
+    /// Motors from the joints; the pelvis IMU from the root (gyroscope and accelerometer in
+    /// its frame, the accelerometer measuring acceleration minus gravity); the torso IMU
+    /// from the torso body.
+    fn read(&mut self, state: &PhysicsState) {
+        for (j, m) in self
+            .low
+            .motor_state
+            .iter_mut()
+            .enumerate()
+            .take(state.q.len())
+        {
+            m.mode = 1;
+            m.q = state.q[j] as f32;
+            m.dq = state.qd[j] as f32;
+            m.tau_est = state.applied_torque_nm.get(j).copied().unwrap_or(0.0) as f32;
+        }
+        let Some(root) = &state.root else {
+            return;
+        };
+        let pelvis = root.world_from_root.rotation;
+        let gravity_w = Vector3::new(0.0, 0.0, -9.81);
+        let torso = state
+            .world_from_body
+            .get(self.torso_body)
+            .map_or(pelvis, |p| p.rotation);
+        let (accel_w, torso_rate_b) = match self.previous {
+            Some((v0, torso0, t0)) if state.time_s > t0 => {
+                let h = state.time_s - t0;
+                let turn = (torso0.inverse() * torso).scaled_axis() / h;
+                ((root.lin_vel_w - v0) / h, turn)
+            }
+            _ => (Vector3::zeros(), Vector3::zeros()),
+        };
+        self.previous = Some((root.lin_vel_w, torso, state.time_s));
+        fill_imu(
+            &mut self.low.imu_state,
+            &pelvis,
+            pelvis.inverse() * root.ang_vel_w,
+            pelvis.inverse() * (accel_w - gravity_w),
+        );
+        fill_imu(
+            &mut self.torso,
+            &torso,
+            torso_rate_b,
+            torso.inverse() * (accel_w - gravity_w),
+        );
+    }
+}
+
+fn fill_imu(
+    imu: &mut ImuState,
+    orientation: &UnitQuaternion<f64>,
+    gyro_b: Vector3<f64>,
+    accel_b: Vector3<f64>,
+) {
+    let q = orientation.quaternion();
+    imu.quaternion = [q.w as f32, q.i as f32, q.j as f32, q.k as f32];
+    let (roll, pitch, yaw) = orientation.euler_angles();
+    imu.rpy = [roll as f32, pitch as f32, yaw as f32];
+    imu.gyroscope = [gyro_b.x as f32, gyro_b.y as f32, gyro_b.z as f32];
+    imu.accelerometer = [accel_b.x as f32, accel_b.y as f32, accel_b.z as f32];
+}

@@ -1,0 +1,219 @@
+//! `thorarena dds` end to end: Unitree's Python SDK (unitree_sdk2_python on PyPI's
+//! `cyclonedds` 11.0.1), used as a deployment script uses it, drives one episode of the
+//! sample over loopback: it reads the robot's state, then commands a standing pose with
+//! the left elbow swinging. The run directory holds a scored episode, `realtime.json`
+//! (real time kept or not, commands counted: the corrupted ones ignored) and a trace in
+//! which the elbow follows its commands. Skipped, saying so, when `../shared/reference`
+//! (the SDK) or Python's `cyclonedds` is absent; never in CI.
+
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+mod prereq;
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+/// A deployment-style script: waits for the state, holds the pose it read with the
+/// default profile's gains, swings the left elbow (motor 18) by ±0.3 rad at 0.5 Hz, sends
+/// every 25th command with a broken checksum, and stops when the state stops coming.
+const DEPLOY_SCRIPT: &str = r#"
+import math, sys, time
+from unitree_sdk2py.core.channel import ChannelFactoryInitialize, ChannelPublisher, ChannelSubscriber
+from unitree_sdk2py.idl.default import unitree_hg_msg_dds__LowCmd_
+from unitree_sdk2py.idl.unitree_hg.msg.dds_ import LowCmd_, LowState_
+from unitree_sdk2py.utils.crc import CRC
+
+KP = [400, 400, 400, 600, 160, 160] * 2 + [600, 600, 600] + [40] * 14
+KD = [4, 4, 4, 8, 4, 4] * 2 + [8, 8, 8] + [5] * 14
+ELBOW = 18
+ChannelFactoryInitialize(0, "lo")
+latest = {}
+def on_state(m):
+    latest["s"], latest["t"] = m, time.time()
+sub = ChannelSubscriber("rt/lowstate", LowState_)
+sub.Init(on_state, 10)
+pub = ChannelPublisher("rt/lowcmd", LowCmd_)
+pub.Init()
+deadline = time.time() + 60
+while "s" not in latest or latest["s"].tick == 0:
+    if time.time() > deadline:
+        print("no state within 60 s", flush=True)
+        sys.exit(1)
+    time.sleep(0.01)
+first = latest["s"]
+print("state crc", int(CRC().Crc(first) == first.crc), flush=True)
+q0 = [first.motor_state[i].q for i in range(29)]
+crc = CRC()
+t0 = time.time()
+sent = 0
+while time.time() - latest["t"] < 1.0 and time.time() - t0 < 60:
+    c = unitree_hg_msg_dds__LowCmd_()
+    c.mode_machine = 5
+    for i in range(29):
+        m = c.motor_cmd[i]
+        m.mode, m.q, m.kp, m.kd = 1, q0[i], KP[i], KD[i]
+    c.motor_cmd[ELBOW].q = q0[ELBOW] + 0.3 * math.sin(math.pi * (time.time() - t0))
+    c.crc = crc.Crc(c)
+    if sent % 25 == 24:
+        c.crc ^= 0xFFFF
+    pub.Write(c)
+    sent += 1
+    time.sleep(0.002)
+print("sent", sent, flush=True)
+"#;
+
+#[test]
+fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
+    const TEST: &str = "dds_bridge::python_sdk";
+    let Some(sdk) = prereq::reference(TEST, "unitree_sdk2_python/unitree_sdk2py") else {
+        return;
+    };
+    if !prereq::python_modules(
+        TEST,
+        &["cyclonedds"],
+        "pip install -r tools/requirements-dev.txt",
+    ) {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let mut bridge = Command::new(BIN)
+        .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
+        .args([
+            "--sequence",
+            "pull_chair/pull_chair_000",
+            "--setting",
+            "no-force",
+        ])
+        .args(["--start-timeout", "90", "--out", out.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deploy = Command::new("python3")
+        .args(["-c", DEPLOY_SCRIPT])
+        .env("PYTHONPATH", sdk.parent().unwrap())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Both end on their own; stopped by their pids if they do not within two minutes.
+    let start = Instant::now();
+    while bridge.try_wait().unwrap().is_none() && start.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let _ = bridge.kill();
+    let bridge = bridge.wait_with_output().unwrap();
+    let deploy = deploy.wait_with_output().unwrap();
+    let said = format!(
+        "bridge: {}\ndeploy: {}{}",
+        String::from_utf8_lossy(&bridge.stderr),
+        String::from_utf8_lossy(&deploy.stdout),
+        String::from_utf8_lossy(&deploy.stderr)
+    );
+    assert!(bridge.status.success(), "{said}");
+    assert!(deploy.status.success(), "{said}");
+    assert!(
+        said.contains("state crc 1"),
+        "the SDK rejected the state's checksum: {said}"
+    );
+
+    let episodes = std::fs::read_to_string(out.join("episodes.jsonl")).unwrap();
+    assert_eq!(episodes.lines().count(), 1, "{episodes}");
+    assert!(out.join("summary.json").is_file() && out.join("tables.md").is_file());
+    let realtime: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("realtime.json")).unwrap()).unwrap();
+    let commands = &realtime["commands"];
+    let received = commands["received"].as_u64().unwrap();
+    let bad = commands["bad_crc"].as_u64().unwrap();
+    assert!(received > 50, "{realtime}");
+    // Every 25th command was corrupted: those, and only those, were refused.
+    assert!(bad >= 1 && bad <= received / 20 + 1, "{realtime}");
+    assert_eq!(commands["unusable"], 0);
+    assert!(
+        realtime["physics_steps"].as_u64().unwrap() > 100,
+        "{realtime}"
+    );
+    let seconds =
+        realtime["start_offset_s"].as_f64().unwrap() + realtime["wall_s"].as_f64().unwrap();
+    let state_rate_hz = realtime["states_published"].as_f64().unwrap() / seconds;
+    assert!(
+        (400.0..=510.0).contains(&state_rate_hz),
+        "rt/lowstate at {state_rate_hz:.0} Hz: {realtime}"
+    );
+
+    // The trace: the elbow's target swings as commanded and the joint follows it.
+    let trace_file = std::fs::read_dir(out.join("traces"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let steps: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(trace_file).unwrap()).unwrap();
+    let series = |key: &str, j: usize| -> Vec<f64> {
+        steps.iter().map(|s| s[key][j].as_f64().unwrap()).collect()
+    };
+    let (target, q) = (series("targets", 18), series("q", 18));
+    let range = |v: &[f64]| {
+        v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min)
+    };
+    assert!(
+        range(&target) > 0.3,
+        "the elbow's target did not swing: {target:?}"
+    );
+    let mean_error = q
+        .iter()
+        .zip(&target)
+        .map(|(a, b)| (a - b).abs())
+        .sum::<f64>()
+        / q.len() as f64;
+    assert!(
+        mean_error < 0.15,
+        "the elbow did not follow: mean |q − q*| {mean_error:.3} rad"
+    );
+    // A held joint's target is the pose the script read.
+    let hip = series("targets", 0);
+    assert!(range(&hip) < 1e-6, "{hip:?}");
+}
+
+/// No deployment code: the bridge gives up after `--start-timeout`, says why, and leaves
+/// no empty run behind; a malformed sequence name is refused before DDS starts.
+#[test]
+fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never");
+    let run = Command::new(BIN)
+        .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
+        .args(["--sequence", "pull_chair/pull_chair_000", "--domain", "57"])
+        .args(["--start-timeout", "1", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("no valid command on rt/lowcmd within 1s"),
+        "{stderr}"
+    );
+    assert!(
+        !out.join("run.json").exists(),
+        "an empty run was left in {}",
+        out.display()
+    );
+    let bad = Command::new(BIN)
+        .args([
+            "dds",
+            "--sequence",
+            "pull_chair",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && stderr.contains("give TASK/SEQUENCE_ID"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
