@@ -11,7 +11,9 @@ use std::time::Duration;
 use thorarena::dds::bridge::{run_episode, BridgeOptions, RealTimeReport};
 use thorarena::dds::RobotEndpoints;
 use thorarena::episode::{Episode, EpisodeSetup};
-use thorarena::evaluation::{task_thresholds, EpisodeRecord, EvalRequest, EvalSpec};
+use thorarena::evaluation::{
+    task_thresholds, EpisodeRecord, EvalRequest, EvalSpec, TerminationRule,
+};
 use thorarena::motion::SequenceSelection;
 use thorarena::physics::{make_physics, PhysicsSettings};
 use thorarena::results::{RunDir, RunHeader};
@@ -49,6 +51,14 @@ pub struct Args {
     /// Seconds to wait for the first command (the reference clock starts with it).
     #[arg(long, default_value_t = 60.0)]
     pub start_timeout: f64,
+    /// Termination: torso height off its reference by more than this, m (a large value
+    /// lets a script that does not balance — Unitree's low-level examples, written for a
+    /// robot on a gantry — run through its stages on the ground).
+    #[arg(long, default_value_t = TerminationRule::default().max_torso_height_error_m)]
+    pub max_torso_height_error: f64,
+    /// Termination: torso tilt off its reference by more than this, rad.
+    #[arg(long, default_value_t = TerminationRule::default().max_torso_tilt_error_rad)]
+    pub max_torso_tilt_error: f64,
     /// The policy's name in the results.
     #[arg(long, default_value = "dds")]
     pub name: String,
@@ -82,6 +92,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         engine: args.engine.into(),
         mjcf: args.mjcf.clone(),
         trace: vec![args.sequence.clone()],
+        termination: TerminationRule {
+            max_torso_height_error_m: args.max_torso_height_error,
+            max_torso_tilt_error_rad: args.max_torso_tilt_error,
+        },
         ..EvalRequest::default()
     })?;
     for advice in &spec.advice {
@@ -192,7 +206,7 @@ fn write_realtime(
         .with_context(|| format!("writing {}", path.display()))?;
     let c = &report.commands;
     let line = format!(
-        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (not simulated); inter-arrival p50 {:.2} ms, p99 {:.2} ms; reference clock started {:.2} s after the bridge.\n",
+        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (not simulated), {} in the parallel ankle mode (targets taken as pitch/roll); inter-arrival p50 {:.2} ms, p99 {:.2} ms; reference clock started {:.2} s after the bridge.\n",
         if report.kept_real_time { "kept" } else { "NOT KEPT — these scores are not those of a real-time run" },
         report.real_time_factor,
         report.late_steps,
@@ -202,6 +216,7 @@ fn write_realtime(
         c.bad_crc,
         c.unusable,
         c.with_feedforward,
+        c.parallel_ankle_mode,
         report.command_interarrival.p50_ms,
         report.command_interarrival.p99_ms,
         report.start_offset_s,

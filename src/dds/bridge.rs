@@ -73,6 +73,9 @@ pub struct CommandCounts {
     /// Applied commands that asked for a feed-forward torque or a target velocity, which
     /// the simulator's PD law does not have (applied without them).
     pub with_feedforward: u64,
+    /// Applied commands in the parallel ankle mode (`mode_pr` 1, A/B motors): the
+    /// simulated ankle has pitch and roll joints, so their targets were taken as those.
+    pub parallel_ankle_mode: u64,
 }
 
 /// How well a run kept real time (`realtime.json`).
@@ -95,6 +98,8 @@ pub struct RealTimeReport {
     pub max_lateness_ms: f64,
     /// `rt/lowstate` messages published.
     pub states_published: u64,
+    /// `motion_switcher` requests answered (CheckMode, ReleaseMode, …).
+    pub service_calls: u64,
     /// The commands.
     pub commands: CommandCounts,
     /// Time between consecutive commands, ms.
@@ -121,6 +126,7 @@ pub fn run_episode(
     // Before the first command the robot stands still and says so.
     let first = loop {
         io.publish_due(endpoints)?;
+        endpoints.serve_services()?;
         if let Some(command) = io.take_commands(endpoints)? {
             break command;
         }
@@ -141,6 +147,9 @@ pub fn run_episode(
             let due = start + dt * steps as u32;
             loop {
                 if let Err(e) = io.publish_state(endpoints, state) {
+                    failure.get_or_insert(e);
+                }
+                if let Err(e) = endpoints.serve_services() {
                     failure.get_or_insert(e);
                 }
                 match io.take_commands(endpoints) {
@@ -183,6 +192,7 @@ pub fn run_episode(
         late_steps,
         max_lateness_ms: max_lateness.as_secs_f64() * 1e3,
         states_published: io.published,
+        service_calls: endpoints.service_calls().len() as u64,
         commands: io.counts,
         command_interarrival: Percentiles::of(io.interarrival_ms),
         kept_real_time: late_steps * 100 <= steps && real_time_factor >= 0.98,
@@ -312,6 +322,9 @@ impl RobotIo {
             .any(|m| enabled(m) && (m.tau != 0.0 || m.dq != 0.0))
         {
             self.counts.with_feedforward += 1;
+        }
+        if command.mode_pr == 1 {
+            self.counts.parallel_ankle_mode += 1;
         }
         let q: Vec<f64> = motors.iter().map(|m| f64::from(m.q)).collect();
         physics.set_targets(&q);

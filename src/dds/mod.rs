@@ -8,6 +8,7 @@
 pub mod bridge;
 pub mod cdr;
 pub mod crc;
+pub mod motion_switcher;
 pub mod transport;
 pub mod unitree_hg;
 

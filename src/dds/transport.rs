@@ -4,8 +4,9 @@
 //!
 //! QoS: the writers offer reliable delivery and the reader asks for best effort, so they
 //! match whatever the deployment code's CycloneDDS asks or offers (a reader may not ask for
-//! more than a writer offers). History keeps the last message: a robot's state is only
-//! ever wanted fresh, and a command only as the latest.
+//! more than a writer offers). The writers keep the last message (a robot's state is only
+//! ever wanted fresh); the command reader keeps every command until it is taken, so each
+//! is counted and timed, though only the newest is applied.
 
 use super::cdr::{self, Layout, Message};
 use super::{DecodeError, ImuState, LowCmd, LowState};
@@ -122,6 +123,7 @@ pub struct RobotEndpoints {
     low_state: DataWriter<LowState, UnitreeCdr<LowState>>,
     secondary_imu: DataWriter<ImuState, UnitreeCdr<ImuState>>,
     low_command: DataReader<LowCmd, UnitreeCdr<LowCmd>>,
+    motion_switcher: super::motion_switcher::MotionSwitcher,
     /// Commands that arrived and could not be decoded.
     undecodable: u64,
     // Last: the readers and writers go before their participant.
@@ -150,9 +152,11 @@ impl RobotEndpoints {
             })
             .history(History::KeepLast { depth: 1 })
             .build();
+        // Every command is kept until taken (to count them and time their arrivals);
+        // the robot applies the newest.
         let reader_qos = QosPolicyBuilder::new()
             .reliability(Reliability::BestEffort)
-            .history(History::KeepLast { depth: 1 })
+            .history(History::KeepLast { depth: 256 })
             .build();
         let topic = |name: &str, type_name: &str, qos: &QosPolicies| {
             participant
@@ -183,10 +187,18 @@ impl RobotEndpoints {
                 None,
             )
             .map_err(create("rt/lowcmd reader"))?;
+        let motion_switcher = super::motion_switcher::MotionSwitcher::new(
+            &participant,
+            &publisher,
+            &subscriber,
+            &writer_qos,
+            &reader_qos,
+        )?;
         Ok(Self {
             low_state,
             secondary_imu,
             low_command,
+            motion_switcher,
             undecodable: 0,
             _participant: participant,
         })
@@ -220,6 +232,16 @@ impl RobotEndpoints {
                 Err(e) => return Err(DdsError::Read(e.to_string())),
             }
         }
+    }
+
+    /// Answers the robot's services' requests (`motion_switcher`) that arrived.
+    pub fn serve_services(&mut self) -> Result<(), DdsError> {
+        self.motion_switcher.serve()
+    }
+
+    /// Service requests answered so far, by API id.
+    pub fn service_calls(&self) -> &[i64] {
+        &self.motion_switcher.answered
     }
 
     /// Commands that arrived and could not be decoded, so far.
