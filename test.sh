@@ -23,7 +23,7 @@ rust_targets=(--workspace)
 py_targets=(tools/tests adapters/python/tests)
 if [ "${1:-}" = --reference-tests-only ]; then
     rust_targets=()
-    for f in $(grep -lE 'prereq::reference|reference_dir|THORARENA_REFERENCE|shared/reference' tests/*.rs); do
+    for f in $(grep -lE 'prereq::(reference|unitree_sdk)|reference_dir|THORARENA_REFERENCE|shared/reference' tests/*.rs); do
         rust_targets+=(--test "$(basename "$f" .rs)")
     done
     mapfile -t py_targets < <(grep -lE 'THORARENA_REFERENCE|shared.*reference|reference MJCF' tools/tests/*.py adapters/python/tests/*.py)

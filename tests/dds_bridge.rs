@@ -6,7 +6,7 @@
 //! which the elbow follows its commands. Skipped, saying so, when `../shared/reference`
 //! (the SDK) or Python's `cyclonedds` is absent; never in CI.
 
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 mod prereq;
 
@@ -65,49 +65,59 @@ while time.time() - latest["t"] < 1.0 and time.time() - t0 < 60:
 print("sent", sent, flush=True)
 "#;
 
-#[test]
-fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
-    const TEST: &str = "dds_bridge::python_sdk";
-    let Some(sdk) = prereq::reference(TEST, "unitree_sdk2_python/unitree_sdk2py") else {
-        return;
-    };
-    if !prereq::python_modules(
-        TEST,
-        &["cyclonedds"],
-        "pip install -r tools/requirements-dev.txt",
-    ) {
-        return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("run");
-    let mut bridge = Command::new(BIN)
+/// `thorarena dds` on the sample's pull_chair_000 without force, into `out`.
+fn start_bridge(out: &std::path::Path, extra: &[&str]) -> Child {
+    Command::new(BIN)
         .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
-        .args([
-            "--sequence",
-            "pull_chair/pull_chair_000",
-            "--setting",
-            "no-force",
-        ])
-        .args(["--start-timeout", "90", "--out", out.to_str().unwrap()])
-        .args(["--domain", DEPLOY_DOMAIN])
+        .args(["--sequence", "pull_chair/pull_chair_000"])
+        .args(["--setting", "no-force", "--start-timeout", "90"])
+        .args(["--out", out.to_str().unwrap()])
+        .args(extra)
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
-        .unwrap();
-    let deploy = Command::new("python3")
-        .args(["-c", DEPLOY_SCRIPT, DEPLOY_DOMAIN])
-        .env("PYTHONPATH", sdk.parent().unwrap())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Both end on their own; stopped by their pids if they do not within two minutes.
+        .unwrap()
+}
+
+/// The bridge's end: it ends on its own with its episode, or is stopped by its pid after
+/// two minutes.
+fn finished(mut bridge: Child) -> Output {
     let start = Instant::now();
     while bridge.try_wait().unwrap().is_none() && start.elapsed() < Duration::from_secs(120) {
         std::thread::sleep(Duration::from_millis(100));
     }
     let _ = bridge.kill();
-    let bridge = bridge.wait_with_output().unwrap();
+    bridge.wait_with_output().unwrap()
+}
+
+/// The run's one trace: per control step, `q`, `targets`, ….
+fn trace(out: &std::path::Path) -> Vec<serde_json::Value> {
+    let file = std::fs::read_dir(out.join("traces"))
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap()
+}
+
+#[test]
+fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
+    const TEST: &str = "dds_bridge::python_sdk";
+    let Some(sdk) = prereq::unitree_sdk(TEST) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let bridge = start_bridge(&out, &["--domain", DEPLOY_DOMAIN]);
+    let deploy = Command::new("python3")
+        .args(["-c", DEPLOY_SCRIPT, DEPLOY_DOMAIN])
+        .env("PYTHONPATH", &sdk)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let bridge = finished(bridge);
     let deploy = deploy.wait_with_output().unwrap();
     let said = format!(
         "bridge: {}\ndeploy: {}{}",
@@ -147,14 +157,7 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     );
 
     // The trace: the elbow's target swings as commanded and the joint follows it.
-    let trace_file = std::fs::read_dir(out.join("traces"))
-        .unwrap()
-        .next()
-        .unwrap()
-        .unwrap()
-        .path();
-    let steps: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(trace_file).unwrap()).unwrap();
+    let steps = trace(&out);
     let series = |key: &str, j: usize| -> Vec<f64> {
         steps.iter().map(|s| s[key][j].as_f64().unwrap()).collect()
     };
@@ -232,38 +235,19 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
 #[test]
 fn unitrees_low_level_example_runs_unchanged_and_the_joints_follow_it() {
     const TEST: &str = "dds_bridge::g1_low_level_example";
-    let Some(sdk) = prereq::reference(TEST, "unitree_sdk2_python") else {
+    let Some(sdk) = prereq::unitree_sdk(TEST) else {
         return;
     };
-    if !prereq::python_modules(
-        TEST,
-        &["cyclonedds", "numpy"],
-        "pip install -r tools/requirements-dev.txt",
-    ) {
-        return;
-    }
     let example = sdk.join("example/g1/low_level/g1_low_level_example.py");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let mut bridge = Command::new(BIN)
-        .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
-        .args([
-            "--sequence",
-            "pull_chair/pull_chair_000",
-            "--setting",
-            "no-force",
-        ])
-        .args([
-            "--max-torso-height-error",
-            "100",
-            "--max-torso-tilt-error",
-            "100",
-        ])
-        .args(["--start-timeout", "90", "--out", out.to_str().unwrap()])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let open_termination = [
+        "--max-torso-height-error",
+        "100",
+        "--max-torso-tilt-error",
+        "100",
+    ];
+    let bridge = start_bridge(&out, &open_termination);
     let mut deploy = Command::new("python3")
         .arg(&example)
         .arg("lo")
@@ -278,12 +262,7 @@ fn unitrees_low_level_example_runs_unchanged_and_the_joints_follow_it() {
         use std::io::Write;
         deploy.stdin.take().unwrap().write_all(b"\n").unwrap();
     }
-    let start = Instant::now();
-    while bridge.try_wait().unwrap().is_none() && start.elapsed() < Duration::from_secs(120) {
-        std::thread::sleep(Duration::from_millis(100));
-    }
-    let _ = bridge.kill();
-    let bridge = bridge.wait_with_output().unwrap();
+    let bridge = finished(bridge);
     let _ = deploy.kill(); // its loop never ends on its own
     let deploy = deploy.wait_with_output().unwrap();
     let said = format!(
@@ -314,14 +293,7 @@ fn unitrees_low_level_example_runs_unchanged_and_the_joints_follow_it() {
         "stage 3 never came: {realtime}"
     );
 
-    let trace_file = std::fs::read_dir(out.join("traces"))
-        .unwrap()
-        .next()
-        .unwrap()
-        .unwrap()
-        .path();
-    let steps: Vec<serde_json::Value> =
-        serde_json::from_str(&std::fs::read_to_string(trace_file).unwrap()).unwrap();
+    let steps = trace(&out);
     let vector = |s: &serde_json::Value, key: &str| -> Vec<f64> {
         s[key]
             .as_array()

@@ -79,19 +79,12 @@ fn unhex(text: &str) -> Vec<u8> {
 #[test]
 fn the_codec_writes_reads_and_checksums_as_unitrees_python_sdk() {
     const TEST: &str = "dds_codec::python_sdk";
-    let Some(sdk) = prereq::reference(TEST, "unitree_sdk2_python/unitree_sdk2py") else {
+    let Some(sdk) = prereq::unitree_sdk(TEST) else {
         return;
     };
-    if !prereq::python_modules(
-        TEST,
-        &["cyclonedds"],
-        "pip install -r tools/requirements-dev.txt",
-    ) {
-        return;
-    }
     let out = Command::new("python3")
         .args(["-c", SDK_SCRIPT])
-        .env("PYTHONPATH", sdk.parent().unwrap())
+        .env("PYTHONPATH", &sdk)
         .output()
         .unwrap();
     assert!(

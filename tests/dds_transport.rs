@@ -54,21 +54,14 @@ print("sent", flush=True)
 #[test]
 fn the_robot_endpoints_exchange_checked_messages_with_unitrees_python_sdk() {
     const TEST: &str = "dds_transport::python_sdk";
-    let Some(sdk) = prereq::reference(TEST, "unitree_sdk2_python/unitree_sdk2py") else {
+    let Some(sdk) = prereq::unitree_sdk(TEST) else {
         return;
     };
-    if !prereq::python_modules(
-        TEST,
-        &["cyclonedds"],
-        "pip install -r tools/requirements-dev.txt",
-    ) {
-        return;
-    }
     let loopback = std::net::IpAddr::from([127, 0, 0, 1]);
     let mut robot = RobotEndpoints::join(0, Some(loopback)).expect("join domain 0 on lo");
     let mut sdk_side = Command::new("python3")
         .args(["-c", SDK_SCRIPT])
-        .env("PYTHONPATH", sdk.parent().unwrap())
+        .env("PYTHONPATH", &sdk)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

@@ -87,3 +87,18 @@ fn workspace_root() -> PathBuf {
         manifest
     }
 }
+
+/// Unitree's Python SDK (unitree_sdk2_python, the directory to put on `PYTHONPATH`) when
+/// it is among the reference artifacts and Python's `cyclonedds` imports; otherwise
+/// [`skip`]s and returns `None`.
+pub fn unitree_sdk(test: &str) -> Option<PathBuf> {
+    let sdk = reference(test, "unitree_sdk2_python/unitree_sdk2py")?;
+    if !python_modules(
+        test,
+        &["cyclonedds", "numpy"],
+        "pip install -r tools/requirements-dev.txt",
+    ) {
+        return None;
+    }
+    sdk.parent().map(std::path::Path::to_path_buf)
+}
