@@ -16,11 +16,12 @@ const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 const DEPLOY_DOMAIN: &str = "1";
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// A deployment-style script: waits for the state, holds the pose it read with the
+/// A deployment-style script: waits for the state and the remote's start button, holds
+/// the pose it read then with the
 /// default profile's gains, swings the left elbow (motor 18) by ±0.3 rad at 0.5 Hz, sends
 /// every 25th command with a broken checksum, and stops when the state stops coming.
 const DEPLOY_SCRIPT: &str = r#"
-import math, sys, time
+import math, struct, sys, time
 from unitree_sdk2py.core.channel import ChannelFactoryInitialize, ChannelPublisher, ChannelSubscriber
 from unitree_sdk2py.idl.default import unitree_hg_msg_dds__LowCmd_
 from unitree_sdk2py.idl.unitree_hg.msg.dds_ import LowCmd_, LowState_
@@ -45,6 +46,13 @@ while "s" not in latest or latest["s"].tick == 0:
     time.sleep(0.01)
 first = latest["s"]
 print("state crc", int(CRC().Crc(first) == first.crc), flush=True)
+# As deploy scripts do: nothing moves before the remote's start button (bit 2 of bytes 2-3).
+while not struct.unpack("<H", bytes(latest["s"].wireless_remote[2:4]))[0] & (1 << 2):
+    if time.time() > deadline:
+        print("no start button within 60 s", flush=True)
+        sys.exit(1)
+    time.sleep(0.002)
+first = latest["s"]
 q0 = [first.motor_state[i].q for i in range(29)]
 crc = CRC()
 t0 = time.time()
@@ -109,7 +117,7 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let bridge = start_bridge(&out, &["--domain", DEPLOY_DOMAIN]);
+    let bridge = start_bridge(&out, &["--domain", DEPLOY_DOMAIN, "--remote", "start@5s"]);
     let deploy = Command::new("python3")
         .args(["-c", DEPLOY_SCRIPT, DEPLOY_DOMAIN])
         .env("PYTHONPATH", &sdk)
@@ -148,6 +156,9 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
         realtime["physics_steps"].as_u64().unwrap() > 100,
         "{realtime}"
     );
+    // The script moved nothing before the scripted start press at 5 s.
+    let offset = realtime["start_offset_s"].as_f64().unwrap();
+    assert!((5.0..7.0).contains(&offset), "{realtime}");
     let seconds =
         realtime["start_offset_s"].as_f64().unwrap() + realtime["wall_s"].as_f64().unwrap();
     let state_rate_hz = realtime["states_published"].as_f64().unwrap() / seconds;

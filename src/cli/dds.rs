@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 use thorarena::dds::bridge::{run_episode, BridgeOptions, RealTimeReport};
+use thorarena::dds::remote::RemoteScript;
 use thorarena::dds::RobotEndpoints;
 use thorarena::episode::{Episode, EpisodeSetup};
 use thorarena::evaluation::{
@@ -59,6 +60,12 @@ pub struct Args {
     /// Termination: torso tilt off its reference by more than this, rad.
     #[arg(long, default_value_t = TerminationRule::default().max_torso_tilt_error_rad)]
     pub max_torso_tilt_error: f64,
+    /// Wireless-remote presses, each `BUTTON@SECONDS` after the bridge starts, for
+    /// scripts that wait for buttons (e.g. `start@1s,A@3s`; buttons R1 L1 start select R2
+    /// L2 F1 F2 A B X Y up right down left). The reference clock still starts with the
+    /// first valid command.
+    #[arg(long, default_value = "", value_parser = parse_remote)]
+    pub remote: RemoteScript,
     /// The policy's name in the results.
     #[arg(long, default_value = "dds")]
     pub name: String,
@@ -156,6 +163,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         state_period: Duration::from_millis(2),
         start_timeout: Duration::from_secs_f64(args.start_timeout),
         torso_body: spec.robot.frame_index("torso_link").unwrap_or(0),
+        remote: args.remote.clone(),
     };
     let realtime = run_episode(
         &mut endpoints,
@@ -229,4 +237,8 @@ fn write_realtime(
         eprintln!("warning: the run did not keep real time (realtime.json)");
     }
     Ok(())
+}
+
+fn parse_remote(text: &str) -> Result<RemoteScript, String> {
+    RemoteScript::parse(text).map_err(|e| e.to_string())
 }

@@ -28,6 +28,8 @@ pub struct BridgeOptions {
     pub start_timeout: Duration,
     /// Index of the torso body in the robot model (its IMU is `rt/secondary_imu`).
     pub torso_body: usize,
+    /// Button presses on the robot's wireless remote, from the bridge's start.
+    pub remote: super::remote::RemoteScript,
 }
 
 /// Percentiles of a duration sample, ms.
@@ -250,8 +252,11 @@ impl RobotIo {
             self.next_state_at = now + self.options.state_period;
         }
         self.published += 1;
-        let tick = (now - self.started).as_millis() as u32;
-        self.state.low.tick = tick.max(1);
+        let since = now - self.started;
+        self.state.low.tick = (since.as_millis() as u32).max(1);
+        self.options
+            .remote
+            .write(since, &mut self.state.low.wireless_remote);
         self.state.low.crc = self.state.low.crc_of();
         endpoints.publish(&self.state.low, &self.state.torso)
     }

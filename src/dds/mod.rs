@@ -9,6 +9,7 @@ pub mod bridge;
 pub mod cdr;
 pub mod crc;
 pub mod motion_switcher;
+pub mod remote;
 pub mod transport;
 pub mod unitree_hg;
 

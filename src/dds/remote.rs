@@ -1,0 +1,117 @@
+//! A scripted wireless remote: button presses at given times, carried in `rt/lowstate`'s
+//! `wireless_remote` as the G1 carries its handheld remote's, so deployment scripts that
+//! wait for "start", then "A", get through their start-up unattended.
+//!
+//! The buttons are the bits of the little-endian 16-bit word in bytes 2–3, in the order of
+//! unitree_rl_gym's `deploy/deploy_real/common/remote_controller.py` (bit 0 R1, 1 L1,
+//! 2 start, 3 select, 4 R2, 5 L2, 6 F1, 7 F2, 8 A, 9 B, 10 X, 11 Y, 12 up, 13 right,
+//! 14 down, 15 left); unitree_sdk2_python's `utils/joystick.py` reads the same bits.
+
+use std::time::Duration;
+
+/// How long a scripted press holds its button down.
+pub const PRESS: Duration = Duration::from_millis(200);
+
+/// The buttons, by name, in bit order.
+pub const BUTTONS: [&str; 16] = [
+    "R1", "L1", "start", "select", "R2", "L2", "F1", "F2", "A", "B", "X", "Y", "up", "right",
+    "down", "left",
+];
+
+/// A bad `--remote` script.
+#[derive(Debug, thiserror::Error, PartialEq, Eq)]
+pub enum RemoteError {
+    /// A press is not `BUTTON@SECONDS` (e.g. `start@1s`, `A@2.5`).
+    #[error("remote press `{0}`: give BUTTON@SECONDS, e.g. start@1s")]
+    Malformed(String),
+    /// An unknown button.
+    #[error("remote press `{press}`: no button `{button}` (buttons: {})", BUTTONS.join(", "))]
+    UnknownButton {
+        /// The press as written.
+        press: String,
+        /// The button named.
+        button: String,
+    },
+}
+
+/// Presses at times since the bridge started publishing.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RemoteScript {
+    presses: Vec<(Duration, u16)>,
+}
+
+impl RemoteScript {
+    /// `start@1s,A@2s`: comma-separated presses, each a button and the time, s (the `s`
+    /// is optional).
+    pub fn parse(text: &str) -> Result<Self, RemoteError> {
+        let mut presses = Vec::new();
+        for press in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let malformed = || RemoteError::Malformed(press.to_string());
+            let (button, at) = press.split_once('@').ok_or_else(malformed)?;
+            let seconds: f64 = at
+                .trim()
+                .trim_end_matches('s')
+                .parse()
+                .map_err(|_| malformed())?;
+            let at = Duration::try_from_secs_f64(seconds).map_err(|_| malformed())?;
+            let bit = BUTTONS
+                .iter()
+                .position(|b| b.eq_ignore_ascii_case(button.trim()))
+                .ok_or_else(|| RemoteError::UnknownButton {
+                    press: press.to_string(),
+                    button: button.trim().to_string(),
+                })?;
+            presses.push((at, 1u16 << bit));
+        }
+        presses.sort();
+        Ok(Self { presses })
+    }
+
+    /// The buttons held down `since` the bridge started publishing.
+    pub fn buttons_at(&self, since: Duration) -> u16 {
+        self.presses
+            .iter()
+            .filter(|(at, _)| since >= *at && since < *at + PRESS)
+            .fold(0, |held, (_, bit)| held | bit)
+    }
+
+    /// Writes the held buttons into a `wireless_remote` field.
+    pub fn write(&self, since: Duration, wireless_remote: &mut [u8; 40]) {
+        let [low, high] = self.buttons_at(since).to_le_bytes();
+        wireless_remote[2] = low;
+        wireless_remote[3] = high;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presses_set_their_bits_for_a_moment() {
+        let script = RemoteScript::parse("start@1s, A@2").unwrap();
+        let mut remote = [0u8; 40];
+        script.write(Duration::from_millis(1050), &mut remote);
+        assert_eq!((remote[2], remote[3]), (0x04, 0x00));
+        script.write(Duration::from_millis(2100), &mut remote);
+        assert_eq!((remote[2], remote[3]), (0x00, 0x01));
+        script.write(Duration::from_millis(1500), &mut remote);
+        assert_eq!((remote[2], remote[3]), (0, 0));
+        assert_eq!(script.buttons_at(Duration::from_millis(999)), 0);
+    }
+
+    #[test]
+    fn bad_scripts_are_errors_naming_the_press() {
+        assert!(matches!(
+            RemoteScript::parse("start"),
+            Err(RemoteError::Malformed(p)) if p == "start"
+        ));
+        assert!(matches!(
+            RemoteScript::parse("Z@1s"),
+            Err(RemoteError::UnknownButton { button, .. }) if button == "Z"
+        ));
+        assert!(RemoteScript::parse("A@-1").is_err());
+        assert!(RemoteScript::parse("A@nan").is_err());
+        assert_eq!(RemoteScript::parse("").unwrap(), RemoteScript::default());
+    }
+}
