@@ -117,7 +117,17 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let bridge = start_bridge(&out, &["--domain", DEPLOY_DOMAIN, "--remote", "start@5s"]);
+    let bridge = start_bridge(
+        &out,
+        &[
+            "--domain",
+            DEPLOY_DOMAIN,
+            "--remote",
+            "start@5s,A@6.5s",
+            "--start-on",
+            "A",
+        ],
+    );
     let deploy = Command::new("python3")
         .args(["-c", DEPLOY_SCRIPT, DEPLOY_DOMAIN])
         .env("PYTHONPATH", &sdk)
@@ -156,9 +166,10 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
         realtime["physics_steps"].as_u64().unwrap() > 100,
         "{realtime}"
     );
-    // The script moved nothing before the scripted start press at 5 s.
+    // The script sends nothing before the start press at 5 s, and the episode (its
+    // reference clock) starts at the A press, 6.5 s.
     let offset = realtime["start_offset_s"].as_f64().unwrap();
-    assert!((5.0..7.0).contains(&offset), "{realtime}");
+    assert!((6.5..7.0).contains(&offset), "{realtime}");
     let seconds =
         realtime["start_offset_s"].as_f64().unwrap() + realtime["wall_s"].as_f64().unwrap();
     let state_rate_hz = realtime["states_published"].as_f64().unwrap() / seconds;
@@ -234,6 +245,22 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
         "{stderr}"
     );
     assert!(!stderr.contains("panicked"), "{stderr}");
+    let never_pressed = Command::new(BIN)
+        .args([
+            "dds",
+            "--sequence",
+            "pull_chair/pull_chair_000",
+            "--start-on",
+            "A",
+        ])
+        .args(["--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&never_pressed.stderr);
+    assert!(
+        !never_pressed.status.success() && stderr.contains("--remote never presses A"),
+        "{stderr}"
+    );
 }
 
 /// Unitree's own `example/g1/low_level/g1_low_level_example.py`, unchanged, from

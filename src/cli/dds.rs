@@ -62,10 +62,14 @@ pub struct Args {
     pub max_torso_tilt_error: f64,
     /// Wireless-remote presses, each `BUTTON@SECONDS` after the bridge starts, for
     /// scripts that wait for buttons (e.g. `start@1s,A@3s`; buttons R1 L1 start select R2
-    /// L2 F1 F2 A B X Y up right down left). The reference clock still starts with the
-    /// first valid command.
+    /// L2 F1 F2 A B X Y up right down left).
     #[arg(long, default_value = "", value_parser = parse_remote)]
     pub remote: RemoteScript,
+    /// When the episode (and the reference clock) starts: `first-command`, or a button
+    /// `--remote` presses (e.g. `A`: a deploy script's "run the policy"); until then the
+    /// robot is held still at the reference's first frame, as on a gantry.
+    #[arg(long, default_value = "first-command")]
+    pub start_on: String,
     /// The policy's name in the results.
     #[arg(long, default_value = "dds")]
     pub name: String,
@@ -82,6 +86,17 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if !(args.start_timeout.is_finite() && args.start_timeout > 0.0) {
         bail!("--start-timeout must be > 0 s");
     }
+    let start_button = match args.start_on.as_str() {
+        "first-command" => None,
+        name => match thorarena::dds::remote::button_bit(name) {
+            Some(bit) if args.remote.presses(bit) => Some(bit),
+            Some(_) => bail!("--start-on {name}: --remote never presses {name}"),
+            None => bail!(
+                "--start-on {name}: give first-command or a button ({})",
+                thorarena::dds::remote::BUTTONS.join(", ")
+            ),
+        },
+    };
     let Some((task, _)) = args.sequence.split_once('/') else {
         bail!("--sequence {}: give TASK/SEQUENCE_ID", args.sequence);
     };
@@ -151,19 +166,24 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let mut episode = Episode::start(&setup, seq, physics.as_mut());
     episode.record_trace();
     eprintln!(
-        "{}/{} ({}, {:.1} s): rt/lowstate at 500 Hz on DDS domain {} ({}); the episode starts with the first valid rt/lowcmd…",
+        "{}/{} ({}, {:.1} s): rt/lowstate at 500 Hz on DDS domain {} ({}); the episode starts {}…",
         seq.task,
         seq.sequence_id,
         setting.name,
         seq.duration_s(),
         args.domain,
-        args.address
+        args.address,
+        match start_button {
+            None => "with the first valid rt/lowcmd".to_string(),
+            Some(_) => format!("at the remote's {} press", args.start_on),
+        }
     );
     let options = BridgeOptions {
         state_period: Duration::from_millis(2),
         start_timeout: Duration::from_secs_f64(args.start_timeout),
         torso_body: spec.robot.frame_index("torso_link").unwrap_or(0),
         remote: args.remote.clone(),
+        start_button,
     };
     let realtime = run_episode(
         &mut endpoints,
@@ -214,7 +234,7 @@ fn write_realtime(
         .with_context(|| format!("writing {}", path.display()))?;
     let c = &report.commands;
     let line = format!(
-        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (not simulated), {} in the parallel ankle mode (targets taken as pitch/roll); inter-arrival p50 {:.2} ms, p99 {:.2} ms; reference clock started {:.2} s after the bridge.\n",
+        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (not simulated), {} in the parallel ankle mode (targets taken as pitch/roll); inter-arrival p50 {:.2} ms, p99 {:.2} ms; episode (and reference clock) started {:.2} s after the bridge.\n",
         if report.kept_real_time { "kept" } else { "NOT KEPT — these scores are not those of a real-time run" },
         report.real_time_factor,
         report.late_steps,

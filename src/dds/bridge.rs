@@ -30,6 +30,11 @@ pub struct BridgeOptions {
     pub torso_body: usize,
     /// Button presses on the robot's wireless remote, from the bridge's start.
     pub remote: super::remote::RemoteScript,
+    /// Start the episode at this button's press (its bit; the first valid command after
+    /// it, if none came before) instead of at the first valid command. Until then the
+    /// robot is held still at the reference's first frame, as on a gantry: commands are
+    /// taken and counted, the physics does not step.
+    pub start_button: Option<u16>,
 }
 
 /// Percentiles of a duration sample, ms.
@@ -83,8 +88,9 @@ pub struct CommandCounts {
 /// How well a run kept real time (`realtime.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RealTimeReport {
-    /// Wall time from the bridge's start to the first valid command, which started the
-    /// reference clock, s.
+    /// Wall time from the bridge's start to the episode's start (the first valid command,
+    /// or the one in force at the start button's press), when the reference clock
+    /// started, s.
     pub start_offset_s: f64,
     /// Physics steps run.
     pub physics_steps: u64,
@@ -125,12 +131,22 @@ pub fn run_episode(
     let mut io = RobotIo::new(options.clone(), gains.clone());
     let bridge_start = Instant::now();
     io.state.read_from(physics);
-    // Before the first command the robot stands still and says so.
+    // Before the start the robot stands still and says so.
+    let mut newest = None;
+    let mut pressed = options.start_button.is_none();
     let first = loop {
         io.publish_due(endpoints)?;
         endpoints.serve_services()?;
         if let Some(command) = io.take_commands(endpoints)? {
-            break command;
+            newest = Some(command);
+        }
+        if let Some(bit) = options.start_button {
+            pressed |= options.remote.buttons_at(io.started.elapsed()) & bit != 0;
+        }
+        if pressed {
+            if let Some(command) = newest.take() {
+                break command;
+            }
         }
         if bridge_start.elapsed() > options.start_timeout {
             return Err(DdsError::NoCommand(options.start_timeout));

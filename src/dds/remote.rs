@@ -34,6 +34,14 @@ pub enum RemoteError {
     },
 }
 
+/// The bit of button `name` (case-insensitive) in the remote's 16-bit word.
+pub fn button_bit(name: &str) -> Option<u16> {
+    BUTTONS
+        .iter()
+        .position(|b| b.eq_ignore_ascii_case(name.trim()))
+        .map(|bit| 1u16 << bit)
+}
+
 /// Presses at times since the bridge started publishing.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RemoteScript {
@@ -54,17 +62,19 @@ impl RemoteScript {
                 .parse()
                 .map_err(|_| malformed())?;
             let at = Duration::try_from_secs_f64(seconds).map_err(|_| malformed())?;
-            let bit = BUTTONS
-                .iter()
-                .position(|b| b.eq_ignore_ascii_case(button.trim()))
-                .ok_or_else(|| RemoteError::UnknownButton {
-                    press: press.to_string(),
-                    button: button.trim().to_string(),
-                })?;
-            presses.push((at, 1u16 << bit));
+            let bit = button_bit(button).ok_or_else(|| RemoteError::UnknownButton {
+                press: press.to_string(),
+                button: button.trim().to_string(),
+            })?;
+            presses.push((at, bit));
         }
         presses.sort();
         Ok(Self { presses })
+    }
+
+    /// Whether the script ever presses the buttons of `bits`.
+    pub fn presses(&self, bits: u16) -> bool {
+        self.presses.iter().any(|(_, b)| b & bits != 0)
     }
 
     /// The buttons held down `since` the bridge started publishing.
