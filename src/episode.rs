@@ -2,7 +2,8 @@
 //! frame), observe, advance one control step (action delay, force replay and PD at the
 //! physics rate, metrics, termination), finish.
 
-use crate::evaluation::{reference_steps, PolicyFault, PolicyFaults, Termination, TerminationRule};
+use crate::evaluation::{reference_steps, EpisodeRecord, PolicyFault, PolicyFaults, Setting};
+use crate::evaluation::{Termination, TerminationRule};
 use crate::feet::{FeetMeter, FootContact};
 use crate::metrics::{keypoint_error_m, reanchor, EpisodeSeries};
 use crate::motion::{Reference, ReferenceFrame, Sequence};
@@ -86,6 +87,30 @@ pub struct EpisodeSetup<'a> {
     pub push_heading_deg: Option<f64>,
     /// Reference offsets the policy asked for, s.
     pub reference_offsets_s: Vec<f64>,
+}
+
+impl<'a> EpisodeSetup<'a> {
+    /// The setup of `setting`'s episodes (its force replay or push) for the run's robot,
+    /// profile, keypoints and termination rule, with reference frames at `reference_offsets_s`.
+    pub fn for_setting(
+        robot: &'a RobotModel,
+        profile: &'a Profile,
+        keypoints: &'a KeypointSet,
+        termination: TerminationRule,
+        setting: &Setting,
+        reference_offsets_s: Vec<f64>,
+    ) -> Self {
+        Self {
+            robot,
+            profile,
+            keypoints,
+            termination,
+            force_coefficient: setting.coefficient,
+            push_n: setting.push_n,
+            push_heading_deg: setting.push_heading_deg,
+            reference_offsets_s,
+        }
+    }
 }
 
 /// A running episode.
@@ -472,6 +497,23 @@ impl<'a> Episode<'a> {
     /// The recorded series and why the episode ended early, if it did.
     pub fn finish(self) -> (EpisodeSeries, Option<Termination>) {
         (self.series, self.termination)
+    }
+
+    /// The record of this episode of `seq` under `setting`, for `policy` (take the trace
+    /// first, if one was recorded).
+    pub fn into_record(self, seq: &Sequence, setting: &Setting, policy: &str) -> EpisodeRecord {
+        let faults = self.faults();
+        let (series, termination) = self.finish();
+        EpisodeRecord {
+            task: seq.task.clone(),
+            sequence_id: seq.sequence_id.clone(),
+            setting: setting.name.clone(),
+            coefficient: setting.coefficient,
+            policy: policy.to_string(),
+            termination,
+            faults,
+            series,
+        }
     }
 }
 

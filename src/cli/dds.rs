@@ -12,9 +12,7 @@ use thorarena::dds::bridge::{run_episode, BridgeOptions, RealTimeReport};
 use thorarena::dds::remote::RemoteScript;
 use thorarena::dds::RobotEndpoints;
 use thorarena::episode::{Episode, EpisodeSetup};
-use thorarena::evaluation::{
-    task_thresholds, EpisodeRecord, EvalRequest, EvalSpec, TerminationRule,
-};
+use thorarena::evaluation::{task_thresholds, EvalRequest, EvalSpec, TerminationRule};
 use thorarena::motion::SequenceSelection;
 use thorarena::physics::{make_physics, PhysicsSettings};
 use thorarena::results::{RunDir, RunHeader};
@@ -149,19 +147,16 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         spec.profile.gains.clone(),
     )?;
     let setting = &spec.settings[0];
-    let setup = EpisodeSetup {
-        robot: &spec.robot,
-        profile: &spec.profile,
-        keypoints: spec
-            .robot
+    let setup = EpisodeSetup::for_setting(
+        &spec.robot,
+        &spec.profile,
+        spec.robot
             .keypoint_set(&spec.keypoints)
             .context("keypoint set")?,
-        termination: spec.termination,
-        force_coefficient: setting.coefficient,
-        push_n: setting.push_n,
-        push_heading_deg: setting.push_heading_deg,
-        reference_offsets_s: vec![0.0],
-    };
+        spec.termination,
+        setting,
+        vec![0.0],
+    );
     let mut endpoints = RobotEndpoints::join(args.domain, Some(args.address))?;
     let mut episode = Episode::start(&setup, seq, physics.as_mut());
     episode.record_trace();
@@ -193,18 +188,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         &options,
     )?;
     let trace = episode.take_trace();
-    let faults = episode.faults();
-    let (series, termination) = episode.finish();
-    let record = EpisodeRecord {
-        task: seq.task.clone(),
-        sequence_id: seq.sequence_id.clone(),
-        setting: setting.name.clone(),
-        coefficient: setting.coefficient,
-        policy: args.name.clone(),
-        termination,
-        faults,
-        series,
-    };
+    let record = episode.into_record(seq, setting, &args.name);
     // Started only now: a bridge that got no command leaves no empty run behind.
     let header = RunHeader::of(&spec, &args.name);
     run.start(&header, false)?;

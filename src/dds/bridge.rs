@@ -155,7 +155,7 @@ pub fn run_episode(
     };
     let start = Instant::now();
     let start_offset_s = (start - bridge_start).as_secs_f64();
-    io.apply(&first, physics, None);
+    io.apply(&first, physics);
     let mut steps = 0u64;
     let mut late_steps = 0u64;
     let mut max_lateness = Duration::ZERO;
@@ -171,7 +171,7 @@ pub fn run_episode(
                     failure.get_or_insert(e);
                 }
                 match io.take_commands(endpoints) {
-                    Ok(Some(command)) => io.apply(&command, physics, Some(targets)),
+                    Ok(Some(command)) => io.apply(&command, physics),
                     Ok(None) => {}
                     Err(e) => {
                         failure.get_or_insert(e);
@@ -314,12 +314,7 @@ impl RobotIo {
     }
 
     /// Puts `command` in force: gains (a disabled motor, mode 0, has none) and targets.
-    fn apply(
-        &mut self,
-        command: &LowCmd,
-        physics: &mut dyn Physics,
-        targets: Option<&mut Vec<f64>>,
-    ) {
+    fn apply(&mut self, command: &LowCmd, physics: &mut dyn Physics) {
         let n = self.limits.kp.len();
         let motors = &command.motor_cmd[..n];
         let enabled = |m: &super::MotorCmd| m.mode != 0;
@@ -349,9 +344,6 @@ impl RobotIo {
         }
         let q: Vec<f64> = motors.iter().map(|m| f64::from(m.q)).collect();
         physics.set_targets(&q);
-        if let Some(t) = targets {
-            t.clone_from(&q);
-        }
         self.targets = Some(q);
     }
 }

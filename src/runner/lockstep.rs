@@ -108,15 +108,15 @@ fn episode_setups<'a>(plan: &EvalPlan<'a>, offsets: Vec<f64>) -> Vec<EpisodeSetu
         .expect("keypoint set checked by the caller");
     plan.settings
         .iter()
-        .map(|setting| EpisodeSetup {
-            robot: plan.robot,
-            profile: plan.profile,
-            keypoints,
-            termination: plan.termination,
-            force_coefficient: setting.coefficient,
-            push_n: setting.push_n,
-            push_heading_deg: setting.push_heading_deg,
-            reference_offsets_s: offsets.clone(),
+        .map(|setting| {
+            EpisodeSetup::for_setting(
+                plan.robot,
+                plan.profile,
+                keypoints,
+                plan.termination,
+                setting,
+                offsets.clone(),
+            )
         })
         .collect()
 }
@@ -255,8 +255,15 @@ pub fn run_eval(
                 continue;
             }
             idle[g] = false;
-            let outcome = if std::mem::take(&mut fails_unasked[g]) {
-                ActOutcome::Failed
+            if std::mem::take(&mut fails_unasked[g]) {
+                // The policy failed while answering the other group: end these episodes
+                // as it would have ended them.
+                for o in &observations {
+                    commands[o.env] = SlotCommand::Terminate {
+                        why: Termination::PolicyFailed,
+                        fault: None,
+                    };
+                }
             } else {
                 for o in observations.iter().filter(|o| o.step == 0) {
                     policy.reset(o.env);
@@ -286,15 +293,6 @@ pub fn run_eval(
                     } else {
                         shared.stop.store(true, Ordering::SeqCst);
                     }
-                }
-                outcome
-            };
-            if outcome == ActOutcome::Failed {
-                for o in &observations {
-                    commands[o.env] = SlotCommand::Terminate {
-                        why: Termination::PolicyFailed,
-                        fault: None,
-                    };
                 }
             }
             pipe.dispatch(g, &groups[g], &mut commands);
@@ -534,22 +532,11 @@ fn finish(shared: &Shared, job: usize, mut ep: Episode) -> Finished {
     let seq = &shared.sequences[q];
     let setting = &shared.plan.settings[s];
     let trace = ep.take_trace();
-    let faults = ep.faults();
     let physics_wall = ep.physics_wall();
-    let (series, termination) = ep.finish();
     Finished {
         job,
         physics_wall,
-        record: EpisodeRecord {
-            task: seq.task.clone(),
-            sequence_id: seq.sequence_id.clone(),
-            setting: setting.name.clone(),
-            coefficient: setting.coefficient,
-            policy: shared.policy_name.clone(),
-            termination,
-            faults,
-            series,
-        },
+        record: ep.into_record(seq, setting, &shared.policy_name),
         trace,
     }
 }
