@@ -244,7 +244,7 @@ impl EvalObserver for Progress {
     fn episode(&mut self, _: &EpisodeRecord, _: Option<&thorarena::episode::EpisodeTrace>) {
         self.done += 1;
         let step = (self.to_run / 10).max(1);
-        if self.done % step == 0 || self.done == self.to_run {
+        if self.done.is_multiple_of(step) || self.done == self.to_run {
             eprintln!("  {}/{} episodes", self.done, self.to_run);
         }
     }

@@ -158,7 +158,7 @@ impl Writer {
     }
 
     fn align(&mut self, n: usize) {
-        while (self.bytes.len() - self.origin) % n != 0 {
+        while !(self.bytes.len() - self.origin).is_multiple_of(n) {
             self.bytes.push(0);
         }
     }

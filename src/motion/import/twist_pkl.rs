@@ -292,7 +292,7 @@ impl Reader<'_> {
         }
         let size = match dtype.size {
             Some(size) => size,
-            None if count > 0 && p.raw.len() % count == 0 => p.raw.len() / count,
+            None if count > 0 && p.raw.len().is_multiple_of(count) => p.raw.len() / count,
             None => {
                 return Err(self.bad(
                     field,
