@@ -6,6 +6,9 @@
 #   - Python packages into the project-local virtual environment .venv/ (never system-wide):
 #     tools/requirements.txt (MuJoCo cross-check), tools/requirements-dev.txt (ruff, mypy),
 #     and the policy client ./adapters/python[policies,test], editable;
+#   - deployment code run unchanged against `thorarena dds` (tools/requirements-deploy.txt:
+#     holosoma's inference package and Unitree's SDK binding) into .venv-deploy/, an
+#     environment of its own; if that fails, its test counts as skipped;
 #   - the front end's node packages (web/node_modules: esbuild, playwright-core);
 #   - g++, make and chromium through apt-get, only if missing and only when run as root;
 #     otherwise the tests that need them are counted as skipped and the line says so;
@@ -64,6 +67,16 @@ if [ "$(cat .venv/.thorarena-setup 2>/dev/null)" != "$want" ]; then
 fi
 export VIRTUAL_ENV=$root/.venv
 export PATH=$root/.venv/bin:$PATH
+
+say "deployment code in .venv-deploy (tools/requirements-deploy.txt)"
+want=$(sha256sum < tools/requirements-deploy.txt)
+if [ "$(cat .venv-deploy/.thorarena-setup 2>/dev/null)" != "$want" ]; then
+    { [ -x .venv-deploy/bin/python ] || python3 -m venv .venv-deploy; } \
+        && .venv-deploy/bin/python -m pip install --quiet --disable-pip-version-check \
+            -r tools/requirements-deploy.txt > "$logs/pip-deploy.log" 2>&1 \
+        && echo "$want" > .venv-deploy/.thorarena-setup \
+        || { tail -n 20 "$logs/pip-deploy.log"; say "could not set up .venv-deploy: the deployment-code test counts as skipped"; }
+fi
 
 say "front end node packages (web/node_modules)"
 if command -v npm >/dev/null; then

@@ -3,16 +3,19 @@
 //! sample over loopback: it reads the robot's state, then commands a standing pose with
 //! the left elbow swinging. The run directory holds a scored episode, `realtime.json`
 //! (real time kept or not, commands counted: the corrupted ones ignored) and a trace in
-//! which the elbow follows its commands. Skipped, saying so, when `../shared/reference`
+//! which the elbow follows its commands. The bridge and the Python side of each test run in
+//! a private network namespace of their own when root allows it (`netns`). Skipped, saying so, when `../shared/reference`
 //! (the SDK) or Python's `cyclonedds` is absent; never in CI.
 
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
+mod netns;
 mod prereq;
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 /// The DDS domain of the scripted deployment: not 0, where Unitree's unchanged example
-/// (hard-coded to domain 0) runs at the same time in the next test.
+/// (hard-coded to domain 0) runs at the same time in the next test, should both be on the
+/// host's loopback (no private namespace).
 const DEPLOY_DOMAIN: &str = "1";
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
@@ -74,8 +77,9 @@ print("sent", sent, flush=True)
 "#;
 
 /// `thorarena dds` on the sample's pull_chair_000 without force, into `out`.
-fn start_bridge(out: &std::path::Path, extra: &[&str]) -> Child {
-    Command::new(BIN)
+fn start_bridge(network: &netns::PrivateNetwork, out: &std::path::Path, extra: &[&str]) -> Child {
+    network
+        .command(BIN)
         .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
         .args(["--sequence", "pull_chair/pull_chair_000"])
         .args(["--setting", "no-force", "--start-timeout", "90"])
@@ -117,7 +121,9 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     };
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
+    let network = netns::PrivateNetwork::new(TEST);
     let bridge = start_bridge(
+        &network,
         &out,
         &[
             "--domain",
@@ -128,7 +134,8 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
             "A",
         ],
     );
-    let deploy = Command::new("python3")
+    let deploy = network
+        .command("python3")
         .args(["-c", DEPLOY_SCRIPT, DEPLOY_DOMAIN])
         .env("PYTHONPATH", &sdk)
         .stdout(Stdio::piped())
@@ -285,8 +292,10 @@ fn unitrees_low_level_example_runs_unchanged_and_the_joints_follow_it() {
         "--max-torso-tilt-error",
         "100",
     ];
-    let bridge = start_bridge(&out, &open_termination);
-    let mut deploy = Command::new("python3")
+    let network = netns::PrivateNetwork::new(TEST);
+    let bridge = start_bridge(&network, &out, &open_termination);
+    let mut deploy = network
+        .command("python3")
         .arg(&example)
         .arg("lo")
         .env("PYTHONPATH", &sdk)

@@ -1,39 +1,44 @@
 //! The robot's DDS endpoints (`thorarena::dds::RobotEndpoints`, on rustdds) talk to
 //! Unitree's own Python SDK (unitree_sdk2_python on PyPI's `cyclonedds` 11.0.1) over
 //! loopback on domain 0: the SDK's subscriber receives `rt/lowstate` with a checksum it
-//! accepts, and its `rt/lowcmd` messages arrive here decoded, checksums intact — but for
+//! accepts and `rt/wirelesscontroller` (`unitree_go`) with the buttons held, and its `rt/lowcmd` messages arrive here decoded, checksums intact — but for
 //! the one the script corrupts, which fails the check. Skipped, saying so, when
 //! `../shared/reference` (the SDK) or Python's `cyclonedds` is absent; never in CI.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use thorarena::dds::unitree_hg::MODE_MACHINE_G1_29DOF;
-use thorarena::dds::{ImuState, LowState, RobotEndpoints};
+use thorarena::dds::{ImuState, LowState, RobotEndpoints, WirelessController};
 mod prereq;
 
-/// Unitree's SDK as a deployment script uses it: waits for states, checks one's CRC,
-/// then sends 50 commands at 100 Hz (the 11th with a flipped checksum bit).
+/// Unitree's SDK as a deployment script uses it: waits for states (and the remote's
+/// message), checks one's CRC, then sends 50 commands at 100 Hz (the 11th with a flipped checksum bit).
 const SDK_SCRIPT: &str = r#"
 import sys, time
 from unitree_sdk2py.core.channel import ChannelFactoryInitialize, ChannelPublisher, ChannelSubscriber
 from unitree_sdk2py.idl.default import unitree_hg_msg_dds__LowCmd_
 from unitree_sdk2py.idl.unitree_hg.msg.dds_ import LowCmd_, LowState_
+from unitree_sdk2py.idl.unitree_go.msg.dds_ import WirelessController_
 from unitree_sdk2py.utils.crc import CRC
 
 ChannelFactoryInitialize(0, "lo")
 states = []
 sub = ChannelSubscriber("rt/lowstate", LowState_)
 sub.Init(lambda m: states.append(m), 10)
+remotes = []
+remote_sub = ChannelSubscriber("rt/wirelesscontroller", WirelessController_)
+remote_sub.Init(lambda m: remotes.append(m), 10)
 pub = ChannelPublisher("rt/lowcmd", LowCmd_)
 pub.Init()
 deadline = time.time() + 30
-while len(states) < 5 and time.time() < deadline:
+while (len(states) < 5 or not remotes) and time.time() < deadline:
     time.sleep(0.01)
-if not states:
-    print("no state within 30 s", flush=True)
+if not states or not remotes:
+    print("no state or no remote within 30 s", flush=True)
     sys.exit(1)
 s = states[-1]
 print("state", s.tick, int(CRC().Crc(s) == s.crc), s.motor_state[3].q, flush=True)
+print("remote", remotes[-1].keys, remotes[-1].lx, flush=True)
 crc = CRC()
 for k in range(50):
     c = unitree_hg_msg_dds__LowCmd_()
@@ -76,6 +81,12 @@ fn the_robot_endpoints_exchange_checked_messages_with_unitrees_python_sdk() {
         quaternion: [1.0, 0.0, 0.0, 0.0],
         ..Default::default()
     };
+    // select + A, and a stick off centre.
+    let remote = WirelessController {
+        keys: 264,
+        lx: 0.25,
+        ..Default::default()
+    };
     let mut commands = Vec::new();
     let start = Instant::now();
     // The robot's loop: a state every 2 ms (500 Hz), commands collected, until the
@@ -83,7 +94,7 @@ fn the_robot_endpoints_exchange_checked_messages_with_unitrees_python_sdk() {
     let status = loop {
         state.tick += 1;
         state.crc = state.crc_of();
-        robot.publish(&state, &torso).expect("publish");
+        robot.publish(&state, &torso, &remote).expect("publish");
         commands.extend(robot.commands().expect("read commands"));
         if let Some(status) = sdk_side.try_wait().unwrap() {
             break Some(status);
@@ -110,6 +121,8 @@ fn the_robot_endpoints_exchange_checked_messages_with_unitrees_python_sdk() {
         "the SDK rejected the state's checksum: {line}"
     );
     assert_eq!(fields[3], "0.75", "{line}");
+    let remote_line = said.lines().find(|l| l.starts_with("remote ")).unwrap();
+    assert_eq!(remote_line, "remote 264 0.25", "{said}");
 
     assert!(
         commands.len() >= 40,

@@ -59,13 +59,16 @@ pub struct Args {
     #[arg(long, default_value_t = TerminationRule::default().max_torso_tilt_error_rad)]
     pub max_torso_tilt_error: f64,
     /// Wireless-remote presses, each `BUTTON@SECONDS` after the bridge starts, for
-    /// scripts that wait for buttons (e.g. `start@1s,A@3s`; buttons R1 L1 start select R2
-    /// L2 F1 F2 A B X Y up right down left).
+    /// scripts that wait for buttons (e.g. `start@1s,A@3s`; a chord joins buttons with
+    /// `+`, e.g. `select+A@4s`; buttons R1 L1 start select R2 L2 F1 F2 A B X Y up right
+    /// down left). Carried in `rt/lowstate`'s `wireless_remote` and on
+    /// `rt/wirelesscontroller`.
     #[arg(long, default_value = "", value_parser = parse_remote)]
     pub remote: RemoteScript,
-    /// When the episode (and the reference clock) starts: `first-command`, or a button
-    /// `--remote` presses (e.g. `A`: a deploy script's "run the policy"); until then the
-    /// robot is held still at the reference's first frame, as on a gantry.
+    /// When the episode (and the reference clock) starts: `first-command`, or a button or
+    /// chord `--remote` presses (e.g. `A`: a deploy script's "run the policy";
+    /// `select+A`: holosoma's "start the motion clip"); until then the robot is held
+    /// still at the reference's first frame, as on a gantry.
     #[arg(long, default_value = "first-command")]
     pub start_on: String,
     /// The policy's name in the results.
@@ -86,11 +89,11 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     let start_button = match args.start_on.as_str() {
         "first-command" => None,
-        name => match thorarena::dds::remote::button_bit(name) {
-            Some(bit) if args.remote.presses(bit) => Some(bit),
+        name => match thorarena::dds::remote::chord_bits(name) {
+            Some(bits) if args.remote.presses(bits) => Some(bits),
             Some(_) => bail!("--start-on {name}: --remote never presses {name}"),
             None => bail!(
-                "--start-on {name}: give first-command or a button ({})",
+                "--start-on {name}: give first-command, a button ({}) or a chord (select+A)",
                 thorarena::dds::remote::BUTTONS.join(", ")
             ),
         },

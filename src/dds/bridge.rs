@@ -30,8 +30,8 @@ pub struct BridgeOptions {
     pub torso_body: usize,
     /// Button presses on the robot's wireless remote, from the bridge's start.
     pub remote: super::remote::RemoteScript,
-    /// Start the episode at this button's press (its bit; the first valid command after
-    /// it, if none came before) instead of at the first valid command. Until then the
+    /// Start the episode when these buttons are held together (their bits; the first
+    /// valid command after the press, if none came before) instead of at the first valid command. Until then the
     /// robot is held still at the reference's first frame, as on a gantry: commands are
     /// taken and counted, the physics does not step.
     pub start_button: Option<u16>,
@@ -140,8 +140,8 @@ pub fn run_episode(
         if let Some(command) = io.take_commands(endpoints)? {
             newest = Some(command);
         }
-        if let Some(bit) = options.start_button {
-            pressed |= options.remote.buttons_at(io.started.elapsed()) & bit != 0;
+        if let Some(bits) = options.start_button {
+            pressed |= options.remote.buttons_at(io.started.elapsed()) & bits == bits;
         }
         if pressed {
             if let Some(command) = newest.take() {
@@ -274,7 +274,11 @@ impl RobotIo {
             .remote
             .write(since, &mut self.state.low.wireless_remote);
         self.state.low.crc = self.state.low.crc_of();
-        endpoints.publish(&self.state.low, &self.state.torso)
+        endpoints.publish(
+            &self.state.low,
+            &self.state.torso,
+            &self.options.remote.controller(since),
+        )
     }
 
     /// Reads `state` into the messages and publishes them when due.

@@ -1,7 +1,7 @@
 //! The G1's own DDS interface (Unitree's `unitree_hg` messages on `rt/lowcmd` and
 //! `rt/lowstate`), so deployment code written for the robot can drive the simulator.
 //!
-//! The message types (`unitree_hg`), their CDR encoding (`cdr`) and the checksum the robot
+//! The message types (`unitree_hg`, and `unitree_go`'s wireless remote), their CDR encoding (`cdr`) and the checksum the robot
 //! and Unitree's SDKs put in every message (`crc`, computed over the messages' C struct
 //! layout) are ours; DDS itself is `rustdds` (`transport`: the robot's topics).
 
@@ -11,9 +11,11 @@ pub mod crc;
 pub mod motion_switcher;
 pub mod remote;
 pub mod transport;
+pub mod unitree_go;
 pub mod unitree_hg;
 
 pub use transport::{DdsError, RobotEndpoints};
+pub use unitree_go::WirelessController;
 pub use unitree_hg::{ImuState, LowCmd, LowState, MotorCmd, MotorState};
 
 /// A DDS message that could not be decoded.

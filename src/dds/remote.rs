@@ -1,6 +1,7 @@
 //! A scripted wireless remote: button presses at given times, carried in `rt/lowstate`'s
-//! `wireless_remote` as the G1 carries its handheld remote's, so deployment scripts that
-//! wait for "start", then "A", get through their start-up unattended.
+//! `wireless_remote` and on `rt/wirelesscontroller`, as the G1 carries its handheld
+//! remote's, so deployment scripts that wait for "start", then "A" (or a chord such as
+//! holosoma's "select+A"), get through their start-up unattended.
 //!
 //! The buttons are the bits of the little-endian 16-bit word in bytes 2–3, in the order of
 //! unitree_rl_gym's `deploy/deploy_real/common/remote_controller.py` (bit 0 R1, 1 L1,
@@ -21,8 +22,8 @@ pub const BUTTONS: [&str; 16] = [
 /// A bad `--remote` script.
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum RemoteError {
-    /// A press is not `BUTTON@SECONDS` (e.g. `start@1s`, `A@2.5`).
-    #[error("remote press `{0}`: give BUTTON@SECONDS, e.g. start@1s")]
+    /// A press is not `BUTTON@SECONDS` (e.g. `start@1s`, `A@2.5`, `select+A@4s`).
+    #[error("remote press `{0}`: give BUTTON@SECONDS or BUTTON+BUTTON@SECONDS, e.g. start@1s")]
     Malformed(String),
     /// An unknown button.
     #[error("remote press `{press}`: no button `{button}` (buttons: {})", BUTTONS.join(", "))]
@@ -42,6 +43,13 @@ pub fn button_bit(name: &str) -> Option<u16> {
         .map(|bit| 1u16 << bit)
 }
 
+/// The bits of `chord`: one button, or several joined by `+` (`select+A`), held together.
+pub fn chord_bits(chord: &str) -> Option<u16> {
+    chord
+        .split('+')
+        .try_fold(0u16, |bits, name| Some(bits | button_bit(name)?))
+}
+
 /// Presses at times since the bridge started publishing.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RemoteScript {
@@ -49,8 +57,8 @@ pub struct RemoteScript {
 }
 
 impl RemoteScript {
-    /// `start@1s,A@2s`: comma-separated presses, each a button and the time, s (the `s`
-    /// is optional).
+    /// `start@1s,A@2s,select+A@3s`: comma-separated presses, each a button (or a chord of
+    /// buttons joined by `+`) and the time, s (the `s` is optional).
     pub fn parse(text: &str) -> Result<Self, RemoteError> {
         let mut presses = Vec::new();
         for press in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
@@ -62,9 +70,14 @@ impl RemoteScript {
                 .parse()
                 .map_err(|_| malformed())?;
             let at = Duration::try_from_secs_f64(seconds).map_err(|_| malformed())?;
-            let bit = button_bit(button).ok_or_else(|| RemoteError::UnknownButton {
+            let bit = chord_bits(button).ok_or_else(|| RemoteError::UnknownButton {
                 press: press.to_string(),
-                button: button.trim().to_string(),
+                button: button
+                    .split('+')
+                    .find(|name| button_bit(name).is_none())
+                    .unwrap_or(button)
+                    .trim()
+                    .to_string(),
             })?;
             presses.push((at, bit));
         }
@@ -72,9 +85,9 @@ impl RemoteScript {
         Ok(Self { presses })
     }
 
-    /// Whether the script ever presses the buttons of `bits`.
+    /// Whether the script ever holds all the buttons of `bits` down together.
     pub fn presses(&self, bits: u16) -> bool {
-        self.presses.iter().any(|(_, b)| b & bits != 0)
+        bits != 0 && self.presses.iter().any(|(_, b)| b & bits == bits)
     }
 
     /// The buttons held down `since` the bridge started publishing.
@@ -90,6 +103,14 @@ impl RemoteScript {
         let [low, high] = self.buttons_at(since).to_le_bytes();
         wireless_remote[2] = low;
         wireless_remote[3] = high;
+    }
+
+    /// The remote as `rt/wirelesscontroller` carries it: the held buttons, sticks centred.
+    pub fn controller(&self, since: Duration) -> super::WirelessController {
+        super::WirelessController {
+            keys: self.buttons_at(since),
+            ..Default::default()
+        }
     }
 }
 
@@ -108,6 +129,23 @@ mod tests {
         script.write(Duration::from_millis(1500), &mut remote);
         assert_eq!((remote[2], remote[3]), (0, 0));
         assert_eq!(script.buttons_at(Duration::from_millis(999)), 0);
+        assert_eq!(script.controller(Duration::from_millis(2100)).keys, 0x0100);
+    }
+
+    #[test]
+    fn a_chord_holds_its_buttons_together() {
+        // holosoma's "start the motion clip": select (bit 3) + A (bit 8) = 264.
+        assert_eq!(chord_bits("select+A"), Some(264));
+        let script = RemoteScript::parse("A@1s,select+A@2s").unwrap();
+        assert_eq!(script.buttons_at(Duration::from_millis(2100)), 264);
+        assert!(script.presses(264));
+        assert!(script.presses(button_bit("A").unwrap()));
+        assert!(!RemoteScript::parse("A@1s").unwrap().presses(264));
+        assert!(matches!(
+            RemoteScript::parse("select+Q@1s"),
+            Err(RemoteError::UnknownButton { button, .. }) if button == "Q"
+        ));
+        assert_eq!(chord_bits("select+"), None);
     }
 
     #[test]

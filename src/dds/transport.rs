@@ -1,5 +1,5 @@
-//! The robot's end of Unitree's DDS interface on `rustdds`: `rt/lowstate` and
-//! `rt/secondary_imu` written, `rt/lowcmd` read, each message through this module's own
+//! The robot's end of Unitree's DDS interface on `rustdds`: `rt/lowstate`,
+//! `rt/secondary_imu` and `rt/wirelesscontroller` written, `rt/lowcmd` read, each message through this module's own
 //! codec ([`UnitreeCdr`], plugged into rustdds as its serializer adapter).
 //!
 //! QoS: the writers offer reliable delivery and the reader asks for best effort, so they
@@ -9,7 +9,7 @@
 //! is counted and timed, though only the newest is applied.
 
 use super::cdr::{self, Layout, Message};
-use super::{DecodeError, ImuState, LowCmd, LowState};
+use super::{DecodeError, ImuState, LowCmd, LowState, WirelessController};
 use rustdds::no_key::{DataReader, DataWriter, Decode, DefaultDecoder};
 use rustdds::no_key::{DeserializerAdapter, SerializerAdapter};
 use rustdds::policy::{History, Reliability};
@@ -23,6 +23,8 @@ use std::marker::PhantomData;
 pub const LOW_STATE_TOPIC: &str = "rt/lowstate";
 /// The torso IMU's state.
 pub const SECONDARY_IMU_TOPIC: &str = "rt/secondary_imu";
+/// The wireless remote (also in `rt/lowstate`'s `wireless_remote`).
+pub const WIRELESS_CONTROLLER_TOPIC: &str = "rt/wirelesscontroller";
 /// Motor commands from the deployment code.
 pub const LOW_COMMAND_TOPIC: &str = "rt/lowcmd";
 
@@ -122,6 +124,7 @@ impl<M: Message> DefaultDecoder<M> for UnitreeCdr<M> {
 pub struct RobotEndpoints {
     low_state: DataWriter<LowState, UnitreeCdr<LowState>>,
     secondary_imu: DataWriter<ImuState, UnitreeCdr<ImuState>>,
+    wireless_controller: DataWriter<WirelessController, UnitreeCdr<WirelessController>>,
     low_command: DataReader<LowCmd, UnitreeCdr<LowCmd>>,
     motion_switcher: super::motion_switcher::MotionSwitcher,
     /// Commands that arrived and could not be decoded.
@@ -181,6 +184,16 @@ impl RobotEndpoints {
                 None,
             )
             .map_err(create("rt/secondary_imu writer"))?;
+        let wireless_controller = publisher
+            .create_datawriter_no_key::<WirelessController, UnitreeCdr<WirelessController>>(
+                &topic(
+                    WIRELESS_CONTROLLER_TOPIC,
+                    WirelessController::TYPE_NAME,
+                    &writer_qos,
+                )?,
+                None,
+            )
+            .map_err(create("rt/wirelesscontroller writer"))?;
         let low_command = subscriber
             .create_datareader_no_key::<LowCmd, UnitreeCdr<LowCmd>>(
                 &topic(LOW_COMMAND_TOPIC, LowCmd::TYPE_NAME, &reader_qos)?,
@@ -197,6 +210,7 @@ impl RobotEndpoints {
         Ok(Self {
             low_state,
             secondary_imu,
+            wireless_controller,
             low_command,
             motion_switcher,
             undecodable: 0,
@@ -204,8 +218,14 @@ impl RobotEndpoints {
         })
     }
 
-    /// Publishes the robot's state (its checksum as given) and the torso IMU's.
-    pub fn publish(&self, state: &LowState, torso_imu: &ImuState) -> Result<(), DdsError> {
+    /// Publishes the robot's state (its checksum as given), the torso IMU's and the
+    /// wireless remote's.
+    pub fn publish(
+        &self,
+        state: &LowState,
+        torso_imu: &ImuState,
+        remote: &WirelessController,
+    ) -> Result<(), DdsError> {
         self.low_state
             .write(state.clone(), None)
             .map_err(|e| DdsError::Write {
@@ -216,6 +236,12 @@ impl RobotEndpoints {
             .write(*torso_imu, None)
             .map_err(|e| DdsError::Write {
                 topic: SECONDARY_IMU_TOPIC,
+                detail: e.to_string(),
+            })?;
+        self.wireless_controller
+            .write(*remote, None)
+            .map_err(|e| DdsError::Write {
+                topic: WIRELESS_CONTROLLER_TOPIC,
                 detail: e.to_string(),
             })
     }

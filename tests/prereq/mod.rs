@@ -102,3 +102,31 @@ pub fn unitree_sdk(test: &str) -> Option<PathBuf> {
     }
     sdk.parent().map(std::path::Path::to_path_buf)
 }
+
+/// The Python of the deployment-code environment (`.venv-deploy`, which `./test.sh` makes
+/// from `tools/requirements-deploy.txt`: holosoma's inference package and the Unitree SDK
+/// binding it drives the robot through), or `$THORARENA_DEPLOY_PYTHON`, when
+/// `holosoma_inference` and `unitree_interface` import with it; otherwise [`skip`]s and
+/// returns `None`.
+pub fn deploy_python(test: &str) -> Option<PathBuf> {
+    let python = match std::env::var_os("THORARENA_DEPLOY_PYTHON") {
+        Some(python) => PathBuf::from(python),
+        None => workspace_root().join(".venv-deploy/bin/python"),
+    };
+    let ok = Command::new(&python)
+        .args(["-c", "import holosoma_inference, unitree_interface"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ok {
+        skip(
+            test,
+            &format!(
+                "`{} -c \"import holosoma_inference, unitree_interface\"` fails (run ./test.sh, \
+                 which makes .venv-deploy from tools/requirements-deploy.txt)",
+                python.display()
+            ),
+        );
+        return None;
+    }
+    Some(python)
+}

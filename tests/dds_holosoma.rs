@@ -1,0 +1,187 @@
+//! A published deployment stack, unchanged, drives a scored episode through `thorarena dds`:
+//! holosoma's inference package (PyPI `holosoma-inference` 0.1.3 on Unitree's SDK binding
+//! `far-unitree-sdk` 0.1.6, CycloneDDS inside), started as holosoma's sim-to-sim guide
+//! starts it (`run_policy inference:g1-29dof-wbt --task.interface lo`, the robot's remote as
+//! its input), runs its FastSAC dance policy on the simulated G1 for the whole 135.5 s
+//! dance. The scripted remote presses A ("start the policy") and select+A ("start the
+//! motion clip"); the reference clock starts at the latter. The same policy is then scored
+//! in process (`--policy beyondmimic:`), and both results are printed side by side.
+//!
+//! 0.1.3 applies a per-joint action scale to any ONNX without `action_scale` metadata,
+//! which the FastSAC file lacks (it was trained with 1.0, holosoma at fc600e7); the deploy
+//! code's own flag `--task.no-action-scales-by-effort-limit-over-p-gain` restores 1.0, the
+//! `holosoma-wbt` profile's scale. Without it the robot falls after about 4 s, through the
+//! bridge as in process (README, "Your deployment code, unchanged").
+//!
+//! Both run in a private network namespace when root allows it. Skipped, saying so, when
+//! `../shared/reference` or the deployment environment (`.venv-deploy`) is absent; never
+//! in CI.
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+mod netns;
+mod prereq;
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+
+/// What holosoma logs when it waits for its operator (after its DDS participant is up).
+const READY: &str = "Press the appropriate button";
+
+/// `thorarena` with `args`; its stderr on failure.
+fn thorarena(args: &[&str]) {
+    let out = Command::new(BIN).args(args).output().unwrap();
+    assert!(
+        out.status.success(),
+        "thorarena {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The no-force average of a run's `summary.json`.
+fn average(run: &Path) -> serde_json::Value {
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    summary["settings"]["no-force"]["average"].clone()
+}
+
+#[test]
+fn holosomas_inference_package_runs_unchanged_and_its_dance_is_scored() {
+    const TEST: &str = "dds_holosoma::holosoma_inference";
+    let Some(onnx) = prereq::reference(TEST, "holosoma/fastsac_g1_29dof_dancing.onnx") else {
+        return;
+    };
+    let Some(python) = prereq::deploy_python(TEST) else {
+        return;
+    };
+    let onnx = onnx.to_str().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let (dataset, deployed, in_process) = (path("dance"), path("deployed"), path("in-process"));
+    thorarena(&[
+        "data",
+        "import",
+        "--format",
+        "onnx-motion",
+        "--profile",
+        "holosoma-wbt",
+        onnx,
+        "--out",
+        &dataset,
+        "--task",
+        "dance",
+    ]);
+
+    let network = netns::PrivateNetwork::new(TEST);
+    let log_path = dir.path().join("holosoma.log");
+    let log = std::fs::File::create(&log_path).unwrap();
+    let read_log = || std::fs::read_to_string(&log_path).unwrap_or_default();
+    let mut deploy = network
+        .command(&python)
+        .args([
+            "-m",
+            "holosoma_inference.run_policy",
+            "inference:g1-29dof-wbt",
+        ])
+        .args(["--task.model-path", onnx, "--task.interface", "lo"])
+        .args(["--task.use-joystick", "--task.rl-rate", "50"])
+        .arg("--task.no-action-scales-by-effort-limit-over-p-gain")
+        .env("LOGURU_LEVEL", "INFO")
+        .stdin(Stdio::null())
+        .stdout(log.try_clone().unwrap())
+        .stderr(log)
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while !read_log().contains(READY) {
+        if deploy.try_wait().unwrap().is_some() || started.elapsed() > Duration::from_secs(120) {
+            let _ = deploy.kill();
+            let _ = deploy.wait();
+            panic!("holosoma did not get ready:\n{}", read_log());
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+
+    let mut bridge = network
+        .command(BIN)
+        .args(["dds", "--dataset", &dataset])
+        .args(["--sequence", "dance/fastsac_g1_29dof_dancing"])
+        .args(["--setting", "no-force", "--profile", "holosoma-wbt"])
+        .args(["--remote", "A@3s,select+A@3.5s", "--start-on", "select+A"])
+        .args(["--name", "holosoma-deploy", "--out", &deployed])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The dance is 135.5 s in real time; the bridge ends with it (or is stopped by its pid
+    // after four minutes).
+    let started = Instant::now();
+    while bridge.try_wait().unwrap().is_none() && started.elapsed() < Duration::from_secs(240) {
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let _ = bridge.kill();
+    let bridge = bridge.wait_with_output().unwrap();
+    let _ = deploy.kill(); // its loop never ends on its own
+    let _ = deploy.wait();
+    drop(network);
+    let said = format!(
+        "bridge: {}\nholosoma:\n{}",
+        String::from_utf8_lossy(&bridge.stderr),
+        read_log()
+    );
+    assert!(bridge.status.success(), "{said}");
+    let log_text = read_log();
+    assert!(log_text.contains("Using policy actions"), "{said}");
+    assert!(log_text.contains("Starting motion clip"), "{said}");
+
+    let realtime: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(Path::new(&deployed).join("realtime.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(realtime["kept_real_time"], true, "{realtime}");
+    let offset = realtime["start_offset_s"].as_f64().unwrap();
+    assert!((3.5..4.0).contains(&offset), "{realtime}");
+    let commands = &realtime["commands"];
+    assert_eq!(commands["bad_crc"], 0, "{realtime}");
+    // The SDK binding sends the newest command at 500 Hz: most of 135 s × 500.
+    assert!(
+        commands["received"].as_u64().unwrap() > 50_000,
+        "{realtime}"
+    );
+
+    thorarena(&[
+        "eval",
+        "--dataset",
+        &dataset,
+        "--profile",
+        "holosoma-wbt",
+        "--policy",
+        &format!("beyondmimic:{onnx}"),
+        "--settings",
+        "no-force",
+        "--out",
+        &in_process,
+    ]);
+    let (deployed, in_process) = (
+        average(Path::new(&deployed)),
+        average(Path::new(&in_process)),
+    );
+    let number = |v: &serde_json::Value, key: &str| v[key].as_f64().unwrap();
+    eprintln!(
+        "holosoma FastSAC dance, no force — deployed through DDS: FATS {:.1}, survival {:.3}, \
+         KP {:.1} mm; in process: FATS {:.1}, survival {:.3}, KP {:.1} mm",
+        number(&deployed, "fats"),
+        number(&deployed, "survival"),
+        number(&deployed, "kp_mm"),
+        number(&in_process, "fats"),
+        number(&in_process, "survival"),
+        number(&in_process, "kp_mm"),
+    );
+    // The deploy code danced the whole clip: a robot held in its stiff start-up pose, or
+    // one scaled wrong, is terminated within seconds (survival below 0.15).
+    assert_eq!(number(&in_process, "survival"), 1.0, "{in_process}");
+    assert!(number(&deployed, "survival") >= 0.9, "{deployed}");
+    // The BeyondMimic check's tracking bound.
+    assert!(number(&deployed, "kp_mm") < 100.0, "{deployed}");
+}
