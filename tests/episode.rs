@@ -189,6 +189,9 @@ impl thorarena::physics::Physics for DivergingPhysics {
     fn set_targets(&mut self, q_target: &[f64]) {
         self.inner.set_targets(q_target)
     }
+    fn set_feedforward(&mut self, torque_nm: &[f64]) {
+        self.inner.set_feedforward(torque_nm)
+    }
     fn set_external_force(&mut self, force: thorarena::physics::ExternalForce) {
         self.inner.set_external_force(force)
     }

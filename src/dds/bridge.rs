@@ -5,10 +5,9 @@
 //! DDS has no lock-step: the simulation paces itself by the wall clock (physics step `k`
 //! is due `k · dt` after the first valid command, the moment the reference clock starts)
 //! and records how well it kept to it. Each physics step applies the newest command whose
-//! checksum holds, with the robot's law per motor, `τ = kp (q* − q) + kd (0 − q̇)`,
-//! clamped to the motor's limit (the simulator's PD law with the command's gains); a
-//! command that also asks for a feed-forward torque or a target velocity is counted,
-//! since the simulator's PD law has neither.
+//! checksum holds, with the robot's law per motor, `τ = τ_ff + kp (q* − q) + kd (q̇* − q̇)`,
+//! clamped to the motor's limit: the simulator's PD law with the command's gains and
+//! `τ_ff + kd q̇*` as its feed-forward torque (`Physics::set_feedforward`).
 
 use super::transport::{DdsError, RobotEndpoints};
 use super::unitree_hg::{MODE_MACHINE_G1_29DOF, MOTOR_SLOTS};
@@ -75,10 +74,11 @@ pub struct CommandCounts {
     pub bad_crc: u64,
     /// Commands that could not be decoded: ignored.
     pub undecodable: u64,
-    /// Commands with a non-finite or negative gain, or a non-finite target: ignored.
+    /// Commands with a non-finite or negative gain, or a non-finite target, velocity or
+    /// torque: ignored.
     pub unusable: u64,
-    /// Applied commands that asked for a feed-forward torque or a target velocity, which
-    /// the simulator's PD law does not have (applied without them).
+    /// Applied commands that asked for a feed-forward torque or a target velocity (both
+    /// applied: `τ_ff + kd q̇*` is added to the PD torque before its clamp).
     pub with_feedforward: u64,
     /// Applied commands in the parallel ankle mode (`mode_pr` 1, A/B motors): the
     /// simulated ankle has pitch and roll joints, so their targets were taken as those.
@@ -232,6 +232,8 @@ struct RobotIo {
     /// Targets of the command in force, rad.
     targets: Option<Vec<f64>>,
     gains_in_force: Option<PdGains>,
+    /// The feed-forward torques set on the physics, N·m (set only when they change).
+    feedforward_in_force: Option<Vec<f64>>,
 }
 
 impl RobotIo {
@@ -249,6 +251,7 @@ impl RobotIo {
             interarrival_ms: Vec::new(),
             targets: None,
             gains_in_force: None,
+            feedforward_in_force: None,
         }
     }
 
@@ -337,11 +340,16 @@ impl RobotIo {
             physics.set_gains(&gains);
             self.gains_in_force = Some(gains);
         }
+        let feedforward = feedforward_nm(motors);
         if motors
             .iter()
             .any(|m| enabled(m) && (m.tau != 0.0 || m.dq != 0.0))
         {
             self.counts.with_feedforward += 1;
+        }
+        if self.feedforward_in_force.as_ref() != Some(&feedforward) {
+            physics.set_feedforward(&feedforward);
+            self.feedforward_in_force = Some(feedforward);
         }
         if command.mode_pr == 1 {
             self.counts.parallel_ankle_mode += 1;
@@ -352,12 +360,29 @@ impl RobotIo {
     }
 }
 
-/// Finite gains ≥ 0 and finite targets on the robot's motors.
+/// The part of the robot's motor law `τ = τ_ff + kp (q* − q) + kd (q̇* − q̇)` that the
+/// simulator's PD law lacks, `τ_ff + kd q̇*`, per motor, N·m (zero for a limp motor).
+fn feedforward_nm(motors: &[super::MotorCmd]) -> Vec<f64> {
+    motors
+        .iter()
+        .map(|m| {
+            if m.mode != 0 {
+                f64::from(m.tau) + f64::from(m.kd) * f64::from(m.dq)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Finite gains ≥ 0 and finite targets, velocities and torques on the robot's motors.
 fn usable(command: &LowCmd, n_joints: usize) -> bool {
     command.motor_cmd[..n_joints.min(MOTOR_SLOTS)]
         .iter()
         .all(|m| {
-            m.q.is_finite() && m.kp.is_finite() && m.kd.is_finite() && m.kp >= 0.0 && m.kd >= 0.0
+            [m.q, m.dq, m.tau, m.kp, m.kd].iter().all(|v| v.is_finite())
+                && m.kp >= 0.0
+                && m.kd >= 0.0
         })
 }
 
@@ -451,4 +476,28 @@ fn fill_imu(
     imu.rpy = [roll as f32, pitch as f32, yaw as f32];
     imu.gyroscope = [gyro_b.x as f32, gyro_b.y as f32, gyro_b.z as f32];
     imu.accelerometer = [accel_b.x as f32, accel_b.y as f32, accel_b.z as f32];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dds::MotorCmd;
+
+    #[test]
+    fn the_feedforward_is_the_torque_plus_kd_times_the_target_velocity() {
+        let motor = |mode, dq, tau, kd| MotorCmd {
+            mode,
+            dq,
+            tau,
+            kd,
+            ..Default::default()
+        };
+        let motors = [
+            motor(1, 0.0, 0.0, 2.0),
+            motor(1, 0.5, 1.5, 2.0),
+            motor(1, -1.0, 0.0, 3.0),
+            motor(0, 0.5, 1.5, 2.0), // limp: nothing
+        ];
+        assert_eq!(feedforward_nm(&motors), vec![0.0, 2.5, -3.0, 0.0]);
+    }
 }

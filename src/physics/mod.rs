@@ -45,6 +45,12 @@ pub trait Physics {
     /// Sets the joint position targets of the PD law for the coming steps, rad.
     fn set_targets(&mut self, q_target: &[f64]);
 
+    /// Sets a torque added to each joint's PD torque before its limit clamps it, N·m, for
+    /// the coming steps (zero until set; it holds until changed, also across resets). A
+    /// robot's motor law `τ = τ_ff + kp (q* − q) + kd (q̇* − q̇)` is the PD law with
+    /// `τ_ff + kd q̇*` here: the DDS bridge sets it from each command.
+    fn set_feedforward(&mut self, torque_nm: &[f64]);
+
     /// Holds a world-frame force at a point of a body for the coming steps, replacing any
     /// force previously set at that same point of that body (forces at other points add).
     fn set_external_force(&mut self, force: ExternalForce);

@@ -76,6 +76,8 @@ pub struct MujocoPhysics {
     settings: PhysicsSettings,
     gains: PdGains,
     targets: Vec<f64>,
+    /// Added to the PD torques before their clamp, N·m (`Physics::set_feedforward`).
+    feedforward_nm: Vec<f64>,
     external: Vec<ExternalForce>,
     applied_torque_nm: Vec<f64>,
     /// The PD torques applied through `qfrc_applied` in the current step.
@@ -141,6 +143,7 @@ impl MujocoPhysics {
         let data = MjData::new(Box::new(mj));
         let mut physics = Self {
             targets: model.default_pose(),
+            feedforward_nm: vec![0.0; n],
             applied_torque_nm: vec![0.0; n],
             explicit_torque_nm: vec![0.0; n],
             external: Vec::new(),
@@ -385,6 +388,15 @@ impl Physics for MujocoPhysics {
         self.targets.copy_from_slice(q_target);
     }
 
+    fn set_feedforward(&mut self, torque_nm: &[f64]) {
+        assert_eq!(
+            torque_nm.len(),
+            self.feedforward_nm.len(),
+            "feed-forward length"
+        );
+        self.feedforward_nm.copy_from_slice(torque_nm);
+    }
+
     fn set_external_force(&mut self, force: ExternalForce) {
         assert!(force.body < self.model.bodies.len(), "body index");
         ExternalForce::hold(&mut self.external, force);
@@ -403,7 +415,7 @@ impl Physics for MujocoPhysics {
                 let (tau, reported) = self.gains.torque_nm(
                     self.settings.pd_form,
                     j,
-                    self.targets[j],
+                    (self.targets[j], self.feedforward_nm[j]),
                     qpos[a],
                     qvel[d],
                 );

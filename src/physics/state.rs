@@ -72,17 +72,18 @@ impl PdGains {
     /// The benchmark's PD law for joint `j`, the same on every backend: returns the torque
     /// the engine must apply explicitly and the PD torque to report, N·m. With
     /// [`PdForm::Hybrid`] the clamped spring is explicit and `kd` is the engine's implicit
-    /// joint damping, reported here all the same.
+    /// joint damping, reported here all the same. `feedforward` (N·m, constant over the
+    /// step) adds to the spring before the clamp.
     pub(super) fn torque_nm(
         &self,
         form: PdForm,
         j: usize,
-        target: f64,
+        (target, feedforward): (f64, f64),
         q: f64,
         qd: f64,
     ) -> (f64, f64) {
         let (kp, kd, limit) = (self.kp[j], self.kd[j], self.effort_limit_nm[j]);
-        let spring = kp * (target - q);
+        let spring = kp * (target - q) + feedforward;
         match form {
             PdForm::Explicit => {
                 let tau = (spring - kd * qd).clamp(-limit, limit);

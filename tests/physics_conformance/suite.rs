@@ -239,6 +239,48 @@ fn pd_torque_is_clamped_to_the_effort_limit() {
 }
 
 #[test]
+fn a_feedforward_torque_adds_to_the_pd_torque_before_the_clamp() {
+    // kp = kd = 0: the feed-forward torque alone, constant, q = ½(τ/I)t²; beyond the
+    // 0.1 N·m limit, the limit (the DDS bridge's `τ_ff + kd q̇*`).
+    for (feedforward, applied) in [(0.05, 0.05), (1.0, 0.1), (-1.0, -0.1)] {
+        let settings = PhysicsSettings {
+            dt_s: 0.001,
+            fixed_base: true,
+            contacts: ContactMode::None,
+            ..Default::default()
+        };
+        let gains = PdGains {
+            kp: vec![0.0],
+            kd: vec![0.0],
+            effort_limit_nm: vec![0.1],
+        };
+        let mut p = backend(&pendulum(), settings, gains);
+        p.reset(&ResetState {
+            root: RootState::at_rest(Isometry3::identity()),
+            q: vec![0.0],
+            qd: vec![0.0],
+        });
+        p.set_feedforward(&[feedforward]);
+        for _ in 0..300 {
+            p.step();
+        }
+        let s = state_of(p.as_ref());
+        let t = p.time_s();
+        let expected = 0.5 * (applied / 0.02) * t * t;
+        assert!(
+            (s.q[0] - expected).abs() < 0.01 * expected.abs(),
+            "feed-forward {feedforward}: q {} vs {expected}",
+            s.q[0]
+        );
+        assert!(
+            (s.applied_torque_nm[0] - applied).abs() < 1e-12,
+            "feed-forward {feedforward}: reported torque {}",
+            s.applied_torque_nm[0]
+        );
+    }
+}
+
+#[test]
 fn joints_have_no_hidden_damping() {
     // rapier gives every new joint 0.1 damping; with kp = kd = 0 a spinning joint must keep
     // its speed (it would lose ~99 % in 1 s at 0.1 N·m·s/rad on 0.02 kg·m²).

@@ -23,6 +23,8 @@ pub struct RapierPhysics {
     settings: PhysicsSettings,
     gains: PdGains,
     targets: Vec<f64>,
+    /// Added to the PD torques before their clamp, N·m (`Physics::set_feedforward`).
+    feedforward_nm: Vec<f64>,
     external: Vec<ExternalForce>,
     applied_torque_nm: Vec<f64>,
     world: World,
@@ -41,6 +43,7 @@ impl RapierPhysics {
         let world = build_world(&model, &settings, &gains, &state);
         Self {
             targets: state.q.clone(),
+            feedforward_nm: vec![0.0; n],
             applied_torque_nm: vec![0.0; n],
             external: Vec::new(),
             model,
@@ -140,6 +143,15 @@ impl Physics for RapierPhysics {
         self.targets.copy_from_slice(q_target);
     }
 
+    fn set_feedforward(&mut self, torque_nm: &[f64]) {
+        assert_eq!(
+            torque_nm.len(),
+            self.feedforward_nm.len(),
+            "feed-forward length"
+        );
+        self.feedforward_nm.copy_from_slice(torque_nm);
+    }
+
     fn set_external_force(&mut self, force: ExternalForce) {
         assert!(force.body < self.model.bodies.len(), "body index");
         ExternalForce::hold(&mut self.external, force);
@@ -172,9 +184,13 @@ impl Physics for RapierPhysics {
         for (j, joint) in self.model.joints.iter().enumerate() {
             let (link_id, dof) = links[j];
             let q = mb.link(link_id).expect("link").joint().coords()[3] as f64;
-            let (tau, reported) =
-                self.gains
-                    .torque_nm(self.settings.pd_form, j, self.targets[j], q, gv[dof] as f64);
+            let (tau, reported) = self.gains.torque_nm(
+                self.settings.pd_form,
+                j,
+                (self.targets[j], self.feedforward_nm[j]),
+                q,
+                gv[dof] as f64,
+            );
             self.applied_torque_nm[j] = reported;
             if tau == 0.0 {
                 continue;
