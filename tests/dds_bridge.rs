@@ -268,6 +268,24 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
         !never_pressed.status.success() && stderr.contains("--remote never presses A"),
         "{stderr}"
     );
+    let no_such_interface = Command::new(BIN)
+        .args(["dds", "--sequence", "pull_chair/pull_chair_000"])
+        .args([
+            "--interface",
+            "no-such-nic0",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&no_such_interface.stderr);
+    assert!(
+        !no_such_interface.status.success()
+            && stderr.contains("no network interface `no-such-nic0`")
+            && stderr.contains("lo 127.0.0.1"),
+        "{stderr}"
+    );
+    assert!(!out.join("run.json").exists());
 }
 
 /// Unitree's own `example/g1/low_level/g1_low_level_example.py`, unchanged, from

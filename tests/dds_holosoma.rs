@@ -108,6 +108,7 @@ fn holosomas_inference_package_runs_unchanged_and_its_dance_is_scored() {
         .args(["dds", "--dataset", &dataset])
         .args(["--sequence", "dance/fastsac_g1_29dof_dancing"])
         .args(["--setting", "no-force", "--profile", "holosoma-wbt"])
+        .args(["--interface", "lo"])
         .args(["--remote", "A@3s,select+A@3.5s", "--start-on", "select+A"])
         .args(["--name", "holosoma-deploy", "--out", &deployed])
         .stdout(Stdio::null())

@@ -45,8 +45,12 @@ pub struct Args {
     pub domain: u16,
     /// Use only the network interface with this address for DDS (127.0.0.1: loopback,
     /// nothing leaves the machine; the deployment code must then use `lo`).
-    #[arg(long, default_value = "127.0.0.1")]
+    #[arg(long, default_value = "127.0.0.1", conflicts_with = "interface")]
     pub address: std::net::IpAddr,
+    /// Use only this network interface for DDS, by name as deployment code names it
+    /// (`lo`, `enp3s0`; its first IPv4 address), instead of `--address`.
+    #[arg(long)]
+    pub interface: Option<String>,
     /// Seconds to wait for the first command (the reference clock starts with it).
     #[arg(long, default_value_t = 60.0)]
     pub start_timeout: f64,
@@ -97,6 +101,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
                 thorarena::dds::remote::BUTTONS.join(", ")
             ),
         },
+    };
+    let address = match &args.interface {
+        Some(name) => std::net::IpAddr::V4(thorarena::dds::interface::ipv4_of(name)?),
+        None => args.address,
     };
     let Some((task, _)) = args.sequence.split_once('/') else {
         bail!("--sequence {}: give TASK/SEQUENCE_ID", args.sequence);
@@ -160,7 +168,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         setting,
         vec![0.0],
     );
-    let mut endpoints = RobotEndpoints::join(args.domain, Some(args.address))?;
+    let mut endpoints = RobotEndpoints::join(args.domain, Some(address))?;
     let mut episode = Episode::start(&setup, seq, physics.as_mut());
     episode.record_trace();
     eprintln!(
@@ -170,7 +178,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         setting.name,
         seq.duration_s(),
         args.domain,
-        args.address,
+        match &args.interface {
+            Some(name) => format!("{name}, {address}"),
+            None => address.to_string(),
+        },
         match start_button {
             None => "with the first valid rt/lowcmd".to_string(),
             Some(_) => format!("at the remote's {} press", args.start_on),

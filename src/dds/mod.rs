@@ -8,6 +8,7 @@
 pub mod bridge;
 pub mod cdr;
 pub mod crc;
+pub mod interface;
 pub mod motion_switcher;
 pub mod remote;
 pub mod transport;
