@@ -75,6 +75,11 @@ pub struct Args {
     /// still at the reference's first frame, as on a gantry.
     #[arg(long, default_value = "first-command")]
     pub start_on: String,
+    /// Also publish the simulator's clock as holosoma's simulator does (ZeroMQ PUB on
+    /// 127.0.0.1:PORT, holosoma's default 5555; milliseconds as text, with each state),
+    /// for holosoma's inference package run with `--task.use-sim-time`.
+    #[arg(long, value_name = "PORT")]
+    pub zmq_clock: Option<u16>,
     /// The policy's name in the results.
     #[arg(long, default_value = "dds")]
     pub name: String,
@@ -193,6 +198,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         torso_body: spec.robot.frame_index("torso_link").unwrap_or(0),
         remote: args.remote.clone(),
         start_button,
+        zmq_clock_port: args.zmq_clock,
     };
     let realtime = run_episode(
         &mut endpoints,

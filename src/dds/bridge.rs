@@ -30,10 +30,14 @@ pub struct BridgeOptions {
     /// Button presses on the robot's wireless remote, from the bridge's start.
     pub remote: super::remote::RemoteScript,
     /// Start the episode when these buttons are held together (their bits; the first
-    /// valid command after the press, if none came before) instead of at the first valid command. Until then the
-    /// robot is held still at the reference's first frame, as on a gantry: commands are
-    /// taken and counted, the physics does not step.
+    /// valid command after the press, if none came before) instead of at the first valid
+    /// command. Until then the robot is held still at the reference's first frame, as on
+    /// a gantry: commands are taken and counted, the physics does not step.
     pub start_button: Option<u16>,
+    /// Also publish the simulator's clock as holosoma's simulator does, over ZeroMQ on
+    /// 127.0.0.1 at this port ([`super::zmq_clock`]), with each state: time since the
+    /// bridge started, the simulated time once the episode runs.
+    pub zmq_clock_port: Option<u16>,
 }
 
 /// Percentiles of a duration sample, ms.
@@ -128,7 +132,7 @@ pub fn run_episode(
     options: &BridgeOptions,
 ) -> Result<RealTimeReport, DdsError> {
     let dt = Duration::from_secs_f64(physics.settings().dt_s);
-    let mut io = RobotIo::new(options.clone(), gains.clone());
+    let mut io = RobotIo::new(options.clone(), gains.clone())?;
     let bridge_start = Instant::now();
     io.state.read_from(physics);
     // Before the start the robot stands still and says so.
@@ -155,6 +159,7 @@ pub fn run_episode(
     };
     let start = Instant::now();
     let start_offset_s = (start - bridge_start).as_secs_f64();
+    io.episode_offset_s = Some(start_offset_s);
     io.apply(&first, physics);
     let mut steps = 0u64;
     let mut late_steps = 0u64;
@@ -234,12 +239,24 @@ struct RobotIo {
     gains_in_force: Option<PdGains>,
     /// The feed-forward torques set on the physics, N·m (set only when they change).
     feedforward_in_force: Option<Vec<f64>>,
+    clock: Option<super::zmq_clock::ZmqClock>,
+    /// When the episode started, s after the bridge; `None` before.
+    episode_offset_s: Option<f64>,
+    /// Simulated time of the episode, s.
+    episode_time_s: f64,
 }
 
 impl RobotIo {
-    fn new(options: BridgeOptions, limits: PdGains) -> Self {
+    fn new(options: BridgeOptions, limits: PdGains) -> Result<Self, DdsError> {
+        let clock = options
+            .zmq_clock_port
+            .map(super::zmq_clock::ZmqClock::bind)
+            .transpose()?;
         let now = Instant::now();
-        Self {
+        Ok(Self {
+            clock,
+            episode_offset_s: None,
+            episode_time_s: 0.0,
             state: StateMessages::new(options.torso_body),
             options,
             limits,
@@ -252,7 +269,7 @@ impl RobotIo {
             targets: None,
             gains_in_force: None,
             feedforward_in_force: None,
-        }
+        })
     }
 
     fn until_next_state(&self) -> Duration {
@@ -277,6 +294,13 @@ impl RobotIo {
             .remote
             .write(since, &mut self.state.low.wireless_remote);
         self.state.low.crc = self.state.low.crc_of();
+        if let Some(clock) = &self.clock {
+            let time_s = match self.episode_offset_s {
+                Some(offset) => offset + self.episode_time_s,
+                None => since.as_secs_f64(),
+            };
+            clock.publish((time_s * 1e3) as u64);
+        }
         endpoints.publish(
             &self.state.low,
             &self.state.torso,
@@ -293,6 +317,7 @@ impl RobotIo {
         if Instant::now() >= self.next_state_at {
             self.state.read(state);
         }
+        self.episode_time_s = state.time_s;
         self.publish_due(endpoints)
     }
 

@@ -14,6 +14,7 @@ pub mod remote;
 pub mod transport;
 pub mod unitree_go;
 pub mod unitree_hg;
+pub mod zmq_clock;
 
 pub use transport::{DdsError, RobotEndpoints};
 pub use unitree_go::WirelessController;

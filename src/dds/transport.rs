@@ -53,6 +53,9 @@ pub enum DdsError {
     /// The command reader failed (not a bad message: those are counted).
     #[error("DDS: reading {LOW_COMMAND_TOPIC}: {0}")]
     Read(String),
+    /// The simulator clock for holosoma could not be served.
+    #[error(transparent)]
+    Clock(#[from] super::zmq_clock::ZmqClockError),
 }
 
 /// rustdds' serializer and deserializer adapter for the `unitree_hg` messages: XCDR1
