@@ -200,13 +200,27 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         start_button,
         zmq_clock_port: args.zmq_clock,
     };
+    let duration_s = seq.duration_s();
+    let bar = indicatif::ProgressBar::new((duration_s * 10.0).round() as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{bar:40} {msg}").expect("valid template"),
+    );
     let realtime = run_episode(
         &mut endpoints,
         &mut episode,
         physics.as_mut(),
         &spec.profile.gains,
         &options,
-    )?;
+        &mut |p| {
+            bar.set_position((p.simulated_s * 10.0).round() as u64);
+            bar.set_message(format!(
+                "{:.1}/{duration_s:.1} s, {} commands, {} physics steps late",
+                p.simulated_s, p.commands, p.late_steps
+            ));
+        },
+    );
+    bar.finish_and_clear();
+    let realtime = realtime?;
     let trace = episode.take_trace();
     let record = episode.into_record(seq, setting, &args.name);
     // Started only now: a bridge that got no command leaves no empty run behind.

@@ -121,15 +121,28 @@ pub struct RealTimeReport {
     pub kept_real_time: bool,
 }
 
+/// Where a running episode is, for a progress display (every half second of it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BridgeProgress {
+    /// Simulated time of the episode, s.
+    pub simulated_s: f64,
+    /// Physics steps more than a step late so far.
+    pub late_steps: u64,
+    /// Commands received so far (since the bridge started).
+    pub commands: u64,
+}
+
 /// Runs `episode` in real time from `rt/lowcmd`, publishing the robot's state: waits up
 /// to [`BridgeOptions::start_timeout`] for a valid command (publishing the initial state
-/// meanwhile), then steps the physics on the wall clock until the episode is done.
+/// meanwhile), then steps the physics on the wall clock until the episode is done, telling
+/// `on_progress` where it is every half second of simulated time.
 pub fn run_episode(
     endpoints: &mut RobotEndpoints,
     episode: &mut Episode,
     physics: &mut dyn Physics,
     gains: &PdGains,
     options: &BridgeOptions,
+    on_progress: &mut dyn FnMut(&BridgeProgress),
 ) -> Result<RealTimeReport, DdsError> {
     let dt = Duration::from_secs_f64(physics.settings().dt_s);
     let mut io = RobotIo::new(options.clone(), gains.clone())?;
@@ -162,6 +175,7 @@ pub fn run_episode(
     io.episode_offset_s = Some(start_offset_s);
     io.apply(&first, physics);
     let mut steps = 0u64;
+    let steps_per_progress = ((0.5 / dt.as_secs_f64()).round() as u64).max(1);
     let mut late_steps = 0u64;
     let mut max_lateness = Duration::ZERO;
     let mut failure = None;
@@ -197,6 +211,13 @@ pub fn run_episode(
                 targets.clone_from(t);
             }
             steps += 1;
+            if steps.is_multiple_of(steps_per_progress) {
+                on_progress(&BridgeProgress {
+                    simulated_s: steps as f64 * dt.as_secs_f64(),
+                    late_steps,
+                    commands: io.counts.received,
+                });
+            }
         });
     }
     if let Some(e) = failure {
