@@ -1,11 +1,12 @@
 //! `thorarena dds` end to end: Unitree's Python SDK (unitree_sdk2_python on PyPI's
 //! `cyclonedds` 11.0.1), used as a deployment script uses it, drives one episode of the
-//! sample over loopback: it reads the robot's state, then commands a standing pose with
-//! the left elbow swinging. The run directory holds a scored episode, `realtime.json`
-//! (real time kept or not, commands counted: the corrupted ones ignored) and a trace in
-//! which the elbow follows its commands. The bridge and the Python side of each test run in
-//! a private network namespace of their own when root allows it (`netns`). Skipped, saying so, when `../shared/reference`
-//! (the SDK) or Python's `cyclonedds` is absent; never in CI.
+//! sample over loopback, its hand forces replayed: it reads the robot's state, then
+//! commands a standing pose with the left elbow swinging. The run directory holds a
+//! scored episode, `realtime.json` (real time kept or not, commands counted: the corrupted
+//! ones ignored) and a trace in which the elbow follows its commands and the hands carry
+//! the recorded forces. The bridge and the Python side of each test run in a private
+//! network namespace of their own when root allows it (`netns`). Skipped, saying so, when
+//! `../shared/reference` (the SDK) or Python's `cyclonedds` is absent; never in CI.
 
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -76,13 +77,18 @@ while time.time() - latest["t"] < 1.0 and time.time() - t0 < 60:
 print("sent", sent, flush=True)
 "#;
 
-/// `thorarena dds` on the sample's pull_chair_000 without force, into `out`.
-fn start_bridge(network: &netns::PrivateNetwork, out: &std::path::Path, extra: &[&str]) -> Child {
+/// `thorarena dds` on the sample's pull_chair_000 in `setting`, into `out`.
+fn start_bridge(
+    network: &netns::PrivateNetwork,
+    out: &std::path::Path,
+    setting: &str,
+    extra: &[&str],
+) -> Child {
     network
         .command(BIN)
         .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
         .args(["--sequence", "pull_chair/pull_chair_000"])
-        .args(["--setting", "no-force", "--start-timeout", "90"])
+        .args(["--setting", setting, "--start-timeout", "90"])
         .args(["--out", out.to_str().unwrap()])
         .args(extra)
         .stdout(Stdio::null())
@@ -125,6 +131,7 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     let bridge = start_bridge(
         &network,
         &out,
+        "force",
         &[
             "--domain",
             DEPLOY_DOMAIN,
@@ -211,6 +218,24 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     // A held joint's target is the pose the script read.
     let hip = series("targets", 0);
     assert!(range(&hip) < 1e-6, "{hip:?}");
+    // The sequence's hand forces were replayed on the robot (the force setting).
+    let peak_hand_force_n = steps
+        .iter()
+        .flat_map(|s| s["hand_force_w"].as_array().unwrap().clone())
+        .map(|f| {
+            let f: Vec<f64> = f
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            f.iter().map(|x| x * x).sum::<f64>().sqrt()
+        })
+        .fold(0.0, f64::max);
+    assert!(
+        peak_hand_force_n > 5.0,
+        "no hand force replayed: peak {peak_hand_force_n} N"
+    );
 }
 
 /// No deployment code: the bridge gives up after `--start-timeout`, says why, and leaves
@@ -311,7 +336,7 @@ fn unitrees_low_level_example_runs_unchanged_and_the_joints_follow_it() {
         "100",
     ];
     let network = netns::PrivateNetwork::new(TEST);
-    let bridge = start_bridge(&network, &out, &open_termination);
+    let bridge = start_bridge(&network, &out, "no-force", &open_termination);
     let mut deploy = network
         .command("python3")
         .arg(&example)

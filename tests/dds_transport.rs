@@ -1,14 +1,17 @@
 //! The robot's DDS endpoints (`thorarena::dds::RobotEndpoints`, on rustdds) talk to
 //! Unitree's own Python SDK (unitree_sdk2_python on PyPI's `cyclonedds` 11.0.1) over
 //! loopback on domain 0: the SDK's subscriber receives `rt/lowstate` with a checksum it
-//! accepts and `rt/wirelesscontroller` (`unitree_go`) with the buttons held, and its `rt/lowcmd` messages arrive here decoded, checksums intact — but for
-//! the one the script corrupts, which fails the check. Skipped, saying so, when
-//! `../shared/reference` (the SDK) or Python's `cyclonedds` is absent; never in CI.
+//! accepts and `rt/wirelesscontroller` (`unitree_go`) with the buttons held, and its
+//! `rt/lowcmd` messages arrive here decoded, checksums intact — but for the one the script
+//! corrupts, which fails the check. Both ends run in a private network namespace when root
+//! allows it (`netns`). Skipped, saying so, when `../shared/reference` (the SDK) or
+//! Python's `cyclonedds` is absent; never in CI.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 use thorarena::dds::unitree_hg::MODE_MACHINE_G1_29DOF;
 use thorarena::dds::{ImuState, LowState, RobotEndpoints, WirelessController};
+mod netns;
 mod prereq;
 
 /// Unitree's SDK as a deployment script uses it: waits for states (and the remote's
@@ -62,6 +65,8 @@ fn the_robot_endpoints_exchange_checked_messages_with_unitrees_python_sdk() {
     let Some(sdk) = prereq::unitree_sdk(TEST) else {
         return;
     };
+    // This thread, rustdds' threads and the Python peer, in a network of their own.
+    netns::enter_private_network(TEST);
     let loopback = std::net::IpAddr::from([127, 0, 0, 1]);
     let mut robot = RobotEndpoints::join(0, Some(loopback)).expect("join domain 0 on lo");
     let mut sdk_side = Command::new("python3")

@@ -4,9 +4,10 @@
 //! another test or a developer's robot on domain 0.
 //!
 //! Made with `unshare -n` (a holder process keeps the namespace alive; programs join it
-//! with `nsenter -n`), which needs root. Where that is not allowed, the programs run on
-//! the host's loopback (both ends are told to use `lo` / 127.0.0.1 only) and this is said
-//! on stderr.
+//! with `nsenter -n`), or for a test whose own thread speaks DDS, by moving that thread
+//! into a new namespace ([`enter_private_network`]); both need root. Where that is not
+//! allowed, everything runs on the host's loopback (both ends are told to use `lo` /
+//! 127.0.0.1 only) and this is said on stderr.
 #![allow(dead_code)]
 
 use std::ffi::OsStr;
@@ -75,6 +76,45 @@ impl PrivateNetwork {
             None => Command::new(program),
         }
     }
+}
+
+/// Moves the calling thread into a new network namespace with its loopback up; threads
+/// and processes it starts afterwards (rustdds' event loop, a Python peer) are in it too.
+/// Returns whether it did (it says on stderr why not).
+pub fn enter_private_network(test: &str) -> bool {
+    let say = |why: &str| {
+        eprintln!("{test}: no private network namespace ({why}): on the host's loopback");
+    };
+    // To come back to if the new namespace's loopback cannot be brought up.
+    let host = match std::fs::File::open("/proc/thread-self/ns/net") {
+        Ok(file) => file,
+        Err(e) => {
+            say(&format!("/proc/thread-self/ns/net: {e}"));
+            return false;
+        }
+    };
+    // SAFETY: unshare(2) with CLONE_NEWNET changes only this thread's network namespace.
+    if unsafe { libc::unshare(libc::CLONE_NEWNET) } != 0 {
+        say(&format!("unshare: {}", std::io::Error::last_os_error()));
+        return false;
+    }
+    // `ip` runs in this thread's new namespace, whose loopback starts down.
+    let up = Command::new("ip")
+        .args(["link", "set", "lo", "up"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !up {
+        use std::os::fd::AsRawFd;
+        // SAFETY: setns(2) back into the namespace this thread came from, by an open fd.
+        let back = unsafe { libc::setns(host.as_raw_fd(), libc::CLONE_NEWNET) } == 0;
+        assert!(
+            back,
+            "{test}: could not return to the host's network namespace"
+        );
+        say("`ip link set lo up` failed");
+        return false;
+    }
+    true
 }
 
 impl Drop for PrivateNetwork {
