@@ -158,12 +158,17 @@ const GREETING: [u8; 64] = {
 
 /// READY with the one property `Socket-Type: PUB`.
 fn ready_command() -> Vec<u8> {
+    ready_command_of(b"PUB")
+}
+
+/// READY with the one property `Socket-Type: socket_type` (a short command frame).
+fn ready_command_of(socket_type: &[u8]) -> Vec<u8> {
     let mut body = vec![5];
     body.extend(b"READY");
     body.push(11);
     body.extend(b"Socket-Type");
-    body.extend(3u32.to_be_bytes());
-    body.extend(b"PUB");
+    body.extend((socket_type.len() as u32).to_be_bytes());
+    body.extend(socket_type);
     let mut frame = vec![0x04, body.len() as u8];
     frame.extend(body);
     frame
@@ -200,14 +205,7 @@ mod tests {
         let mut sub = TcpStream::connect(("127.0.0.1", clock.port())).unwrap();
         sub.set_read_timeout(Some(Duration::from_secs(5))).unwrap();
         sub.write_all(&GREETING).unwrap();
-        let mut body = vec![5];
-        body.extend(b"READY");
-        body.push(11);
-        body.extend(b"Socket-Type");
-        body.extend(3u32.to_be_bytes());
-        body.extend(b"SUB");
-        sub.write_all(&[0x04, body.len() as u8]).unwrap();
-        sub.write_all(&body).unwrap();
+        sub.write_all(&ready_command_of(b"SUB")).unwrap();
         sub.write_all(&[0x00, 0x01, 0x01]).unwrap();
         let mut greeting = [0u8; 64];
         sub.read_exact(&mut greeting).unwrap();
