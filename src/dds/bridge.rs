@@ -370,7 +370,6 @@ impl RobotIo {
     fn apply(&mut self, command: &LowCmd, physics: &mut dyn Physics) {
         let n = self.limits.kp.len();
         let motors = &command.motor_cmd[..n];
-        let enabled = |m: &super::MotorCmd| m.mode != 0;
         let gains = PdGains {
             kp: motors
                 .iter()
@@ -406,13 +405,18 @@ impl RobotIo {
     }
 }
 
+/// Whether a motor is driven (mode 1); a motor in mode 0 is limp.
+fn enabled(m: &super::MotorCmd) -> bool {
+    m.mode != 0
+}
+
 /// The part of the robot's motor law `τ = τ_ff + kp (q* − q) + kd (q̇* − q̇)` that the
 /// simulator's PD law lacks, `τ_ff + kd q̇*`, per motor, N·m (zero for a limp motor).
 fn feedforward_nm(motors: &[super::MotorCmd]) -> Vec<f64> {
     motors
         .iter()
         .map(|m| {
-            if m.mode != 0 {
+            if enabled(m) {
                 f64::from(m.tau) + f64::from(m.kd) * f64::from(m.dq)
             } else {
                 0.0

@@ -1,6 +1,7 @@
 //! The robot's end of Unitree's DDS interface on `rustdds`: `rt/lowstate`,
-//! `rt/secondary_imu` and `rt/wirelesscontroller` written, `rt/lowcmd` read, each message through this module's own
-//! codec ([`UnitreeCdr`], plugged into rustdds as its serializer adapter).
+//! `rt/secondary_imu` and `rt/wirelesscontroller` written, `rt/lowcmd` read, each message
+//! through this module's own codec ([`UnitreeCdr`], plugged into rustdds as its
+//! serializer adapter).
 //!
 //! QoS: the writers offer reliable delivery and the reader asks for best effort, so they
 //! match whatever the deployment code's CycloneDDS asks or offers (a reader may not ask for

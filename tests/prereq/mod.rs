@@ -9,7 +9,7 @@
 #![allow(dead_code)]
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// Environment variable naming the published reference artifacts (see README,
@@ -64,15 +64,23 @@ pub fn reference(test: &str, relative: &str) -> Option<PathBuf> {
 /// `true` when `python3 -c "import <modules>"` works; otherwise [`skip`]s with the
 /// install line and returns `false`.
 pub fn python_modules(test: &str, modules: &[&str], install: &str) -> bool {
+    python_imports(test, Path::new("python3"), modules, install)
+}
+
+/// `true` when `<python> -c "import <modules>"` works; otherwise [`skip`]s with `install`.
+fn python_imports(test: &str, python: &Path, modules: &[&str], install: &str) -> bool {
     let import = format!("import {}", modules.join(", "));
-    let ok = Command::new("python3")
+    let ok = Command::new(python)
         .args(["-c", &import])
         .output()
         .is_ok_and(|o| o.status.success());
     if !ok {
         skip(
             test,
-            &format!("`python3 -c \"{import}\"` fails ({install}, or run ./test.sh)"),
+            &format!(
+                "`{} -c \"{import}\"` fails ({install}, or run ./test.sh)",
+                python.display()
+            ),
         );
     }
     ok
@@ -113,20 +121,7 @@ pub fn deploy_python(test: &str) -> Option<PathBuf> {
         Some(python) => PathBuf::from(python),
         None => workspace_root().join(".venv-deploy/bin/python"),
     };
-    let ok = Command::new(&python)
-        .args(["-c", "import holosoma_inference, unitree_interface"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !ok {
-        skip(
-            test,
-            &format!(
-                "`{} -c \"import holosoma_inference, unitree_interface\"` fails (run ./test.sh, \
-                 which makes .venv-deploy from tools/requirements-deploy.txt)",
-                python.display()
-            ),
-        );
-        return None;
-    }
-    Some(python)
+    let modules = ["holosoma_inference", "unitree_interface"];
+    let install = "./test.sh makes .venv-deploy from tools/requirements-deploy.txt";
+    python_imports(test, &python, &modules, install).then_some(python)
 }
