@@ -184,6 +184,14 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     // reference clock) starts at the A press, 6.5 s.
     let offset = realtime["start_offset_s"].as_f64().unwrap();
     assert!((6.5..7.0).contains(&offset), "{realtime}");
+    // The robot's loop ran at the default real-time priority where the kernel allows one.
+    if real_time_priority_allowed() {
+        assert_eq!(
+            realtime["scheduling"],
+            serde_json::json!({"policy": "fifo", "priority": 50}),
+            "{realtime}"
+        );
+    }
     let seconds =
         realtime["start_offset_s"].as_f64().unwrap() + realtime["wall_s"].as_f64().unwrap();
     let state_rate_hz = realtime["states_published"].as_f64().unwrap() / seconds;
@@ -310,7 +318,28 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
             && stderr.contains("lo 127.0.0.1"),
         "{stderr}"
     );
+    let out_of_range = Command::new(BIN)
+        .args(["dds", "--sequence", "pull_chair/pull_chair_000"])
+        .args(["--rt-priority", "120", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out_of_range.stderr);
+    assert!(
+        !out_of_range.status.success()
+            && stderr.contains("--rt-priority: real-time priority 120 is outside"),
+        "{stderr}"
+    );
     assert!(!out.join("run.json").exists());
+}
+
+/// Whether this process may run a thread under `SCHED_FIFO` (root, or RLIMIT_RTPRIO, and
+/// no container forbidding it), as `chrt` finds.
+fn real_time_priority_allowed() -> bool {
+    Command::new("chrt")
+        .args(["-f", "1", "true"])
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
 }
 
 /// Unitree's own `example/g1/low_level/g1_low_level_example.py`, unchanged, from

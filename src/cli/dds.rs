@@ -10,6 +10,7 @@ use std::sync::Arc;
 use std::time::Duration;
 use thorarena::dds::bridge::{run_episode, BridgeOptions, RealTimeReport};
 use thorarena::dds::remote::RemoteScript;
+use thorarena::dds::scheduling::SchedulingError;
 use thorarena::dds::RobotEndpoints;
 use thorarena::episode::{Episode, EpisodeSetup};
 use thorarena::evaluation::{task_thresholds, EvalRequest, EvalSpec, TerminationRule};
@@ -80,6 +81,14 @@ pub struct Args {
     /// for holosoma's inference package run with `--task.use-sim-time`.
     #[arg(long, value_name = "PORT")]
     pub zmq_clock: Option<u16>,
+    /// Real-time priority (SCHED_FIFO, 1–99) of the simulated robot: its physics loop
+    /// and its DDS threads. The G1's motor controllers do not share a computer with the
+    /// policy; on one machine the policy process could otherwise delay physics steps.
+    /// 50 is ros2_control's default for its control loop. Needs root, or RLIMIT_RTPRIO
+    /// at least this (`ulimit -r`); refused, the bridge runs at normal priority and says
+    /// so (`realtime.json` records what it ran under). 0: normal priority.
+    #[arg(long, default_value_t = 50)]
+    pub rt_priority: i32,
     /// The policy's name in the results.
     #[arg(long, default_value = "dds")]
     pub name: String,
@@ -173,6 +182,17 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         setting,
         vec![0.0],
     );
+    // Before the DDS participant starts its threads: they inherit it.
+    if args.rt_priority != 0 {
+        if let Err(e) = thorarena::dds::scheduling::enter_fifo(args.rt_priority) {
+            match e {
+                SchedulingError::OutOfRange { .. } => bail!("--rt-priority: {e}"),
+                SchedulingError::Refused { .. } => eprintln!(
+                    "warning: {e}: running at normal priority, where the policy's process can delay physics steps (--rt-priority 0 asks for it)"
+                ),
+            }
+        }
+    }
     let mut endpoints = RobotEndpoints::join(args.domain, Some(address))?;
     let mut episode = Episode::start(&setup, seq, physics.as_mut());
     episode.record_trace();
@@ -252,7 +272,7 @@ fn write_realtime(
         .with_context(|| format!("writing {}", path.display()))?;
     let c = &report.commands;
     let line = format!(
-        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (applied), {} in the parallel ankle mode (targets taken as pitch/roll); inter-arrival p50 {:.2} ms, p99 {:.2} ms; episode (and reference clock) started {:.2} s after the bridge.\n",
+        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (applied), {} in the parallel ankle mode (targets taken as pitch/roll); inter-arrival p50 {:.2} ms, p99 {:.2} ms; episode (and reference clock) started {:.2} s after the bridge; the physics loop ran at {}.\n",
         if report.kept_real_time { "kept" } else { "NOT KEPT — these scores are not those of a real-time run" },
         report.real_time_factor,
         report.late_steps,
@@ -266,6 +286,7 @@ fn write_realtime(
         report.command_interarrival.p50_ms,
         report.command_interarrival.p99_ms,
         report.start_offset_s,
+        report.scheduling,
     );
     tables.push_str(&line);
     let tables_path = run.path().join("tables.md");

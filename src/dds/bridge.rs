@@ -9,6 +9,7 @@
 //! clamped to the motor's limit: the simulator's PD law with the command's gains and
 //! `τ_ff + kd q̇*` as its feed-forward torque (`Physics::set_feedforward`).
 
+use super::scheduling::Scheduling;
 use super::transport::{DdsError, RobotEndpoints};
 use super::unitree_hg::{MODE_MACHINE_G1_29DOF, MOTOR_SLOTS};
 use super::{ImuState, LowCmd, LowState};
@@ -119,6 +120,8 @@ pub struct RealTimeReport {
     /// Whether the run kept real time: at most 1 % of the physics steps late and a
     /// real-time factor of at least 0.98. Scores of a run that did not are marked so.
     pub kept_real_time: bool,
+    /// The scheduling the physics loop ran under ([`super::scheduling`]).
+    pub scheduling: Scheduling,
 }
 
 /// Where a running episode is, for a progress display (every half second of it).
@@ -240,6 +243,7 @@ pub fn run_episode(
         commands: io.counts,
         command_interarrival: Percentiles::of(io.interarrival_ms),
         kept_real_time: late_steps * 100 <= steps && real_time_factor >= 0.98,
+        scheduling: Scheduling::of_this_thread(),
     })
 }
 

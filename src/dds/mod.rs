@@ -11,6 +11,7 @@ pub mod crc;
 pub mod interface;
 pub mod motion_switcher;
 pub mod remote;
+pub mod scheduling;
 pub mod transport;
 pub mod unitree_go;
 pub mod unitree_hg;
