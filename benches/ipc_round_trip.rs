@@ -34,6 +34,7 @@ fn shared_memory(c: &mut Criterion, envs: usize) {
         action_scale: vec![1.0; JOINTS],
         budget: None,
         wait: Default::default(),
+        inputs: vec![],
     })
     .expect("session");
     let policy = std::thread::spawn(move || {
@@ -80,6 +81,7 @@ fn unix_socket(c: &mut Criterion, envs: usize) {
         n_envs: envs,
         n_joints: JOINTS,
         n_refs: 1,
+        n_inputs: 0,
     };
     let (mut ours, mut theirs) = UnixStream::pair().expect("socket pair");
     let peer = std::thread::spawn(move || {

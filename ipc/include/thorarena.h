@@ -18,7 +18,7 @@
 /**
  * Version of the wire protocol; bumped on any change of the messages or the layout.
  */
-#define THORARENA_PROTOCOL_VERSION 1
+#define THORARENA_PROTOCOL_VERSION 2
 
 /**
  * `timeout_us` of [`thorarena_next_step`]: wait as long as the simulator lives.
@@ -44,6 +44,11 @@
  * Bytes of the refusal message in `Welcome` (NUL-padded UTF-8).
  */
 #define THORARENA_MESSAGE_BYTES 256
+
+/**
+ * Bytes of a policy-input name in `Hello` (NUL-padded UTF-8).
+ */
+#define THORARENA_INPUT_NAME_BYTES 32
 
 /**
  * First word of every batch: "THOR" in ASCII, to catch a misrouted or torn block.
@@ -112,6 +117,11 @@ typedef enum ThorarenaStatus {
    * policy's); the message says why.
    */
   THORARENA_STATUS_REFUSED_BY_RUN = 6,
+  /**
+   * Refused: the simulator builds no policy input of the name asked for (or not from
+   * the reference offsets asked for).
+   */
+  THORARENA_STATUS_REFUSED_INPUT = 7,
   /**
    * The run is over: leave the loop and close the client.
    */
@@ -219,6 +229,11 @@ typedef struct ThorarenaConnectOptions {
    * Protocol version to announce (0: this library's, `THORARENA_PROTOCOL_VERSION`).
    */
   uint32_t protocol_version;
+  /**
+   * A network input for the simulator to build into each batch (NUL-terminated name,
+   * e.g. "twist2"; NULL or "": none). See `ThorarenaSessionInfo::inputs_offset`.
+   */
+  const char *input;
 } ThorarenaConnectOptions;
 
 /**
@@ -228,7 +243,8 @@ typedef struct ThorarenaConnectOptions {
  * blocks of `env_stride` bytes; each block starts with a `ThorarenaEnvHeader`, its `f64`
  * arrays sit at the offsets [`thorarena_env_field`] gives, reference frame `i` starts at
  * `ref_offset + i * ref_stride`. The action slots are `n_envs × n_joints` doubles,
- * row-major.
+ * row-major. When the policy asked for an input, the batch ends with it: `n_envs ×
+ * n_inputs` floats, row-major, at `inputs_offset` bytes from the batch's start.
  */
 typedef struct ThorarenaSessionInfo {
   /**
@@ -276,6 +292,14 @@ typedef struct ThorarenaSessionInfo {
    */
   size_t ref_stride;
   /**
+   * `float` values per environment in the policy-input block (0: none asked).
+   */
+  size_t n_inputs;
+  /**
+   * Byte offset of the policy-input block within the observation batch.
+   */
+  size_t inputs_offset;
+  /**
    * `n_joints` offsets of the action mapping: target = offset + scale · action, rad.
    * Owned by the client, valid until `thorarena_close`.
    */
@@ -319,9 +343,9 @@ typedef struct ThorarenaBatchHeader {
    */
   uint32_t env_stride;
   /**
-   * Reserved, zero.
+   * `f32` values per environment in the policy-input block (0: none).
    */
-  uint32_t reserved0;
+  uint32_t n_inputs;
   /**
    * Step counter of the session, echoed in the action batch.
    */
@@ -391,7 +415,7 @@ typedef struct ThorarenaActionHeader {
 /**
  * Every status, in declaration order.
  */
-#define ThorarenaStatus_ALL { ThorarenaStatus_Ok, ThorarenaStatus_RefusedProtocolVersion, ThorarenaStatus_RefusedJointCount, ThorarenaStatus_RefusedJointNames, ThorarenaStatus_RefusedReferenceOffsets, ThorarenaStatus_RefusedBusy, ThorarenaStatus_RefusedByRun, ThorarenaStatus_End, ThorarenaStatus_Timeout, ThorarenaStatus_NoSession, ThorarenaStatus_SessionName, ThorarenaStatus_SessionInUse, ThorarenaStatus_Config, ThorarenaStatus_SimulatorGone, ThorarenaStatus_Layout, ThorarenaStatus_Transport, ThorarenaStatus_InvalidArgument, ThorarenaStatus_CallOrder, ThorarenaStatus_WrongThread, ThorarenaStatus_Panic, }
+#define ThorarenaStatus_ALL { ThorarenaStatus_Ok, ThorarenaStatus_RefusedProtocolVersion, ThorarenaStatus_RefusedJointCount, ThorarenaStatus_RefusedJointNames, ThorarenaStatus_RefusedReferenceOffsets, ThorarenaStatus_RefusedBusy, ThorarenaStatus_RefusedByRun, ThorarenaStatus_RefusedInput, ThorarenaStatus_End, ThorarenaStatus_Timeout, ThorarenaStatus_NoSession, ThorarenaStatus_SessionName, ThorarenaStatus_SessionInUse, ThorarenaStatus_Config, ThorarenaStatus_SimulatorGone, ThorarenaStatus_Layout, ThorarenaStatus_Transport, ThorarenaStatus_InvalidArgument, ThorarenaStatus_CallOrder, ThorarenaStatus_WrongThread, ThorarenaStatus_Panic, }
 
 #ifdef __cplusplus
 extern "C" {

@@ -6,7 +6,7 @@
 //! simulator's requests) and a *client* of the hello service.
 
 use crate::handshake::{
-    from_fixed, joint_names_hash, to_fixed, Hello, Status, Welcome, MAX_JOINTS,
+    from_fixed, joint_names_hash, to_fixed, Hello, Status, Welcome, INPUT_NAME_BYTES, MAX_JOINTS,
     MAX_REFERENCE_OFFSETS,
 };
 use crate::layout::{ActionBatchMut, Layout, ObsBatch, COMMAND_END};
@@ -53,6 +53,9 @@ pub struct PolicyConfig {
     /// Process id to announce: this process's (tests announce another on purpose; the
     /// simulator logs it and never trusts it).
     pub announced_pid: u32,
+    /// A network input for the simulator to build into each batch's policy-input block
+    /// (`twist2`), or empty for none ([`crate::Hello::input`]).
+    pub input: String,
 }
 
 impl PolicyConfig {
@@ -71,6 +74,7 @@ impl PolicyConfig {
             wait: WaitPolicy::default(),
             protocol_version: PROTOCOL_VERSION,
             announced_pid: std::process::id(),
+            input: String::new(),
         }
     }
 }
@@ -126,6 +130,16 @@ impl PolicyClient {
                 message: format!("at most {MAX_REFERENCE_OFFSETS} reference offsets"),
             });
         }
+        if config.input.len() >= INPUT_NAME_BYTES {
+            return Err(IpcError::Refused {
+                status: Status::Input,
+                message: format!(
+                    "policy input name {:?} is longer than {} bytes",
+                    config.input,
+                    INPUT_NAME_BYTES - 1
+                ),
+            });
+        }
         let node = create_node(&format!("thorarena-policy-{}", config.session))?;
         let start = Instant::now();
         let services = open_services(&node, &names, &config.session, start, timeout)?;
@@ -152,6 +166,7 @@ impl PolicyClient {
             n_envs: welcome.n_envs as usize,
             n_joints: welcome.n_joints as usize,
             n_refs: welcome.n_refs as usize,
+            n_inputs: welcome.n_inputs as usize,
         };
         let simulator_node = hello_server_node(&services.hello)?;
         let server = services
@@ -329,6 +344,7 @@ fn say_hello(
         n_refs: config.reference_offsets_s.len() as u32,
         reference_offsets_s: offsets,
         name: to_fixed(&config.name),
+        input: to_fixed(&config.input),
     };
     let pending = client
         .send_copy(hello)

@@ -4,7 +4,7 @@
 //! description.
 
 use crate::handshake::{
-    Hello, Welcome, MAX_JOINTS, MAX_REFERENCE_OFFSETS, MESSAGE_BYTES, NAME_BYTES,
+    Hello, Welcome, INPUT_NAME_BYTES, MAX_JOINTS, MAX_REFERENCE_OFFSETS, MESSAGE_BYTES, NAME_BYTES,
 };
 use crate::layout::{
     ActionHeader, BatchHeader, EnvHeader, Layout, COMMAND_END, COMMAND_STEP, ENV_ARRAYS,
@@ -37,6 +37,7 @@ fn structs() -> Vec<(&'static str, &'static str, usize, usize, Fields)> {
                 n_refs: u32,
                 reference_offsets_s: [f64; MAX_REFERENCE_OFFSETS],
                 name: [u8; NAME_BYTES],
+                input: [u8; INPUT_NAME_BYTES],
             }),
         ),
         (
@@ -54,6 +55,8 @@ fn structs() -> Vec<(&'static str, &'static str, usize, usize, Fields)> {
                 budget_s: f64,
                 n_refs: u32,
                 pid: u32,
+                n_inputs: u32,
+                reserved: u32,
                 action_offset_rad: [f64; MAX_JOINTS],
                 action_scale: [f64; MAX_JOINTS],
                 message: [u8; MESSAGE_BYTES],
@@ -72,7 +75,7 @@ fn structs() -> Vec<(&'static str, &'static str, usize, usize, Fields)> {
                 n_joints: u32,
                 n_refs: u32,
                 env_stride: u32,
-                reserved0: u32,
+                n_inputs: u32,
                 seq: u64,
                 reserved: [u64; 3],
             }),
@@ -109,12 +112,12 @@ fn structs() -> Vec<(&'static str, &'static str, usize, usize, Fields)> {
 
 /// The layout document: protocol constants, the fixed structs (size, alignment, field
 /// offsets), the array lists, and a worked example for the G1 (29 joints, 2 reference
-/// frames, 2 environments) with every field's offset.
+/// frames, 2 environments, TWIST2's 1432 policy inputs) with every field's offset.
 pub fn layout_json() -> String {
     let mut s = String::from("{\n");
     let _ = writeln!(s, "  \"protocol_version\": {},", crate::PROTOCOL_VERSION);
     let _ = writeln!(s, "  \"constants\": {{");
-    let constants: [(&str, u64); 11] = [
+    let constants: [(&str, u64); 12] = [
         ("MAGIC", u64::from(MAGIC)),
         ("COMMAND_STEP", u64::from(COMMAND_STEP)),
         ("COMMAND_END", u64::from(COMMAND_END)),
@@ -128,6 +131,7 @@ pub fn layout_json() -> String {
         ("MAX_REFERENCE_OFFSETS", MAX_REFERENCE_OFFSETS as u64),
         ("NAME_BYTES", NAME_BYTES as u64),
         ("MESSAGE_BYTES", MESSAGE_BYTES as u64),
+        ("INPUT_NAME_BYTES", INPUT_NAME_BYTES as u64),
         ("WORD_BYTES", 8),
     ];
     for (i, (k, v)) in constants.iter().enumerate() {
@@ -171,19 +175,23 @@ pub fn layout_json() -> String {
         n_envs: 2,
         n_joints: 29,
         n_refs: 2,
+        // TWIST2's network input, built by the simulator.
+        n_inputs: 1432,
     };
     let _ = writeln!(s, "  \"example\": {{");
     let _ = writeln!(
         s,
-        "    \"n_envs\": {}, \"n_joints\": {}, \"n_refs\": {},",
-        g1.n_envs, g1.n_joints, g1.n_refs
+        "    \"n_envs\": {}, \"n_joints\": {}, \"n_refs\": {}, \"n_inputs\": {},",
+        g1.n_envs, g1.n_joints, g1.n_refs, g1.n_inputs
     );
     let _ = writeln!(
         s,
-        "    \"ref_offset\": {}, \"ref_stride\": {}, \"env_stride\": {}, \"obs_bytes\": {}, \"action_bytes\": {},",
+        "    \"ref_offset\": {}, \"ref_stride\": {}, \"env_stride\": {}, \"inputs_offset\": {}, \"inputs_bytes\": {}, \"obs_bytes\": {}, \"action_bytes\": {},",
         g1.ref_offset(),
         g1.ref_stride(),
         g1.env_stride(),
+        g1.inputs_offset(),
+        g1.inputs_bytes(),
         g1.obs_bytes(),
         g1.action_bytes()
     );

@@ -26,7 +26,7 @@
 //! thread that connected it.
 
 use crate::client::{Next, PolicyClient, PolicyConfig, PolicyStep};
-use crate::handshake::{Status, MAX_JOINTS, MAX_REFERENCE_OFFSETS};
+use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
 use crate::layout::{Field, Layout};
 use crate::session::{IpcError, WaitPolicy};
 use crate::PROTOCOL_VERSION;
@@ -38,136 +38,7 @@ use std::time::Duration;
 /// `timeout_us` of [`thorarena_next_step`]: wait as long as the simulator lives.
 pub const THORARENA_WAIT_FOREVER: i64 = -1;
 
-/// What a call gave: success, the two non-error outcomes of waiting (`End`, `Timeout`),
-/// or why it failed. Refusals carry the simulator's handshake status with the same number
-/// (`Welcome::status`); every other failure is one `IpcError` variant.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ThorarenaStatus {
-    /// Success.
-    Ok = 0,
-    /// Refused: the simulator speaks another protocol version.
-    RefusedProtocolVersion = 1,
-    /// Refused: the robot has another number of joints.
-    RefusedJointCount = 2,
-    /// Refused: same joint count, different joint names or order.
-    RefusedJointNames = 3,
-    /// Refused: too many reference offsets, none, or one negative or not finite.
-    RefusedReferenceOffsets = 4,
-    /// Refused: another policy is connected.
-    RefusedBusy = 5,
-    /// Refused: the run refused this policy (its name, or a resumed run that was another
-    /// policy's); the message says why.
-    RefusedByRun = 6,
-    /// The run is over: leave the loop and close the client.
-    End = 10,
-    /// Nothing arrived within the timeout (waiting for a step, or for the welcome).
-    Timeout = 11,
-    /// No simulator serves this session.
-    NoSession = 20,
-    /// The session name cannot name iceoryx2 services (`[A-Za-z0-9_.-]{1,64}`).
-    SessionName = 21,
-    /// Another live run owns the session (simulator side).
-    SessionInUse = 22,
-    /// The simulator was configured with something the protocol cannot carry.
-    Config = 23,
-    /// The simulator process died or left.
-    SimulatorGone = 24,
-    /// A received batch does not match the session's layout.
-    Layout = 25,
-    /// iceoryx2 failed (see the message).
-    Transport = 26,
-    /// A NULL pointer, a string that is not UTF-8, an unknown field name, a count out of range.
-    InvalidArgument = 30,
-    /// Calls out of order: `thorarena_next_step` while a step is held (call
-    /// `thorarena_send` first), or `thorarena_send` with no step held.
-    CallOrder = 31,
-    /// The client was used on another thread than the one that connected it (its
-    /// iceoryx2 ports are bound to that thread).
-    WrongThread = 32,
-    /// A bug in this library (a Rust panic, caught at the boundary).
-    Panic = 40,
-}
-
-impl ThorarenaStatus {
-    /// The status of a refused handshake (the same number as on the wire).
-    pub fn from_refusal(status: Status) -> Self {
-        match status {
-            Status::Ok => Self::Ok,
-            Status::ProtocolVersion => Self::RefusedProtocolVersion,
-            Status::JointCount => Self::RefusedJointCount,
-            Status::JointNames => Self::RefusedJointNames,
-            Status::ReferenceOffsets => Self::RefusedReferenceOffsets,
-            Status::Busy => Self::RefusedBusy,
-            Status::Rejected => Self::RefusedByRun,
-        }
-    }
-
-    /// The status of a transport error.
-    pub fn from_error(error: &IpcError) -> Self {
-        match error {
-            IpcError::Config(_) => Self::Config,
-            IpcError::SessionName(_) => Self::SessionName,
-            IpcError::SessionInUse(_) => Self::SessionInUse,
-            IpcError::NoSession(_) => Self::NoSession,
-            IpcError::Refused { status, .. } => Self::from_refusal(*status),
-            IpcError::Timeout(..) => Self::Timeout,
-            IpcError::PeerGone(_) => Self::SimulatorGone,
-            IpcError::Layout(_) => Self::Layout,
-            IpcError::Transport { .. } => Self::Transport,
-        }
-    }
-
-    /// Every status, in declaration order.
-    pub const ALL: [Self; 20] = [
-        Self::Ok,
-        Self::RefusedProtocolVersion,
-        Self::RefusedJointCount,
-        Self::RefusedJointNames,
-        Self::RefusedReferenceOffsets,
-        Self::RefusedBusy,
-        Self::RefusedByRun,
-        Self::End,
-        Self::Timeout,
-        Self::NoSession,
-        Self::SessionName,
-        Self::SessionInUse,
-        Self::Config,
-        Self::SimulatorGone,
-        Self::Layout,
-        Self::Transport,
-        Self::InvalidArgument,
-        Self::CallOrder,
-        Self::WrongThread,
-        Self::Panic,
-    ];
-
-    /// The C name of the status (`THORARENA_STATUS_REFUSED_JOINT_COUNT`).
-    pub fn name(self) -> &'static CStr {
-        match self {
-            Self::Ok => c"THORARENA_STATUS_OK",
-            Self::RefusedProtocolVersion => c"THORARENA_STATUS_REFUSED_PROTOCOL_VERSION",
-            Self::RefusedJointCount => c"THORARENA_STATUS_REFUSED_JOINT_COUNT",
-            Self::RefusedJointNames => c"THORARENA_STATUS_REFUSED_JOINT_NAMES",
-            Self::RefusedReferenceOffsets => c"THORARENA_STATUS_REFUSED_REFERENCE_OFFSETS",
-            Self::RefusedBusy => c"THORARENA_STATUS_REFUSED_BUSY",
-            Self::RefusedByRun => c"THORARENA_STATUS_REFUSED_BY_RUN",
-            Self::End => c"THORARENA_STATUS_END",
-            Self::Timeout => c"THORARENA_STATUS_TIMEOUT",
-            Self::NoSession => c"THORARENA_STATUS_NO_SESSION",
-            Self::SessionName => c"THORARENA_STATUS_SESSION_NAME",
-            Self::SessionInUse => c"THORARENA_STATUS_SESSION_IN_USE",
-            Self::Config => c"THORARENA_STATUS_CONFIG",
-            Self::SimulatorGone => c"THORARENA_STATUS_SIMULATOR_GONE",
-            Self::Layout => c"THORARENA_STATUS_LAYOUT",
-            Self::Transport => c"THORARENA_STATUS_TRANSPORT",
-            Self::InvalidArgument => c"THORARENA_STATUS_INVALID_ARGUMENT",
-            Self::CallOrder => c"THORARENA_STATUS_CALL_ORDER",
-            Self::WrongThread => c"THORARENA_STATUS_WRONG_THREAD",
-            Self::Panic => c"THORARENA_STATUS_PANIC",
-        }
-    }
-}
+pub use status::ThorarenaStatus;
 
 /// A failed call: the status to return and the words for `thorarena_last_error_message`.
 struct Failure {
@@ -263,6 +134,9 @@ pub struct ThorarenaConnectOptions {
     pub liveness_us: u64,
     /// Protocol version to announce (0: this library's, `THORARENA_PROTOCOL_VERSION`).
     pub protocol_version: u32,
+    /// A network input for the simulator to build into each batch (NUL-terminated name,
+    /// e.g. "twist2"; NULL or "": none). See `ThorarenaSessionInfo::inputs_offset`.
+    pub input: *const c_char,
 }
 
 /// The session as the simulator described it, from [`thorarena_session_info`].
@@ -271,7 +145,8 @@ pub struct ThorarenaConnectOptions {
 /// blocks of `env_stride` bytes; each block starts with a `ThorarenaEnvHeader`, its `f64`
 /// arrays sit at the offsets [`thorarena_env_field`] gives, reference frame `i` starts at
 /// `ref_offset + i * ref_stride`. The action slots are `n_envs × n_joints` doubles,
-/// row-major.
+/// row-major. When the policy asked for an input, the batch ends with it: `n_envs ×
+/// n_inputs` floats, row-major, at `inputs_offset` bytes from the batch's start.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct ThorarenaSessionInfo {
@@ -297,6 +172,10 @@ pub struct ThorarenaSessionInfo {
     pub ref_offset: usize,
     /// Bytes of one reference frame.
     pub ref_stride: usize,
+    /// `float` values per environment in the policy-input block (0: none asked).
+    pub n_inputs: usize,
+    /// Byte offset of the policy-input block within the observation batch.
+    pub inputs_offset: usize,
     /// `n_joints` offsets of the action mapping: target = offset + scale · action, rad.
     /// Owned by the client, valid until `thorarena_close`.
     pub action_offset_rad: *const f64,
@@ -359,6 +238,7 @@ pub unsafe extern "C" fn thorarena_connect_options_default(
             spin_us: wait.spin.as_micros() as u64,
             liveness_us: wait.liveness_every.as_micros() as u64,
             protocol_version: PROTOCOL_VERSION,
+            input: std::ptr::null(),
         };
         // SAFETY: non-NULL and writable per the contract; `write` needs no initialised value.
         unsafe { options.write(defaults) };
@@ -442,6 +322,10 @@ pub unsafe extern "C" fn thorarena_connect(
         if o.protocol_version != 0 {
             config.protocol_version = o.protocol_version;
         }
+        if !o.input.is_null() {
+            // SAFETY: as for `session`.
+            config.input = unsafe { utf8(o.input, "options.input") }?.to_string();
+        }
         config.wait = WaitPolicy {
             spin: Duration::from_micros(o.spin_us),
             liveness_every: if o.liveness_us == 0 {
@@ -521,6 +405,8 @@ pub unsafe extern "C" fn thorarena_session_info(
             env_stride: l.env_stride(),
             ref_offset: l.ref_offset(),
             ref_stride: l.ref_stride(),
+            n_inputs: l.n_inputs,
+            inputs_offset: l.inputs_offset(),
             action_offset_rad: info.action_offset_rad.as_ptr(),
             action_scale: info.action_scale.as_ptr(),
         };
@@ -742,6 +628,7 @@ pub unsafe extern "C" fn thorarena_layout_env_field(
             n_envs: 1,
             n_joints,
             n_refs,
+            n_inputs: 0,
         }
         .env_fields();
         // SAFETY: the pointers' contract is this function's.
@@ -790,6 +677,8 @@ pub extern "C" fn thorarena_status_name(status: c_int) -> *const c_char {
 pub extern "C" fn thorarena_protocol_version() -> u32 {
     PROTOCOL_VERSION
 }
+
+mod status;
 
 #[cfg(test)]
 #[path = "ffi_tests.rs"]

@@ -1,10 +1,11 @@
 //! Tests of the C ABI (`ffi.rs`), in their own file to keep the ABI readable.
 
 use super::*;
+use crate::handshake::Status;
 
 #[test]
 fn refusal_statuses_keep_their_wire_numbers() {
-    for wire in 0..=5u32 {
+    for wire in 0..=7u32 {
         let status = Status::from_u32(wire).unwrap();
         assert_eq!(ThorarenaStatus::from_refusal(status) as u32, wire);
     }
@@ -111,6 +112,7 @@ fn steps_round_trip_through_the_c_abi_and_misuse_gets_a_typed_status() {
         action_scale: vec![1.0; 3],
         budget: None,
         wait: Default::default(),
+        inputs: vec![],
     })
     .unwrap();
     let policy = std::thread::spawn(move || {
@@ -230,6 +232,7 @@ fn a_refused_connect_returns_the_refusal_status_and_message() {
         action_scale: vec![1.0; 4],
         budget: None,
         wait: Default::default(),
+        inputs: vec![],
     })
     .unwrap();
     let policy = std::thread::spawn(move || {

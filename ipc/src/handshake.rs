@@ -14,6 +14,8 @@ pub const MAX_JOINTS: usize = 64;
 pub const NAME_BYTES: usize = 64;
 /// Bytes of the refusal message in `Welcome` (NUL-padded UTF-8).
 pub const MESSAGE_BYTES: usize = 256;
+/// Bytes of a policy-input name in `Hello` (NUL-padded UTF-8).
+pub const INPUT_NAME_BYTES: usize = 32;
 
 /// What the policy sends to join a session.
 #[repr(C)]
@@ -34,6 +36,11 @@ pub struct Hello {
     pub reference_offsets_s: [f64; MAX_REFERENCE_OFFSETS],
     /// The policy's name, for results (NUL-padded UTF-8).
     pub name: [u8; NAME_BYTES],
+    /// A network input the simulator should build for the policy, by name (`twist2`:
+    /// TWIST2's 1432 floats), or empty: the simulator writes it into the batch's
+    /// policy-input block (`layout`), so a client in a slow language only runs its network.
+    /// The simulator refuses a name it does not offer ([`Status::Input`]).
+    pub input: [u8; INPUT_NAME_BYTES],
 }
 
 /// `Welcome::status` values; also the C ABI's error codes for a refused session.
@@ -55,6 +62,9 @@ pub enum Status {
     /// The run refused this policy (its name, or a resumed run that was another
     /// policy's); the message says why.
     Rejected = 6,
+    /// The simulator builds no policy input of the name asked for, or not from the
+    /// reference offsets asked for; the message lists what it offers.
+    Input = 7,
 }
 
 impl Status {
@@ -68,6 +78,7 @@ impl Status {
             Self::ReferenceOffsets,
             Self::Busy,
             Self::Rejected,
+            Self::Input,
         ]
         .into_iter()
         .find(|s| *s as u32 == v)
@@ -97,6 +108,10 @@ pub struct Welcome {
     pub n_refs: u32,
     /// The simulator's process id.
     pub pid: u32,
+    /// `f32` values per environment in the batch's policy-input block (0: none asked).
+    pub n_inputs: u32,
+    /// Reserved, zero.
+    pub reserved: u32,
     /// How a raw action becomes a PD target under the session's dynamics profile:
     /// `target_j = action_offset_rad[j] + action_scale[j] · action_j` (first `n_joints`
     /// entries used). Lets a policy that thinks in joint targets answer in actions.
@@ -167,11 +182,11 @@ mod tests {
     fn message_sizes_are_stable() {
         assert_eq!(
             std::mem::size_of::<Hello>(),
-            24 + 8 * MAX_REFERENCE_OFFSETS + NAME_BYTES
+            24 + 8 * MAX_REFERENCE_OFFSETS + NAME_BYTES + INPUT_NAME_BYTES
         );
         assert_eq!(
             std::mem::size_of::<Welcome>(),
-            48 + 16 * MAX_JOINTS + MESSAGE_BYTES
+            56 + 16 * MAX_JOINTS + MESSAGE_BYTES
         );
         assert_eq!(
             unsafe { <Hello as ZeroCopySend>::type_name() },

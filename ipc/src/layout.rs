@@ -8,6 +8,7 @@
 //!
 //! ```text
 //! observation batch = BatchHeader (64 B) + n_envs × env block (env_stride B)
+//!                     + policy inputs: n_envs × n_inputs f32, row-major, zero-padded to 8 B
 //! env block         = EnvHeader (32 B)
 //!                     + root_pos_w 3, root_quat_wxyz 4, root_lin_vel_w 3, root_ang_vel_w 3,
 //!                       root_lin_vel_b 3, root_ang_vel_b 3, projected_gravity_b 3   (f64)
@@ -19,6 +20,11 @@
 //!                     raw actions, canonical joint order)
 //! ```
 //! Quaternions are (w, x, y, z); `_w` is the world frame, `_b` the root (base) frame.
+//!
+//! The policy-input block is there when the policy asked, in its hello, for a network input
+//! the simulator builds (TWIST2's 1432 floats): one contiguous `[n_envs, n_inputs]` float32
+//! array, the tensor the network takes, so a client in any language feeds it to its
+//! network without building or copying anything. `n_inputs` is 0 otherwise.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -57,8 +63,8 @@ pub struct BatchHeader {
     pub n_refs: u32,
     /// Bytes per environment block.
     pub env_stride: u32,
-    /// Reserved, zero.
-    pub reserved0: u32,
+    /// `f32` values per environment in the policy-input block (0: none).
+    pub n_inputs: u32,
     /// Step counter of the session, echoed in the action batch.
     pub seq: u64,
     /// Reserved, zero.
@@ -146,9 +152,12 @@ pub struct Layout {
     pub n_joints: usize,
     /// Reference frames per environment.
     pub n_refs: usize,
+    /// `f32` values per environment in the policy-input block (0: none).
+    pub n_inputs: usize,
 }
 
 const F64: usize = 8;
+const F32: usize = 4;
 
 impl Layout {
     /// Bytes of one reference frame.
@@ -174,9 +183,19 @@ impl Layout {
         self.ref_offset() + self.n_refs * self.ref_stride()
     }
 
+    /// Byte offset of the policy-input block within an observation batch.
+    pub fn inputs_offset(&self) -> usize {
+        std::mem::size_of::<BatchHeader>() + self.n_envs * self.env_stride()
+    }
+
+    /// Bytes of the policy-input block, padding included.
+    pub fn inputs_bytes(&self) -> usize {
+        (F32 * self.n_envs * self.n_inputs).next_multiple_of(8)
+    }
+
     /// Bytes of an observation batch.
     pub fn obs_bytes(&self) -> usize {
-        std::mem::size_of::<BatchHeader>() + self.n_envs * self.env_stride()
+        self.inputs_offset() + self.inputs_bytes()
     }
 
     /// Bytes of an action batch.
@@ -317,6 +336,7 @@ impl<'a> ObsBatch<'a> {
             ("n_envs", h.n_envs as u64, layout.n_envs as u64),
             ("n_joints", h.n_joints as u64, layout.n_joints as u64),
             ("n_refs", h.n_refs as u64, layout.n_refs as u64),
+            ("n_inputs", h.n_inputs as u64, layout.n_inputs as u64),
             (
                 "env_stride",
                 h.env_stride as u64,
@@ -344,6 +364,14 @@ impl<'a> ObsBatch<'a> {
     /// Number of environment slots.
     pub fn n_envs(&self) -> usize {
         self.layout.n_envs
+    }
+
+    /// The policy-input block: `n_envs × n_inputs` values, row-major (empty when the
+    /// policy asked for none).
+    pub fn policy_inputs(&self) -> &'a [f32] {
+        let start = self.layout.inputs_offset();
+        let len = self.layout.n_envs * self.layout.n_inputs;
+        bytemuck::cast_slice(&self.bytes[start..start + F32 * len])
     }
 
     /// Environment slot `i`.
@@ -405,13 +433,24 @@ impl<'a> ObsBatchMut<'a> {
             n_joints: layout.n_joints as u32,
             n_refs: layout.n_refs as u32,
             env_stride: layout.env_stride() as u32,
-            reserved0: 0,
+            n_inputs: layout.n_inputs as u32,
             seq,
             reserved: [0; 3],
         };
         let bytes = &mut bytes[..layout.obs_bytes()];
         bytes[..std::mem::size_of::<BatchHeader>()].copy_from_slice(bytemuck::bytes_of(&header));
+        // The padding after the inputs, so no stale bytes of an earlier step go out.
+        let end = layout.inputs_offset() + F32 * layout.n_envs * layout.n_inputs;
+        bytes[end..].fill(0);
         Self { layout, bytes }
+    }
+
+    /// Slot `i`'s row of the policy-input block, writable (empty when the policy asked for
+    /// none).
+    pub fn policy_input(&mut self, i: usize) -> &mut [f32] {
+        let n = self.layout.n_inputs;
+        let start = self.layout.inputs_offset() + F32 * i * n;
+        bytemuck::cast_slice_mut(&mut self.bytes[start..start + F32 * n])
     }
 
     /// Environment slot `i`, writable.
@@ -563,6 +602,7 @@ mod tests {
             n_envs: 2,
             n_joints: 29,
             n_refs: 2,
+            n_inputs: 0,
         };
         // 32 B header + (22 + 3·29) f64 + 2 · (14 + 2·29) f64
         assert_eq!(l.ref_offset(), 32 + 8 * (22 + 87));
@@ -584,6 +624,7 @@ mod tests {
             n_envs: 3,
             n_joints: 4,
             n_refs: 2,
+            n_inputs: 3,
         };
         let mut words = vec![0u64; l.obs_words()];
         {
@@ -599,6 +640,7 @@ mod tests {
             e.array("qd").copy_from_slice(&[1.0, 2.0, 3.0, 4.0]);
             e.reference(1, "joint_vel")
                 .copy_from_slice(&[5.0, 6.0, 7.0, 8.0]);
+            b.policy_input(1).copy_from_slice(&[0.5, -1.5, 2.5]);
         }
         let b = ObsBatch::new(l, bytemuck::cast_slice(&words)).unwrap();
         assert_eq!(b.header().seq, 7);
@@ -608,6 +650,14 @@ mod tests {
         assert_eq!(e.array("qd"), &[1.0, 2.0, 3.0, 4.0]);
         assert_eq!(e.reference(1, "joint_vel"), &[5.0, 6.0, 7.0, 8.0]);
         assert!(!b.env(0).is_active());
+        // The policy inputs: one [n_envs, n_inputs] f32 array after the environment blocks,
+        // 9 floats padded to 40 bytes.
+        assert_eq!(l.inputs_bytes(), 40);
+        assert_eq!(l.obs_bytes(), 64 + 3 * l.env_stride() + 40);
+        let inputs = b.policy_inputs();
+        assert_eq!(inputs.len(), 9);
+        assert_eq!(&inputs[3..6], &[0.5, -1.5, 2.5]);
+        assert_eq!(b.header().n_inputs, 3);
         // The named field table agrees with the accessors.
         let f = l
             .env_fields()
@@ -626,9 +676,14 @@ mod tests {
             n_envs: 1,
             n_joints: 29,
             n_refs: 1,
+            n_inputs: 0,
         };
         let mut words = vec![0u64; l.obs_words()];
         ObsBatchMut::new(l, bytemuck::cast_slice_mut(&mut words), COMMAND_STEP, 0);
+        let wider = Layout { n_inputs: 2, ..l };
+        // The simulator's batch has no inputs where the policy expects some: a shape error
+        // (the missing block also makes it short, which is checked first).
+        assert!(ObsBatch::new(wider, bytemuck::cast_slice(&words)).is_err());
         let other = Layout { n_joints: 23, ..l };
         let err = ObsBatch::new(other, bytemuck::cast_slice(&words))
             .err()

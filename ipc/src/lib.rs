@@ -20,7 +20,9 @@ pub mod session;
 pub mod sim;
 
 pub use client::{Next, PolicyClient, PolicyConfig, PolicyStep, SessionInfo};
-pub use handshake::{joint_names_hash, Hello, Status, Welcome, MAX_REFERENCE_OFFSETS};
+pub use handshake::{
+    joint_names_hash, Hello, Status, Welcome, INPUT_NAME_BYTES, MAX_REFERENCE_OFFSETS,
+};
 pub use layout::{
     ActionBatch, ActionBatchMut, BatchHeader, EnvHeader, EnvObs, EnvObsMut, Layout, LayoutError,
     ObsBatch, ObsBatchMut, FLAG_ACTIVE, FLAG_PREVIOUS_TERMINATED, FLAG_RESET,
@@ -28,7 +30,7 @@ pub use layout::{
 pub use session::{
     process_alive, Event, IpcError, Message, Port, TransportCause, TransportOp, WaitPolicy,
 };
-pub use sim::{PolicyInfo, SimConfig, SimSession, StepOutcome};
+pub use sim::{InputOffer, PolicyInfo, SimConfig, SimSession, StepOutcome};
 
 /// Version of the wire protocol; bumped on any change of the messages or the layout.
-pub const PROTOCOL_VERSION: u32 = 1;
+pub const PROTOCOL_VERSION: u32 = 2;

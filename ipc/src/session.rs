@@ -264,7 +264,7 @@ pub(crate) fn create_node(name: &str) -> Result<Node<ipc::Service>, IpcError> {
 ///
 /// For a process this one started (its own pid, not one it was told): a pid a peer reports
 /// about itself proves nothing — it may name any live process, and inside a container it
-/// names a process of another pid namespace. Peers are watched through [`PeerNode`].
+/// names a process of another pid namespace. Peers are watched through `PeerNode`.
 pub fn process_alive(pid: u32) -> bool {
     if pid == 0 {
         return true;

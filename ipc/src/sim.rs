@@ -46,6 +46,20 @@ pub struct SimConfig {
     pub budget: Option<Duration>,
     /// How to wait for actions.
     pub wait: WaitPolicy,
+    /// The network inputs this simulator builds for a policy that asks for one by name.
+    pub inputs: Vec<InputOffer>,
+}
+
+/// A network input the simulator can build into the batch's policy-input block.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputOffer {
+    /// Its name, as a policy asks for it in its hello (`twist2`).
+    pub name: String,
+    /// `f32` values per environment.
+    pub n_inputs: usize,
+    /// The reference offsets it is built from, s: a policy asking for it must ask for
+    /// exactly these.
+    pub reference_offsets_s: Vec<f64>,
 }
 
 /// The connected policy.
@@ -58,6 +72,8 @@ pub struct PolicyInfo {
     pub pid: u32,
     /// The reference offsets it asked for, s.
     pub reference_offsets_s: Vec<f64>,
+    /// The network input it asked the simulator to build, if any ([`InputOffer::name`]).
+    pub input: Option<String>,
 }
 
 /// How one step's wait ended.

@@ -122,6 +122,7 @@ fn sim_config(session: &str, n_envs: usize, joint_names: Vec<String>) -> SimConf
         action_scale: (0..n).map(|j| 0.25 + 0.01 * j as f64).collect(),
         budget: None,
         wait: Default::default(),
+        inputs: vec![],
     }
 }
 

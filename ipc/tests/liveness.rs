@@ -33,6 +33,7 @@ fn sim(session: &str) -> SimSession {
         action_scale: vec![1.0; N_JOINTS],
         budget: None,
         wait: Default::default(),
+        inputs: vec![],
     })
     .unwrap()
 }
@@ -98,6 +99,7 @@ fn hello_then_die(session: &str, pid: u32) {
             n_refs: 1,
             reference_offsets_s: [0.0; MAX_REFERENCE_OFFSETS],
             name: thorarena_ipc::handshake::to_fixed("liar"),
+            input: [0; thorarena_ipc::INPUT_NAME_BYTES],
         })
         .unwrap();
     while pending.receive().unwrap().is_none() {

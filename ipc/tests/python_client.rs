@@ -73,6 +73,7 @@ fn sim_config(session: &str, n_envs: usize, budget: Option<Duration>) -> SimConf
         action_scale: (0..n).map(|j| 0.25 + 0.05 * j as f64).collect(),
         budget,
         wait: Default::default(),
+        inputs: vec![],
     }
 }
 

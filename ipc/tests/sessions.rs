@@ -1,8 +1,8 @@
 //! Both ends of a session in one process (each on its own thread, as each would be in its
 //! own process): the handshake accepts a matching policy and refuses mismatched ones with a
 //! typed status, observations arrive intact, actions come back for the step that asked,
-//! a deadline miss is reported and the late reply counted, and two sessions run side by
-//! side without crossing.
+//! a deadline miss is reported and the late reply counted, two sessions run side by
+//! side without crossing, and a network input the simulator builds reaches the policy.
 
 use std::time::Duration;
 use thorarena_ipc::{
@@ -28,6 +28,7 @@ fn sim_config(session: &str, n_envs: usize, n_joints: usize) -> SimConfig {
         action_scale: vec![0.5; n_joints],
         budget: None,
         wait: Default::default(),
+        inputs: vec![],
     }
 }
 
@@ -258,4 +259,101 @@ fn connecting_to_a_missing_session_says_so() {
         other => panic!("expected NoSession, got {:?}", other.err()),
     }
     let _ = Next::Timeout; // keep the enum in the public surface
+}
+
+/// A policy may ask the simulator to build a network input: one it does not offer, or
+/// from other reference offsets, is refused with `Status::Input` and told what is offered;
+/// an offered one arrives as the batch's `[n_envs, n_inputs]` float block, row by slot.
+#[test]
+fn a_policy_input_is_offered_by_name_and_arrives_as_one_float_block() {
+    let session = unique("inputs");
+    let mut config = sim_config(&session, 2, 3);
+    config.inputs = vec![thorarena_ipc::InputOffer {
+        name: "toy".into(),
+        n_inputs: 5,
+        reference_offsets_s: vec![0.0, 0.1],
+    }];
+    let mut sim = SimSession::create(config).unwrap();
+    let s = session.clone();
+    let policy = std::thread::spawn(move || {
+        let ask = |input: &str, offsets: Vec<f64>| {
+            let mut config = PolicyConfig::new(&s, "toy-policy", joints(3), offsets);
+            config.input = input.into();
+            PolicyClient::connect(&config, Duration::from_secs(10))
+        };
+        let unknown = ask("twist2", vec![0.0, 0.1]).err();
+        let wrong_offsets = ask("toy", vec![0.0]).err();
+        let too_long = ask(&"x".repeat(40), vec![0.0, 0.1]).err();
+        let mut client = ask("toy", vec![0.0, 0.1]).unwrap();
+        assert_eq!(client.info().layout.n_inputs, 5);
+        let mut seen = Vec::new();
+        client
+            .run(|obs, actions| {
+                let inputs = obs.policy_inputs();
+                seen.push(inputs.to_vec());
+                // Answer with each slot's first input.
+                for i in 0..obs.n_envs() {
+                    actions.env(i)[0] = f64::from(inputs[i * 5]);
+                }
+            })
+            .unwrap();
+        (unknown, wrong_offsets, too_long, seen)
+    });
+    let mut refusals = Vec::new();
+    let info = sim
+        .accept(Some(Duration::from_secs(20)), |m| {
+            refusals.push(m.to_string())
+        })
+        .unwrap();
+    assert_eq!(info.input.as_deref(), Some("toy"));
+    assert_eq!(sim.layout().unwrap().n_inputs, 5);
+    let mut first = vec![];
+    sim.step(
+        |batch| {
+            for slot in 0..2 {
+                batch.env(slot).set_header(&EnvHeader {
+                    flags: FLAG_ACTIVE,
+                    ..zeroed_header()
+                });
+                for (k, x) in batch.policy_input(slot).iter_mut().enumerate() {
+                    *x = (10 * slot + k) as f32 + 0.5;
+                }
+            }
+        },
+        None,
+        |actions| first = (0..2).map(|i| actions.env(i)[0]).collect(),
+    )
+    .unwrap();
+    sim.end();
+    let (unknown, wrong_offsets, too_long, seen) = policy.join().unwrap();
+    assert_eq!(first, vec![0.5, 10.5]);
+    assert_eq!(
+        seen,
+        vec![vec![0.5, 1.5, 2.5, 3.5, 4.5, 10.5, 11.5, 12.5, 13.5, 14.5]]
+    );
+    for (e, words) in [
+        (unknown, "no policy input `twist2` (it offers `toy`)"),
+        (wrong_offsets, "built from reference offsets [0.0, 0.1] s"),
+        (too_long, "longer than 31 bytes"),
+    ] {
+        match e {
+            Some(IpcError::Refused { status, message }) => {
+                assert_eq!(status, Status::Input);
+                assert!(message.contains(words), "{message}");
+            }
+            other => panic!("expected a refusal, got {other:?}"),
+        }
+    }
+    // The too-long name never reached the simulator.
+    assert_eq!(refusals.len(), 2, "{refusals:?}");
+}
+
+fn zeroed_header() -> EnvHeader {
+    EnvHeader {
+        episode_id: 0,
+        step: 0,
+        flags: 0,
+        reserved: 0,
+        time_s: 0.0,
+    }
 }

@@ -19,8 +19,9 @@ use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 use thorarena::evaluation::LatencySummary;
 use thorarena::perf::{
-    adapter_round_trips, answer_socket_echo, echo_round_trips, socket_round_trips,
+    adapter_round_trips, answer_socket_echo, echo_round_trips, socket_round_trips, AdapterTiming,
 };
+use thorarena::policy::inputs::InputBuilder;
 use thorarena::robot::RobotModel;
 use thorarena_ipc::{Layout, SimConfig, SimSession, WaitPolicy};
 
@@ -86,6 +87,7 @@ pub(super) fn run_peer(args: &PeerArgs) -> anyhow::Result<()> {
         n_envs: args.envs,
         n_joints: args.joints,
         n_refs: args.refs,
+        n_inputs: 0,
     };
     answer_socket_echo(&args.socket, layout, Duration::from_micros(args.spin_us))?;
     Ok(())
@@ -155,6 +157,7 @@ fn echo_table(args: &Args, robot: &RobotModel, clients: &[&String]) -> anyhow::R
             n_envs: envs,
             n_joints,
             n_refs: 1,
+            n_inputs: 0,
         };
         let spin = Duration::from_micros(args.spin_us);
         let blocking =
@@ -194,39 +197,78 @@ struct NetworkTiming {
     count: usize,
     p50: f64,
     p90: f64,
+    /// Every call, in step order.
+    each: Vec<f64>,
 }
 
-/// The Python TWIST2 adapter's round trips against its network's time in the same run.
+/// The Python TWIST2 adapter's round trips against its network's time in the same run,
+/// with the observation built by the simulator (the adapter's default) and by the adapter
+/// in numpy, one row each per environment count.
 fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
     println!(
-        "\nPython TWIST2 adapter (ONNX Runtime, 1 thread), standing observations: round trip {} timed steps after {} warm-up, against the network call timed inside the adapter over the same steps; µs",
-        args.adapter_steps, args.warmup
+        "\nPython TWIST2 adapter (ONNX Runtime, 1 thread), standing observations: {} timed steps after {} warm-up; spin {} µs then block; the network call timed inside the adapter over the same steps; µs",
+        args.adapter_steps, args.warmup, args.spin_us
     );
-    println!("| envs | round trip p50 | p90 | p99 | network p50 | network p90 | round trip − network, p50 |");
-    println!("|---:|---:|---:|---:|---:|---:|---:|");
+    println!("| envs | observation built by | round trip p50 | p90 | p99 | simulator's build p50 | network p50 | network p90 | overhead p50 | overhead p90 |");
+    println!("|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for &envs in &args.envs {
-        let Some((rt, net)) = adapter_round_trip(args, robot, envs)? else {
-            return Ok(());
-        };
-        println!(
-            "| {envs} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
-            rt.p50_us,
-            rt.p90_us,
-            rt.p99_us,
-            net.p50,
-            net.p90,
-            rt.p50_us - net.p50
-        );
+        for built_by in [Builder::Simulator, Builder::Adapter] {
+            let Some((timing, net)) = adapter_round_trip(args, robot, envs, built_by)? else {
+                return Ok(());
+            };
+            let (rt, build) = (timing.round_trip, timing.input_build);
+            // Per step: its round trip and build less its own network call.
+            let timed = &net.each[args.warmup..];
+            let mut overhead: Vec<f64> = timing
+                .per_step_us
+                .iter()
+                .zip(timed)
+                .map(|(total, network)| total - network)
+                .collect();
+            overhead.sort_by(f64::total_cmp);
+            let at = |p: f64| overhead[((overhead.len() - 1) as f64 * p).round() as usize];
+            println!(
+                "| {envs} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
+                built_by.label(),
+                rt.p50_us,
+                rt.p90_us,
+                rt.p99_us,
+                build.p50_us,
+                net.p50,
+                net.p90,
+                at(0.5),
+                at(0.9)
+            );
+        }
     }
-    println!("goal: round trip − network ≤ 50 µs at 1 and at 64 environments");
+    println!("overhead: per step, round trip + simulator's build − that step's network call; goal ≤ 50 µs at 1 and at 64 environments");
     Ok(())
+}
+
+/// Who builds TWIST2's observation in a measured row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Builder {
+    /// The simulator, into the batch's policy-input block (`Hello::input` "twist2").
+    Simulator,
+    /// The adapter, in numpy (`--observation python`).
+    Adapter,
+}
+
+impl Builder {
+    fn label(self) -> &'static str {
+        match self {
+            Self::Simulator => "simulator (Rust)",
+            Self::Adapter => "adapter (numpy)",
+        }
+    }
 }
 
 fn adapter_round_trip(
     args: &Args,
     robot: &RobotModel,
     envs: usize,
-) -> anyhow::Result<Option<(LatencySummary, NetworkTiming)>> {
+    built_by: Builder,
+) -> anyhow::Result<Option<(AdapterTiming, NetworkTiming)>> {
     let onnx = args.onnx.as_ref().context("--onnx")?;
     let ok = Command::new(&args.python)
         .args(["-c", "import iceoryx2, numpy, onnxruntime"])
@@ -240,11 +282,21 @@ fn adapter_round_trip(
         return Ok(None);
     }
     let session = format!("bench-twist2-{envs}-{}", std::process::id());
-    let mut sim = SimSession::create(sim_config(args, robot, &session, envs))?;
+    let config = sim_config(args, robot, &session, envs);
+    let mut builder = InputBuilder::new("twist2", envs, &config.action_offset_rad)
+        .context("the simulator's TWIST2 input")?;
+    let mut sim = SimSession::create(config)?;
     let python = repo_root().join("adapters/python");
+    let observation = match built_by {
+        Builder::Simulator => "simulator",
+        Builder::Adapter => "python",
+    };
     let mut child = Command::new(&args.python)
         .arg(python.join("examples/twist2/run_twist2.py"))
-        .args(["--session", &session, "--time-network", "--onnx"])
+        .args(["--session", &session, "--time-network"])
+        .args(["--observation", observation])
+        .args(["--spin-us", &args.spin_us.to_string()])
+        .arg("--onnx")
         .arg(onnx)
         .env("PYTHONPATH", python)
         .stdout(Stdio::piped())
@@ -252,11 +304,17 @@ fn adapter_round_trip(
         .spawn()
         .context("starting the Python TWIST2 adapter")?;
     let accepted = sim.accept(Some(Duration::from_secs(60)), |m| eprintln!("refused: {m}"));
-    let timed = accepted.map_err(anyhow::Error::from).and_then(|_| {
+    let timed = accepted.map_err(anyhow::Error::from).and_then(|info| {
+        let input = info.input.is_some().then_some(&mut builder);
+        if input.is_some() != (built_by == Builder::Simulator) {
+            bail!("the adapter asked for policy input {:?}", info.input);
+        }
         Ok(adapter_round_trips(
             &mut sim,
             args.warmup,
             args.adapter_steps,
+            &info.reference_offsets_s,
+            input,
         )?)
     });
     sim.end();
@@ -278,7 +336,9 @@ fn adapter_round_trip(
         .lines()
         .find_map(|l| serde_json::from_str::<Line>(l).ok())
         .with_context(|| format!("the adapter printed no network timing; its output:\n{stdout}"))?;
-    if line.network_us.count != args.warmup + args.adapter_steps {
+    if line.network_us.count != args.warmup + args.adapter_steps
+        || line.network_us.each.len() != line.network_us.count
+    {
         bail!(
             "the adapter timed {} network calls, {} steps were sent",
             line.network_us.count,
@@ -303,6 +363,7 @@ fn sim_config(args: &Args, robot: &RobotModel, session: &str, envs: usize) -> Si
             spin: Duration::from_micros(args.spin_us),
             ..WaitPolicy::default()
         },
+        inputs: thorarena::policy::inputs::offers(),
     }
 }
 

@@ -4,6 +4,13 @@
 
 use super::PerfError;
 use crate::evaluation::{LatencyRecorder, LatencySummary};
+use crate::motion::ReferenceFrame;
+use crate::physics::RootState;
+use crate::policy::inputs::InputBuilder;
+use crate::policy::wire::write_observation;
+use crate::policy::Observation;
+use nalgebra::{Isometry3, Vector3};
+use std::time::{Duration, Instant};
 use thorarena_ipc::{
     ActionBatch, EnvHeader, Layout, ObsBatchMut, SimSession, StepOutcome, FLAG_ACTIVE,
 };
@@ -38,36 +45,44 @@ pub fn echo_round_trips(
     warmup: usize,
     steps: usize,
 ) -> Result<LatencySummary, PerfError> {
-    timed_round_trips(
+    let timing = timed_round_trips(
         sim,
         warmup,
         steps,
-        fill_echo_observations,
+        |batch, shape, step| {
+            fill_echo_observations(batch, shape, step);
+            Duration::ZERO
+        },
         |a, shape, step| {
             let last = shape.n_envs - 1;
             a.env(last)[1] == (last * 100 + 1) as f64 + step as f64
         },
-    )
+    )?;
+    Ok(timing.round_trip)
 }
 
-/// `warmup` untimed and `steps` timed round trips, each batch written by `fill` and each
-/// answer judged by `answer_ok` (a wrong one ends the measurement with an error).
+/// `warmup` untimed and `steps` timed round trips, each batch written by `fill` (which
+/// returns how long of that it spent building policy inputs) and each answer judged by
+/// `answer_ok` (a wrong one ends the measurement with an error).
 fn timed_round_trips(
     sim: &mut SimSession,
     warmup: usize,
     steps: usize,
-    fill: impl Fn(&mut ObsBatchMut, Layout, u64),
+    mut fill: impl FnMut(&mut ObsBatchMut, Layout, u64) -> Duration,
     answer_ok: impl Fn(&ActionBatch, Layout, u64) -> bool,
-) -> Result<LatencySummary, PerfError> {
+) -> Result<AdapterTiming, PerfError> {
     let shape = sim.layout().ok_or(PerfError::WrongEcho {
         step: 0,
         outcome: "no policy connected".into(),
     })?;
-    let mut rec = LatencyRecorder::default();
+    let mut round_trip = LatencyRecorder::default();
+    let mut input_build = LatencyRecorder::default();
+    let mut per_step_us = Vec::with_capacity(steps);
     for step in 0..(warmup + steps) as u64 {
         let mut ok = true;
+        let mut build = Duration::ZERO;
         let outcome = sim.step(
-            |b| fill(b, shape, step),
+            |b| build = fill(b, shape, step),
             None,
             |a| ok = answer_ok(a, shape, step),
         )?;
@@ -78,44 +93,86 @@ fn timed_round_trips(
             });
         }
         if step >= warmup as u64 {
-            rec.record(sim.last_round_trip());
+            round_trip.record(sim.last_round_trip());
+            input_build.record(build);
+            per_step_us.push((sim.last_round_trip() + build).as_secs_f64() * 1e6);
         }
     }
-    Ok(rec.summary())
+    Ok(AdapterTiming {
+        round_trip: round_trip.summary(),
+        input_build: input_build.summary(),
+        per_step_us,
+    })
 }
 
-/// Fills every slot of `batch` as active with a robot standing still on a standing
-/// reference: identity rotations, zero velocities, joints at 0 rad, at episode step `step`
-/// (0 starts the episode). What a network adapter sees on its first steps, for timing it.
-pub fn fill_standing_observations(batch: &mut ObsBatchMut, layout: Layout, step: u64) {
-    const IDENTITY_WXYZ: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
-    for i in 0..layout.n_envs {
-        let mut env = batch.env(i);
-        env.set_header(&active_header(i, step));
-        env.array("root_quat_wxyz").copy_from_slice(&IDENTITY_WXYZ);
-        env.array("root_pos_w")[2] = 0.79;
-        for r in 0..layout.n_refs {
-            env.reference(r, "root_quat_wxyz")
-                .copy_from_slice(&IDENTITY_WXYZ);
-            env.reference(r, "root_pos_w")[2] = 0.79;
-        }
+/// A robot standing still on a standing reference in slot `env` at episode step `step`
+/// (0 starts the episode): identity rotations, zero velocities, joints at 0 rad, the root
+/// 0.79 m up. What a network adapter sees on its first steps, for timing it.
+pub fn standing_observation(env: usize, step: u64, n_joints: usize, n_refs: usize) -> Observation {
+    let pose = Isometry3::translation(0.0, 0.0, 0.79);
+    let frame = ReferenceFrame {
+        world_from_root: pose,
+        root_lin_vel_w: Vector3::zeros(),
+        root_ang_vel_w: Vector3::zeros(),
+        joint_pos: vec![0.0; n_joints],
+        joint_vel: vec![0.0; n_joints],
+        force_sensor: [Vector3::zeros(); 2],
+    };
+    Observation {
+        env,
+        episode_id: env as u64,
+        step: step as usize,
+        time_s: step as f64 * 0.02,
+        root: RootState::at_rest(pose),
+        q: vec![0.0; n_joints],
+        qd: vec![0.0; n_joints],
+        last_action: vec![0.0; n_joints],
+        reference: vec![frame; n_refs],
     }
+}
+
+/// Timings of a network adapter's round trips, µs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AdapterTiming {
+    /// Observation batch published → actions received.
+    pub round_trip: LatencySummary,
+    /// Building the policy input in the simulator, before publishing (zero when the
+    /// adapter builds its own).
+    pub input_build: LatencySummary,
+    /// Each timed step's round trip plus its input build, µs, in step order (to pair
+    /// with what the adapter timed of the same step).
+    pub per_step_us: Vec<f64>,
 }
 
 /// `warmup` untimed and `steps` timed round trips with a network adapter connected to
-/// `sim`, on standing observations ([`fill_standing_observations`]), one episode running
-/// from step 0; every answer must be finite, so an adapter that answers nothing cannot
-/// look fast.
+/// `sim`, on standing observations ([`standing_observation`]) at `reference_offsets_s`,
+/// one episode running from step 0; the policy input the adapter asked for, if any, is
+/// built into each batch by `input` and its cost timed. Every answer must be finite, so
+/// an adapter that answers nothing cannot look fast.
 pub fn adapter_round_trips(
     sim: &mut SimSession,
     warmup: usize,
     steps: usize,
-) -> Result<LatencySummary, PerfError> {
+    reference_offsets_s: &[f64],
+    mut input: Option<&mut InputBuilder>,
+) -> Result<AdapterTiming, PerfError> {
     timed_round_trips(
         sim,
         warmup,
         steps,
-        fill_standing_observations,
+        |batch, shape, step| {
+            let mut build = Duration::ZERO;
+            for i in 0..shape.n_envs {
+                let obs = standing_observation(i, step, shape.n_joints, shape.n_refs);
+                write_observation(&obs, reference_offsets_s, &mut batch.env(i), 0);
+                if let Some(builder) = input.as_mut() {
+                    let started = Instant::now();
+                    builder.write(&obs, batch.policy_input(i));
+                    build += started.elapsed();
+                }
+            }
+            build
+        },
         |a, shape, _| (0..shape.n_envs).all(|i| a.env(i).iter().all(|x| x.is_finite())),
     )
 }

@@ -5,6 +5,7 @@
 mod batch_plans;
 pub mod beyondmimic;
 mod builtin;
+pub mod inputs;
 mod remote;
 pub mod twist2;
 pub mod wire;

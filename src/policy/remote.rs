@@ -2,6 +2,7 @@
 //! control step the batch of observations is written straight into the request, and the
 //! actions are read straight from the response, under the session's latency budget.
 
+use super::inputs::InputBuilder;
 use super::wire::write_observation;
 use super::{ActOutcome, Observation, Policy};
 use std::time::Duration;
@@ -26,6 +27,10 @@ pub enum RemoteError {
     /// The transport failed or no policy connected in time.
     #[error(transparent)]
     Ipc(#[from] IpcError),
+    /// The session offered a policy input this simulator has no builder for (a
+    /// `SimConfig::inputs` entry not from [`super::inputs::offers`]).
+    #[error("the session offers policy input `{0}`, which this simulator cannot build")]
+    NoBuilder(String),
 }
 
 /// Counters of the transport, for the results.
@@ -52,6 +57,8 @@ pub struct RemotePolicy {
     previous_terminated: Vec<bool>,
     last_round_trip: Option<Duration>,
     stats: TransportStats,
+    /// The network input the policy asked the simulator to build, and its builder.
+    input: Option<(String, InputBuilder)>,
 }
 
 impl RemotePolicy {
@@ -66,7 +73,17 @@ impl RemotePolicy {
     ) -> Result<Self, RemoteError> {
         let mut session = SimSession::create(config.session.clone())?;
         let info = session.accept_vetted(config.connect_timeout, vet, |m| on_refused(m))?;
+        let input = match &info.input {
+            None => None,
+            Some(name) => {
+                let session = &config.session;
+                let builder = InputBuilder::new(name, session.n_envs, &session.action_offset_rad)
+                    .ok_or_else(|| RemoteError::NoBuilder(name.clone()))?;
+                Some((name.clone(), builder))
+            }
+        };
         Ok(Self {
+            input,
             session,
             name: info.name,
             offsets_s: info.reference_offsets_s,
@@ -106,6 +123,7 @@ impl Policy for RemotePolicy {
         let n_envs = self.config.session.n_envs;
         let offsets = &self.offsets_s;
         let previous_terminated = &mut self.previous_terminated;
+        let mut input = self.input.as_mut().map(|(_, builder)| builder);
         self.stats.round_trips += 1;
         let outcome = self.session.step(
             |batch| {
@@ -118,6 +136,9 @@ impl Policy for RemotePolicy {
                         0
                     };
                     write_observation(obs, offsets, &mut env, flags);
+                    if let Some(builder) = input.as_mut() {
+                        builder.write(obs, batch.policy_input(obs.env));
+                    }
                     filled[obs.env] = true;
                 }
                 for (slot, _) in filled.iter().enumerate().filter(|(_, f)| !**f) {
@@ -127,6 +148,7 @@ impl Policy for RemotePolicy {
                         0
                     };
                     batch.env(slot).clear(flags);
+                    batch.policy_input(slot).fill(0.0);
                 }
                 for obs in observations {
                     if obs.step == 0 {
@@ -181,14 +203,20 @@ impl Policy for RemotePolicy {
             self.config.session.session, self.offsets_s
         );
         let offsets = self.offsets_s.clone();
+        let input = self.input.as_ref().map(|(name, _)| name.clone());
         let same_offsets = |info: &PolicyInfo| {
-            if info.reference_offsets_s == offsets {
-                Ok(())
-            } else {
+            if info.reference_offsets_s != offsets {
                 Err(format!(
                     "policy `{}` asks for reference offsets {:?}, the run uses {:?}",
                     info.name, info.reference_offsets_s, offsets
                 ))
+            } else if info.input != input {
+                Err(format!(
+                    "policy `{}` asks for policy input {:?}, the run's policy asked for {:?}",
+                    info.name, info.input, input
+                ))
+            } else {
+                Ok(())
             }
         };
         let accepted = self

@@ -150,20 +150,43 @@ impl History {
 
 /// The whole observation of one environment; updates its history.
 pub fn observation(obs: &Observation, default_pose: &[f64], history: &mut History) -> Vec<f32> {
+    let mut out = vec![0.0; OBS_LEN];
+    observation_into(obs, default_pose, history, &mut out);
+    out
+}
+
+/// [`observation`] written into `out` (its [`OBS_LEN`] values), each term computed in
+/// `f64` and rounded once; the simulator builds a policy process's input with it, straight
+/// into shared memory.
+pub fn observation_into(
+    obs: &Observation,
+    default_pose: &[f64],
+    history: &mut History,
+    out: &mut [f32],
+) {
     if obs.step == 0 {
-        *history = History::default();
+        history.frames.iter_mut().for_each(|f| f.fill(0.0));
     }
     let single = single_frame(obs, default_pose);
-    let mut all = Vec::with_capacity(OBS_LEN);
-    all.extend_from_slice(&single);
-    for f in &history.frames {
-        all.extend_from_slice(f);
+    let mut future = Vec::with_capacity(MIMIC_LEN);
+    mimic(&obs.reference[0], &mut future);
+    // Slice by slice: a chained iterator over the segments would not vectorise, and costs
+    // several times the arithmetic.
+    let (head, rest) = out.split_at_mut(SINGLE_LEN);
+    clip_into(&single, head);
+    let (past, tail) = rest.split_at_mut(SINGLE_LEN * HISTORY_LEN);
+    for (frame, row) in history.frames.iter().zip(past.chunks_exact_mut(SINGLE_LEN)) {
+        clip_into(frame, row);
     }
-    mimic(&obs.reference[0], &mut all);
+    clip_into(&future, tail);
     history.push(&single, obs.step);
-    all.into_iter()
-        .map(|v| v.clamp(-100.0, 100.0) as f32)
-        .collect()
+}
+
+/// `out = clamp(values, ±100)` rounded to `f32`, element by element.
+fn clip_into(values: &[f64], out: &mut [f32]) {
+    for (o, v) in out.iter_mut().zip(values) {
+        *o = v.clamp(-100.0, 100.0) as f32;
+    }
 }
 
 /// TWIST2 in process: `--policy twist2:PATH.onnx` with `--profile twist2`.

@@ -91,6 +91,7 @@ pub fn wire_json(obs: &thorarena::policy::Observation, offsets: &[f64]) -> serde
         n_envs: 1,
         n_joints: obs.q.len(),
         n_refs: offsets.len(),
+        n_inputs: 0,
     };
     let mut words = vec![0u64; layout.obs_words()];
     {

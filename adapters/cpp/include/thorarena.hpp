@@ -111,6 +111,7 @@ struct ConnectOptions {
     std::chrono::milliseconds timeout{10000};              ///< wait for the simulator
     std::chrono::microseconds spin{50};                    ///< busy-poll before blocking
     std::uint32_t protocol_version = 0;                    ///< 0: the library's
+    std::string input;                                     ///< a network input the simulator builds ("twist2"), or none
 };
 
 /// What waiting for a step gave.
@@ -138,6 +139,7 @@ public:
         o.timeout_ms = static_cast<std::uint64_t>(options.timeout.count());
         o.spin_us = static_cast<std::uint64_t>(options.spin.count());
         o.protocol_version = options.protocol_version;
+        o.input = options.input.c_str();
         check(thorarena_connect(&o, &client_));
         check(thorarena_session_info(client_, &info_));
     }
@@ -195,6 +197,12 @@ public:
     /// Environment slot `i` of the held batch.
     EnvView env(std::size_t i) const noexcept {
         return EnvView(obs_ + sizeof(ThorarenaBatchHeader) + i * info_.env_stride);
+    }
+
+    /// The held batch's policy-input block: n_envs x info().n_inputs floats, row-major, the
+    /// network input the simulator built (empty when ConnectOptions::input was empty).
+    Span<const float> policy_inputs() const noexcept {
+        return {reinterpret_cast<const float*>(obs_ + info_.inputs_offset), info_.n_envs * info_.n_inputs};
     }
 
     /// The action slot of environment `i` (zeroed on arrival), to fill before send.

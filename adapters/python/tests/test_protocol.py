@@ -30,7 +30,9 @@ STRUCTS: dict[str, type[ctypes.Structure]] = {
 
 def example_layout() -> Layout:
     e = LAYOUT_JSON["example"]
-    return Layout(n_envs=e["n_envs"], n_joints=e["n_joints"], n_refs=e["n_refs"])
+    return Layout(
+        n_envs=e["n_envs"], n_joints=e["n_joints"], n_refs=e["n_refs"], n_inputs=e["n_inputs"]
+    )
 
 
 def test_every_rust_struct_has_a_python_mirror() -> None:
@@ -86,7 +88,8 @@ def test_array_tables_are_the_rust_ones() -> None:
 def test_example_layout_sizes_match() -> None:
     e = LAYOUT_JSON["example"]
     layout = example_layout()
-    for name in ("ref_offset", "ref_stride", "env_stride", "obs_bytes", "action_bytes"):
+    names = ("ref_offset", "ref_stride", "env_stride", "inputs_offset", "inputs_bytes")
+    for name in (*names, "obs_bytes", "action_bytes"):
         assert getattr(layout, name) == e[name], name
     assert layout.obs_words * 8 == e["obs_bytes"]
     assert layout.action_words * 8 == e["action_bytes"]

@@ -235,12 +235,27 @@ def test_a_network_timer_gets_one_entry_per_network_call() -> None:
     assert len(a.network_s) == 3 and all(t > 0 for t in a.network_s)
 
 
+def test_an_input_built_by_the_simulator_goes_to_the_network_as_it_is() -> None:
+    a = adapter(3, TakeFirst())
+    obs = batch(3, active=(0, 2))
+    built = np.arange(3 * 1432, dtype=np.float32).reshape(3, 1432) / 1000.0
+    actions = np.zeros((3, 29))
+    inputs = a.act(obs, actions, built)
+    assert np.array_equal(inputs, built[[0, 2]])
+    assert np.allclose(actions[[0, 2]], built[[0, 2], :29] * 0.1)
+    assert not actions[1].any()
+    # The adapter's own builder was not run: its history is untouched.
+    assert not a.state["history"].any()
+
+
 def test_the_run_loop_answers_every_step_of_a_session() -> None:
     class FakeSession:
         n_envs = 2
         action_offset_rad = DEFAULT
         action_scale = SCALE
         steps_answered = 0
+        layout = ta.Layout(n_envs=2, n_joints=29, n_refs=2)
+        policy_inputs = None  # the adapter builds the observation itself
 
         class info:  # noqa: N801
             reference_offsets_s = (0.0, 0.02)

@@ -26,6 +26,7 @@ import numpy as np
 from .protocol import (
     ACTION_HEADER_BYTES,
     COMMAND_END,
+    INPUT_NAME_BYTES,
     MAGIC,
     MAX_REFERENCE_OFFSETS,
     NAME_BYTES,
@@ -176,6 +177,10 @@ class Session:
         """`seq` of the newest observation batch received."""
         self.ended = False
         """True once the simulator ended the run."""
+        self.policy_inputs: np.ndarray | None = None
+        """The current step's policy-input block, when the session carries one (`input=` of
+        `connect`): read-only float32 `(n_envs, n_inputs)` over shared memory, valid in the
+        body of the `steps()` loop only, like `obs`."""
 
     # The session's shape, as flat attributes.
     @property
@@ -249,7 +254,7 @@ class Session:
         header = ActionHeader(MAGIC, PROTOCOL_VERSION, layout.n_envs, layout.n_joints, 0, 0)
         # Views by shared-memory address: the few chunks of each side's static pool recur,
         # and a view is only a pointer, a shape and a dtype.
-        obs_views: dict[int, np.ndarray] = {}
+        obs_views: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
         action_views: dict[int, np.ndarray] = {}
         while True:
             request = self._next_request(timeout_s)
@@ -271,13 +276,16 @@ class Session:
                     block = action_block.from_address(address)
                     block.session = self  # type: ignore[attr-defined]  # keeps the mapping alive
                     actions = action_views[address] = layout.action_view(block)
-                obs = obs_views.get(request.payload_ptr)
-                if obs is None:
+                views = obs_views.get(request.payload_ptr)
+                if views is None:
                     block = obs_block.from_address(request.payload_ptr)
                     block.session = self  # type: ignore[attr-defined]
-                    obs = obs_views[request.payload_ptr] = layout.obs_view(block)
+                    inputs = layout.inputs_view(block) if layout.n_inputs else None
+                    views = obs_views[request.payload_ptr] = (layout.obs_view(block), inputs)
+                obs, self.policy_inputs = views
                 yield obs, actions
                 del obs, actions
+                self.policy_inputs = None
                 ready = response.assume_init()
                 response = None
                 try:
@@ -391,13 +399,16 @@ def connect(
     reference_offsets_s: Sequence[float] = (0.0,),
     timeout_s: float = 10.0,
     spin_us: float = 50.0,
+    input: str | None = None,
     protocol_version: int = PROTOCOL_VERSION,
 ) -> Session:
     """Joins `session`, waiting up to `timeout_s` for a simulator to serve it.
 
     `joint_names` is the joint order the policy assumes (checked against the robot's by
     hash); `reference_offsets_s` the times ahead of each step at which it wants reference
-    frames; `spin_us` how long to busy-poll for each observation before blocking.
+    frames; `spin_us` how long to busy-poll for each observation before blocking; `input`
+    a network input for the simulator to build into every batch (`"twist2"`), read as
+    `Session.policy_inputs` (the simulator refuses a name it does not offer).
     `protocol_version` is for tests that announce a wrong one on purpose.
 
     Raises `NoSession`, `SessionRefused(status, message)`, `Timeout` or `TransportError`.
@@ -406,6 +417,11 @@ def connect(
     if len(offsets) > MAX_REFERENCE_OFFSETS:
         raise SessionRefused(
             Status.REFERENCE_OFFSETS, f"at most {MAX_REFERENCE_OFFSETS} reference offsets"
+        )
+    input_name = (input or "").encode("utf-8")
+    if len(input_name) >= INPUT_NAME_BYTES:
+        raise SessionRefused(
+            Status.INPUT, f"policy input name {input!r} is longer than {INPUT_NAME_BYTES - 1} bytes"
         )
     names = {
         leaf: _service_name(session, leaf)
@@ -447,13 +463,19 @@ def connect(
     )
     hello.reference_offsets_s[: len(offsets)] = offsets
     ctypes.memmove(hello.name, to_fixed(name, NAME_BYTES), NAME_BYTES)
+    ctypes.memmove(hello.input, input_name.ljust(INPUT_NAME_BYTES, b"\0"), INPUT_NAME_BYTES)
     welcome = _say_hello(hello_service, hello, start, timeout_s)
     if welcome.status != Status.OK:
         obs_ready.delete()
         action_ready.delete()
         raise SessionRefused(welcome.status, from_fixed(welcome.message))
 
-    layout = Layout(n_envs=welcome.n_envs, n_joints=welcome.n_joints, n_refs=welcome.n_refs)
+    layout = Layout(
+        n_envs=welcome.n_envs,
+        n_joints=welcome.n_joints,
+        n_refs=welcome.n_refs,
+        n_inputs=welcome.n_inputs,
+    )
     try:
         server = (
             step.server_builder()

@@ -1,13 +1,14 @@
 """The ThorArena wire protocol in Python: handshake messages, constants and the batch layout.
 
 Everything here mirrors crate `thorarena-ipc` of this repository (`ipc/src/handshake.rs`,
-`ipc/src/layout.rs`; protocol version 1, as of commit dadc9ed). `ipc/layout.json`, generated
+`ipc/src/layout.rs`; protocol version 2). `ipc/layout.json`, generated
 from the Rust types, is the ground truth that `tests/test_protocol.py` checks these
 definitions against, byte for byte.
 
 Layout of one control step (native-endian, 8-byte aligned, no padding)::
 
     observation batch = BatchHeader (64 B) + n_envs x env block (env_stride B)
+                        + policy inputs: n_envs x n_inputs f32, row-major, padded to 8 B
     env block         = EnvHeader (32 B)
                         + root_pos_w 3, root_quat_wxyz 4, root_lin_vel_w 3, root_ang_vel_w 3,
                           root_lin_vel_b 3, root_ang_vel_b 3, projected_gravity_b 3   (f64)
@@ -18,6 +19,8 @@ Layout of one control step (native-endian, 8-byte aligned, no padding)::
     action batch      = ActionHeader (32 B) + n_envs x n f64 (raw actions, canonical order)
 
 Quaternions are (w, x, y, z); `_w` is the world frame, `_b` the root (base) frame.
+The policy-input block holds a network input the simulator builds when the policy asks
+for one by name in its hello (`connect(..., input="twist2")`); `n_inputs` is 0 otherwise.
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-PROTOCOL_VERSION = 1
+PROTOCOL_VERSION = 2
 """Version of the wire protocol (`thorarena_ipc::PROTOCOL_VERSION`)."""
 
 MAGIC = 0x524F_4854
@@ -56,6 +59,8 @@ NAME_BYTES = 64
 """Bytes of the policy name in `Hello` (NUL-padded UTF-8)."""
 MESSAGE_BYTES = 256
 """Bytes of the refusal message in `Welcome` (NUL-padded UTF-8)."""
+INPUT_NAME_BYTES = 32
+"""Bytes of the policy-input name in `Hello` (NUL-padded UTF-8)."""
 WORD_BYTES = 8
 """Batches travel as iceoryx2 slices of u64 words."""
 
@@ -107,6 +112,7 @@ class Status(enum.IntEnum):
     REFERENCE_OFFSETS = 4
     BUSY = 5
     REJECTED = 6
+    INPUT = 7
 
 
 class Hello(ctypes.Structure):
@@ -120,6 +126,7 @@ class Hello(ctypes.Structure):
         ("n_refs", ctypes.c_uint32),
         ("reference_offsets_s", ctypes.c_double * MAX_REFERENCE_OFFSETS),
         ("name", ctypes.c_uint8 * NAME_BYTES),
+        ("input", ctypes.c_uint8 * INPUT_NAME_BYTES),
     ]
 
     @staticmethod
@@ -141,6 +148,8 @@ class Welcome(ctypes.Structure):
         ("budget_s", ctypes.c_double),
         ("n_refs", ctypes.c_uint32),
         ("pid", ctypes.c_uint32),
+        ("n_inputs", ctypes.c_uint32),
+        ("reserved", ctypes.c_uint32),
         ("action_offset_rad", ctypes.c_double * MAX_JOINTS),
         ("action_scale", ctypes.c_double * MAX_JOINTS),
         ("message", ctypes.c_uint8 * MESSAGE_BYTES),
@@ -220,7 +229,7 @@ class BatchHeader(ctypes.Structure):
         ("n_joints", ctypes.c_uint32),
         ("n_refs", ctypes.c_uint32),
         ("env_stride", ctypes.c_uint32),
-        ("reserved0", ctypes.c_uint32),
+        ("n_inputs", ctypes.c_uint32),
         ("seq", ctypes.c_uint64),
         ("reserved", ctypes.c_uint64 * 3),
     ]
@@ -297,6 +306,8 @@ class Layout:
     """Joints per environment."""
     n_refs: int
     """Reference frames per environment."""
+    n_inputs: int = 0
+    """float32 values per environment in the policy-input block (0: none)."""
 
     @cached_property
     def ref_stride(self) -> int:
@@ -316,9 +327,19 @@ class Layout:
         return self.ref_offset + self.n_refs * self.ref_stride
 
     @cached_property
+    def inputs_offset(self) -> int:
+        """Byte offset of the policy-input block within an observation batch."""
+        return BATCH_HEADER_BYTES + self.n_envs * self.env_stride
+
+    @cached_property
+    def inputs_bytes(self) -> int:
+        """Bytes of the policy-input block, padding to 8 bytes included."""
+        return -(-4 * self.n_envs * self.n_inputs // 8) * 8
+
+    @cached_property
     def obs_bytes(self) -> int:
         """Bytes of an observation batch."""
-        return BATCH_HEADER_BYTES + self.n_envs * self.env_stride
+        return self.inputs_offset + self.inputs_bytes
 
     @cached_property
     def action_bytes(self) -> int:
@@ -374,6 +395,15 @@ class Layout:
         view.flags.writeable = False
         return view
 
+    def inputs_view(self, buffer: Any) -> np.ndarray:
+        """The policy-input block of an observation batch, zero-copy, read-only, float32
+        of shape (n_envs, n_inputs): the tensor the network takes."""
+        flat = np.frombuffer(
+            buffer, dtype="=f4", count=self.n_envs * self.n_inputs, offset=self.inputs_offset
+        )
+        flat.flags.writeable = False
+        return flat.reshape(self.n_envs, self.n_inputs)
+
     def action_view(self, buffer: Any) -> np.ndarray:
         """The actions of an action batch, zero-copy, writable, shape (n_envs, n_joints)."""
         flat = np.frombuffer(
@@ -389,6 +419,7 @@ class Layout:
             ("n_envs", header.n_envs, self.n_envs),
             ("n_joints", header.n_joints, self.n_joints),
             ("n_refs", header.n_refs, self.n_refs),
+            ("n_inputs", header.n_inputs, self.n_inputs),
             ("env_stride", header.env_stride, self.env_stride),
         ):
             if got != want:

@@ -2,7 +2,7 @@
 //! conditions, answered with a welcome (or the reason for refusing it), and a welcomed
 //! policy is connected once its step server is up.
 
-use super::{Connection, HelloFactory, PolicyInfo, SimSession, StepFactory};
+use super::{Connection, HelloFactory, InputOffer, PolicyInfo, SimSession, StepFactory};
 use crate::handshake::{from_fixed, to_fixed, Hello, Status, Welcome};
 use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
 use crate::layout::Layout;
@@ -87,6 +87,7 @@ impl SimSession {
             name: from_fixed(&hello.name),
             pid: hello.pid,
             reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
+            input: Some(from_fixed(&hello.input)).filter(|name| !name.is_empty()),
         };
         if let Err(why) = vet(&info) {
             on_refused(&why);
@@ -105,6 +106,7 @@ impl SimSession {
             n_envs: self.config.n_envs,
             n_joints: self.config.joint_names.len(),
             n_refs,
+            n_inputs: welcome.n_inputs as usize,
         };
         let client = self
             .step
@@ -148,6 +150,8 @@ impl SimSession {
             budget_s: self.config.budget.map_or(0.0, |b| b.as_secs_f64()),
             n_refs: hello.n_refs.min(MAX_REFERENCE_OFFSETS as u32),
             pid: std::process::id(),
+            n_inputs: self.offer(hello).map_or(0, |o| o.n_inputs as u32),
+            reserved: 0,
             action_offset_rad: fixed_joints(&self.config.action_offset_rad),
             action_scale: fixed_joints(&self.config.action_scale),
             message: to_fixed(message),
@@ -218,7 +222,48 @@ impl SimSession {
             );
             (Status::ReferenceOffsets, msg)
         } else {
-            (Status::Ok, String::new())
+            self.check_input(hello, offsets)
+        }
+    }
+
+    /// The offer a hello's input name names (`None` for no name or an unknown one).
+    fn offer(&self, hello: &Hello) -> Option<&InputOffer> {
+        let name = from_fixed(&hello.input);
+        self.config.inputs.iter().find(|o| o.name == name)
+    }
+
+    /// Whether the simulator builds the input the hello asks for, from its offsets.
+    fn check_input(&self, hello: &Hello, offsets: &[f64]) -> (Status, String) {
+        let name = from_fixed(&hello.input);
+        if name.is_empty() {
+            return (Status::Ok, String::new());
+        }
+        match self.offer(hello) {
+            None => {
+                let offered: Vec<String> = self
+                    .config
+                    .inputs
+                    .iter()
+                    .map(|o| format!("`{}`", o.name))
+                    .collect();
+                let msg = format!(
+                    "this simulator builds no policy input `{name}` (it offers {})",
+                    if offered.is_empty() {
+                        "none".to_string()
+                    } else {
+                        offered.join(", ")
+                    }
+                );
+                (Status::Input, msg)
+            }
+            Some(offer) if offer.reference_offsets_s.as_slice() != offsets => {
+                let msg = format!(
+                    "policy input `{name}` is built from reference offsets {:?} s, the policy asks for {offsets:?}",
+                    offer.reference_offsets_s
+                );
+                (Status::Input, msg)
+            }
+            Some(_) => (Status::Ok, String::new()),
         }
     }
 }

@@ -4,9 +4,11 @@ as the policy of a ThorArena run serving session NAME:
     cargo run --release -- eval --policy ipc:NAME --profile twist2 --dataset DIR   # one shell
     python run_twist2.py --session NAME --onnx twist2.onnx                         # another
 
-It joins with the adapter's reference offsets (0 and 0.02 s) under the name "twist2", builds
-TWIST2's observation for every active slot and answers each step with the network's raw
-output. Needs onnxruntime (`pip install './adapters/python[policies]'`).
+It joins with the adapter's reference offsets (0 and 0.02 s) under the name "twist2" and
+answers each step with the network's raw output for every active slot. By default the
+simulator builds TWIST2's 1432-float observation into the batch (the same Rust code the
+in-process policy uses) and the network runs on it in place; `--observation python` builds
+it here in numpy instead. Needs onnxruntime (`pip install './adapters/python[policies]'`).
 """
 
 from __future__ import annotations
@@ -31,19 +33,41 @@ def main() -> int:
         "--timeout", type=float, default=10.0, help="seconds to wait for the simulator"
     )
     parser.add_argument(
+        "--observation",
+        choices=("simulator", "python"),
+        default="simulator",
+        help="who builds TWIST2's observation: the simulator, into the batch (default), or "
+        "this adapter in numpy",
+    )
+    parser.add_argument(
+        "--spin-us",
+        type=float,
+        default=50.0,
+        help="busy-poll this long for each observation before blocking, µs (longer: lower "
+        "latency, a core kept busy)",
+    )
+    parser.add_argument(
         "--time-network",
         action="store_true",
         help="time every network call; at the end print one JSON line "
-        '{"network_us": {"count", "p50", "p90", "p99"}} on stdout',
+        '{"network_us": {"count", "p50", "p90", "p99", "each": [every call]}} on stdout',
     )
     args = parser.parse_args()
 
     adapter = Twist2Adapter(OnnxPolicy(args.onnx, intra_op_threads=args.threads))
     if args.time_network:
         adapter.network_s = []
-    session = adapter.connect(args.session, name=args.name, timeout_s=args.timeout)
+    session = adapter.connect(
+        args.session,
+        name=args.name,
+        timeout_s=args.timeout,
+        spin_us=args.spin_us,
+        input=Twist2Adapter.simulator_input if args.observation == "simulator" else None,
+    )
+    built = "the simulator" if session.layout.n_inputs else "this adapter"
     print(
-        f"connected: {session.n_envs} environments, control dt {session.control_dt_s} s",
+        f"connected: {session.n_envs} environments, control dt {session.control_dt_s} s, "
+        f"observation built by {built}",
         flush=True,
     )
     steps = adapter.run(session)
@@ -51,7 +75,8 @@ def main() -> int:
     if adapter.network_s is not None:
         us = np.asarray(adapter.network_s) * 1e6
         p50, p90, p99 = (float(np.percentile(us, q)) for q in (50, 90, 99))
-        timing = {"count": len(us), "p50": p50, "p90": p90, "p99": p99}
+        each = [round(float(x), 2) for x in us]
+        timing = {"count": len(us), "p50": p50, "p90": p90, "p99": p99, "each": each}
         print(json.dumps({"network_us": timing}), flush=True)
     return 0
 

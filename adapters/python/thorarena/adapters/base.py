@@ -37,6 +37,10 @@ class Adapter(ABC):
     """Width of the network input."""
     state_dtypes: ClassVar[dict[str, type]] = {}
     """The dtype of a per-slot state array, where it is not float64."""
+    simulator_input: ClassVar[str | None] = None
+    """A network input the simulator builds for this adapter (`connect(input=...)`), the
+    same vector `observe` builds: `connect` asks for it unless told `input=None`, and
+    `run` then feeds the network from the session's policy-input block."""
 
     def __init__(self, policy: Policy | None) -> None:
         self.policy = policy
@@ -105,22 +109,31 @@ class Adapter(ABC):
         for array in self.state.values():
             array[slots] = 0.0
 
-    def act(self, obs: np.ndarray, actions: np.ndarray) -> np.ndarray:
+    def act(
+        self, obs: np.ndarray, actions: np.ndarray, built: np.ndarray | None = None
+    ) -> np.ndarray:
         """One control step: resets the slots whose episode starts (`step == 0` or
         `FLAG_RESET`), builds the observation of every active slot, runs the network on them
         in one batch and writes their raw actions into `actions` (inactive slots are left as
-        they are: zeros from the session). Returns the network input of the active slots."""
+        they are: zeros from the session). Returns the network input of the active slots.
+
+        `built` is the network input of every slot as the simulator built it (the session's
+        `policy_inputs`, shape (n_envs, obs_dim)): taken as it is instead of `observe`."""
         if len(obs) != self.n_envs:
             raise ValueError(f"a batch of {len(obs)} slots, bound to {self.n_envs}: call bind()")
         slots = np.flatnonzero((obs["flags"] & FLAG_ACTIVE) != 0)
         if len(slots) == 0:
             return np.zeros((0, self.obs_dim), dtype=np.float32)
         # All active (the usual case): the batch itself, no copy; else the active records.
-        records = obs if len(slots) == len(obs) else np.take(obs, slots)
-        starting = (records["step"] == 0) | ((records["flags"] & FLAG_RESET) != 0)
-        if starting.any():
-            self.reset(slots[starting])
-        inputs = self.observe(records, slots)
+        every = len(slots) == len(obs)
+        records = obs if every else np.take(obs, slots)
+        if built is not None:
+            inputs = built if every else built[slots]
+        else:
+            starting = (records["step"] == 0) | ((records["flags"] & FLAG_RESET) != 0)
+            if starting.any():
+                self.reset(slots[starting])
+            inputs = self.observe(records, slots)
         if self.policy is not None:
             if self.network_s is None:
                 outputs = self.policy(inputs, steps=records["step"])
@@ -133,8 +146,10 @@ class Adapter(ABC):
 
     def connect(self, session: str, **kwargs: Any) -> Session:
         """Joins `session` with this adapter's name, joint order and reference offsets;
-        `kwargs` go to `thorarena.connect` (`timeout_s`, `spin_us`, or `name` to override)."""
+        `kwargs` go to `thorarena.connect` (`timeout_s`, `spin_us`, or `name` to override;
+        `input=None` to build the observation here rather than in the simulator)."""
         kwargs.setdefault("name", self.name)
+        kwargs.setdefault("input", self.simulator_input)
         return connect(
             session,
             joint_names=self.joint_names,
@@ -156,8 +171,14 @@ class Adapter(ABC):
             action_offset_rad=session.action_offset_rad,
             action_scale=session.action_scale,
         )
+        built = session.layout.n_inputs > 0
+        if built and session.layout.n_inputs != self.obs_dim:
+            raise ValueError(
+                f"{self.name}: the session's policy inputs are {session.layout.n_inputs} wide, "
+                f"the network takes {self.obs_dim}"
+            )
         for obs, actions in session.steps():
-            self.act(obs, actions)
+            self.act(obs, actions, session.policy_inputs if built else None)
         return session.steps_answered
 
 

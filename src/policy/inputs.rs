@@ -1,0 +1,50 @@
+//! Network inputs the simulator builds for a policy process that asks for one by name in
+//! its hello (`Hello::input`), written into the batch's policy-input block: one
+//! `[n_envs, n_inputs]` float32 array, the tensor the network takes.
+//!
+//! Why the simulator builds them: a policy process in Python pays numpy's per-call cost
+//! for every term of an observation, which for TWIST2's 1432 floats was most of its
+//! per-step time (README, "Policies in other languages"). The same vector is built here
+//! by the code the in-process policy uses ([`super::twist2::observation_into`]), once per
+//! environment, while the simulator holds the data anyway; the client only runs its
+//! network on a zero-copy view.
+
+use super::twist2;
+use super::Observation;
+use thorarena_ipc::InputOffer;
+
+/// The inputs this simulator builds.
+pub fn offers() -> Vec<InputOffer> {
+    vec![InputOffer {
+        name: TWIST2.into(),
+        n_inputs: twist2::OBS_LEN,
+        reference_offsets_s: vec![0.0, twist2::MIMIC_LOOKAHEAD_S],
+    }]
+}
+
+/// TWIST2's 1432-float observation, with its per-environment history.
+const TWIST2: &str = "twist2";
+
+/// Builds one named input for every environment slot of a session, keeping whatever
+/// per-slot state it needs (TWIST2's history) across steps.
+pub struct InputBuilder {
+    /// The pose `q` is taken relative to (the profile's action offset), rad.
+    default_pose: Vec<f64>,
+    histories: Vec<twist2::History>,
+}
+
+impl InputBuilder {
+    /// The builder of input `name` for `n_envs` slots, or `None` for a name [`offers`]
+    /// does not list (the handshake refuses those first).
+    pub fn new(name: &str, n_envs: usize, default_pose: &[f64]) -> Option<Self> {
+        (name == TWIST2).then(|| Self {
+            default_pose: default_pose.to_vec(),
+            histories: vec![twist2::History::default(); n_envs],
+        })
+    }
+
+    /// Writes `obs`'s input into `out` (its slot's row) and advances that slot's state.
+    pub fn write(&mut self, obs: &Observation, out: &mut [f32]) {
+        twist2::observation_into(obs, &self.default_pose, &mut self.histories[obs.env], out);
+    }
+}
