@@ -4,7 +4,8 @@
 //! steps of two environments with exactly `(reference − offset) / scale` (zeros for inactive
 //! slots); a Python policy announcing the wrong joint count is refused and exits non-zero with
 //! the simulator's message; a Python policy killed mid-run is reported `PolicyGone` before the
-//! step's deadline; a late Python reply is a miss and counted late. When `python3` cannot
+//! step's deadline; a late Python reply is a miss and counted late; a Python policy in a
+//! pid namespace of its own judges the simulator by its node, not its pid. When `python3` cannot
 //! import `iceoryx2` and `numpy` the tests say so and pass without running (CI installs both).
 
 use std::io::{BufRead, BufReader};
@@ -394,4 +395,94 @@ fn python_echo_round_trip_latency_is_printed() {
             q(1.0)
         );
     }
+}
+
+/// A Python policy in a pid namespace of its own (another container, say) cannot see the
+/// simulator's process: the pid in the welcome names nothing there. It judges the
+/// simulator by its iceoryx2 node instead, so it waits out a pause between steps, and
+/// still sees the simulator go. Needs root for `unshare --pid`; skipped, saying so,
+/// without it.
+#[test]
+fn a_python_policy_in_another_pid_namespace_judges_the_simulator_by_its_node() {
+    const TEST: &str = "python_client::another_pid_namespace";
+    if !python_ready(TEST) {
+        return;
+    }
+    let probe = Command::new("unshare")
+        .args(["--pid", "--fork", "--mount-proc", "true"])
+        .stderr(Stdio::null())
+        .status();
+    if !probe.is_ok_and(|s| s.success()) {
+        prereq::skip(
+            TEST,
+            "`unshare --pid --fork --mount-proc` is not permitted (needs root)",
+        );
+        return;
+    }
+    let session = unique("pidns");
+    let mut sim = SimSession::create(sim_config(&session, 1, None)).unwrap();
+    let root = repo_root();
+    let mut python = Python(Some(
+        Command::new("unshare")
+            .args(["--pid", "--fork", "--mount-proc", "python3"])
+            .arg("adapters/python/examples/echo/echo_policy.py")
+            .args(["--session", &session])
+            .current_dir(&root)
+            .env("PYTHONPATH", root.join("adapters/python"))
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    ));
+    sim.accept(Some(Duration::from_secs(30)), |_| {}).unwrap();
+    let mut step = |k: u64| {
+        sim.step(
+            |batch| {
+                let mut env = batch.env(0);
+                env.set_header(&active_header(k));
+                env.array("q").fill(k as f64);
+            },
+            Some(Duration::from_secs(10)),
+            |actions| assert_eq!(actions.env(0), vec![k as f64; 29].as_slice()),
+        )
+        .unwrap()
+    };
+    for k in 0..3 {
+        let outcome = step(k);
+        if outcome != StepOutcome::Answered {
+            let out = python.wait();
+            panic!(
+                "step {k}: {outcome:?}; the policy said: {}{}",
+                text(&out.stdout),
+                text(&out.stderr)
+            );
+        }
+    }
+    // The policy blocks through this pause, checking the simulator's liveness.
+    std::thread::sleep(Duration::from_millis(300));
+    for k in 3..6 {
+        assert_eq!(
+            step(k),
+            StepOutcome::Answered,
+            "the policy left during the pause"
+        );
+    }
+    // The simulator goes without ending the run: its node goes with it.
+    drop(sim);
+    let start = Instant::now();
+    while !python.exited() && start.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = python.wait();
+    let stderr = text(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("the simulator") && stderr.contains("is gone"),
+        "{stderr}"
+    );
+    assert!(
+        start.elapsed() < Duration::from_secs(10),
+        "not noticed: {stderr}"
+    );
 }

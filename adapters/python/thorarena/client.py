@@ -44,7 +44,9 @@ from .protocol import (
 )
 
 LIVENESS_EVERY_S = 0.002
-"""While blocked on `obs_ready`, how often the simulator's process is checked."""
+"""While blocked on `obs_ready`, how often the simulator's liveness is checked."""
+NODE_CHECK_EVERY_S = 0.010
+"""How often the simulator's iceoryx2 node is looked up at most (a directory listing)."""
 
 
 class ThorArenaError(Exception):
@@ -116,6 +118,62 @@ def process_alive(pid: int) -> bool:
     return not fields or fields[0] not in (b"Z", b"X")
 
 
+class SimulatorWatch:
+    """Whether the simulator lives, judged by its iceoryx2 node, as the simulator judges
+    the policy: the kernel releases a node's lock when its process dies, in whatever pid
+    namespace it ran. The pid in the welcome is only for logs — in another container it
+    names no process here, or another one. Without the node (not found at connect), the
+    pid is checked instead."""
+
+    def __init__(self, step_service: Any, node_id: int | None, pid: int) -> None:
+        self._step = step_service
+        self._id = node_id
+        self._pid = pid
+        self._checked_at = 0.0
+        self._alive = True
+
+    @staticmethod
+    def find(step_service: Any, session: str, own_id: int) -> int | None:
+        """The id of the live simulator node attached to the step service (the node
+        `thorarena-sim-<session>`, not ours), or None when there is not exactly one."""
+        ids = []
+        for state in step_service.nodes:
+            if not isinstance(state, iox2.NodeState.Alive):
+                continue
+            view = state[0]
+            if view.id.value != own_id and view.details.name.as_str() == (
+                f"thorarena-sim-{session}"
+            ):
+                ids.append(view.id.value)
+        return ids[0] if len(ids) == 1 else None
+
+    def alive(self) -> bool:
+        """True while the simulator lives (or its node cannot be read)."""
+        if self._id is None:
+            return process_alive(self._pid)
+        now = time.perf_counter()
+        if not self._alive or now - self._checked_at < NODE_CHECK_EVERY_S:
+            return self._alive
+        self._checked_at = now
+        alive = False  # absent: it closed and removed its node
+        try:
+            states = self._step.nodes if self._step is not None else []
+        except Exception:
+            return True  # the listing failed: not a sign of death
+        for state in states:
+            inner = state[0]  # a node view, or the bare id of an unreadable node
+            node_id = getattr(inner, "id", inner)
+            if getattr(node_id, "value", None) == self._id:
+                alive = not isinstance(state, iox2.NodeState.Dead)
+                break
+        self._alive = alive
+        return alive
+
+    def release(self) -> None:
+        """Drops the service handle (before the node it was opened by)."""
+        self._step = None
+
+
 def _service_name(session: str, leaf: str) -> Any:
     ok = 0 < len(session) <= 64 and all(
         c.isascii() and (c.isalnum() or c in "_.-") for c in session
@@ -163,8 +221,10 @@ class Session:
         obs_ready: Any,
         action_ready: Any,
         spin_s: float,
+        simulator: SimulatorWatch,
     ) -> None:
         self.info = info
+        self._simulator = simulator
         self._node = node
         self._server = server
         self._obs_ready = obs_ready
@@ -310,7 +370,7 @@ class Session:
         """The newest observation batch (older ones are dropped unanswered), or None at the
         end of the run."""
         server = self._server
-        pid = self.info.simulator_pid
+        simulator = self._simulator
         now = time.perf_counter()
         deadline = None if timeout_s is None else now + timeout_s
         spin_until = now + self._spin_s
@@ -328,7 +388,8 @@ class Session:
                     else:
                         wait = self._slice
                     woken = self._obs_ready.timed_wait(wait)
-                    if not woken and not server.has_requests and not process_alive(pid):
+                    if not woken and not server.has_requests and not simulator.alive():
+                        pid = self.info.simulator_pid
                         raise SimulatorGone(f"the simulator (pid {pid}) is gone")
                 while (request := server.receive()) is not None:
                     if newest is not None:
@@ -366,6 +427,7 @@ class Session:
             if port is not None:
                 port.delete()
         self._server = self._obs_ready = self._action_ready = None
+        self._simulator.release()
         self._node = None
 
     def __enter__(self) -> Session:
@@ -508,6 +570,9 @@ def connect(
         obs_ready=obs_ready,
         action_ready=action_ready,
         spin_s=spin_us * 1e-6,
+        simulator=SimulatorWatch(
+            step, SimulatorWatch.find(step, session, node.id.value), welcome.pid
+        ),
     )
 
 
