@@ -525,7 +525,7 @@ def connect(
     )
     hello.reference_offsets_s[: len(offsets)] = offsets
     ctypes.memmove(hello.name, to_fixed(name, NAME_BYTES), NAME_BYTES)
-    ctypes.memmove(hello.input, input_name.ljust(INPUT_NAME_BYTES, b"\0"), INPUT_NAME_BYTES)
+    ctypes.memmove(hello.input, to_fixed(input or "", INPUT_NAME_BYTES), INPUT_NAME_BYTES)
     welcome = _say_hello(hello_service, hello, start, timeout_s)
     if welcome.status != Status.OK:
         obs_ready.delete()
