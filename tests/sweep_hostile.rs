@@ -318,6 +318,17 @@ fn a_policy_that_dies_mid_run_fails_its_task_and_collect_will_not_score_it() {
     assert!(row.contains(",false,"), "the cell is marked partial: {csv}");
 }
 
+/// Rewrites the first record of `episodes` (an `episodes.jsonl`) as a dead policy's
+/// cut it short: termination `policy_failed`.
+fn mark_first_policy_failed(episodes: &Path) {
+    let text = std::fs::read_to_string(episodes).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut r: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
+    r["termination"] = serde_json::json!("policy_failed");
+    lines[0] = serde_json::to_string(&r).unwrap();
+    std::fs::write(episodes, lines.join("\n") + "\n").unwrap();
+}
+
 #[test]
 fn collect_refuses_a_done_task_whose_run_holds_policy_failed_episodes() {
     // The record written by a ThorArena that trusted the count: done.json beside a run
@@ -327,12 +338,7 @@ fn collect_refuses_a_done_task_whose_run_holds_policy_failed_episodes() {
     plan(&four_tasks(tmp.path()), &dir);
     ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
     let episodes = dir.join("tasks/000001/run/episodes.jsonl");
-    let text = std::fs::read_to_string(&episodes).unwrap();
-    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-    let mut r: serde_json::Value = serde_json::from_str(&lines[0]).unwrap();
-    r["termination"] = serde_json::json!("policy_failed");
-    lines[0] = serde_json::to_string(&r).unwrap();
-    std::fs::write(&episodes, lines.join("\n") + "\n").unwrap();
+    mark_first_policy_failed(&episodes);
     let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
     assert!(e.contains("policy_failed") && e.contains("task 1"), "{e}");
     ok(thorarena(&["sweep", "collect", s(&dir), "--partial"]));
@@ -340,6 +346,55 @@ fn collect_refuses_a_done_task_whose_run_holds_policy_failed_episodes() {
     let rows: Vec<&str> = csv.lines().collect();
     assert!(rows[1].contains(",false,"), "{csv}");
     assert!(rows[2].contains(",true,"), "{csv}");
+}
+
+#[test]
+fn a_done_task_whose_run_no_longer_counts_is_not_done_and_runs_again() {
+    // done.json was true when it was written; afterwards task 1's run lost an episode to a
+    // "dead policy" and task 2's run was replaced by task 3's (another shard).
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("sweep");
+    plan(&four_tasks(tmp.path()), &dir);
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    let episodes = dir.join("tasks/000001/run/episodes.jsonl");
+    mark_first_policy_failed(&episodes);
+    let (two, three) = (dir.join("tasks/000002/run"), dir.join("tasks/000003/run"));
+    std::fs::remove_dir_all(&two).unwrap();
+    copy_dir(&three, &two);
+    assert!(dir.join("tasks/000001/done.json").exists());
+
+    let status = out(&ok(thorarena(&["sweep", "status", s(&dir)])));
+    assert!(
+        status.contains("2 done, 0 failed") && status.contains("2 marked done whose run"),
+        "{status}"
+    );
+    assert!(
+        status.contains("not counted: task 1") && status.contains("policy_failed"),
+        "{status}"
+    );
+    assert!(
+        status.contains("not counted: task 2") && status.contains("not task 2's run"),
+        "{status}"
+    );
+    assert!(status.contains("not done (--array): 1-2"), "{status}");
+
+    // `sweep run` no longer skips them: task 1 runs its missing episode, task 2 is refused.
+    let e = err(&thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    assert!(
+        e.contains("not task 2's run") && e.contains("remove"),
+        "{e}"
+    );
+    let status = out(&ok(thorarena(&["sweep", "status", s(&dir)])));
+    assert!(status.contains("3 done, 1 failed"), "{status}");
+    assert!(!status.contains("not counted"), "{status}");
+    assert!(status.contains("not done (--array): 2"), "{status}");
+    let rerun = std::fs::read_to_string(&episodes).unwrap();
+    assert!(!rerun.contains("policy_failed"), "{rerun}");
+
+    // Removing the foreign run, as the message says, lets the sweep finish.
+    std::fs::remove_dir_all(&two).unwrap();
+    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
+    ok(thorarena(&["sweep", "collect", s(&dir)]));
 }
 
 // ---------------------------------------------------------------- D: runs and plan entries

@@ -121,6 +121,17 @@ impl TaskDir {
         let _ = std::fs::remove_file(self.failed_file());
     }
 
+    /// Withdraws `done.json` (its run no longer counts: the task runs again). Unlike a
+    /// stale `failed.json`, a `done.json` left behind would make the task look done, so
+    /// failing to remove it is an error.
+    pub fn clear_done(&self) -> Result<(), SweepError> {
+        let path = self.dir.join(DONE_FILE);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(self.io(path)(e)),
+            _ => Ok(()),
+        }
+    }
+
     /// Records that the task is done: `done.json`, atomically, last.
     pub fn write_done(&self, done: &DoneRecord) -> Result<(), SweepError> {
         let json = serde_json::to_string_pretty(done).expect("a DoneRecord serialises");

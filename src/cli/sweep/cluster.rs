@@ -1,12 +1,13 @@
 //! `sweep slurm` and `sweep k8s`: job scripts and manifests for the cluster engines.
 
+use super::verify::CheckedCensus;
 use super::{K8sArgs, SlurmArgs};
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use thorarena::sweep::{
-    census, compact_ranges, k8s_manifest, k8s_manifest_path, slurm_logs_dir, slurm_script_path,
-    K8sRequest, Plan,
+    compact_ranges, k8s_manifest, k8s_manifest_path, slurm_logs_dir, slurm_script_path, K8sRequest,
+    Plan,
 };
 pub(super) fn absolute(p: &Path) -> anyhow::Result<PathBuf> {
     std::fs::canonicalize(p).with_context(|| format!("{} does not exist", p.display()))
@@ -18,7 +19,7 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
     if args.cpus_per_task == 0 {
         bail!("--cpus-per-task must be at least 1");
     }
-    let not_done = census(&dir, &plan)?.not_done();
+    let not_done = CheckedCensus::of(&dir, &plan)?.not_done();
     if not_done.is_empty() {
         println!("every task of {} is done: nothing to submit", dir.display());
         return Ok(());
@@ -65,17 +66,17 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
         .status()
         .context("running sbatch (is Slurm's client installed and configured?)")?;
     if !status.success() {
-        let c = census(&dir, &plan)?;
+        let c = CheckedCensus::of(&dir, &plan)?;
         bail!(
             "sbatch {}: {status}; {} task(s) failed, {} not done (`thorarena sweep status {}`)",
             if args.wait { "--wait" } else { "" },
-            c.failed.len(),
+            c.census.failed.len(),
             c.not_done().len(),
             dir.display()
         );
     }
     if args.wait {
-        let c = census(&dir, &plan)?;
+        let c = CheckedCensus::of(&dir, &plan)?;
         if !c.not_done().is_empty() {
             bail!(
                 "the array finished with {} task(s) not done: {}",

@@ -1,7 +1,7 @@
 //! `sweep collect`: shards merged into cells, `results.csv`, and the report with the
 //! sweep's curves.
 
-use super::verify::{check_task_run, RunProblem};
+use super::verify::{CheckedCensus, RunProblem};
 use super::CollectArgs;
 use anyhow::{bail, Context};
 use std::collections::{BTreeMap, HashSet};
@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use thorarena::motion::{Dataset, Sequence};
 use thorarena::report::{label_cells, sweep_charts, sweep_title};
 use thorarena::results::RunDir;
-use thorarena::sweep::{census, compact_ranges, CellResult, Plan, Task, TaskDir};
+use thorarena::sweep::{compact_ranges, CellResult, Plan, Task, TaskDir};
 
 /// Each dataset of the plan, loaded, after checking it is the one planned: scores are
 /// computed against the references as they are now, so they must be the ones the runs
@@ -43,24 +43,18 @@ fn planned_datasets(
 /// — and why the others do not; a done task whose run is another configuration's is an
 /// error.
 fn counted_tasks(dir: &Path, plan: &Plan) -> anyhow::Result<(HashSet<usize>, Vec<String>)> {
-    let c = census(dir, plan)?;
-    // A task counts when its done.json is there and its run is complete and its own.
-    let mut done: HashSet<usize> = HashSet::new();
+    let checked = CheckedCensus::of(dir, plan)?;
     let mut not_counted: Vec<String> = Vec::new();
-    for &i in &c.done {
-        let run = TaskDir::of(dir, i).run_dir();
-        match check_task_run(plan, &plan.tasks[i], &run)? {
-            Ok(_) => {
-                done.insert(i);
-            }
-            Err(RunProblem::NotThisTask(why)) => bail!(
+    for (i, problem) in &checked.not_counted {
+        match problem {
+            RunProblem::NotThisTask(why) => bail!(
                 "{why}; a run that is not the cell's is never scored under its label: remove {} and run the task again",
-                run.display()
+                TaskDir::of(dir, *i).run_dir().display()
             ),
-            Err(RunProblem::Incomplete(why)) => not_counted.push(format!("task {i}: {why}")),
+            RunProblem::Incomplete(why) => not_counted.push(format!("task {i}: {why}")),
         }
     }
-    Ok((done, not_counted))
+    Ok((checked.census.done.into_iter().collect(), not_counted))
 }
 
 pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {

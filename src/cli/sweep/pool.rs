@@ -1,6 +1,7 @@
 //! `sweep run`: the local pool, N tasks at a time, with progress over the sweep.
 
 use super::task::{cores, run_task, Outcome};
+use super::verify::CheckedCensus;
 use super::RunArgs;
 use anyhow::bail;
 use std::collections::VecDeque;
@@ -8,7 +9,7 @@ use std::path::Path;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use thorarena::results::RunDir;
-use thorarena::sweep::{printable, task_state, Plan, TaskDir, TaskState};
+use thorarena::sweep::{printable, Plan, TaskDir};
 pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
     let plan = Arc::new(Plan::load(&args.dir)?);
     let jobs = match args.jobs {
@@ -17,14 +18,15 @@ pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
         None => cores(),
     };
     let workers = (cores() / jobs).max(1);
-    let mut pending = VecDeque::new();
-    let mut done_episodes = 0usize;
-    for t in &plan.tasks {
-        match task_state(&args.dir, t.index)? {
-            TaskState::Done(_) => done_episodes += t.episodes,
-            _ => pending.push_back(t.index),
-        }
-    }
+    // Done means the run counts (a task marked done whose run changed since runs again).
+    let checked = CheckedCensus::of(&args.dir, &plan)?;
+    let done_episodes: usize = checked
+        .census
+        .done
+        .iter()
+        .map(|&i| plan.tasks[i].episodes)
+        .sum();
+    let pending: VecDeque<usize> = checked.not_done().into();
     let to_run = pending.len();
     eprintln!(
         "sweep {}: {} of {} tasks to run, {jobs} at a time, {workers} worker(s) each",

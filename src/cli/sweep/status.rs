@@ -1,23 +1,45 @@
-//! `sweep status`: tasks by state, failure reasons, the not-done set.
+//! `sweep status`: tasks by state (done only when the run counts), failure reasons, the
+//! not-done set.
 
+use super::verify::{problem_text, CheckedCensus};
 use super::StatusArgs;
 use thorarena::sweep::{
-    census, compact_ranges, printable, truncated, Plan, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
+    compact_ranges, printable, truncated, Plan, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
 };
 pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
     let plan = Plan::load(&args.dir)?;
-    let c = census(&args.dir, &plan)?;
+    // A task is done when its run counts, not merely when its done.json is there.
+    let checked = CheckedCensus::of(&args.dir, &plan)?;
+    let (c, not_counted) = (&checked.census, &checked.not_counted);
     println!(
-        "{}: {} tasks — {} done, {} failed, {} started (running or interrupted), {} not started",
+        "{}: {} tasks — {} done, {} failed, {} started (running or interrupted), {} not started{}",
         args.dir.display(),
         plan.tasks.len(),
         c.done.len(),
         c.failed.len(),
         c.started.len(),
-        c.not_started.len()
+        c.not_started.len(),
+        if not_counted.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", {} marked done whose run does not count",
+                not_counted.len()
+            )
+        }
     );
     // Records are policy output and files anyone may edit: printed bounded, with
     // control characters escaped.
+    for (i, problem) in not_counted {
+        let cell = &plan.cells[plan.tasks[*i].cell];
+        println!(
+            "not counted: task {i} (cell {}, policy `{}`, setting `{}`): {}; `sweep run` runs what is missing, or says why it cannot",
+            cell.index,
+            printable(&cell.policy.name),
+            printable(&cell.setting),
+            truncated(&printable(problem_text(problem)), LOG_LINE_MAX_BYTES)
+        );
+    }
     for (i, f) in &c.failed {
         let cell = &plan.cells[plan.tasks[*i].cell];
         println!(
@@ -38,7 +60,7 @@ pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
             println!("    {l}");
         }
     }
-    let not_done = c.not_done();
+    let not_done = checked.not_done();
     if not_done.is_empty() {
         println!("not done: none");
     } else {

@@ -37,14 +37,29 @@ pub(super) fn run_task(
     let tdir = TaskDir::of(dir, index);
     // One copy at a time; a second one waits, then finds the task done.
     let lock = tdir.lock()?;
-    if let TaskState::Done(_) = tdir.state()? {
-        return Ok(Outcome::AlreadyDone);
-    }
-    tdir.clear_failed();
-    let started = Instant::now();
     let fail = |reason: String, logs: &[TaskLog]| -> anyhow::Result<Outcome> {
         Ok(Outcome::Failed(tdir.write_failed(&reason, logs)?))
     };
+    // done.json is only a claim about the run when it was written: the run counts again,
+    // here, before the task is skipped (`status` and `collect` check the same).
+    if let TaskState::Done(_) = tdir.state()? {
+        let run_dir = tdir.run_dir();
+        match check_task_run(plan, task, &run_dir) {
+            Ok(Ok(_)) => return Ok(Outcome::AlreadyDone),
+            Ok(Err(RunProblem::NotThisTask(why))) => {
+                tdir.clear_done()?;
+                return fail(
+                    format!("{why}; remove {} and run the task again", run_dir.display()),
+                    &[],
+                );
+            }
+            // Missing or policy-failed episodes, or an unreadable run: `eval --resume`
+            // runs what is missing, or says why it cannot.
+            Ok(Err(RunProblem::Incomplete(_))) | Err(_) => tdir.clear_done()?,
+        }
+    }
+    tdir.clear_failed();
+    let started = Instant::now();
 
     // The dataset must be the one planned.
     let robot = thorarena::registry::robot(&plan.robot)?;
