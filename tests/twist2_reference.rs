@@ -230,8 +230,8 @@ fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
         "--python",
         "python3",
     ]);
-    // | envs | built by | round trip p50 | p90 | p99 | build p50 | network p50 | network p90
-    // | overhead p50 | overhead p90 |
+    // | envs | built by | round trip p50 | p90 | p99 | build p50 | prepared p50
+    // | network p50 | network p90 | overhead p50 | overhead p90 |
     let rows: Vec<(String, Vec<f64>)> = out
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| envs"))
@@ -257,7 +257,8 @@ fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
         (4.0, "simulator (Rust)"),
         (4.0, "adapter (numpy)"),
     ]) {
-        let (rt_p50, build_p50, net_p50, overhead_p50) = (row[1], row[4], row[5], row[7]);
+        let (rt_p50, build_p50, prepared_p50, net_p50, overhead_p50) =
+            (row[1], row[4], row[5], row[6], row[8]);
         assert_eq!((row[0], built_by.as_str()), (envs, by), "{out}");
         // Each step's round trip holds its network call.
         assert!(
@@ -265,5 +266,6 @@ fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
             "{out}"
         );
         assert_eq!(build_p50 > 0.0, by.starts_with("simulator"), "{out}");
+        assert_eq!(prepared_p50 > 0.0, by.starts_with("simulator"), "{out}");
     }
 }

@@ -19,12 +19,14 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::server::Server;
 use iceoryx2::prelude::*;
+use iceoryx2::request_mut::RequestMut;
 use iceoryx2::service::port_factory::request_response::PortFactory as RrFactory;
 use std::time::{Duration, Instant};
 
 type StepFactory = RrFactory<ipc::Service, [u64], (), [u64], ()>;
 type StepClient = Client<ipc::Service, [u64], (), [u64], ()>;
 type StepPending = PendingResponse<ipc::Service, [u64], (), [u64], ()>;
+type StepRequest = RequestMut<ipc::Service, [u64], (), [u64], ()>;
 type HelloFactory = RrFactory<ipc::Service, Hello, (), Welcome, ()>;
 
 /// What the simulator offers.
@@ -102,6 +104,9 @@ struct Connection {
     /// a late reply is counted either here (its own pending receives it) or when the
     /// current step's `receive` discards it — a lower bound when several arrive at once.
     overdue: Option<StepPending>,
+    /// The next step's batch, loaned and handed to `prepare_next` while the policy
+    /// computed the last answer ([`SimSession::step_prepared`]).
+    next: Option<StepRequest>,
 }
 
 /// The simulator's end of a session.
@@ -150,7 +155,8 @@ impl SimSession {
             // The current request, the overdue one, and the end-of-run notice.
             .max_active_requests_per_client(3)
             .max_response_buffer_size(2)
-            .max_loaned_requests(1)
+            // The batch being filled, and the next one, prepared while the policy computes.
+            .max_loaned_requests(2)
             .max_borrowed_responses_per_pending_response(1)
             .enable_fire_and_forget_requests(true)
             .create()
@@ -239,6 +245,24 @@ impl SimSession {
         budget: Option<Duration>,
         read: impl FnOnce(&ActionBatch),
     ) -> Result<StepOutcome, IpcError> {
+        self.step_prepared(|batch, _| fill(batch), |_| {}, budget, read)
+    }
+
+    /// [`Self::step`], with work for the next step done while the policy computes this
+    /// one's answer: once the batch is published, the next step's batch is loaned (which
+    /// zeroes it) and handed to `prepare_next`, whose writes stay in it; the next step's
+    /// `fill` gets that batch with `prepared` true (false when it had to be loaned then,
+    /// as on the first step). What can be written before the step's own state is known —
+    /// a network input's history — leaves the step's critical path that way. The round
+    /// trip is timed from publishing, so a `prepare_next` slower than the policy shows
+    /// in it.
+    pub fn step_prepared(
+        &mut self,
+        fill: impl FnOnce(&mut ObsBatchMut, bool),
+        prepare_next: impl FnOnce(&mut ObsBatchMut),
+        budget: Option<Duration>,
+        read: impl FnOnce(&ActionBatch),
+    ) -> Result<StepOutcome, IpcError> {
         let conn = self
             .connection
             .as_mut()
@@ -255,14 +279,19 @@ impl SimSession {
             conn.overdue = None;
         }
         conn.seq += 1;
-        let mut request = conn
-            .client
-            .loan_slice(conn.layout.obs_words())
-            .map_err(transport(TransportOp::Loan(Message::Observations)))?;
+        let (mut request, prepared) = match conn.next.take() {
+            Some(request) => (request, true),
+            None => (
+                conn.client
+                    .loan_slice(conn.layout.obs_words())
+                    .map_err(transport(TransportOp::Loan(Message::Observations)))?,
+                false,
+            ),
+        };
         {
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(request.payload_mut());
             let mut batch = ObsBatchMut::new(conn.layout, bytes, COMMAND_STEP, conn.seq);
-            fill(&mut batch);
+            fill(&mut batch, prepared);
         }
         let sent = Instant::now();
         let pending = request
@@ -271,6 +300,18 @@ impl SimSession {
         self.obs_ready
             .notify()
             .map_err(transport(TransportOp::Notify(Event::ObsReady)))?;
+        // Not loanable now (every chunk in flight): the next step loans it, unprepared,
+        // and reports the error if there is still none.
+        if let Ok(mut next) = conn.client.loan_slice(conn.layout.obs_words()) {
+            let bytes: &mut [u8] = bytemuck::cast_slice_mut(next.payload_mut());
+            prepare_next(&mut ObsBatchMut::new(
+                conn.layout,
+                bytes,
+                COMMAND_STEP,
+                conn.seq + 1,
+            ));
+            conn.next = Some(next);
+        }
         let deadline = budget.map(|b| sent + b);
         let step_service = &self.step;
         let mut response = None;
@@ -352,7 +393,11 @@ impl SimSession {
                     self.late_replies += 1;
                 }
             }
-            if let Ok(mut request) = conn.client.loan_slice(conn.layout.obs_words()) {
+            let request = match conn.next.take() {
+                Some(request) => Ok(request),
+                None => conn.client.loan_slice(conn.layout.obs_words()),
+            };
+            if let Ok(mut request) = request {
                 let bytes: &mut [u8] = bytemuck::cast_slice_mut(request.payload_mut());
                 ObsBatchMut::new(conn.layout, bytes, COMMAND_END, conn.seq + 1);
                 if let Ok(pending) = request.send() {

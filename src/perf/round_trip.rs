@@ -10,6 +10,7 @@ use crate::policy::inputs::InputBuilder;
 use crate::policy::wire::write_observation;
 use crate::policy::Observation;
 use nalgebra::{Isometry3, Vector3};
+use std::cell::RefCell;
 use std::time::{Duration, Instant};
 use thorarena_ipc::{
     ActionBatch, EnvHeader, Layout, ObsBatchMut, SimSession, StepOutcome, FLAG_ACTIVE,
@@ -49,10 +50,11 @@ pub fn echo_round_trips(
         sim,
         warmup,
         steps,
-        |batch, shape, step| {
+        |batch, shape, step, _| {
             fill_echo_observations(batch, shape, step);
             Duration::ZERO
         },
+        |_| Duration::ZERO,
         |a, shape, step| {
             let last = shape.n_envs - 1;
             a.env(last)[1] == (last * 100 + 1) as f64 + step as f64
@@ -62,13 +64,16 @@ pub fn echo_round_trips(
 }
 
 /// `warmup` untimed and `steps` timed round trips, each batch written by `fill` (which
-/// returns how long of that it spent building policy inputs) and each answer judged by
-/// `answer_ok` (a wrong one ends the measurement with an error).
+/// returns how long of that it spent building policy inputs; told whether `prepare` wrote
+/// into the batch first) and each answer judged by `answer_ok` (a wrong one ends the
+/// measurement with an error). `prepare` writes into the next batch while the policy
+/// computes ([`SimSession::step_prepared`]) and returns how long it took.
 fn timed_round_trips(
     sim: &mut SimSession,
     warmup: usize,
     steps: usize,
-    mut fill: impl FnMut(&mut ObsBatchMut, Layout, u64) -> Duration,
+    mut fill: impl FnMut(&mut ObsBatchMut, Layout, u64, bool) -> Duration,
+    mut prepare: impl FnMut(&mut ObsBatchMut) -> Duration,
     answer_ok: impl Fn(&ActionBatch, Layout, u64) -> bool,
 ) -> Result<AdapterTiming, PerfError> {
     let shape = sim.layout().ok_or(PerfError::WrongEcho {
@@ -77,12 +82,15 @@ fn timed_round_trips(
     })?;
     let mut round_trip = LatencyRecorder::default();
     let mut input_build = LatencyRecorder::default();
+    let mut input_prepare = LatencyRecorder::default();
     let mut per_step_us = Vec::with_capacity(steps);
     for step in 0..(warmup + steps) as u64 {
         let mut ok = true;
         let mut build = Duration::ZERO;
-        let outcome = sim.step(
-            |b| build = fill(b, shape, step),
+        let mut prepared = Duration::ZERO;
+        let outcome = sim.step_prepared(
+            |b, was_prepared| build = fill(b, shape, step, was_prepared),
+            |next| prepared = prepare(next),
             None,
             |a| ok = answer_ok(a, shape, step),
         )?;
@@ -95,12 +103,14 @@ fn timed_round_trips(
         if step >= warmup as u64 {
             round_trip.record(sim.last_round_trip());
             input_build.record(build);
+            input_prepare.record(prepared);
             per_step_us.push((sim.last_round_trip() + build).as_secs_f64() * 1e6);
         }
     }
     Ok(AdapterTiming {
         round_trip: round_trip.summary(),
         input_build: input_build.summary(),
+        input_prepare: input_prepare.summary(),
         per_step_us,
     })
 }
@@ -139,6 +149,10 @@ pub struct AdapterTiming {
     /// Building the policy input in the simulator, before publishing (zero when the
     /// adapter builds its own).
     pub input_build: LatencySummary,
+    /// Writing the next batch's policy inputs as far as they are known (TWIST2's history)
+    /// while the policy computes: inside the round trip, off the critical path unless
+    /// it outlasts the policy (zero when the adapter builds its own).
+    pub input_prepare: LatencySummary,
     /// Each timed step's round trip plus its input build, µs, in step order (to pair
     /// with what the adapter timed of the same step).
     pub per_step_us: Vec<f64>,
@@ -147,31 +161,43 @@ pub struct AdapterTiming {
 /// `warmup` untimed and `steps` timed round trips with a network adapter connected to
 /// `sim`, on standing observations ([`standing_observation`]) at `reference_offsets_s`,
 /// one episode running from step 0; the policy input the adapter asked for, if any, is
-/// built into each batch by `input` and its cost timed. Every answer must be finite, so
-/// an adapter that answers nothing cannot look fast.
+/// built into each batch by `input` — prepared while the policy computes, as
+/// `RemotePolicy` does — and both parts timed. Every answer must be finite, so an adapter
+/// that answers nothing cannot look fast.
 pub fn adapter_round_trips(
     sim: &mut SimSession,
     warmup: usize,
     steps: usize,
     reference_offsets_s: &[f64],
-    mut input: Option<&mut InputBuilder>,
+    input: Option<&mut InputBuilder>,
 ) -> Result<AdapterTiming, PerfError> {
+    let input = RefCell::new(input);
     timed_round_trips(
         sim,
         warmup,
         steps,
-        |batch, shape, step| {
+        |batch, shape, step, prepared| {
             let mut build = Duration::ZERO;
+            let mut input = input.borrow_mut();
             for i in 0..shape.n_envs {
                 let obs = standing_observation(i, step, shape.n_joints, shape.n_refs);
                 write_observation(&obs, reference_offsets_s, &mut batch.env(i), 0);
                 if let Some(builder) = input.as_mut() {
                     let started = Instant::now();
-                    builder.write(&obs, batch.policy_input(i));
+                    builder.write(&obs, batch.policy_input(i), prepared);
                     build += started.elapsed();
                 }
             }
             build
+        },
+        |next| {
+            let started = Instant::now();
+            if let Some(builder) = input.borrow().as_ref() {
+                for slot in 0..builder.n_envs() {
+                    builder.prepare(slot, next.policy_input(slot));
+                }
+            }
+            started.elapsed()
         },
         |a, shape, _| (0..shape.n_envs).all(|i| a.env(i).iter().all(|x| x.is_finite())),
     )

@@ -44,7 +44,23 @@ impl InputBuilder {
     }
 
     /// Writes `obs`'s input into `out` (its slot's row) and advances that slot's state.
-    pub fn write(&mut self, obs: &Observation, out: &mut [f32]) {
-        twist2::observation_into(obs, &self.default_pose, &mut self.histories[obs.env], out);
+    /// `prepared`: every row of the batch `out` belongs to went through [`Self::prepare`]
+    /// after the last `write`, so what it wrote there is not written again.
+    pub fn write(&mut self, obs: &Observation, out: &mut [f32], prepared: bool) {
+        let history = &mut self.histories[obs.env];
+        twist2::observation_onto(obs, &self.default_pose, history, out, prepared);
+    }
+
+    /// Writes into slot `slot`'s row `out` of the next batch what its next `write` would
+    /// write there from the state it already has (TWIST2's history: 10 of its 11 frames),
+    /// while the policy process computes the current step
+    /// ([`thorarena_ipc::SimSession::step_prepared`]).
+    pub fn prepare(&self, slot: usize, out: &mut [f32]) {
+        twist2::history_into(&self.histories[slot], out);
+    }
+
+    /// Environment slots it builds for.
+    pub fn n_envs(&self) -> usize {
+        self.histories.len()
     }
 }

@@ -5,6 +5,7 @@
 use super::inputs::InputBuilder;
 use super::wire::write_observation;
 use super::{ActOutcome, Observation, Policy};
+use std::cell::RefCell;
 use std::time::Duration;
 use thorarena_ipc::{
     IpcError, PolicyInfo, SimConfig, SimSession, StepOutcome, FLAG_PREVIOUS_TERMINATED,
@@ -123,10 +124,13 @@ impl Policy for RemotePolicy {
         let n_envs = self.config.session.n_envs;
         let offsets = &self.offsets_s;
         let previous_terminated = &mut self.previous_terminated;
-        let mut input = self.input.as_mut().map(|(_, builder)| builder);
+        // Both closures use the builder: `fill` to write, `prepare_next` (run while the
+        // policy computes) to read the histories into the next batch.
+        let input = RefCell::new(self.input.as_mut().map(|(_, builder)| builder));
         self.stats.round_trips += 1;
-        let outcome = self.session.step(
-            |batch| {
+        let outcome = self.session.step_prepared(
+            |batch, prepared| {
+                let mut input = input.borrow_mut();
                 let mut filled = vec![false; n_envs];
                 for obs in observations {
                     let mut env = batch.env(obs.env);
@@ -137,7 +141,7 @@ impl Policy for RemotePolicy {
                     };
                     write_observation(obs, offsets, &mut env, flags);
                     if let Some(builder) = input.as_mut() {
-                        builder.write(obs, batch.policy_input(obs.env));
+                        builder.write(obs, batch.policy_input(obs.env), prepared);
                     }
                     filled[obs.env] = true;
                 }
@@ -153,6 +157,13 @@ impl Policy for RemotePolicy {
                 for obs in observations {
                     if obs.step == 0 {
                         previous_terminated[obs.env] = false;
+                    }
+                }
+            },
+            |next| {
+                if let Some(builder) = input.borrow().as_ref() {
+                    for slot in 0..n_envs {
+                        builder.prepare(slot, next.policy_input(slot));
                     }
                 }
             },

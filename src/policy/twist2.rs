@@ -164,7 +164,23 @@ pub fn observation_into(
     history: &mut History,
     out: &mut [f32],
 ) {
-    if obs.step == 0 {
+    observation_onto(obs, default_pose, history, out, false);
+}
+
+/// [`observation_into`], onto a row whose history rows may already hold `history`
+/// (`history_written`: [`history_into`] wrote them since `history`'s last push). Then only
+/// the current and the future frame are written — a fifth of the row — unless the episode
+/// starts (step 0), whose history is zeros. The result is [`observation_into`]'s, bit for
+/// bit.
+pub fn observation_onto(
+    obs: &Observation,
+    default_pose: &[f64],
+    history: &mut History,
+    out: &mut [f32],
+    history_written: bool,
+) {
+    let starts = obs.step == 0;
+    if starts {
         history.frames.iter_mut().for_each(|f| f.fill(0.0));
     }
     let single = single_frame(obs, default_pose);
@@ -172,14 +188,22 @@ pub fn observation_into(
     mimic(&obs.reference[0], &mut future);
     // Slice by slice: a chained iterator over the segments would not vectorise, and costs
     // several times the arithmetic.
-    let (head, rest) = out.split_at_mut(SINGLE_LEN);
-    clip_into(&single, head);
-    let (past, tail) = rest.split_at_mut(SINGLE_LEN * HISTORY_LEN);
+    clip_into(&single, &mut out[..SINGLE_LEN]);
+    if starts || !history_written {
+        history_into(history, out);
+    }
+    clip_into(&future, &mut out[SINGLE_LEN * (HISTORY_LEN + 1)..]);
+    history.push(&single, obs.step);
+}
+
+/// The history rows of observation row `out` ([`OBS_LEN`] values) from `history`: what
+/// the environment's next observation holds there, unless its episode starts anew. The
+/// simulator writes them while the policy process computes the current step.
+pub fn history_into(history: &History, out: &mut [f32]) {
+    let past = &mut out[SINGLE_LEN..SINGLE_LEN * (HISTORY_LEN + 1)];
     for (frame, row) in history.frames.iter().zip(past.chunks_exact_mut(SINGLE_LEN)) {
         clip_into(frame, row);
     }
-    clip_into(&future, tail);
-    history.push(&single, obs.step);
 }
 
 /// `out = clamp(values, ±100)` rounded to `f32`, element by element.

@@ -133,6 +133,7 @@ impl SimSession {
             client,
             seq: 0,
             overdue: None,
+            next: None,
         });
         Ok(Some(info))
     }
