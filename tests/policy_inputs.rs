@@ -45,7 +45,7 @@ fn the_simulator_builds_twist2s_input_as_the_in_process_policy_does() {
             action_scale: vec![0.5; 29],
             budget: None,
             wait: Default::default(),
-            inputs: thorarena::policy::inputs::offers(),
+            inputs: thorarena::policy::inputs::offers(29),
         },
         connect_timeout: Some(Duration::from_secs(20)),
         reconnect: false,

@@ -18,7 +18,7 @@
 /**
  * Version of the wire protocol; bumped on any change of the messages or the layout.
  */
-#define THORARENA_PROTOCOL_VERSION 2
+#define THORARENA_PROTOCOL_VERSION 3
 
 /**
  * `timeout_us` of [`thorarena_next_step`]: wait as long as the simulator lives.
@@ -351,9 +351,19 @@ typedef struct ThorarenaBatchHeader {
    */
   uint64_t seq;
   /**
+   * Environment slots flagged [`FLAG_ACTIVE`] in this batch, counted by the simulator
+   * as it publishes it: when it equals `n_envs` a client can take every slot as active
+   * without reading each slot's flags (at 64 slots, 64 cache lines another core wrote).
+   */
+  uint32_t n_active;
+  /**
    * Reserved, zero.
    */
-  uint64_t reserved[3];
+  uint32_t reserved0;
+  /**
+   * Reserved, zero.
+   */
+  uint64_t reserved[2];
 } ThorarenaBatchHeader;
 
 /**

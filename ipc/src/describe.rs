@@ -77,7 +77,9 @@ fn structs() -> Vec<(&'static str, &'static str, usize, usize, Fields)> {
                 env_stride: u32,
                 n_inputs: u32,
                 seq: u64,
-                reserved: [u64; 3],
+                n_active: u32,
+                reserved0: u32,
+                reserved: [u64; 2],
             }),
         ),
         (

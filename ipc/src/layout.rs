@@ -67,8 +67,14 @@ pub struct BatchHeader {
     pub n_inputs: u32,
     /// Step counter of the session, echoed in the action batch.
     pub seq: u64,
+    /// Environment slots flagged [`FLAG_ACTIVE`] in this batch, counted by the simulator
+    /// as it publishes it: when it equals `n_envs` a client can take every slot as active
+    /// without reading each slot's flags (at 64 slots, 64 cache lines another core wrote).
+    pub n_active: u32,
     /// Reserved, zero.
-    pub reserved: [u64; 3],
+    pub reserved0: u32,
+    /// Reserved, zero.
+    pub reserved: [u64; 2],
 }
 
 /// Head of one environment's block.
@@ -435,7 +441,9 @@ impl<'a> ObsBatchMut<'a> {
             env_stride: layout.env_stride() as u32,
             n_inputs: layout.n_inputs as u32,
             seq,
-            reserved: [0; 3],
+            n_active: 0,
+            reserved0: 0,
+            reserved: [0; 2],
         };
         let bytes = &mut bytes[..layout.obs_bytes()];
         bytes[..std::mem::size_of::<BatchHeader>()].copy_from_slice(bytemuck::bytes_of(&header));
@@ -443,6 +451,21 @@ impl<'a> ObsBatchMut<'a> {
         let end = layout.inputs_offset() + F32 * layout.n_envs * layout.n_inputs;
         bytes[end..].fill(0);
         Self { layout, bytes }
+    }
+
+    /// Counts the slots whose block is flagged [`FLAG_ACTIVE`] into the header's
+    /// `n_active`; the session calls it once the batch is filled, before publishing.
+    pub fn count_active(&mut self) {
+        let s = self.layout.env_stride();
+        let head = std::mem::size_of::<BatchHeader>();
+        let n_active = (0..self.layout.n_envs)
+            .filter(|i| {
+                let block = &self.bytes[head + i * s..][..std::mem::size_of::<EnvHeader>()];
+                bytemuck::pod_read_unaligned::<EnvHeader>(block).flags & FLAG_ACTIVE != 0
+            })
+            .count() as u32;
+        let at = std::mem::offset_of!(BatchHeader, n_active);
+        self.bytes[at..at + 4].copy_from_slice(&n_active.to_ne_bytes());
     }
 
     /// Slot `i`'s row of the policy-input block, writable (empty when the policy asked for

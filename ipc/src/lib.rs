@@ -33,4 +33,4 @@ pub use session::{
 pub use sim::{InputOffer, PolicyInfo, SimConfig, SimSession, StepOutcome};
 
 /// Version of the wire protocol; bumped on any change of the messages or the layout.
-pub const PROTOCOL_VERSION: u32 = 2;
+pub const PROTOCOL_VERSION: u32 = 3;

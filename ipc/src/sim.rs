@@ -292,6 +292,7 @@ impl SimSession {
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(request.payload_mut());
             let mut batch = ObsBatchMut::new(conn.layout, bytes, COMMAND_STEP, conn.seq);
             fill(&mut batch, prepared);
+            batch.count_active();
         }
         let sent = Instant::now();
         let pending = request

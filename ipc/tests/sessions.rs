@@ -100,6 +100,52 @@ fn observations_go_out_and_matching_actions_come_back() {
 }
 
 #[test]
+fn the_batch_header_counts_the_active_slots() {
+    let session = unique("active");
+    let mut sim = SimSession::create(sim_config(&session, 4, 3)).unwrap();
+    let s = session.clone();
+    let policy = std::thread::spawn(move || {
+        let config = PolicyConfig::new(&s, "counter", joints(3), vec![0.0, 0.1]);
+        let mut client = PolicyClient::connect(&config, Duration::from_secs(10)).unwrap();
+        let mut seen = Vec::new();
+        client
+            .run(|obs, _| seen.push(obs.header().n_active))
+            .unwrap();
+        seen
+    });
+    sim.accept(Some(Duration::from_secs(10)), |_| {}).unwrap();
+    // Step k: the first k % 5 slots active, the others cleared (or never written).
+    for step in 0..10u64 {
+        let outcome = sim
+            .step(
+                |batch| {
+                    for i in 0..4 {
+                        let mut env = batch.env(i);
+                        if i as u64 >= step % 5 {
+                            env.clear(0);
+                            continue;
+                        }
+                        env.set_header(&EnvHeader {
+                            episode_id: i as u64,
+                            step,
+                            flags: FLAG_ACTIVE,
+                            reserved: 0,
+                            time_s: 0.0,
+                        });
+                    }
+                },
+                None,
+                |_| {},
+            )
+            .unwrap();
+        assert_eq!(outcome, StepOutcome::Answered);
+    }
+    sim.end();
+    let want: Vec<u32> = (0..10).map(|k| k % 5).collect();
+    assert_eq!(policy.join().unwrap(), want);
+}
+
+#[test]
 fn mismatched_policies_are_refused_with_a_typed_status() {
     let session = unique("mismatch");
     let mut sim = SimSession::create(sim_config(&session, 1, 4)).unwrap();

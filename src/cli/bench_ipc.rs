@@ -364,7 +364,7 @@ fn sim_config(args: &Args, robot: &RobotModel, session: &str, envs: usize) -> Si
             spin: Duration::from_micros(args.spin_us),
             ..WaitPolicy::default()
         },
-        inputs: thorarena::policy::inputs::offers(),
+        inputs: thorarena::policy::inputs::offers(n_joints),
     }
 }
 

@@ -143,7 +143,7 @@ pub fn connect_remote(
                 spin: Duration::from_micros(io.spin_us),
                 ..WaitPolicy::default()
             },
-            inputs: thorarena::policy::inputs::offers(),
+            inputs: thorarena::policy::inputs::offers(robot.joints.len()),
         },
         connect_timeout: (io.connect_timeout > 0.0)
             .then(|| Duration::try_from_secs_f64(io.connect_timeout))

@@ -13,13 +13,19 @@ use super::twist2;
 use super::Observation;
 use thorarena_ipc::InputOffer;
 
-/// The inputs this simulator builds.
-pub fn offers() -> Vec<InputOffer> {
-    vec![InputOffer {
+/// The inputs this simulator builds for a robot of `n_joints` joints: TWIST2's for the
+/// 29-joint G1 only (its observation has 29 joint positions per frame; the handshake's
+/// joint-name hash holds a policy to the G1's names).
+pub fn offers(n_joints: usize) -> Vec<InputOffer> {
+    let twist2 = InputOffer {
         name: TWIST2.into(),
         n_inputs: twist2::OBS_LEN,
         reference_offsets_s: vec![0.0, twist2::MIMIC_LOOKAHEAD_S],
-    }]
+    };
+    (n_joints == twist2::N_JOINTS)
+        .then_some(twist2)
+        .into_iter()
+        .collect()
 }
 
 /// TWIST2's 1432-float observation, with its per-environment history.
@@ -35,9 +41,10 @@ pub struct InputBuilder {
 
 impl InputBuilder {
     /// The builder of input `name` for `n_envs` slots, or `None` for a name [`offers`]
-    /// does not list (the handshake refuses those first).
+    /// does not list for `default_pose`'s joint count (the handshake refuses those first).
     pub fn new(name: &str, n_envs: usize, default_pose: &[f64]) -> Option<Self> {
-        (name == TWIST2).then(|| Self {
+        let offered = offers(default_pose.len()).iter().any(|o| o.name == name);
+        offered.then(|| Self {
             default_pose: default_pose.to_vec(),
             histories: vec![twist2::History::default(); n_envs],
         })
@@ -62,5 +69,19 @@ impl InputBuilder {
     /// Environment slots it builds for.
     pub fn n_envs(&self) -> usize {
         self.histories.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn twist2s_input_is_offered_for_the_29_joint_g1_only() {
+        assert_eq!(offers(29).len(), 1);
+        assert!(offers(23).is_empty());
+        assert!(InputBuilder::new(TWIST2, 2, &[0.0; 29]).is_some());
+        assert!(InputBuilder::new(TWIST2, 2, &[0.0; 23]).is_none());
+        assert!(InputBuilder::new("gmt", 2, &[0.0; 29]).is_none());
     }
 }

@@ -79,13 +79,21 @@ fn roll_pitch(q: &UnitQuaternion<f64>) -> (f64, f64) {
     (roll, pitch)
 }
 
-/// `mimic(frame)`: what TWIST2 sees of one reference frame.
+/// `mimic(frame)`: what TWIST2 sees of one reference frame, appended to `out`.
 pub fn mimic(frame: &ReferenceFrame, out: &mut Vec<f64>) {
+    let start = out.len();
+    out.resize(start + MIMIC_LEN, 0.0);
+    mimic_into(frame, &mut out[start..]);
+}
+
+/// `mimic(frame)` into `out` ([`MIMIC_LEN`] values).
+fn mimic_into(frame: &ReferenceFrame, out: &mut [f64]) {
     let r = &frame.world_from_root.rotation;
     let v = r.inverse_transform_vector(&frame.root_lin_vel_w);
     let w = r.inverse_transform_vector(&frame.root_ang_vel_w);
     let (roll, pitch) = roll_pitch(r);
-    out.extend([
+    let (head, joints) = out.split_at_mut(6);
+    head.copy_from_slice(&[
         v.x,
         v.y,
         frame.world_from_root.translation.z,
@@ -93,31 +101,37 @@ pub fn mimic(frame: &ReferenceFrame, out: &mut Vec<f64>) {
         pitch,
         w.z,
     ]);
-    out.extend_from_slice(&frame.joint_pos);
+    joints.copy_from_slice(&frame.joint_pos);
 }
 
 /// The current frame `mimic(reference at t + 0.02 s) ++ proprio` of one environment.
 /// `reference[1]` must be the frame at t + 0.02 s ([`Twist2Policy::reference_offsets_s`]).
 pub fn single_frame(obs: &Observation, default_pose: &[f64]) -> Vec<f64> {
-    let mut s = Vec::with_capacity(SINGLE_LEN);
-    mimic(&obs.reference[1], &mut s);
+    let mut s = [0.0; SINGLE_LEN];
+    single_frame_into(obs, default_pose, &mut s);
+    s.to_vec()
+}
+
+/// [`single_frame`] into `s`, without allocating (the simulator builds 64 of them per
+/// step on a policy process's critical path).
+fn single_frame_into(obs: &Observation, default_pose: &[f64], s: &mut [f64; SINGLE_LEN]) {
+    let (mimic, proprio) = s.split_at_mut(MIMIC_LEN);
+    mimic_into(&obs.reference[1], mimic);
     let w = obs.root.ang_vel_b();
-    s.extend([0.25 * w.x, 0.25 * w.y, 0.25 * w.z]);
     let (roll, pitch) = roll_pitch(&obs.root.world_from_root.rotation);
-    s.extend([roll, pitch]);
-    s.extend(obs.q.iter().zip(default_pose).map(|(q, d)| q - d));
-    s.extend(obs.qd.iter().enumerate().map(
-        |(j, qd)| {
-            if ANKLES.contains(&j) {
-                0.0
-            } else {
-                0.05 * qd
-            }
-        },
-    ));
-    s.extend_from_slice(&obs.last_action);
-    debug_assert_eq!(s.len(), SINGLE_LEN);
-    s
+    proprio[..5].copy_from_slice(&[0.25 * w.x, 0.25 * w.y, 0.25 * w.z, roll, pitch]);
+    let (q, rest) = proprio[5..].split_at_mut(N_JOINTS);
+    let (qd, last_action) = rest.split_at_mut(N_JOINTS);
+    for ((out, q), d) in q.iter_mut().zip(&obs.q).zip(default_pose) {
+        *out = q - d;
+    }
+    for (out, qd) in qd.iter_mut().zip(&obs.qd) {
+        *out = 0.05 * qd;
+    }
+    for j in ANKLES {
+        qd[j] = 0.0;
+    }
+    last_action.copy_from_slice(&obs.last_action);
 }
 
 /// One environment's past frames.
@@ -183,9 +197,10 @@ pub fn observation_onto(
     if starts {
         history.frames.iter_mut().for_each(|f| f.fill(0.0));
     }
-    let single = single_frame(obs, default_pose);
-    let mut future = Vec::with_capacity(MIMIC_LEN);
-    mimic(&obs.reference[0], &mut future);
+    let mut single = [0.0; SINGLE_LEN];
+    single_frame_into(obs, default_pose, &mut single);
+    let mut future = [0.0; MIMIC_LEN];
+    mimic_into(&obs.reference[0], &mut future);
     // Slice by slice: a chained iterator over the segments would not vectorise, and costs
     // several times the arithmetic.
     clip_into(&single, &mut out[..SINGLE_LEN]);

@@ -235,6 +235,21 @@ def test_a_network_timer_gets_one_entry_per_network_call() -> None:
     assert len(a.network_s) == 3 and all(t > 0 for t in a.network_s)
 
 
+def test_a_batch_the_simulator_counted_all_active_acts_as_one_whose_flags_say_so() -> None:
+    built = np.arange(3 * 1432, dtype=np.float32).reshape(3, 1432) / 1000.0
+    results = []
+    for all_active in (False, True):
+        a, obs = adapter(3, TakeFirst()), batch(3)
+        actions = np.zeros((3, 29))
+        for k in range(3):
+            obs["step"] = k
+            inputs = a.act(obs, actions, None if k < 2 else built, all_active=all_active)
+        results.append((inputs, actions.copy(), a.state["history"].copy()))
+    (inputs_f, actions_f, history_f), (inputs_t, actions_t, history_t) = results
+    assert np.array_equal(inputs_f, inputs_t) and np.array_equal(actions_f, actions_t)
+    assert np.array_equal(history_f, history_t) and history_t.any()
+
+
 def test_an_input_built_by_the_simulator_goes_to_the_network_as_it_is() -> None:
     a = adapter(3, TakeFirst())
     obs = batch(3, active=(0, 2))
@@ -256,6 +271,7 @@ def test_the_run_loop_answers_every_step_of_a_session() -> None:
         steps_answered = 0
         layout = ta.Layout(n_envs=2, n_joints=29, n_refs=2)
         policy_inputs = None  # the adapter builds the observation itself
+        n_active = 2  # as the simulator counts the batches below
 
         class info:  # noqa: N801
             reference_offsets_s = (0.0, 0.02)

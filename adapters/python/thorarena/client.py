@@ -237,6 +237,9 @@ class Session:
         """`seq` of the newest observation batch received."""
         self.ended = False
         """True once the simulator ended the run."""
+        self.n_active = 0
+        """Slots flagged `FLAG_ACTIVE` in the current batch, as the simulator counted them:
+        when it is `n_envs`, every slot is active and their flags need not be read."""
         self.policy_inputs: np.ndarray | None = None
         """The current step's policy-input block, when the session carries one (`input=` of
         `connect`): read-only float32 `(n_envs, n_inputs)` over shared memory, valid in the
@@ -414,6 +417,7 @@ class Session:
             newest.delete()
             raise LayoutMismatch(problem)
         self.seq = header.seq
+        self.n_active = header.n_active
         if header.command == COMMAND_END:
             newest.delete()
             return None

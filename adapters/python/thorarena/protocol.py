@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-PROTOCOL_VERSION = 2
+PROTOCOL_VERSION = 3
 """Version of the wire protocol (`thorarena_ipc::PROTOCOL_VERSION`)."""
 
 MAGIC = 0x524F_4854
@@ -231,7 +231,9 @@ class BatchHeader(ctypes.Structure):
         ("env_stride", ctypes.c_uint32),
         ("n_inputs", ctypes.c_uint32),
         ("seq", ctypes.c_uint64),
-        ("reserved", ctypes.c_uint64 * 3),
+        ("n_active", ctypes.c_uint32),
+        ("reserved0", ctypes.c_uint32),
+        ("reserved", ctypes.c_uint64 * 2),
     ]
 
 
