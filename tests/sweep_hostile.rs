@@ -330,9 +330,10 @@ fn mark_first_policy_failed(episodes: &Path) {
 }
 
 #[test]
-fn collect_refuses_a_done_task_whose_run_holds_policy_failed_episodes() {
-    // The record written by a ThorArena that trusted the count: done.json beside a run
-    // whose episodes a dead policy cut short.
+fn a_done_task_whose_run_no_longer_counts_is_not_done_and_runs_again() {
+    // done.json was true when it was written (or written by a ThorArena that trusted the
+    // count); afterwards task 1's run lost an episode to a "dead policy" and task 2's run
+    // was replaced by task 3's (another shard).
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("sweep");
     plan(&four_tasks(tmp.path()), &dir);
@@ -346,18 +347,6 @@ fn collect_refuses_a_done_task_whose_run_holds_policy_failed_episodes() {
     let rows: Vec<&str> = csv.lines().collect();
     assert!(rows[1].contains(",false,"), "{csv}");
     assert!(rows[2].contains(",true,"), "{csv}");
-}
-
-#[test]
-fn a_done_task_whose_run_no_longer_counts_is_not_done_and_runs_again() {
-    // done.json was true when it was written; afterwards task 1's run lost an episode to a
-    // "dead policy" and task 2's run was replaced by task 3's (another shard).
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("sweep");
-    plan(&four_tasks(tmp.path()), &dir);
-    ok(thorarena(&["sweep", "run", s(&dir), "--jobs", "2"]));
-    let episodes = dir.join("tasks/000001/run/episodes.jsonl");
-    mark_first_policy_failed(&episodes);
     let (two, three) = (dir.join("tasks/000002/run"), dir.join("tasks/000003/run"));
     std::fs::remove_dir_all(&two).unwrap();
     copy_dir(&three, &two);

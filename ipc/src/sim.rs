@@ -245,21 +245,22 @@ impl SimSession {
         budget: Option<Duration>,
         read: impl FnOnce(&ActionBatch),
     ) -> Result<StepOutcome, IpcError> {
-        self.step_prepared(|batch, _| fill(batch), |_| {}, budget, read)
+        self.step_prepared(|batch, _| fill(batch), None, budget, read)
     }
 
     /// [`Self::step`], with work for the next step done while the policy computes this
-    /// one's answer: once the batch is published, the next step's batch is loaned (which
-    /// zeroes it) and handed to `prepare_next`, whose writes stay in it; the next step's
-    /// `fill` gets that batch with `prepared` true (false when it had to be loaned then,
-    /// as on the first step). What can be written before the step's own state is known —
-    /// a network input's history — leaves the step's critical path that way. The round
-    /// trip is timed from publishing, so a `prepare_next` slower than the policy shows
-    /// in it.
+    /// one's answer: given `prepare_next`, once the batch is published the next step's
+    /// batch is loaned (which zeroes it) and handed to it, and its writes stay there; the
+    /// next step's `fill` gets that batch with `prepared` true (false when it had to be
+    /// loaned then, as on the first step). What can be written before the step's own
+    /// state is known — a network input's history — leaves the step's critical path that
+    /// way. The round trip is timed from publishing, so loaning and preparing show in it
+    /// when the policy answers faster than they take (an echo policy at 64 slots): only
+    /// callers with something to prepare pass `Some`.
     pub fn step_prepared(
         &mut self,
         fill: impl FnOnce(&mut ObsBatchMut, bool),
-        prepare_next: impl FnOnce(&mut ObsBatchMut),
+        prepare_next: Option<&mut dyn FnMut(&mut ObsBatchMut)>,
         budget: Option<Duration>,
         read: impl FnOnce(&ActionBatch),
     ) -> Result<StepOutcome, IpcError> {
@@ -303,16 +304,18 @@ impl SimSession {
             .map_err(transport(TransportOp::Notify(Event::ObsReady)))?;
         // Not loanable now (every chunk in flight): the next step loans it, unprepared,
         // and reports the error if there is still none.
-        if let Ok(mut next) = conn.client.loan_slice(conn.layout.obs_words()) {
+        let next = prepare_next.and_then(|prepare| {
+            let mut next = conn.client.loan_slice(conn.layout.obs_words()).ok()?;
             let bytes: &mut [u8] = bytemuck::cast_slice_mut(next.payload_mut());
-            prepare_next(&mut ObsBatchMut::new(
+            prepare(&mut ObsBatchMut::new(
                 conn.layout,
                 bytes,
                 COMMAND_STEP,
                 conn.seq + 1,
             ));
-            conn.next = Some(next);
-        }
+            Some(next)
+        });
+        conn.next = next;
         let deadline = budget.map(|b| sent + b);
         let step_service = &self.step;
         let mut response = None;

@@ -54,7 +54,7 @@ pub fn echo_round_trips(
             fill_echo_observations(batch, shape, step);
             Duration::ZERO
         },
-        |_| Duration::ZERO,
+        None,
         |a, shape, step| {
             let last = shape.n_envs - 1;
             a.env(last)[1] == (last * 100 + 1) as f64 + step as f64
@@ -73,13 +73,14 @@ fn timed_round_trips(
     warmup: usize,
     steps: usize,
     mut fill: impl FnMut(&mut ObsBatchMut, Layout, u64, bool) -> Duration,
-    mut prepare: impl FnMut(&mut ObsBatchMut) -> Duration,
+    mut prepare: Option<&mut dyn FnMut(&mut ObsBatchMut) -> Duration>,
     answer_ok: impl Fn(&ActionBatch, Layout, u64) -> bool,
 ) -> Result<AdapterTiming, PerfError> {
     let shape = sim.layout().ok_or(PerfError::WrongEcho {
         step: 0,
         outcome: "no policy connected".into(),
     })?;
+    let has_prepare = prepare.is_some();
     let mut round_trip = LatencyRecorder::default();
     let mut input_build = LatencyRecorder::default();
     let mut input_prepare = LatencyRecorder::default();
@@ -88,9 +89,19 @@ fn timed_round_trips(
         let mut ok = true;
         let mut build = Duration::ZERO;
         let mut prepared = Duration::ZERO;
+        let mut prepare_timed = |next: &mut ObsBatchMut| {
+            if let Some(p) = prepare.as_mut() {
+                prepared = p(next);
+            }
+        };
+        let prepare_next: Option<&mut dyn FnMut(&mut ObsBatchMut)> = if has_prepare {
+            Some(&mut prepare_timed)
+        } else {
+            None
+        };
         let outcome = sim.step_prepared(
             |b, was_prepared| build = fill(b, shape, step, was_prepared),
-            |next| prepared = prepare(next),
+            prepare_next,
             None,
             |a| ok = answer_ok(a, shape, step),
         )?;
@@ -171,7 +182,17 @@ pub fn adapter_round_trips(
     reference_offsets_s: &[f64],
     input: Option<&mut InputBuilder>,
 ) -> Result<AdapterTiming, PerfError> {
+    let has_input = input.is_some();
     let input = RefCell::new(input);
+    let mut prepare = |next: &mut ObsBatchMut| {
+        let started = Instant::now();
+        if let Some(builder) = input.borrow().as_ref() {
+            for slot in 0..builder.n_envs() {
+                builder.prepare(slot, next.policy_input(slot));
+            }
+        }
+        started.elapsed()
+    };
     timed_round_trips(
         sim,
         warmup,
@@ -190,15 +211,7 @@ pub fn adapter_round_trips(
             }
             build
         },
-        |next| {
-            let started = Instant::now();
-            if let Some(builder) = input.borrow().as_ref() {
-                for slot in 0..builder.n_envs() {
-                    builder.prepare(slot, next.policy_input(slot));
-                }
-            }
-            started.elapsed()
-        },
+        if has_input { Some(&mut prepare) } else { None },
         |a, shape, _| (0..shape.n_envs).all(|i| a.env(i).iter().all(|x| x.is_finite())),
     )
 }

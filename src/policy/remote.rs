@@ -8,7 +8,7 @@ use super::{ActOutcome, Observation, Policy};
 use std::cell::RefCell;
 use std::time::Duration;
 use thorarena_ipc::{
-    IpcError, PolicyInfo, SimConfig, SimSession, StepOutcome, FLAG_PREVIOUS_TERMINATED,
+    IpcError, ObsBatchMut, PolicyInfo, SimConfig, SimSession, StepOutcome, FLAG_PREVIOUS_TERMINATED,
 };
 
 /// How to serve a session: the session itself, and what to do about connections.
@@ -126,7 +126,17 @@ impl Policy for RemotePolicy {
         let previous_terminated = &mut self.previous_terminated;
         // Both closures use the builder: `fill` to write, `prepare_next` (run while the
         // policy computes) to read the histories into the next batch.
+        let has_input = self.input.is_some();
         let input = RefCell::new(self.input.as_mut().map(|(_, builder)| builder));
+        let mut prepare = |next: &mut ObsBatchMut| {
+            if let Some(builder) = input.borrow().as_ref() {
+                for slot in 0..n_envs {
+                    builder.prepare(slot, next.policy_input(slot));
+                }
+            }
+        };
+        let prepare_next: Option<&mut dyn FnMut(&mut ObsBatchMut)> =
+            if has_input { Some(&mut prepare) } else { None };
         self.stats.round_trips += 1;
         let outcome = self.session.step_prepared(
             |batch, prepared| {
@@ -160,13 +170,7 @@ impl Policy for RemotePolicy {
                     }
                 }
             },
-            |next| {
-                if let Some(builder) = input.borrow().as_ref() {
-                    for slot in 0..n_envs {
-                        builder.prepare(slot, next.policy_input(slot));
-                    }
-                }
-            },
+            prepare_next,
             self.config.session.budget,
             |batch| {
                 for (obs, action) in observations.iter().zip(actions.iter_mut()) {
