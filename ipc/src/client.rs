@@ -200,6 +200,7 @@ impl PolicyClient {
             &self.obs_ready,
             self.wait,
             deadline,
+            None,
             &self.simulator,
             || true,
             || self.server.has_requests().unwrap_or(true),

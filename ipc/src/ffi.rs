@@ -333,6 +333,7 @@ pub unsafe extern "C" fn thorarena_connect(
             } else {
                 Duration::from_micros(o.liveness_us)
             },
+            ..WaitPolicy::default()
         };
         let client = PolicyClient::connect(&config, Duration::from_millis(o.timeout_ms))?;
         let l = client.info().layout;

@@ -331,13 +331,21 @@ impl PeerNode {
 pub(crate) const NODE_CHECK_EVERY: Duration = Duration::from_millis(10);
 
 /// How a side waits for the other: busy-poll for `spin`, then block on the event
-/// listener; check the peer's liveness every `liveness_every` of blocking.
+/// listener; check the peer's liveness every `liveness_every` of blocking. When the side
+/// knows when the other is due (the policy's recent round trips), it stops blocking
+/// `wake_early` before that moment and busy-polls until `wake_early` after it: waking a
+/// blocked process costs tens of µs, polling through a short window costs nothing on the
+/// critical path.
 #[derive(Debug, Clone, Copy)]
 pub struct WaitPolicy {
     /// Busy-poll this long before blocking (the low-latency path).
     pub spin: Duration,
     /// While blocked, check that the peer process lives this often.
     pub liveness_every: Duration,
+    /// Busy-poll from this long before the other side's earliest expected moment until
+    /// as long after its latest (zero: never; only waits that know when the other side
+    /// is due use it).
+    pub wake_early: Duration,
 }
 
 impl Default for WaitPolicy {
@@ -345,6 +353,7 @@ impl Default for WaitPolicy {
         Self {
             spin: Duration::from_micros(50),
             liveness_every: Duration::from_millis(2),
+            wake_early: Duration::from_micros(150),
         }
     }
 }
@@ -358,11 +367,14 @@ pub(crate) enum Waited {
 
 /// Waits until `ready()` holds, the deadline passes, or the peer is gone: its node died
 /// (`peer`), or it left the session while alive (`peer_present()` false). Drains the
-/// listener after each wake-up (a WaitSet-free loop cannot spin on stale events).
+/// listener after each wake-up (a WaitSet-free loop cannot spin on stale events). `due`:
+/// the earliest and latest moment `ready()` is expected to start holding, if known
+/// ([`WaitPolicy::wake_early`]).
 pub(crate) fn wait_for(
     listener: &Listener<ipc::Service>,
     policy: WaitPolicy,
     deadline: Option<Instant>,
+    due: Option<(Instant, Instant)>,
     peer: &PeerNode,
     peer_present: impl Fn() -> bool,
     mut ready: impl FnMut() -> bool,
@@ -374,6 +386,12 @@ pub(crate) fn wait_for(
         }
         std::hint::spin_loop();
     }
+    // The window around `due` to poll through, if there is one still ahead.
+    let early = policy.wake_early;
+    let window = due
+        .filter(|_| !early.is_zero())
+        .map(|(first, last)| (first.checked_sub(early).unwrap_or(first), last + early))
+        .filter(|(_, end)| *end > Instant::now());
     loop {
         if ready() {
             return Ok(Waited::Ready);
@@ -385,6 +403,21 @@ pub(crate) fn wait_for(
                 return Ok(Waited::Deadline);
             }
             slice = slice.min(d - now);
+        }
+        if let Some((from, until)) = window {
+            if now >= from && now < until {
+                let until = deadline.map_or(until, |d| until.min(d));
+                while Instant::now() < until {
+                    if ready() {
+                        return Ok(Waited::Ready);
+                    }
+                    std::hint::spin_loop();
+                }
+                continue;
+            }
+            if now < from {
+                slice = slice.min(from - now);
+            }
         }
         let n = match listener.timed_wait(|_| {}, slice) {
             Ok(n) => n,

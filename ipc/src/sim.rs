@@ -107,7 +107,13 @@ struct Connection {
     /// The next step's batch, loaned and handed to `prepare_next` while the policy
     /// computed the last answer ([`SimSession::step_prepared`]).
     next: Option<StepRequest>,
+    /// The last answered steps' round trips (up to [`RECENT_ROUND_TRIPS`]): between the
+    /// quickest and the slowest the next answer is due ([`WaitPolicy::wake_early`]).
+    recent_round_trips: Vec<Duration>,
 }
+
+/// Round trips remembered to predict the next one.
+const RECENT_ROUND_TRIPS: usize = 8;
 
 /// The simulator's end of a session.
 pub struct SimSession {
@@ -321,10 +327,18 @@ impl SimSession {
         let mut response = None;
         let mut receive_error = None;
         let mut discarded = 0;
+        // Due: between this policy's quickest and slowest recent answers.
+        let recent = &conn.recent_round_trips;
+        let due = recent
+            .iter()
+            .min()
+            .zip(recent.iter().max())
+            .map(|(&first, &last)| (sent + first, sent + last));
         let waited = wait_for(
             &self.action_ready,
             self.config.wait,
             deadline,
+            due,
             &conn.peer,
             // A policy that closed its session but lives on has no step server any more.
             || step_service.dynamic_config().number_of_servers() > 0,
@@ -341,6 +355,13 @@ impl SimSession {
             },
         )?;
         self.last_round_trip = sent.elapsed();
+        if matches!(waited, Waited::Ready) {
+            let slot = (conn.seq as usize) % RECENT_ROUND_TRIPS;
+            match conn.recent_round_trips.get_mut(slot) {
+                Some(rt) => *rt = self.last_round_trip,
+                None => conn.recent_round_trips.push(self.last_round_trip),
+            }
+        }
         self.late_replies += discarded;
         if let Some(old) = conn.overdue.take() {
             if matches!(old.receive(), Ok(Some(_))) {

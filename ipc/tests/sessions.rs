@@ -146,6 +146,42 @@ fn the_batch_header_counts_the_active_slots() {
 }
 
 #[test]
+fn a_policy_late_after_steady_answers_is_a_miss_at_the_deadline() {
+    // Steady 2 ms answers teach the simulator when the next is due (it polls through
+    // that window instead of blocking); a 60 ms stall must still end at the 15 ms budget.
+    let session = unique("due");
+    let mut sim = SimSession::create(sim_config(&session, 1, 3)).unwrap();
+    let s = session.clone();
+    let policy = std::thread::spawn(move || {
+        let config = PolicyConfig::new(&s, "steady", joints(3), vec![0.0, 0.1]);
+        let mut client = PolicyClient::connect(&config, Duration::from_secs(10)).unwrap();
+        let mut step = 0;
+        client
+            .run(|_, _| {
+                step += 1;
+                std::thread::sleep(Duration::from_millis(if step == 11 { 60 } else { 2 }));
+            })
+            .unwrap();
+    });
+    sim.accept(Some(Duration::from_secs(10)), |_| {}).unwrap();
+    let budget = Some(Duration::from_millis(15));
+    for step in 0..10 {
+        let outcome = sim.step(|_| {}, budget, |_| {}).unwrap();
+        assert_eq!(outcome, StepOutcome::Answered, "step {step}");
+    }
+    let started = std::time::Instant::now();
+    let outcome = sim.step(|_| {}, budget, |_| {}).unwrap();
+    let waited = started.elapsed();
+    assert_eq!(outcome, StepOutcome::Missed);
+    assert!(
+        waited >= Duration::from_millis(15) && waited < Duration::from_millis(45),
+        "the miss came after {waited:?}"
+    );
+    sim.end();
+    policy.join().unwrap();
+}
+
+#[test]
 fn mismatched_policies_are_refused_with_a_typed_status() {
     let session = unique("mismatch");
     let mut sim = SimSession::create(sim_config(&session, 1, 4)).unwrap();

@@ -16,6 +16,7 @@ import contextlib
 import ctypes
 import os
 import time
+from collections import deque
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -43,6 +44,8 @@ from .protocol import (
     to_fixed,
 )
 
+RECENT_TURNAROUNDS = 8
+"""The simulator's turnarounds remembered to predict when the next batch is due."""
 LIVENESS_EVERY_S = 0.002
 """While blocked on `obs_ready`, how often the simulator's liveness is checked."""
 NODE_CHECK_EVERY_S = 0.010
@@ -221,6 +224,7 @@ class Session:
         obs_ready: Any,
         action_ready: Any,
         spin_s: float,
+        wake_early_s: float = 0.0,
         simulator: SimulatorWatch,
     ) -> None:
         self.info = info
@@ -230,6 +234,10 @@ class Session:
         self._obs_ready = obs_ready
         self._action_ready = action_ready
         self._spin_s = spin_s
+        self._wake_early_s = wake_early_s
+        # The simulator's last turnarounds (answer sent → next batch here), s: between the
+        # quickest and the slowest the next batch is due.
+        self._turnarounds: deque[float] = deque(maxlen=RECENT_TURNAROUNDS)
         self._slice = iox2.Duration.from_secs_f64(LIVENESS_EVERY_S)
         self.steps_answered = 0
         """Control steps answered so far."""
@@ -377,12 +385,24 @@ class Session:
         now = time.perf_counter()
         deadline = None if timeout_s is None else now + timeout_s
         spin_until = now + self._spin_s
+        early = self._wake_early_s
+        turnarounds = self._turnarounds
+        due = None  # the window to poll through, where the next batch is due
+        if early > 0.0 and turnarounds:
+            due = (now + min(turnarounds) - early, now + max(turnarounds) + early)
         newest = None
         try:
             while not server.has_requests and time.perf_counter() < spin_until:
                 pass
             while newest is None:
                 while not server.has_requests:
+                    t = time.perf_counter()
+                    if due is not None and due[0] <= t < due[1]:
+                        until = due[1] if deadline is None else min(due[1], deadline)
+                        while not server.has_requests and time.perf_counter() < until:
+                            pass
+                        due = None
+                        continue
                     if deadline is not None:
                         left = deadline - time.perf_counter()
                         if left <= 0:
@@ -390,6 +410,11 @@ class Session:
                         wait = iox2.Duration.from_secs_f64(min(left, LIVENESS_EVERY_S))
                     else:
                         wait = self._slice
+                    if due is not None and t < due[0]:  # wake up when it is due
+                        wait_s = min(due[0] - t, LIVENESS_EVERY_S)
+                        if deadline is not None:
+                            wait_s = min(wait_s, deadline - t)
+                        wait = iox2.Duration.from_secs_f64(max(wait_s, 0.0))
                     woken = self._obs_ready.timed_wait(wait)
                     if not woken and not server.has_requests and not simulator.alive():
                         pid = self.info.simulator_pid
@@ -398,6 +423,8 @@ class Session:
                     if newest is not None:
                         newest.delete()
                     newest = request
+            if self.steps_answered:  # not the wait for the first batch
+                turnarounds.append(time.perf_counter() - now)
         except ThorArenaError:
             raise
         except Exception as e:
@@ -465,6 +492,7 @@ def connect(
     reference_offsets_s: Sequence[float] = (0.0,),
     timeout_s: float = 10.0,
     spin_us: float = 50.0,
+    wake_early_us: float = 150.0,
     input: str | None = None,
     protocol_version: int = PROTOCOL_VERSION,
 ) -> Session:
@@ -472,7 +500,9 @@ def connect(
 
     `joint_names` is the joint order the policy assumes (checked against the robot's by
     hash); `reference_offsets_s` the times ahead of each step at which it wants reference
-    frames; `spin_us` how long to busy-poll for each observation before blocking; `input`
+    frames; `spin_us` how long to busy-poll for each observation before blocking;
+    `wake_early_us` how long before the next observation is due (the simulator's recent
+    turnarounds) to stop blocking and busy-poll, until as long after (0: never); `input`
     a network input for the simulator to build into every batch (`"twist2"`), read as
     `Session.policy_inputs` (the simulator refuses a name it does not offer).
     `protocol_version` is for tests that announce a wrong one on purpose.
@@ -574,6 +604,7 @@ def connect(
         obs_ready=obs_ready,
         action_ready=action_ready,
         spin_s=spin_us * 1e-6,
+        wake_early_s=wake_early_us * 1e-6,
         simulator=SimulatorWatch(
             step, SimulatorWatch.find(step, session, node.id.value), welcome.pid
         ),

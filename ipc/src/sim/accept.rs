@@ -134,6 +134,7 @@ impl SimSession {
             seq: 0,
             overdue: None,
             next: None,
+            recent_round_trips: Vec::new(),
         });
         Ok(Some(info))
     }
