@@ -187,9 +187,7 @@ pub fn adapter_round_trips(
     let mut prepare = |next: &mut ObsBatchMut| {
         let started = Instant::now();
         if let Some(builder) = input.borrow().as_ref() {
-            for slot in 0..builder.n_envs() {
-                builder.prepare(slot, next.policy_input(slot));
-            }
+            builder.prepare(next);
         }
         started.elapsed()
     };

@@ -11,7 +11,7 @@
 
 use super::twist2;
 use super::Observation;
-use thorarena_ipc::InputOffer;
+use thorarena_ipc::{InputOffer, ObsBatchMut};
 
 /// The inputs this simulator builds for a robot of `n_joints` joints: TWIST2's for the
 /// 29-joint G1 only (its observation has 29 joint positions per frame; the handshake's
@@ -58,17 +58,14 @@ impl InputBuilder {
         twist2::observation_onto(obs, &self.default_pose, history, out, prepared);
     }
 
-    /// Writes into slot `slot`'s row `out` of the next batch what its next `write` would
-    /// write there from the state it already has (TWIST2's history: 10 of its 11 frames),
-    /// while the policy process computes the current step
+    /// Writes into every slot's row of the next batch what its next `write` would write
+    /// there from the state it already has (TWIST2's history: 10 of its 11 frames), while
+    /// the policy process computes the current step
     /// ([`thorarena_ipc::SimSession::step_prepared`]).
-    pub fn prepare(&self, slot: usize, out: &mut [f32]) {
-        twist2::history_into(&self.histories[slot], out);
-    }
-
-    /// Environment slots it builds for.
-    pub fn n_envs(&self) -> usize {
-        self.histories.len()
+    pub fn prepare(&self, next: &mut ObsBatchMut) {
+        for (slot, history) in self.histories.iter().enumerate() {
+            twist2::history_into(history, next.policy_input(slot));
+        }
     }
 }
 

@@ -130,9 +130,7 @@ impl Policy for RemotePolicy {
         let input = RefCell::new(self.input.as_mut().map(|(_, builder)| builder));
         let mut prepare = |next: &mut ObsBatchMut| {
             if let Some(builder) = input.borrow().as_ref() {
-                for slot in 0..n_envs {
-                    builder.prepare(slot, next.policy_input(slot));
-                }
+                builder.prepare(next);
             }
         };
         let prepare_next: Option<&mut dyn FnMut(&mut ObsBatchMut)> =
