@@ -12,7 +12,7 @@ use crate::handshake::{
 use crate::layout::{ActionBatchMut, Layout, ObsBatch, COMMAND_END};
 use crate::session::{
     create_node, service_names, transport, wait_for, Event, IpcError, Message, PeerNode, Port,
-    ServiceNames, TransportOp, WaitPolicy, Waited, NODE_CHECK_EVERY,
+    RecentTurns, ServiceNames, TransportOp, WaitPolicy, Waited, NODE_CHECK_EVERY,
 };
 use crate::PROTOCOL_VERSION;
 use iceoryx2::active_request::ActiveRequest;
@@ -25,6 +25,7 @@ use iceoryx2::prelude::*;
 use iceoryx2::response_mut::ResponseMut;
 use iceoryx2::service::port_factory::event::PortFactory as EventPortFactory;
 use iceoryx2::service::port_factory::request_response::PortFactory as RrFactory;
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 type StepServer = Server<ipc::Service, [u64], (), [u64], ()>;
@@ -114,6 +115,11 @@ pub struct PolicyClient {
     obs_ready: Listener<ipc::Service>,
     action_ready: Notifier<ipc::Service>,
     wait: WaitPolicy,
+    /// When the last answer went out: the simulator's next batch is due a turn later.
+    answered_at: Cell<Option<Instant>>,
+    /// The simulator's last turns (from an answer to the next batch): physics, then
+    /// building the batch.
+    recent_turns: RecentTurns,
     /// The simulator's iceoryx2 node: whether it lives.
     simulator: PeerNode,
     // Declared last: ports above drop before their node.
@@ -182,6 +188,8 @@ impl PolicyClient {
             obs_ready,
             action_ready,
             wait: config.wait,
+            answered_at: Cell::new(None),
+            recent_turns: RecentTurns::default(),
             simulator: PeerNode::new(simulator_node, node.config(), NODE_CHECK_EVERY),
             _node: node,
         })
@@ -196,11 +204,13 @@ impl PolicyClient {
     /// that was overtaken (the policy fell behind its deadline) is dropped unanswered.
     pub fn next_step(&mut self, timeout: Option<Duration>) -> Result<Next, IpcError> {
         let deadline = timeout.map(|t| Instant::now() + t);
+        let answered_at = self.answered_at.take();
+        let due = answered_at.and_then(|at| self.recent_turns.due_after(at));
         let waited = wait_for(
             &self.obs_ready,
             self.wait,
             deadline,
-            None,
+            due,
             &self.simulator,
             || true,
             || self.server.has_requests().unwrap_or(true),
@@ -209,6 +219,9 @@ impl PolicyClient {
             Waited::Deadline => return Ok(Next::Timeout),
             Waited::PeerGone => return Err(IpcError::PeerGone("simulator")),
             Waited::Ready => {}
+        }
+        if let Some(at) = answered_at {
+            self.recent_turns.record(at.elapsed());
         }
         let mut newest = None;
         while let Some(r) = self
@@ -451,6 +464,7 @@ impl PolicyStep {
             .action_ready
             .notify()
             .map_err(transport(TransportOp::Notify(Event::ActionReady)))?;
+        client.answered_at.set(Some(Instant::now()));
         Ok(())
     }
 }

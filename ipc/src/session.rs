@@ -1,10 +1,11 @@
 //! What both sides share: service names per session, node creation, errors, and the
 //! spin-then-block wait.
 
+use crate::precise_wait::wait_for_event;
 use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::node::NodeState;
-use iceoryx2::port::listener::{Listener, ListenerWaitError};
+use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
 use std::cell::Cell;
 use std::time::{Duration, Instant};
@@ -332,7 +333,7 @@ pub(crate) const NODE_CHECK_EVERY: Duration = Duration::from_millis(10);
 
 /// How a side waits for the other: busy-poll for `spin`, then block on the event
 /// listener; check the peer's liveness every `liveness_every` of blocking. When the side
-/// knows when the other is due (the policy's recent round trips), it stops blocking
+/// knows when the other is due (its recent turns), it stops blocking
 /// `wake_early` before that moment and busy-polls until `wake_early` after it: waking a
 /// blocked process costs tens of µs, polling through a short window costs nothing on the
 /// critical path.
@@ -355,6 +356,33 @@ impl Default for WaitPolicy {
             liveness_every: Duration::from_millis(2),
             wake_early: Duration::from_micros(150),
         }
+    }
+}
+
+/// The other side's last few turns (from this side's send to the other's answer), which
+/// say when its next answer is due: between the quickest and the slowest
+/// ([`WaitPolicy::wake_early`]).
+#[derive(Debug, Default)]
+pub(crate) struct RecentTurns(Vec<Duration>);
+
+impl RecentTurns {
+    /// Turns remembered.
+    const KEPT: usize = 8;
+
+    /// Remembers one turn, forgetting the oldest beyond [`Self::KEPT`].
+    pub(crate) fn record(&mut self, turn: Duration) {
+        if self.0.len() == Self::KEPT {
+            self.0.remove(0);
+        }
+        self.0.push(turn);
+    }
+
+    /// When the answer to what was sent at `sent` is due: the earliest and the latest
+    /// moment, or `None` before any turn was seen.
+    pub(crate) fn due_after(&self, sent: Instant) -> Option<(Instant, Instant)> {
+        let first = self.0.iter().min()?;
+        let last = self.0.iter().max()?;
+        Some((sent + *first, sent + *last))
     }
 }
 
@@ -419,13 +447,7 @@ pub(crate) fn wait_for(
                 slice = slice.min(from - now);
             }
         }
-        let n = match listener.timed_wait(|_| {}, slice) {
-            Ok(n) => n,
-            // A signal interrupted the wait (Ctrl-Z then `fg`: SIGSTOP, SIGCONT): nothing
-            // happened to the session, so wait again after the liveness check below.
-            Err(ListenerWaitError::InterruptSignal) => 0,
-            Err(e) => return Err(transport(TransportOp::WaitForEvent)(e)),
-        };
+        let n = wait_for_event(listener, slice)?;
         if n == 0 && !ready() && (!peer_present() || !peer.alive()) {
             return Ok(Waited::PeerGone);
         }

@@ -11,7 +11,7 @@ use crate::handshake::{joint_names_hash, Hello, Welcome, MAX_JOINTS};
 use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
 use crate::session::{
     create_node, service_names, transport, wait_for, Event, IpcError, Message, PeerNode, Port,
-    TransportCause, TransportOp, WaitPolicy, Waited,
+    RecentTurns, TransportCause, TransportOp, WaitPolicy, Waited,
 };
 use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
@@ -107,13 +107,9 @@ struct Connection {
     /// The next step's batch, loaned and handed to `prepare_next` while the policy
     /// computed the last answer ([`SimSession::step_prepared`]).
     next: Option<StepRequest>,
-    /// The last answered steps' round trips (up to [`RECENT_ROUND_TRIPS`]): between the
-    /// quickest and the slowest the next answer is due ([`WaitPolicy::wake_early`]).
-    recent_round_trips: Vec<Duration>,
+    /// The last answered steps' round trips: when the next answer is due.
+    recent_round_trips: RecentTurns,
 }
-
-/// Round trips remembered to predict the next one.
-const RECENT_ROUND_TRIPS: usize = 8;
 
 /// The simulator's end of a session.
 pub struct SimSession {
@@ -327,13 +323,7 @@ impl SimSession {
         let mut response = None;
         let mut receive_error = None;
         let mut discarded = 0;
-        // Due: between this policy's quickest and slowest recent answers.
-        let recent = &conn.recent_round_trips;
-        let due = recent
-            .iter()
-            .min()
-            .zip(recent.iter().max())
-            .map(|(&first, &last)| (sent + first, sent + last));
+        let due = conn.recent_round_trips.due_after(sent);
         let waited = wait_for(
             &self.action_ready,
             self.config.wait,
@@ -356,11 +346,7 @@ impl SimSession {
         )?;
         self.last_round_trip = sent.elapsed();
         if matches!(waited, Waited::Ready) {
-            let slot = (conn.seq as usize) % RECENT_ROUND_TRIPS;
-            match conn.recent_round_trips.get_mut(slot) {
-                Some(rt) => *rt = self.last_round_trip,
-                None => conn.recent_round_trips.push(self.last_round_trip),
-            }
+            conn.recent_round_trips.record(self.last_round_trip);
         }
         self.late_replies += discarded;
         if let Some(old) = conn.overdue.take() {

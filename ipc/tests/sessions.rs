@@ -182,6 +182,43 @@ fn a_policy_late_after_steady_answers_is_a_miss_at_the_deadline() {
 }
 
 #[test]
+fn an_answer_after_the_deadline_is_a_miss_even_when_it_wakes_the_simulator() {
+    // The simulator blocks while a slow policy computes; an answer 3 ms after a 3 ms
+    // budget must not be taken as on time because its notification woke the simulator
+    // before the simulator's own timeout did (a socket receive timeout rounds up to
+    // scheduler ticks: 8 ms for a 2 ms wait at HZ=250).
+    let session = unique("late");
+    let mut sim = SimSession::create(sim_config(&session, 1, 3)).unwrap();
+    let s = session.clone();
+    let policy = std::thread::spawn(move || {
+        let config = PolicyConfig::new(&s, "late", joints(3), vec![0.0, 0.1]);
+        let mut client = PolicyClient::connect(&config, Duration::from_secs(10)).unwrap();
+        client
+            .run(|_, _| std::thread::sleep(Duration::from_millis(6)))
+            .unwrap();
+    });
+    sim.accept(Some(Duration::from_secs(10)), |_| {}).unwrap();
+    let budget = Some(Duration::from_millis(3));
+    let mut answered = 0;
+    for _ in 0..20 {
+        let started = std::time::Instant::now();
+        let outcome = sim.step(|_| {}, budget, |_| {}).unwrap();
+        if outcome == StepOutcome::Answered {
+            answered += 1;
+            eprintln!("answered after {:?}", started.elapsed());
+        }
+        // Let the late answer arrive before the next step.
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    sim.end();
+    policy.join().unwrap();
+    assert_eq!(
+        answered, 0,
+        "{answered} of 20 answers 6 ms after the step counted within 3 ms"
+    );
+}
+
+#[test]
 fn mismatched_policies_are_refused_with_a_typed_status() {
     let session = unique("mismatch");
     let mut sim = SimSession::create(sim_config(&session, 1, 4)).unwrap();

@@ -6,7 +6,9 @@ use super::{Connection, HelloFactory, InputOffer, PolicyInfo, SimSession, StepFa
 use crate::handshake::{from_fixed, to_fixed, Hello, Status, Welcome};
 use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
 use crate::layout::Layout;
-use crate::session::{transport, IpcError, Message, PeerNode, Port, TransportOp, NODE_CHECK_EVERY};
+use crate::session::{
+    transport, IpcError, Message, PeerNode, Port, RecentTurns, TransportOp, NODE_CHECK_EVERY,
+};
 use crate::PROTOCOL_VERSION;
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::identifiers::UniqueNodeId;
@@ -134,7 +136,7 @@ impl SimSession {
             seq: 0,
             overdue: None,
             next: None,
-            recent_round_trips: Vec::new(),
+            recent_round_trips: RecentTurns::default(),
         });
         Ok(Some(info))
     }
