@@ -194,3 +194,18 @@ def test_g1_joint_names_are_robot_toml_order() -> None:
     tomllib = pytest.importorskip("tomllib")
     robot = tomllib.loads((REPO / "data" / "robots" / "g1_29dof" / "robot.toml").read_text())
     assert list(protocol.G1_JOINT_NAMES) == [j["name"] for j in robot["joints"]]
+
+
+def test_a_batch_header_read_in_one_call_gives_every_field_up_to_n_active() -> None:
+    header = protocol.BatchHeader(
+        magic=protocol.MAGIC, protocol_version=3, command=1, n_envs=4, n_joints=29, n_refs=2,
+        env_stride=1000, n_inputs=1432, seq=77, n_active=3,
+    )  # fmt: skip
+    words = protocol.BATCH_HEADER_WORDS
+    assert words.size == protocol.BatchHeader.reserved0.offset
+    fields = words.unpack_from(bytes(header))
+    assert fields == (protocol.MAGIC, 3, 1, 4, 29, 2, 1000, 1432, 77, 3)
+    layout = Layout(n_envs=4, n_joints=29, n_refs=2, n_inputs=1432)
+    header.env_stride = layout.env_stride
+    assert words.unpack_from(bytes(header))[3:8] == layout.batch_shape
+    assert layout.check_batch_header(header) is None

@@ -276,13 +276,19 @@ def test_the_run_loop_answers_every_step_of_a_session() -> None:
         class info:  # noqa: N801
             reference_offsets_s = (0.0, 0.02)
 
-        def steps(self) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        def steps(self, *, zero_actions: bool = True) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+            # The adapter asks for unzeroed memory: what an earlier step left is garbage
+            # here, and the row of a slot that went inactive must come back zero.
+            assert not zero_actions
             for k in range(3):
-                obs = batch(2)
+                obs = batch(2, active=(0,) if k == 2 else (0, 1))
                 obs["step"] = k
-                actions = np.zeros((2, 29))
+                self.n_active = 1 if k == 2 else 2
+                actions = np.full((2, 29), np.nan)
                 yield obs, actions
-                assert actions.any()
+                assert np.isfinite(actions).all()
+                assert actions[0].any()
+                assert actions[1].any() if k < 2 else not actions[1].any()
                 self.steps_answered += 1
 
     a = Twist2Adapter(TakeFirst())

@@ -26,6 +26,7 @@ import numpy as np
 
 from .protocol import (
     ACTION_HEADER_BYTES,
+    BATCH_HEADER_WORDS,
     COMMAND_END,
     INPUT_NAME_BYTES,
     MAGIC,
@@ -299,12 +300,17 @@ class Session:
         """True once the session's ports are released."""
         return self._server is None
 
-    def steps(self, *, timeout_s: float | None = None) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    def steps(
+        self, *, timeout_s: float | None = None, zero_actions: bool = True
+    ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
         """Yields `(obs, actions)` for each control step until the run ends.
 
         `obs` is a read-only structured array of `n_envs` records (`Layout.env_dtype`) over
         the request in shared memory; `actions` a writable `(n_envs, n_joints)` float64 array
-        over the loaned response, zeroed. Their contents belong to the current step only
+        over the loaned response, zeroed — or, with `zero_actions=False`, holding whatever
+        an earlier step left in that memory: for a loop that writes every active slot's
+        row itself (the simulator reads only the active slots'), which spares zeroing
+        the block each step. Their contents belong to the current step only
         (the memory is reused for later steps): copy what you keep. The views keep the
         session's shared memory mapped; `close()` unmaps it, after which they must not be
         touched. Leaving the body sends the actions and wakes the simulator; leaving the
@@ -323,23 +329,40 @@ class Session:
         obs_block = ctypes.c_uint8 * layout.obs_bytes
         action_block = ctypes.c_uint8 * layout.action_bytes
         header = ActionHeader(MAGIC, PROTOCOL_VERSION, layout.n_envs, layout.n_joints, 0, 0)
-        # Views by shared-memory address: the few chunks of each side's static pool recur,
-        # and a view is only a pointer, a shape and a dtype.
-        obs_views: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
+        shape = layout.batch_shape
+        unpack_header = BATCH_HEADER_WORDS.unpack_from
+        # Per shared-memory address (the few chunks of each side's static pool recur): the
+        # chunk as a ctypes block and its views, a view being only a pointer, a shape and
+        # a dtype. A batch's length is checked when its chunk is first seen; its header,
+        # every step. Each Python operation counts here: the network just ran and left
+        # the interpreter's own code and data cold in the caches.
+        obs_views: dict[int, tuple[Any, np.ndarray, np.ndarray | None]] = {}
         action_views: dict[int, np.ndarray] = {}
         while True:
             request = self._next_request(timeout_s)
-            if request is None:
-                self.ended = True
-                return
             response = None
             try:
+                address = request.payload_ptr
+                views = obs_views.get(address)
+                if views is None:
+                    views = obs_views[address] = self._obs_views(request, address, obs_block)
+                block, obs, self.policy_inputs = views
+                fields = unpack_header(block)
+                if fields[0] != MAGIC or fields[3:8] != shape:
+                    problem = layout.check_batch_header(BatchHeader.from_buffer(block))
+                    raise LayoutMismatch(problem or "batch header of another layout")
+                self.seq = fields[8]
+                self.n_active = fields[9]
+                if fields[2] == COMMAND_END:
+                    self.ended = True
+                    return
                 try:
                     response = request.loan_slice_uninit(words)
                 except Exception as e:  # iceoryx2 raises its own error types
                     raise _transport("loaning the action batch", e) from e
                 address = response.payload_ptr
-                ctypes.memset(address, 0, words * WORD_BYTES)
+                if zero_actions:
+                    ctypes.memset(address, 0, words * WORD_BYTES)
                 header.seq = self.seq
                 ctypes.memmove(address, ctypes.addressof(header), ACTION_HEADER_BYTES)
                 actions = action_views.get(address)
@@ -347,13 +370,6 @@ class Session:
                     block = action_block.from_address(address)
                     block.session = self  # type: ignore[attr-defined]  # keeps the mapping alive
                     actions = action_views[address] = layout.action_view(block)
-                views = obs_views.get(request.payload_ptr)
-                if views is None:
-                    block = obs_block.from_address(request.payload_ptr)
-                    block.session = self  # type: ignore[attr-defined]
-                    inputs = layout.inputs_view(block) if layout.n_inputs else None
-                    views = obs_views[request.payload_ptr] = (layout.obs_view(block), inputs)
-                obs, self.policy_inputs = views
                 yield obs, actions
                 del obs, actions
                 self.policy_inputs = None
@@ -370,6 +386,7 @@ class Session:
                     raise _transport("notifying action_ready", e) from e
                 self.steps_answered += 1
             finally:
+                self.policy_inputs = None
                 if response is not None:
                     response.delete()
                 request.delete()
@@ -377,9 +394,25 @@ class Session:
                 obs_views.clear()
                 action_views.clear()
 
+    def _obs_views(
+        self, request: Any, address: int, block_type: Any
+    ) -> tuple[Any, np.ndarray, np.ndarray | None]:
+        """The block and views of an observation chunk seen for the first time, after
+        checking that the batch is as long as the session's layout."""
+        layout = self.info.layout
+        # `header.number_of_elements`, not `Slice.len()` (bytes, iceoryx2 issue #1533).
+        got = request.header.number_of_elements * WORD_BYTES
+        if got < layout.obs_bytes:
+            raise LayoutMismatch(
+                f"batch of {got} bytes, the session's layout needs {layout.obs_bytes}"
+            )
+        block = block_type.from_address(address)
+        block.session = self  # keeps the mapping alive
+        inputs = layout.inputs_view(block) if layout.n_inputs else None
+        return block, layout.obs_view(block), inputs
+
     def _next_request(self, timeout_s: float | None) -> Any:
-        """The newest observation batch (older ones are dropped unanswered), or None at the
-        end of the run."""
+        """The newest observation batch (older ones are dropped unanswered)."""
         server = self._server
         simulator = self._simulator
         now = time.perf_counter()
@@ -432,25 +465,6 @@ class Session:
             raise
         except Exception as e:
             raise _transport("receiving observations", e) from e
-        layout = self.info.layout
-        # `header.number_of_elements`, not `Slice.len()` (bytes, iceoryx2 issue #1533).
-        n_words = newest.header.number_of_elements
-        if n_words * WORD_BYTES < layout.obs_bytes:
-            newest.delete()
-            got = n_words * WORD_BYTES
-            raise LayoutMismatch(
-                f"batch of {got} bytes, the session's layout needs {layout.obs_bytes}"
-            )
-        header = BatchHeader.from_address(newest.payload_ptr)
-        problem = layout.check_batch_header(header)
-        if problem is not None:
-            newest.delete()
-            raise LayoutMismatch(problem)
-        self.seq = header.seq
-        self.n_active = header.n_active
-        if header.command == COMMAND_END:
-            newest.delete()
-            return None
         return newest
 
     def close(self) -> None:

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import ctypes
 import enum
+import struct
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
@@ -237,6 +238,11 @@ class BatchHeader(ctypes.Structure):
     ]
 
 
+BATCH_HEADER_WORDS = struct.Struct("<8IQI")
+"""`BatchHeader` from `magic` to `n_active` as one struct: a client reads every batch's
+header in one call (`unpack_from` on the shared memory) instead of a field at a time."""
+
+
 class EnvHeader(ctypes.Structure):
     """Head of one environment block (`thorarena_ipc::EnvHeader`, 32 B)."""
 
@@ -412,6 +418,12 @@ class Layout:
             buffer, dtype="=f8", count=self.n_envs * self.n_joints, offset=ACTION_HEADER_BYTES
         )
         return flat.reshape(self.n_envs, self.n_joints)
+
+    @cached_property
+    def batch_shape(self) -> tuple[int, ...]:
+        """`(n_envs, n_joints, n_refs, env_stride, n_inputs)` in the batch header's order
+        (`BATCH_HEADER_WORDS` fields 3 to 7)."""
+        return (self.n_envs, self.n_joints, self.n_refs, self.env_stride, self.n_inputs)
 
     def check_batch_header(self, header: BatchHeader) -> str | None:
         """Why `header` does not belong to this layout, or None when it does."""

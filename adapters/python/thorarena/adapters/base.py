@@ -69,9 +69,10 @@ class Adapter(ABC):
         slot order, `slots` their slot indices); updates the per-slot state."""
 
     def actions_from_outputs(self, outputs: np.ndarray, records: np.ndarray) -> np.ndarray:
-        """Raw actions in canonical joint order, `(len(records), n_joints)`, from the network's
-        outputs. By default the outputs are the actions."""
-        return np.asarray(outputs, dtype=np.float64)
+        """Raw actions in canonical joint order, `(len(records), n_joints)`, any float dtype
+        (`act` casts them into the float64 batch), from the network's outputs. By default
+        the outputs are the actions."""
+        return np.asarray(outputs)
 
     # --- the shared machinery -----------------------------------------------------------
 
@@ -121,8 +122,9 @@ class Adapter(ABC):
     ) -> np.ndarray:
         """One control step: resets the slots whose episode starts (`step == 0` or
         `FLAG_RESET`), builds the observation of every active slot, runs the network on them
-        in one batch and writes their raw actions into `actions` (inactive slots are left as
-        they are: zeros from the session). Returns the network input of the active slots.
+        in one batch and writes their raw actions into `actions`, zeros into every other row
+        (so the session need not zero the block: `run` asks it not to). Returns the network
+        input of the active slots.
 
         `built` is the network input of every slot as the simulator built it (the session's
         `policy_inputs`, shape (n_envs, obs_dim)): taken as it is instead of `observe`.
@@ -132,10 +134,12 @@ class Adapter(ABC):
             raise ValueError(f"a batch of {len(obs)} slots, bound to {self.n_envs}: call bind()")
         flags = None if all_active else obs["flags"]
         slots = self._every_slot if flags is None else np.flatnonzero((flags & FLAG_ACTIVE) != 0)
-        if len(slots) == 0:
-            return np.zeros((0, self.obs_dim), dtype=np.float32)
         # All active (the usual case): the batch itself, no copy; else the active records.
         every = len(slots) == len(obs)
+        if not every or self.policy is None:
+            actions[...] = 0.0  # the rows no action is written into below
+        if len(slots) == 0:
+            return np.zeros((0, self.obs_dim), dtype=np.float32)
         records = obs if every else np.take(obs, slots)
         if built is not None:
             inputs = built if every else built[slots]
@@ -153,7 +157,7 @@ class Adapter(ABC):
                 self.network_s.append(time.perf_counter() - started)
             raw = self.actions_from_outputs(outputs, records)
             if every:
-                actions[...] = raw  # a slice copy: a third of an index array's cost at 64
+                actions[...] = raw  # a slice copy (and cast): a third of an index array's cost
             else:
                 actions[slots] = raw
         return inputs
@@ -192,7 +196,7 @@ class Adapter(ABC):
                 f"the network takes {self.obs_dim}"
             )
         n_envs = session.n_envs
-        for obs, actions in session.steps():
+        for obs, actions in session.steps(zero_actions=False):
             all_active = session.n_active == n_envs
             self.act(obs, actions, session.policy_inputs if built else None, all_active=all_active)
         return session.steps_answered
