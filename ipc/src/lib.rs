@@ -16,7 +16,6 @@ pub mod describe;
 pub mod ffi;
 pub mod handshake;
 pub mod layout;
-mod precise_wait;
 pub mod session;
 pub mod sim;
 

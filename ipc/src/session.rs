@@ -1,7 +1,6 @@
 //! What both sides share: service names per session, node creation, errors, and the
 //! spin-then-block wait.
 
-use crate::precise_wait::wait_for_event;
 use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;
 use iceoryx2::node::NodeState;
@@ -9,6 +8,9 @@ use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
 use std::cell::Cell;
 use std::time::{Duration, Instant};
+
+mod precise_wait;
+use precise_wait::wait_for_event;
 
 /// Every way the transport can fail, for both sides.
 #[derive(Debug, thiserror::Error)]

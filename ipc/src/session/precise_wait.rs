@@ -10,7 +10,7 @@
 //! high-resolution timer (late by the thread's timer slack, 50 µs by default); the
 //! events it reports are then taken off the listener without blocking.
 
-use crate::session::{transport, IpcError, TransportOp};
+use super::{transport, IpcError, TransportOp};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::*;
 use std::time::Duration;
