@@ -231,7 +231,7 @@ fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
         "python3",
     ]);
     // | envs | built by | round trip p50 | p90 | p99 | build p50 | prepared p50
-    // | network p50 | network p90 | overhead p50 | overhead p90 |
+    // | network p50 | network p90 | overhead p50 | overhead p90 | noticed polling % |
     let rows: Vec<(String, Vec<f64>)> = out
         .lines()
         .filter(|l| l.starts_with("| ") && !l.starts_with("| envs"))
@@ -267,5 +267,7 @@ fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
         );
         assert_eq!(build_p50 > 0.0, by.starts_with("simulator"), "{out}");
         assert_eq!(prepared_p50 > 0.0, by.starts_with("simulator"), "{out}");
+        let noticed_polling = row[10];
+        assert!((0.0..=100.0).contains(&noticed_polling), "{out}");
     }
 }

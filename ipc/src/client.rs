@@ -218,7 +218,7 @@ impl PolicyClient {
         match waited {
             Waited::Deadline => return Ok(Next::Timeout),
             Waited::PeerGone => return Err(IpcError::PeerGone("simulator")),
-            Waited::Ready => {}
+            Waited::Ready(_) => {}
         }
         if let Some(at) = answered_at {
             self.recent_turns.record(at.elapsed());

@@ -390,9 +390,57 @@ impl RecentTurns {
 
 /// What a wait ended with.
 pub(crate) enum Waited {
-    Ready,
+    Ready(Noticed),
     Deadline,
     PeerGone,
+}
+
+/// How a wait noticed that the other side had answered: what noticing cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Noticed {
+    /// In the busy-poll that starts every wait ([`WaitPolicy::spin`]).
+    Spinning,
+    /// Busy-polling the window where the answer was due ([`WaitPolicy::wake_early`]).
+    InWindow,
+    /// After blocking: a kernel wake-up, tens of µs.
+    AfterBlocking,
+}
+
+/// How the answers seen so far were noticed ([`crate::SimSession::answers_noticed`]):
+/// the share noticed by polling says whether the [`WaitPolicy`] suits the policy's
+/// timing, since each one noticed after blocking cost a kernel wake-up.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct AnswersNoticed {
+    /// In the busy-poll right after the batch went out.
+    pub spinning: u64,
+    /// Busy-polling the window where the answer was due.
+    pub in_window: u64,
+    /// After blocking.
+    pub after_blocking: u64,
+}
+
+impl AnswersNoticed {
+    pub(crate) fn count(&mut self, how: Noticed) {
+        match how {
+            Noticed::Spinning => self.spinning += 1,
+            Noticed::InWindow => self.in_window += 1,
+            Noticed::AfterBlocking => self.after_blocking += 1,
+        }
+    }
+
+    /// Every answer counted.
+    pub fn total(&self) -> u64 {
+        self.spinning + self.in_window + self.after_blocking
+    }
+
+    /// The answers counted since `earlier`, a former value of the same session's counts.
+    pub fn since(&self, earlier: &Self) -> Self {
+        Self {
+            spinning: self.spinning - earlier.spinning,
+            in_window: self.in_window - earlier.in_window,
+            after_blocking: self.after_blocking - earlier.after_blocking,
+        }
+    }
 }
 
 /// Waits until `ready()` holds, the deadline passes, or the peer is gone: its node died
@@ -412,7 +460,7 @@ pub(crate) fn wait_for(
     let start = Instant::now();
     while start.elapsed() < policy.spin {
         if ready() {
-            return Ok(Waited::Ready);
+            return Ok(Waited::Ready(Noticed::Spinning));
         }
         std::hint::spin_loop();
     }
@@ -422,9 +470,15 @@ pub(crate) fn wait_for(
         .filter(|_| !early.is_zero())
         .map(|(first, last)| (first.checked_sub(early).unwrap_or(first), last + early))
         .filter(|(_, end)| *end > Instant::now());
+    let mut blocked = false;
     loop {
         if ready() {
-            return Ok(Waited::Ready);
+            let how = if blocked {
+                Noticed::AfterBlocking
+            } else {
+                Noticed::Spinning
+            };
+            return Ok(Waited::Ready(how));
         }
         let now = Instant::now();
         let mut slice = policy.liveness_every;
@@ -439,7 +493,7 @@ pub(crate) fn wait_for(
                 let until = deadline.map_or(until, |d| until.min(d));
                 while Instant::now() < until {
                     if ready() {
-                        return Ok(Waited::Ready);
+                        return Ok(Waited::Ready(Noticed::InWindow));
                     }
                     std::hint::spin_loop();
                 }
@@ -450,6 +504,7 @@ pub(crate) fn wait_for(
             }
         }
         let n = wait_for_event(listener, slice)?;
+        blocked = true;
         if n == 0 && !ready() && (!peer_present() || !peer.alive()) {
             return Ok(Waited::PeerGone);
         }

@@ -10,8 +10,8 @@ mod accept;
 use crate::handshake::{joint_names_hash, Hello, Welcome, MAX_JOINTS};
 use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
 use crate::session::{
-    create_node, service_names, transport, wait_for, Event, IpcError, Message, PeerNode, Port,
-    RecentTurns, TransportCause, TransportOp, WaitPolicy, Waited,
+    create_node, service_names, transport, wait_for, AnswersNoticed, Event, IpcError, Message,
+    PeerNode, Port, RecentTurns, TransportCause, TransportOp, WaitPolicy, Waited,
 };
 use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
@@ -124,6 +124,7 @@ pub struct SimSession {
     connection: Option<Connection>,
     late_replies: u64,
     last_round_trip: Duration,
+    answers_noticed: AnswersNoticed,
 }
 
 impl SimSession {
@@ -210,6 +211,7 @@ impl SimSession {
             connection: None,
             late_replies: 0,
             last_round_trip: Duration::ZERO,
+            answers_noticed: AnswersNoticed::default(),
         })
     }
 
@@ -236,6 +238,11 @@ impl SimSession {
     /// Replies that arrived after their deadline, so far.
     pub fn late_replies(&self) -> u64 {
         self.late_replies
+    }
+
+    /// How the answers so far were noticed: while polling, or after blocking.
+    pub fn answers_noticed(&self) -> AnswersNoticed {
+        self.answers_noticed
     }
 
     /// One control step: `fill` writes the observation batch into shared memory, the batch
@@ -345,7 +352,8 @@ impl SimSession {
             },
         )?;
         self.last_round_trip = sent.elapsed();
-        if matches!(waited, Waited::Ready) {
+        if let Waited::Ready(how) = waited {
+            self.answers_noticed.count(how);
             conn.recent_round_trips.record(self.last_round_trip);
         }
         self.late_replies += discarded;
@@ -358,7 +366,7 @@ impl SimSession {
             return Err(transport(TransportOp::Receive(Message::Actions))(e));
         }
         match waited {
-            Waited::Ready => {
+            Waited::Ready(_) => {
                 let response = response.expect("ready means received");
                 let bytes: &[u8] = bytemuck::cast_slice(response.payload());
                 let batch = ActionBatch::new(conn.layout, bytes)?;

@@ -13,7 +13,8 @@ use nalgebra::{Isometry3, Vector3};
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
 use thorarena_ipc::{
-    ActionBatch, EnvHeader, Layout, ObsBatchMut, SimSession, StepOutcome, FLAG_ACTIVE,
+    ActionBatch, AnswersNoticed, EnvHeader, Layout, ObsBatchMut, SimSession, StepOutcome,
+    FLAG_ACTIVE,
 };
 
 /// Environment `i` active at episode step `step` (50 Hz control).
@@ -85,7 +86,11 @@ fn timed_round_trips(
     let mut input_build = LatencyRecorder::default();
     let mut input_prepare = LatencyRecorder::default();
     let mut per_step_us = Vec::with_capacity(steps);
+    let mut noticed_before_timing = sim.answers_noticed();
     for step in 0..(warmup + steps) as u64 {
+        if step == warmup as u64 {
+            noticed_before_timing = sim.answers_noticed();
+        }
         let mut ok = true;
         let mut build = Duration::ZERO;
         let mut prepared = Duration::ZERO;
@@ -123,6 +128,7 @@ fn timed_round_trips(
         input_build: input_build.summary(),
         input_prepare: input_prepare.summary(),
         per_step_us,
+        noticed: sim.answers_noticed().since(&noticed_before_timing),
     })
 }
 
@@ -167,6 +173,8 @@ pub struct AdapterTiming {
     /// Each timed step's round trip plus its input build, µs, in step order (to pair
     /// with what the adapter timed of the same step).
     pub per_step_us: Vec<f64>,
+    /// How the simulator noticed the timed steps' answers: polling, or after blocking.
+    pub noticed: AnswersNoticed,
 }
 
 /// `warmup` untimed and `steps` timed round trips with a network adapter connected to
