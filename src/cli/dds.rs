@@ -272,12 +272,15 @@ fn write_realtime(
         .with_context(|| format!("writing {}", path.display()))?;
     let c = &report.commands;
     let line = format!(
-        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (applied), {} in the parallel ankle mode (targets taken as pitch/roll); inter-arrival p50 {:.2} ms, p99 {:.2} ms; episode (and reference clock) started {:.2} s after the bridge; the physics loop ran at {}.\n",
+        "\nReal time: {} — real-time factor {:.3}, {} of {} physics steps late (latest {:.1} ms); a physics step with its bookkeeping took p50 {:.3} ms, p99 {:.3} ms, at most {:.1} ms; commands: {} received, {} bad checksum (ignored), {} unusable (ignored), {} with feed-forward torque or velocity (applied), {} in the parallel ankle mode (targets taken as pitch/roll); inter-arrival p50 {:.2} ms, p99 {:.2} ms; episode (and reference clock) started {:.2} s after the bridge; the physics loop ran at {}.\n",
         if report.kept_real_time { "kept" } else { "NOT KEPT — these scores are not those of a real-time run" },
         report.real_time_factor,
         report.late_steps,
         report.physics_steps,
         report.max_lateness_ms,
+        report.physics_step_ms.p50_ms,
+        report.physics_step_ms.p99_ms,
+        report.physics_step_ms.max_ms,
         c.received,
         c.bad_crc,
         c.unusable,

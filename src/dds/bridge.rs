@@ -117,6 +117,12 @@ pub struct RealTimeReport {
     pub commands: CommandCounts,
     /// Time between consecutive commands, ms.
     pub command_interarrival: Percentiles,
+    /// Wall time of each physics step with the episode's bookkeeping (metrics,
+    /// termination), from one step's command handling to the next's, ms. Real time needs it
+    /// below the physics period; a median far below it with a p99 or maximum above is the
+    /// machine pausing or slowing the loop, not the engine's usual cost.
+    #[serde(default)]
+    pub physics_step_ms: Percentiles,
     /// Whether the run kept real time: at most 1 % of the physics steps late and a
     /// real-time factor of at least 0.98. Scores of a run that did not are marked so.
     pub kept_real_time: bool,
@@ -182,8 +188,15 @@ pub fn run_episode(
     let mut late_steps = 0u64;
     let mut max_lateness = Duration::ZERO;
     let mut failure = None;
+    // When the previous physics step's command handling ended, and the time from there to
+    // the next step's (its physics and bookkeeping), ms.
+    let mut handled_at: Option<Instant> = None;
+    let mut physics_step_ms = Vec::new();
     while !episode.is_done() && failure.is_none() {
         episode.advance_driven(physics, &mut |physics, state, targets| {
+            if let Some(then) = handled_at {
+                physics_step_ms.push(then.elapsed().as_secs_f64() * 1e3);
+            }
             let due = start + dt * steps as u32;
             loop {
                 if let Err(e) = io.publish_state(endpoints, state) {
@@ -213,6 +226,7 @@ pub fn run_episode(
             if let Some(t) = &io.targets {
                 targets.clone_from(t);
             }
+            handled_at = Some(Instant::now());
             steps += 1;
             if steps.is_multiple_of(steps_per_progress) {
                 on_progress(&BridgeProgress {
@@ -242,6 +256,7 @@ pub fn run_episode(
         service_calls: endpoints.service_calls().len() as u64,
         commands: io.counts,
         command_interarrival: Percentiles::of(io.interarrival_ms),
+        physics_step_ms: Percentiles::of(physics_step_ms),
         kept_real_time: late_steps * 100 <= steps && real_time_factor >= 0.98,
         scheduling: Scheduling::of_this_thread(),
     })
