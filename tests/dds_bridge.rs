@@ -180,6 +180,24 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
         realtime["physics_steps"].as_u64().unwrap() > 100,
         "{realtime}"
     );
+    // Each physics step's wall time was taken: ordered percentiles, and half the steps at
+    // the median or above cannot have taken longer than the whole episode.
+    let step_ms = |key: &str| realtime["physics_step_ms"][key].as_f64().unwrap();
+    let (p50, p90, p99, max) = (
+        step_ms("p50_ms"),
+        step_ms("p90_ms"),
+        step_ms("p99_ms"),
+        step_ms("max_ms"),
+    );
+    assert!(
+        0.0 < p50 && p50 <= p90 && p90 <= p99 && p99 <= max,
+        "{realtime}"
+    );
+    let steps = realtime["physics_steps"].as_f64().unwrap();
+    assert!(
+        p50 * steps / 2.0 <= realtime["wall_s"].as_f64().unwrap() * 1e3,
+        "{realtime}"
+    );
     // The script sends nothing before the start press at 5 s, and the episode (its
     // reference clock) starts at the A press, 6.5 s.
     let offset = realtime["start_offset_s"].as_f64().unwrap();
