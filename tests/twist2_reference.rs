@@ -196,8 +196,9 @@ fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
 }
 
 /// `bench ipc --clients twist2` times the Python adapter with the real network and the
-/// network alone inside it, in one run, with the observation built by the simulator and
-/// by the adapter: every column is measured (a round trip holds a network call, so it is
+/// network alone inside it, in one run, with the observation built by the simulator (the
+/// session over iceoryx2's Python binding, then over the C ABI this build left beside the
+/// binary) and by the adapter: every column is measured (a round trip holds a network call, so it is
 /// never the shorter; only the simulator-built rows spend time building), one row per
 /// environment count and builder.
 #[test]
@@ -246,15 +247,18 @@ fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
             (cells[1].to_string(), numbers)
         })
         .collect();
+    let over_c_abi = "simulator (Rust), C ABI client";
     assert_eq!(
         rows.len(),
-        4,
-        "two rows (simulator, adapter) per environment count:\n{out}"
+        6,
+        "three rows (simulator, simulator over the C ABI, adapter) per environment count:\n{out}"
     );
     for ((built_by, row), (envs, by)) in rows.iter().zip([
         (1.0, "simulator (Rust)"),
+        (1.0, over_c_abi),
         (1.0, "adapter (numpy)"),
         (4.0, "simulator (Rust)"),
+        (4.0, over_c_abi),
         (4.0, "adapter (numpy)"),
     ]) {
         let (rt_p50, build_p50, prepared_p50, net_p50, overhead_p50) =

@@ -84,9 +84,15 @@ struct Python(Option<Child>);
 impl Python {
     /// `python3 ARGS…` from the repository root, with the package on `PYTHONPATH`.
     fn spawn(args: &[&str]) -> Self {
+        Self::spawn_with_env(args, &[])
+    }
+
+    /// [`Self::spawn`] with `env` added to the child's environment.
+    fn spawn_with_env(args: &[&str], env: &[(&str, PathBuf)]) -> Self {
         let root = repo_root();
         let child = Command::new("python3")
             .args(args)
+            .envs(env.iter().map(|(k, v)| (k, v)))
             .current_dir(&root)
             .env("PYTHONPATH", root.join("adapters/python"))
             .env("PYTHONUNBUFFERED", "1")
@@ -103,6 +109,14 @@ impl Python {
         let mut all = vec![script.as_str()];
         all.extend_from_slice(args);
         Self::spawn(&all)
+    }
+
+    /// [`Self::example`] with `THORARENA_IPC_LIB` naming this build's C ABI library.
+    fn example_with_library(scenario: &str, args: &[&str]) -> Self {
+        let script = format!("adapters/python/examples/{scenario}/{scenario}_policy.py");
+        let mut all = vec![script.as_str()];
+        all.extend_from_slice(args);
+        Self::spawn_with_env(&all, &[("THORARENA_IPC_LIB", ipc_library())])
     }
 
     fn exited(&mut self) -> bool {
@@ -149,7 +163,36 @@ fn replay_python_policy_against_rust_server() {
     if !python_ready("python_client::replay_python_policy_against_rust_server") {
         return;
     }
-    let session = unique("replay");
+    replay_against_rust_server("python", "IceoryxSession");
+}
+
+/// The same session with the Python package over the C ABI (`transport="native"`,
+/// ctypes on the `libthorarena_ipc.so` cargo built for this test).
+#[test]
+fn replay_python_policy_over_the_c_abi_against_rust_server() {
+    if !python_ready("python_client::replay_python_policy_over_the_c_abi_against_rust_server") {
+        return;
+    }
+    replay_against_rust_server("native", "NativeSession");
+}
+
+/// The shared library cargo built beside this test binary (a test build leaves it in
+/// deps/, next to the binary).
+fn ipc_library() -> PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    let lib = exe.parent().unwrap().join("libthorarena_ipc.so");
+    assert!(
+        lib.is_file(),
+        "{} is missing: is `cdylib` still in ipc/Cargo.toml's crate-type?",
+        lib.display()
+    );
+    lib
+}
+
+/// The replay example over `transport` answers 100 steps of two environments exactly,
+/// zeros on a padding slot, and says which session class served it (`class_name`).
+fn replay_against_rust_server(transport: &str, class_name: &str) {
+    let session = unique(&format!("replay-{transport}"));
     let config = sim_config(&session, 2, None);
     let (offset, scale) = (
         config.action_offset_rad.clone(),
@@ -157,7 +200,8 @@ fn replay_python_policy_against_rust_server() {
     );
     let n = offset.len();
     let mut sim = SimSession::create(config).unwrap();
-    let python = Python::example("replay", &["--session", &session]);
+    let python =
+        Python::example_with_library("replay", &["--session", &session, "--transport", transport]);
     let info = sim.accept(Some(Duration::from_secs(30)), |_| {}).unwrap();
     assert_eq!(info.name, "replay-python");
     assert_eq!(info.reference_offsets_s, vec![0.0]);
@@ -209,14 +253,12 @@ fn replay_python_policy_against_rust_server() {
     sim.end();
     let out = python.wait();
     assert!(out.status.success(), "python: {}", text(&out.stderr));
-    assert!(
-        text(&out.stdout).contains("run over after 100 steps"),
-        "{}",
-        text(&out.stdout)
-    );
+    let stdout = text(&out.stdout);
+    assert!(stdout.contains("run over after 100 steps"), "{stdout}");
+    assert!(stdout.contains(&format!("over {class_name}")), "{stdout}");
     round_trips.sort();
     eprintln!(
-        "python replay, 2 envs × 29 joints: round trip p50 {:?}, max {:?} (first step included)",
+        "python replay over {transport}, 2 envs × 29 joints: round trip p50 {:?}, max {:?} (first step included)",
         round_trips[50], round_trips[99]
     );
 }
@@ -226,12 +268,30 @@ fn a_python_policy_with_the_wrong_joint_count_is_refused_and_exits_with_the_mess
     if !python_ready("python_client::a_python_policy_with_the_wrong_joint_count_is_refused_and_exits_with_the_message") {
         return;
     }
-    let session = unique("refused");
+    refused_with_the_message("python");
+}
+
+#[test]
+fn a_python_policy_over_the_c_abi_with_the_wrong_joint_count_is_refused_with_the_message() {
+    if !python_ready("python_client::a_python_policy_over_the_c_abi_with_the_wrong_joint_count_is_refused_with_the_message") {
+        return;
+    }
+    refused_with_the_message("native");
+}
+
+/// A policy joining over `transport` with 23 joint names is refused; it exits non-zero
+/// with `SessionRefused`, its status and the simulator's message.
+fn refused_with_the_message(transport: &str) {
+    let session = unique(&format!("refused-{transport}"));
     let mut sim = SimSession::create(sim_config(&session, 1, None)).unwrap();
     let script = "import sys, thorarena as ta\n\
-                  ta.connect(sys.argv[1], name='23dof', joint_names=ta.G1_JOINT_NAMES[:23])\n\
+                  ta.connect(sys.argv[1], name='23dof', joint_names=ta.G1_JOINT_NAMES[:23], \
+                  transport=sys.argv[2])\n\
                   print('connected')\n";
-    let mut python = Python::spawn(&["-c", script, &session]);
+    let mut python = Python::spawn_with_env(
+        &["-c", script, &session, transport],
+        &[("THORARENA_IPC_LIB", ipc_library())],
+    );
     let mut refusals = Vec::new();
     let give_up = Instant::now() + Duration::from_secs(60);
     while !python.exited() {

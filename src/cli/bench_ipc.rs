@@ -14,7 +14,7 @@
 //! costs.
 
 use anyhow::{bail, Context};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 use thorarena::evaluation::LatencySummary;
@@ -59,6 +59,12 @@ pub struct Args {
     /// Python interpreter.
     #[arg(long, default_value = "python3")]
     pub python: String,
+    /// The C ABI library the `twist2` client's extra row loads through ctypes
+    /// (`connect(transport="native")`) [default: libthorarena_ipc.so beside this binary, or
+    /// in its deps/, as `cargo build --release -p thorarena-ipc` leaves it; the row is
+    /// skipped, saying so, without one].
+    #[arg(long)]
+    pub ipc_lib: Option<PathBuf>,
 }
 
 /// Hidden subcommand: the socket baseline's echo peer.
@@ -211,9 +217,22 @@ fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
     );
     println!("| envs | observation built by | round trip p50 | p90 | p99 | simulator's build p50 | prepared while waiting p50 | network p50 | network p90 | overhead p50 | overhead p90 | answers noticed polling % |");
     println!("|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let ipc_lib = ipc_library(args);
+    if ipc_lib.is_none() {
+        eprintln!("skipping the C ABI client's rows: no libthorarena_ipc.so beside this binary (cargo build --release -p thorarena-ipc, or --ipc-lib)");
+    }
+    let rows: Vec<Builder> = [
+        Builder::Simulator,
+        Builder::SimulatorNative,
+        Builder::Adapter,
+    ]
+    .into_iter()
+    .filter(|b| *b != Builder::SimulatorNative || ipc_lib.is_some())
+    .collect();
     for &envs in &args.envs {
-        for built_by in [Builder::Simulator, Builder::Adapter] {
-            let Some((timing, net)) = adapter_round_trip(args, robot, envs, built_by)? else {
+        for &built_by in &rows {
+            let lib = ipc_lib.as_deref();
+            let Some((timing, net)) = adapter_round_trip(args, robot, envs, built_by, lib)? else {
                 return Ok(());
             };
             let (rt, build) = (timing.round_trip, timing.input_build);
@@ -250,12 +269,16 @@ fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Who builds TWIST2's observation in a measured row.
+/// Who builds TWIST2's observation in a measured row, and over which transport the
+/// adapter's session runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Builder {
-    /// The simulator, into the batch's policy-input block (`Hello::input` "twist2").
+    /// The simulator, into the batch's policy-input block (`Hello::input` "twist2"); the
+    /// session over iceoryx2's Python binding.
     Simulator,
-    /// The adapter, in numpy (`--observation python`).
+    /// As `Simulator`, the session over the C ABI through ctypes (`--transport native`).
+    SimulatorNative,
+    /// The adapter, in numpy (`--observation python`), over the Python binding.
     Adapter,
 }
 
@@ -263,9 +286,23 @@ impl Builder {
     fn label(self) -> &'static str {
         match self {
             Self::Simulator => "simulator (Rust)",
+            Self::SimulatorNative => "simulator (Rust), C ABI client",
             Self::Adapter => "adapter (numpy)",
         }
     }
+}
+
+/// `--ipc-lib`, or the shared library cargo left beside this binary or in its deps/.
+fn ipc_library(args: &Args) -> Option<PathBuf> {
+    if let Some(lib) = &args.ipc_lib {
+        return Some(lib.clone());
+    }
+    let exe = std::env::current_exe().ok()?;
+    let dir = exe.parent()?;
+    [dir.to_path_buf(), dir.join("deps")]
+        .into_iter()
+        .map(|d| d.join("libthorarena_ipc.so"))
+        .find(|p| p.is_file())
 }
 
 fn adapter_round_trip(
@@ -273,6 +310,7 @@ fn adapter_round_trip(
     robot: &RobotModel,
     envs: usize,
     built_by: Builder,
+    ipc_lib: Option<&Path>,
 ) -> anyhow::Result<Option<(AdapterTiming, NetworkTiming)>> {
     let onnx = args.onnx.as_ref().context("--onnx")?;
     let ok = Command::new(&args.python)
@@ -292,26 +330,32 @@ fn adapter_round_trip(
         .context("the simulator's TWIST2 input")?;
     let mut sim = SimSession::create(config)?;
     let python = repo_root().join("adapters/python");
-    let observation = match built_by {
-        Builder::Simulator => "simulator",
-        Builder::Adapter => "python",
+    let (observation, transport) = match built_by {
+        Builder::Simulator => ("simulator", "python"),
+        Builder::SimulatorNative => ("simulator", "native"),
+        Builder::Adapter => ("python", "python"),
     };
-    let mut child = Command::new(&args.python)
+    let mut command = Command::new(&args.python);
+    command
         .arg(python.join("examples/twist2/run_twist2.py"))
         .args(["--session", &session, "--time-network"])
-        .args(["--observation", observation])
+        .args(["--observation", observation, "--transport", transport])
         .args(["--spin-us", &args.spin_us.to_string()])
         .arg("--onnx")
         .arg(onnx)
         .env("PYTHONPATH", python)
         .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
+        .stderr(Stdio::inherit());
+    if let Some(lib) = ipc_lib {
+        command.env("THORARENA_IPC_LIB", lib);
+    }
+    let mut child = command
         .spawn()
         .context("starting the Python TWIST2 adapter")?;
     let accepted = sim.accept(Some(Duration::from_secs(60)), |m| eprintln!("refused: {m}"));
     let timed = accepted.map_err(anyhow::Error::from).and_then(|info| {
         let input = info.input.is_some().then_some(&mut builder);
-        if input.is_some() != (built_by == Builder::Simulator) {
+        if input.is_some() == (built_by == Builder::Adapter) {
             bail!("the adapter asked for policy input {:?}", info.input);
         }
         Ok(adapter_round_trips(

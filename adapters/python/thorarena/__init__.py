@@ -15,6 +15,7 @@ over the loaned response. The wire protocol is crate `thorarena-ipc` of this rep
 """
 
 from .client import (
+    IceoryxSession,
     LayoutMismatch,
     NoSession,
     Session,
@@ -53,6 +54,7 @@ __all__ = [
     "MAGIC",
     "PROTOCOL_VERSION",
     "Hello",
+    "IceoryxSession",
     "Layout",
     "LayoutMismatch",
     "NoSession",

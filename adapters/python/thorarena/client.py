@@ -214,32 +214,12 @@ class SessionInfo:
 
 
 class Session:
-    """A connected policy: the session's shape, and `steps()`, the control loop."""
+    """A connected policy: the session's shape, and `steps()`, the control loop. `connect`
+    returns one of its two transports: `IceoryxSession` (iceoryx2's Python binding) or
+    `native.NativeSession` (the C ABI of `thorarena-ipc` through ctypes)."""
 
-    def __init__(
-        self,
-        *,
-        info: SessionInfo,
-        node: Any,
-        server: Any,
-        obs_ready: Any,
-        action_ready: Any,
-        spin_s: float,
-        wake_early_s: float = 0.0,
-        simulator: SimulatorWatch,
-    ) -> None:
+    def __init__(self, *, info: SessionInfo) -> None:
         self.info = info
-        self._simulator = simulator
-        self._node = node
-        self._server = server
-        self._obs_ready = obs_ready
-        self._action_ready = action_ready
-        self._spin_s = spin_s
-        self._wake_early_s = wake_early_s
-        # The simulator's last turnarounds (answer sent → next batch here), s: between the
-        # quickest and the slowest the next batch is due.
-        self._turnarounds: deque[float] = deque(maxlen=RECENT_TURNAROUNDS)
-        self._slice = iox2.Duration.from_secs_f64(LIVENESS_EVERY_S)
         self.steps_answered = 0
         """Control steps answered so far."""
         self.seq = 0
@@ -297,8 +277,8 @@ class Session:
 
     @property
     def closed(self) -> bool:
-        """True once the session's ports are released."""
-        return self._server is None
+        """True once the session is closed."""
+        raise NotImplementedError
 
     def steps(
         self, *, timeout_s: float | None = None, zero_actions: bool = True
@@ -320,6 +300,57 @@ class Session:
         `Timeout` when no step arrives within `timeout_s` (default: wait as long as the
         simulator lives).
         """
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Leaves the session, unmapping its shared memory: views from `steps()` must not
+        be used afterwards. Idempotent."""
+        raise NotImplementedError
+
+    def __enter__(self) -> Session:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class IceoryxSession(Session):
+    """A session over iceoryx2's Python binding (no compiled code of ours needed)."""
+
+    def __init__(
+        self,
+        *,
+        info: SessionInfo,
+        node: Any,
+        server: Any,
+        obs_ready: Any,
+        action_ready: Any,
+        spin_s: float,
+        wake_early_s: float = 0.0,
+        simulator: SimulatorWatch,
+    ) -> None:
+        super().__init__(info=info)
+        self._simulator = simulator
+        self._node = node
+        self._server = server
+        self._obs_ready = obs_ready
+        self._action_ready = action_ready
+        self._spin_s = spin_s
+        self._wake_early_s = wake_early_s
+        # The simulator's last turnarounds (answer sent → next batch here), s: between the
+        # quickest and the slowest the next batch is due.
+        self._turnarounds: deque[float] = deque(maxlen=RECENT_TURNAROUNDS)
+        self._slice = iox2.Duration.from_secs_f64(LIVENESS_EVERY_S)
+
+    @property
+    def closed(self) -> bool:
+        """True once the session's ports are released."""
+        return self._server is None
+
+    def steps(
+        self, *, timeout_s: float | None = None, zero_actions: bool = True
+    ) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+        """See `Session.steps`."""
         if self._server is None:
             raise ThorArenaError("the session is closed")
         if self.ended:
@@ -478,12 +509,6 @@ class Session:
         self._simulator.release()
         self._node = None
 
-    def __enter__(self) -> Session:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
 
 def _create_node(session: str) -> Any:
     iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
@@ -512,6 +537,7 @@ def connect(
     wake_early_us: float = 150.0,
     input: str | None = None,
     protocol_version: int = PROTOCOL_VERSION,
+    transport: str = "python",
 ) -> Session:
     """Joins `session`, waiting up to `timeout_s` for a simulator to serve it.
 
@@ -524,7 +550,14 @@ def connect(
     `Session.policy_inputs` (the simulator refuses a name it does not offer).
     `protocol_version` is for tests that announce a wrong one on purpose.
 
-    Raises `NoSession`, `SessionRefused(status, message)`, `Timeout` or `TransportError`.
+    `transport`: `"python"` (default) runs the session over iceoryx2's Python binding;
+    `"native"` over the C ABI of crate `thorarena-ipc` (`libthorarena_ipc.so`, see
+    `thorarena.native`: fewer microseconds per step, with the Rust client's wait, whose
+    wake-up is its own 150 µs — `wake_early_us` must be left at that); `"auto"` the
+    library when `native.find_library()` finds one, else Python.
+
+    Raises `NoSession`, `SessionRefused(status, message)`, `Timeout` or `TransportError`
+    (`ThorArenaError` when `"native"` finds no library).
     """
     offsets = [float(o) for o in reference_offsets_s]
     if len(offsets) > MAX_REFERENCE_OFFSETS:
@@ -540,6 +573,25 @@ def connect(
         leaf: _service_name(session, leaf)
         for leaf in ("hello", "step", "obs_ready", "action_ready")
     }
+    if transport not in ("python", "native", "auto"):
+        raise ValueError(f"transport {transport!r}: use 'python', 'native' or 'auto'")
+    from . import native  # here: it builds on this module
+
+    if transport == "native" or (transport == "auto" and native.find_library() is not None):
+        if wake_early_us != native.WAKE_EARLY_US:
+            raise ValueError(
+                f"the native transport wakes {native.WAKE_EARLY_US} µs early, not {wake_early_us}"
+            )
+        return native.connect_native(
+            session,
+            name=name,
+            joint_names=joint_names,
+            reference_offsets_s=offsets,
+            timeout_s=timeout_s,
+            spin_us=spin_us,
+            input=input,
+            protocol_version=protocol_version,
+        )
     node = _create_node(session)
     start = time.monotonic()
     while True:
@@ -614,7 +666,7 @@ def connect(
         action_scale=frozen(welcome.action_scale),
         reference_offsets_s=tuple(offsets),
     )
-    return Session(
+    return IceoryxSession(
         info=info,
         node=node,
         server=server,

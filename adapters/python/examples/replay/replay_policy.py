@@ -29,12 +29,27 @@ def main() -> int:
     parser.add_argument(
         "--timeout", type=float, default=10.0, help="seconds to wait for the simulator"
     )
+    parser.add_argument(
+        "--transport",
+        choices=("python", "native", "auto"),
+        default="python",
+        help="iceoryx2's Python binding (default), or the C ABI (libthorarena_ipc.so, "
+        "THORARENA_IPC_LIB), or that when found",
+    )
     args = parser.parse_args()
 
     session = ta.connect(
-        args.session, name=args.name, joint_names=ta.G1_JOINT_NAMES, timeout_s=args.timeout
+        args.session,
+        name=args.name,
+        joint_names=ta.G1_JOINT_NAMES,
+        timeout_s=args.timeout,
+        transport=args.transport,
     )
-    print(f"connected: {session.n_envs} environments, {session.n_joints} joints", flush=True)
+    print(
+        f"connected: {session.n_envs} environments, {session.n_joints} joints, "
+        f"over {type(session).__name__}",
+        flush=True,
+    )
     for obs, actions in session.steps():
         active = (obs["flags"] & ta.FLAG_ACTIVE) != 0
         target = obs["reference"][:, 0]["joint_pos"]
