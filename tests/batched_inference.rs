@@ -2,12 +2,17 @@
 //! environments gives each environment bit for bit its batch-one action, and an
 //! evaluation whose policy acts on the workers (each worker's copy, its own slots)
 //! records exactly what the same policy acting on the coordinator records, for any
-//! number of workers and slots. With the published TWIST2 network; skipped, saying so,
-//! when `../shared/reference` is absent.
+//! number of workers and slots. With the published TWIST2 network, and the BeyondMimic
+//! family's (wbc-mjlab's tracker, holosoma's dance policy with its `time_step` input),
+//! which run [`thorarena::policy::beyondmimic::INFERENCE_BATCH`] rows per call (one
+//! today; these tests passed at four too); skipped, saying so, when `../shared/reference`
+//! is absent.
 
+use std::sync::Arc;
 use thorarena::evaluation::{schedule, EpisodeRecord, PolicyIoRules, Setting, TerminationRule};
 use thorarena::motion::Sequence;
-use thorarena::policy::{ActOutcome, Observation, Policy, Twist2Policy};
+use thorarena::policy::beyondmimic::INFERENCE_BATCH;
+use thorarena::policy::{ActOutcome, BeyondMimicPolicy, Observation, Policy, Twist2Policy};
 use thorarena::profile::{bundled_profile_path, load_profile, Profile};
 use thorarena::robot::RobotModel;
 use thorarena::runner::{run_eval, EvalPlan};
@@ -72,9 +77,9 @@ fn a_row_of_a_fixed_size_batch_answers_the_same_wherever_it_sits_and_whatever_it
 }
 
 /// The same policy without its worker copies: it acts on the coordinator.
-struct OnCoordinator(Twist2Policy);
+struct OnCoordinator<P>(P);
 
-impl Policy for OnCoordinator {
+impl<P: Policy> Policy for OnCoordinator<P> {
     fn name(&self) -> &str {
         self.0.name()
     }
@@ -153,4 +158,52 @@ fn acting_on_the_workers_records_what_acting_on_the_coordinator_records() {
             "{workers} workers, {envs} slots: the records differ from one slot on the coordinator"
         );
     }
+}
+
+/// A BeyondMimic network acting for 1 to 5 slots per worker — at four rows per call: one
+/// padded call, a full one, a full one and a padded one — records what it records acting
+/// for one slot at a time on the coordinator.
+fn beyondmimic_records_do_not_depend_on_its_slots(test: &str, onnx: &str, profile: &str) {
+    let robot = g1();
+    let Some(path) = prereq::reference(test, onnx) else {
+        return;
+    };
+    let profile = load_profile(&bundled_profile_path(profile), &robot).unwrap();
+    let policy = BeyondMimicPolicy::load(&path, Arc::new(robot.clone()), &profile).unwrap();
+    assert_eq!(
+        policy.call_rows(),
+        INFERENCE_BATCH,
+        "{onnx} plans for {INFERENCE_BATCH} rows per call"
+    );
+    let seqs = sequences(&robot);
+    let mut coordinator = OnCoordinator(policy);
+    let want = records(&robot, &profile, &seqs, 1, 1, &mut coordinator);
+    assert_eq!(want.len(), 6);
+    let want = format!("{want:?}");
+    let mut policy = coordinator.0;
+    for (workers, envs) in [(1, 4), (2, 5), (1, 5)] {
+        let got = records(&robot, &profile, &seqs, workers, envs, &mut policy);
+        assert!(
+            format!("{got:?}") == want,
+            "{onnx}: {workers} workers, {envs} slots: the records differ from one slot on the coordinator"
+        );
+    }
+}
+
+#[test]
+fn wbc_mjlabs_records_do_not_depend_on_how_many_slots_share_a_call() {
+    beyondmimic_records_do_not_depend_on_its_slots(
+        "batched_inference::wbc_mjlab_slots",
+        "wbc-mjlab/wbc_g1_policy.onnx",
+        "wbc-mjlab",
+    );
+}
+
+#[test]
+fn holosomas_records_do_not_depend_on_how_many_slots_share_a_call() {
+    beyondmimic_records_do_not_depend_on_its_slots(
+        "batched_inference::holosoma_slots",
+        "holosoma/fastsac_g1_29dof_dancing.onnx",
+        "holosoma-wbt",
+    );
 }

@@ -138,27 +138,25 @@ fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
 
     let table = readme::readme_table("published-policies-force");
     assert_eq!(table.len(), 4);
-    for (row, (t, h)) in table.iter().zip(twist2.iter().zip(&holosoma)) {
-        let measured = [
-            format!("{:.2}", t.1),
-            format!("{:.1}", t.2),
-            format!("{:.2}", h.1),
-            format!("{:.1}", h.2),
-        ];
-        eprintln!(
-            "{}: TWIST2 {:?}, holosoma {:?}",
-            row[0],
-            &measured[..2],
-            &measured[2..]
-        );
-        assert_eq!(
-            row[1..],
-            measured,
-            "README's row `{}` differs from what was measured ({})",
-            row[0],
-            t.0
-        );
-    }
+    let measured: Vec<Vec<String>> = table
+        .iter()
+        .zip(twist2.iter().zip(&holosoma))
+        .map(|(row, (t, h))| {
+            let cells = vec![
+                row[0].clone(),
+                format!("{:.2}", t.1),
+                format!("{:.1}", t.2),
+                format!("{:.2}", h.1),
+                format!("{:.1}", h.2),
+            ];
+            eprintln!("| {} |", cells.join(" | "));
+            cells
+        })
+        .collect();
+    assert_eq!(
+        table, measured,
+        "README's table `published-policies-force` differs from what was measured (rows printed above)"
+    );
 }
 
 #[test]

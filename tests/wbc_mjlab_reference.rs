@@ -141,19 +141,23 @@ fn wbc_mjlab_tracks_the_five_shared_clips_in_rapier_and_mujoco() {
     }
     let table = readme::readme_table("wbc-mjlab-clips");
     assert_eq!(table.len(), CLIPS.len());
-    for (row, (r, m)) in table.iter().zip(rapier.iter().zip(&mujoco)) {
-        let measured = [
-            r.0.clone(),
-            format!("{:.2}", r.1),
-            format!("{:.1}", r.2),
-            format!("{:.2}", m.1),
-            format!("{:.1}", m.2),
-        ];
-        assert_eq!(
-            row[..],
-            measured,
-            "README's row `{}` is not what was measured",
-            row[0]
-        );
-    }
+    let measured: Vec<Vec<String>> = rapier
+        .iter()
+        .zip(&mujoco)
+        .map(|(r, m)| {
+            let cells = vec![
+                r.0.clone(),
+                format!("{:.2}", r.1),
+                format!("{:.1}", r.2),
+                format!("{:.2}", m.1),
+                format!("{:.1}", m.2),
+            ];
+            eprintln!("| {} |", cells.join(" | "));
+            cells
+        })
+        .collect();
+    assert_eq!(
+        table, measured,
+        "README's table `wbc-mjlab-clips` is not what was measured (rows printed above)"
+    );
 }

@@ -4,7 +4,7 @@
 
 use super::{
     layout_width, BeyondMimicError, BeyondMimicPolicy, FileMetadata, JointOrderFrom,
-    ObservationSpec, Scratch, Term, KNOWN_LAYOUTS,
+    ObservationSpec, Scratch, Term, INFERENCE_BATCH, KNOWN_LAYOUTS,
 };
 use crate::profile::{ActionMode, BeyondMimicProfile, Profile};
 use crate::robot::RobotModel;
@@ -42,13 +42,14 @@ impl BeyondMimicPolicy {
             network.time_step_input,
             network.actions_output,
         );
-        let plan = network.into_runnable(path, n)?;
+        let (plan, call_rows) = network.into_runnable(path, n)?;
         for d in &disagreements {
             log::warn!("{}: {d}", path.display());
         }
         Ok(Self {
             name: "beyondmimic".into(),
             plan,
+            call_rows,
             spec: ObservationSpec {
                 terms,
                 to_canonical,
@@ -68,6 +69,7 @@ impl BeyondMimicPolicy {
             joint_order_from,
             scratch: Scratch::default(),
             input: Vec::new(),
+            batch_input: Vec::new(),
             last_inputs: Vec::new(),
         })
     }
@@ -120,24 +122,47 @@ impl Network {
         })
     }
 
-    /// Fixes the input shapes (one observation of `obs_width`, one time step), optimizes
-    /// the network and makes it runnable. Its `actions` output must be one value per joint
-    /// (`n_joints`), or every step would fail (a wrong width once scored as a network
-    /// answering zeros).
+    /// Fixes the input shapes, optimizes the network and makes it runnable for one call
+    /// shape: [`INFERENCE_BATCH`] rows (observations `[rows, obs_width]`, time steps
+    /// `[rows, 1]`) when the graph allows it, else one row — an export whose graph
+    /// hard-codes a batch of one (a reshape to `[1, …]`) fails to plan for more, or
+    /// answers another shape. Returns the plan and its rows. Its `actions` output must be
+    /// one value per joint and row (`n_joints`), or every step would fail (a wrong width
+    /// once scored as a network answering zeros).
     fn into_runnable(
         self,
         path: &Path,
         n_joints: usize,
+    ) -> Result<(Arc<TypedRunnableModel>, usize), BeyondMimicError> {
+        if INFERENCE_BATCH > 1 {
+            match self.runnable_for(path, n_joints, INFERENCE_BATCH) {
+                Ok(plan) => return Ok((plan, INFERENCE_BATCH)),
+                Err(e) => log::info!(
+                    "{}: one row per call, the network does not plan for {INFERENCE_BATCH}: {e}",
+                    path.display()
+                ),
+            }
+        }
+        Ok((self.runnable_for(path, n_joints, 1)?, 1))
+    }
+
+    /// The network planned for calls of `rows` rows.
+    fn runnable_for(
+        &self,
+        path: &Path,
+        n_joints: usize,
+        rows: usize,
     ) -> Result<Arc<TypedRunnableModel>, BeyondMimicError> {
         let load_err = load_error(path);
         let n = n_joints;
         let mut model = self
             .model
-            .with_input_fact(self.obs_input, f32::fact([1, self.obs_width]).into())
+            .clone()
+            .with_input_fact(self.obs_input, f32::fact([rows, self.obs_width]).into())
             .map_err(load_err)?;
         if let Some(t) = self.time_step_input {
             model = model
-                .with_input_fact(t, f32::fact([1, 1]).into())
+                .with_input_fact(t, f32::fact([rows, 1]).into())
                 .map_err(load_err)?;
         }
         let typed = model.into_optimized().map_err(load_err)?;
@@ -148,12 +173,12 @@ impl Network {
         if action_width.as_deref().and_then(|s| s.last()) != Some(&n)
             || action_width
                 .as_deref()
-                .is_some_and(|s| s.iter().product::<usize>() != n)
+                .is_some_and(|s| s.iter().product::<usize>() != rows * n)
         {
             return Err(BeyondMimicError::Unusable {
                 path: path.to_path_buf(),
                 reason: format!(
-                    "the `actions` output has shape {action_width:?}, not one value per joint ({n})"
+                    "the `actions` output has shape {action_width:?} for {rows} rows, not one value per joint ({n}) and row"
                 ),
             });
         }

@@ -84,11 +84,25 @@ impl JointOrderFrom {
     }
 }
 
+/// Rows of every network call: a worker's environments go through the network this many
+/// at a time, the last call zero-padded, so an environment's action never depends on how
+/// many others share its call (records are the same for any `--envs` and `--workers`;
+/// `tests/batched_inference.rs`). One, for now, as for TWIST2 (`twist2::INFERENCE_BATCH`):
+/// four rows cost wbc-mjlab's tracker 0.34× one row per environment (`thorarena bench
+/// inference`) and bring a rapier run from 1.21 to 1.10 of its physics floor, but they
+/// round differently, and that alone made holosoma's FastSAC dance fall at 29.6 s in
+/// process on MuJoCo where one row per call dances all 135 s (README, "Measured"). A
+/// network whose graph plans for one row only runs one row per call whatever this is.
+pub const INFERENCE_BATCH: usize = 1;
+
 /// A loaded BeyondMimic-style network and how to talk to it.
 pub struct BeyondMimicPolicy {
     /// The name results carry (the family's).
     name: String,
     plan: Arc<TypedRunnableModel>,
+    /// Rows of each call to `plan` ([`INFERENCE_BATCH`], or 1 for a network planned for
+    /// one row only).
+    call_rows: usize,
     robot: Arc<RobotModel>,
     spec: ObservationSpec,
     obs_width: usize,
@@ -110,6 +124,8 @@ pub struct BeyondMimicPolicy {
     joint_order_from: JointOrderFrom,
     scratch: Scratch,
     input: Vec<f32>,
+    /// One call's inputs, row-major (kept between steps).
+    batch_input: Vec<f32>,
     last_inputs: Vec<Vec<f32>>,
 }
 
@@ -122,6 +138,12 @@ impl BeyondMimicPolicy {
     /// The observation terms in use.
     pub fn terms(&self) -> &[Term] {
         &self.spec.terms
+    }
+
+    /// Rows of each network call: [`INFERENCE_BATCH`], or 1 for a network whose graph
+    /// plans for one row only.
+    pub fn call_rows(&self) -> usize {
+        self.call_rows
     }
 
     /// What the network's actions are added to.
@@ -164,6 +186,7 @@ impl BeyondMimicPolicy {
         Self {
             name: self.name.clone(),
             plan: self.plan.clone(),
+            call_rows: self.call_rows,
             robot: self.robot.clone(),
             spec: self.spec.clone(),
             obs_width: self.obs_width,
@@ -178,6 +201,7 @@ impl BeyondMimicPolicy {
             joint_order_from: self.joint_order_from,
             scratch: Scratch::default(),
             input: Vec::new(),
+            batch_input: Vec::new(),
             last_inputs: Vec::new(),
         }
     }
@@ -205,39 +229,53 @@ impl BeyondMimicPolicy {
             .collect()
     }
 
-    /// Runs the network on one observation; returns the raw action in the robot's order
-    /// for targets `base + scale · a`, the base taken at `frame`.
-    fn infer(&self, input: &[f32], step: usize, frame: &ReferenceFrame) -> TractResult<Vec<f64>> {
+    /// Runs the network on one call's rows (`inputs`: [`Self::call_rows`] rows, those past
+    /// `observations` zero) and writes each observation's raw action, in the robot's order
+    /// for targets `base + scale · a`, the base taken at its reference frame.
+    fn infer(
+        &self,
+        inputs: &[f32],
+        observations: &[Observation],
+        actions: &mut [Vec<f64>],
+    ) -> TractResult<()> {
         let n = self.spec.to_canonical.len();
-        let mut inputs: TVec<TValue> = tvec!();
-        let obs = Tensor::from_shape(&[1, self.obs_width], input)?;
-        let time = Tensor::from_shape(&[1, 1], &[step as f32])?;
+        let rows = self.call_rows;
+        let mut tensors: TVec<TValue> = tvec!();
+        let obs = Tensor::from_shape(&[rows, self.obs_width], inputs)?;
+        let mut steps = vec![0.0_f32; rows];
+        for (t, o) in steps.iter_mut().zip(observations) {
+            *t = o.step as f32;
+        }
+        let time = Tensor::from_shape(&[rows, 1], &steps)?;
         match self.time_step_input {
             Some(0) => {
-                inputs.push(time.into());
-                inputs.push(obs.into());
+                tensors.push(time.into());
+                tensors.push(obs.into());
             }
             Some(_) => {
-                inputs.push(obs.into());
-                inputs.push(time.into());
+                tensors.push(obs.into());
+                tensors.push(time.into());
             }
-            None => inputs.push(obs.into()),
+            None => tensors.push(obs.into()),
         }
-        let out = self.plan.run(inputs)?;
+        let out = self.plan.run(tensors)?;
         let a = out[self.actions_output].to_plain_array_view::<f32>()?;
         let a: Vec<f32> = a.iter().copied().collect();
-        if a.len() != n {
+        if a.len() != rows * n {
             return Err(TractError::msg(format!(
-                "the network answered {} actions for {n} joints",
+                "the network answered {} actions for {rows} rows of {n} joints",
                 a.len()
             )));
         }
-        let mut raw = vec![0.0; n];
-        for (i, &c) in self.spec.to_canonical.iter().enumerate() {
-            let target = self.action_base(i, c, frame) + self.action_scale[i] * f64::from(a[i]);
-            raw[c] = self.raw_for_target(c, target);
+        for ((o, row), raw) in observations.iter().zip(a.chunks_exact(n)).zip(actions) {
+            let frame = &o.reference[0];
+            for (i, &c) in self.spec.to_canonical.iter().enumerate() {
+                let target =
+                    self.action_base(i, c, frame) + self.action_scale[i] * f64::from(row[i]);
+                raw[c] = self.raw_for_target(c, target);
+            }
         }
-        Ok(raw)
+        Ok(())
     }
 }
 
@@ -296,9 +334,12 @@ impl Policy for BeyondMimicPolicy {
 
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
         self.last_inputs.clear();
-        for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+        let (width, rows) = (self.obs_width, self.call_rows);
+        let mut batch = std::mem::take(&mut self.batch_input);
+        batch.clear();
+        batch.resize(observations.len().div_ceil(rows) * rows * width, 0.0);
+        for (obs, row) in observations.iter().zip(batch.chunks_exact_mut(width)) {
             let last = self.policy_last_action(obs);
-            let mut input = std::mem::take(&mut self.input);
             build_observation(
                 &self.spec,
                 &self.robot,
@@ -306,20 +347,23 @@ impl Policy for BeyondMimicPolicy {
                 &obs.reference[0],
                 &last,
                 &mut self.scratch,
-                &mut input,
+                &mut self.input,
             );
-            match self.infer(&input, obs.step, &obs.reference[0]) {
-                Ok(raw) => action.copy_from_slice(&raw),
-                // A network that fails at run time answers NaN: the runner's miss rule
-                // keeps it away from the physics and counts it.
-                Err(e) => {
-                    log::warn!("{}: inference failed: {e:#}", self.name);
-                    action.fill(f64::NAN);
-                }
-            }
-            self.last_inputs.push(input.clone());
-            self.input = input;
+            row.copy_from_slice(&self.input);
+            self.last_inputs.push(self.input.clone());
         }
+        let calls = batch
+            .chunks_exact(rows * width)
+            .zip(observations.chunks(rows).zip(actions.chunks_mut(rows)));
+        for (inputs, (obs, action)) in calls {
+            // A network that fails at run time answers NaN: the runner's miss rule keeps
+            // it away from the physics and counts it.
+            if let Err(e) = self.infer(inputs, obs, action) {
+                log::warn!("{}: inference failed: {e:#}", self.name);
+                action.iter_mut().for_each(|a| a.fill(f64::NAN));
+            }
+        }
+        self.batch_input = batch;
         ActOutcome::Acted
     }
 }
