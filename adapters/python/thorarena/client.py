@@ -212,6 +212,37 @@ class SessionInfo:
     reference_offsets_s: tuple[float, ...]
     """Times ahead of each step of the reference frames, s (as asked)."""
 
+    @classmethod
+    def welcomed(
+        cls,
+        layout: Layout,
+        *,
+        control_dt_s: float,
+        budget_s: float,
+        simulator_pid: int,
+        action_offset_rad: Any,
+        action_scale: Any,
+        reference_offsets_s: Sequence[float],
+    ) -> SessionInfo:
+        """The session a welcome describes, whichever transport read it: the action
+        mapping's first `n_joints` values as read-only float64 arrays."""
+        n = layout.n_joints
+
+        def frozen(values: Any) -> np.ndarray:
+            array = np.array(values[:n], dtype=np.float64)
+            array.flags.writeable = False
+            return array
+
+        return cls(
+            layout=layout,
+            control_dt_s=control_dt_s,
+            budget_s=budget_s,
+            simulator_pid=simulator_pid,
+            action_offset_rad=frozen(action_offset_rad),
+            action_scale=frozen(action_scale),
+            reference_offsets_s=tuple(float(o) for o in reference_offsets_s),
+        )
+
 
 class Session:
     """A connected policy: the session's shape, and `steps()`, the control loop. `connect`
@@ -650,21 +681,14 @@ def connect(
         )
     except Exception as e:
         raise _transport("creating the step server", e) from e
-    n = layout.n_joints
-
-    def frozen(values: Any) -> np.ndarray:
-        array = np.array(values[:n], dtype=np.float64)
-        array.flags.writeable = False
-        return array
-
-    info = SessionInfo(
-        layout=layout,
+    info = SessionInfo.welcomed(
+        layout,
         control_dt_s=welcome.control_dt_s,
         budget_s=welcome.budget_s,
         simulator_pid=welcome.pid,
-        action_offset_rad=frozen(welcome.action_offset_rad),
-        action_scale=frozen(welcome.action_scale),
-        reference_offsets_s=tuple(offsets),
+        action_offset_rad=welcome.action_offset_rad,
+        action_scale=welcome.action_scale,
+        reference_offsets_s=offsets,
     )
     return IceoryxSession(
         info=info,

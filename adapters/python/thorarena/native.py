@@ -340,20 +340,13 @@ def connect_native(
             f"{described.inputs_offset}), this package {layout.obs_bytes} (at "
             f"{layout.inputs_offset}): rebuild it from the same checkout"
         )
-    n = layout.n_joints
-
-    def frozen(values: Any) -> np.ndarray:
-        array = np.array(values[:n], dtype=np.float64)
-        array.flags.writeable = False
-        return array
-
-    info = SessionInfo(
-        layout=layout,
+    info = SessionInfo.welcomed(
+        layout,
         control_dt_s=described.control_dt_s,
         budget_s=described.budget_s,
         simulator_pid=described.simulator_pid,
-        action_offset_rad=frozen(described.action_offset_rad),
-        action_scale=frozen(described.action_scale),
-        reference_offsets_s=tuple(float(o) for o in reference_offsets_s),
+        action_offset_rad=described.action_offset_rad,
+        action_scale=described.action_scale,
+        reference_offsets_s=reference_offsets_s,
     )
     return NativeSession(info=info, lib=lib, client=client)
