@@ -145,17 +145,35 @@ fn acting_on_the_workers_records_what_acting_on_the_coordinator_records() {
         policy.worker_copies(2).is_some(),
         "TWIST2 offers worker copies"
     );
-    let seqs = sequences(&robot);
+    records_match_one_slot_on_the_coordinator(
+        &robot,
+        &profile,
+        policy,
+        &[(1, 1), (2, 2), (2, 5), (3, 4)],
+        "TWIST2",
+    );
+}
+
+/// `policy` on the workers, for each `(workers, slots)`, records what it records acting
+/// for one slot at a time on the coordinator, over the three sample sequences.
+fn records_match_one_slot_on_the_coordinator<P: Policy>(
+    robot: &RobotModel,
+    profile: &Profile,
+    policy: P,
+    layouts: &[(usize, usize)],
+    what: &str,
+) {
+    let seqs = sequences(robot);
     let mut coordinator = OnCoordinator(policy);
-    let want = records(&robot, &profile, &seqs, 1, 1, &mut coordinator);
+    let want = records(robot, profile, &seqs, 1, 1, &mut coordinator);
     assert_eq!(want.len(), 6);
     let want = format!("{want:?}");
     let mut policy = coordinator.0;
-    for (workers, envs) in [(1, 1), (2, 2), (2, 5), (3, 4)] {
-        let got = records(&robot, &profile, &seqs, workers, envs, &mut policy);
+    for &(workers, envs) in layouts {
+        let got = records(robot, profile, &seqs, workers, envs, &mut policy);
         assert!(
             format!("{got:?}") == want,
-            "{workers} workers, {envs} slots: the records differ from one slot on the coordinator"
+            "{what}: {workers} workers, {envs} slots: the records differ from one slot on the coordinator"
         );
     }
 }
@@ -175,19 +193,13 @@ fn beyondmimic_records_do_not_depend_on_its_slots(test: &str, onnx: &str, profil
         INFERENCE_BATCH,
         "{onnx} plans for {INFERENCE_BATCH} rows per call"
     );
-    let seqs = sequences(&robot);
-    let mut coordinator = OnCoordinator(policy);
-    let want = records(&robot, &profile, &seqs, 1, 1, &mut coordinator);
-    assert_eq!(want.len(), 6);
-    let want = format!("{want:?}");
-    let mut policy = coordinator.0;
-    for (workers, envs) in [(1, 4), (2, 5), (1, 5)] {
-        let got = records(&robot, &profile, &seqs, workers, envs, &mut policy);
-        assert!(
-            format!("{got:?}") == want,
-            "{onnx}: {workers} workers, {envs} slots: the records differ from one slot on the coordinator"
-        );
-    }
+    records_match_one_slot_on_the_coordinator(
+        &robot,
+        &profile,
+        policy,
+        &[(1, 4), (2, 5), (1, 5)],
+        onnx,
+    );
 }
 
 #[test]

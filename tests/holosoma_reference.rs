@@ -142,21 +142,16 @@ fn the_holosoma_policy_tracks_its_motion_and_the_force_table_holds() {
         .iter()
         .zip(twist2.iter().zip(&holosoma))
         .map(|(row, (t, h))| {
-            let cells = vec![
+            vec![
                 row[0].clone(),
                 format!("{:.2}", t.1),
                 format!("{:.1}", t.2),
                 format!("{:.2}", h.1),
                 format!("{:.1}", h.2),
-            ];
-            eprintln!("| {} |", cells.join(" | "));
-            cells
+            ]
         })
         .collect();
-    assert_eq!(
-        table, measured,
-        "README's table `published-policies-force` differs from what was measured (rows printed above)"
-    );
+    readme::assert_readme_table("published-policies-force", &measured);
 }
 
 #[test]

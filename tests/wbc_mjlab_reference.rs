@@ -139,25 +139,19 @@ fn wbc_mjlab_tracks_the_five_shared_clips_in_rapier_and_mujoco() {
             "{clip}: keypoint error {kp_rapier:.1} mm in rapier, {kp:.1} mm in MuJoCo: not within 10 %"
         );
     }
-    let table = readme::readme_table("wbc-mjlab-clips");
-    assert_eq!(table.len(), CLIPS.len());
+    assert_eq!(readme::readme_table("wbc-mjlab-clips").len(), CLIPS.len());
     let measured: Vec<Vec<String>> = rapier
         .iter()
         .zip(&mujoco)
         .map(|(r, m)| {
-            let cells = vec![
+            vec![
                 r.0.clone(),
                 format!("{:.2}", r.1),
                 format!("{:.1}", r.2),
                 format!("{:.2}", m.1),
                 format!("{:.1}", m.2),
-            ];
-            eprintln!("| {} |", cells.join(" | "));
-            cells
+            ]
         })
         .collect();
-    assert_eq!(
-        table, measured,
-        "README's table `wbc-mjlab-clips` is not what was measured (rows printed above)"
-    );
+    readme::assert_readme_table("wbc-mjlab-clips", &measured);
 }

@@ -82,12 +82,8 @@ fn sim_config(session: &str, n_envs: usize, budget: Option<Duration>) -> SimConf
 struct Python(Option<Child>);
 
 impl Python {
-    /// `python3 ARGS…` from the repository root, with the package on `PYTHONPATH`.
-    fn spawn(args: &[&str]) -> Self {
-        Self::spawn_with_env(args, &[])
-    }
-
-    /// [`Self::spawn`] with `env` added to the child's environment.
+    /// `python3 ARGS…` from the repository root, with the package on `PYTHONPATH` and
+    /// `env` added to its environment.
     fn spawn_with_env(args: &[&str], env: &[(&str, PathBuf)]) -> Self {
         let root = repo_root();
         let child = Command::new("python3")
@@ -105,18 +101,15 @@ impl Python {
     }
 
     fn example(scenario: &str, args: &[&str]) -> Self {
-        let script = format!("adapters/python/examples/{scenario}/{scenario}_policy.py");
-        let mut all = vec![script.as_str()];
-        all.extend_from_slice(args);
-        Self::spawn(&all)
+        Self::example_with_env(scenario, args, &[])
     }
 
-    /// [`Self::example`] with `THORARENA_IPC_LIB` naming this build's C ABI library.
-    fn example_with_library(scenario: &str, args: &[&str]) -> Self {
+    /// [`Self::example`] with `env` added to its environment.
+    fn example_with_env(scenario: &str, args: &[&str], env: &[(&str, PathBuf)]) -> Self {
         let script = format!("adapters/python/examples/{scenario}/{scenario}_policy.py");
         let mut all = vec![script.as_str()];
         all.extend_from_slice(args);
-        Self::spawn_with_env(&all, &[("THORARENA_IPC_LIB", ipc_library())])
+        Self::spawn_with_env(&all, env)
     }
 
     fn exited(&mut self) -> bool {
@@ -200,8 +193,11 @@ fn replay_against_rust_server(transport: &str, class_name: &str) {
     );
     let n = offset.len();
     let mut sim = SimSession::create(config).unwrap();
-    let python =
-        Python::example_with_library("replay", &["--session", &session, "--transport", transport]);
+    let python = Python::example_with_env(
+        "replay",
+        &["--session", &session, "--transport", transport],
+        &[("THORARENA_IPC_LIB", ipc_library())],
+    );
     let info = sim.accept(Some(Duration::from_secs(30)), |_| {}).unwrap();
     assert_eq!(info.name, "replay-python");
     assert_eq!(info.reference_offsets_s, vec![0.0]);

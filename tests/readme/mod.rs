@@ -25,3 +25,17 @@ pub fn readme_table(name: &str) -> Vec<Vec<String>> {
         })
         .collect()
 }
+
+/// Asserts that README's table `name` is `measured` (cells per row, as [`readme_table`]
+/// reads them), printing every measured row first, so a changed table is mended from one
+/// run.
+pub fn assert_readme_table(name: &str, measured: &[Vec<String>]) {
+    for row in measured {
+        eprintln!("| {} |", row.join(" | "));
+    }
+    assert_eq!(
+        readme_table(name),
+        measured,
+        "README's table `{name}` is not what was measured (rows printed above)"
+    );
+}
