@@ -41,7 +41,8 @@ pub struct Args {
     /// Worker threads [default: one per core].
     #[arg(long)]
     pub workers: Option<usize>,
-    /// Environment slots [default: the number of workers].
+    /// Environment slots [default: as for `eval`: one per worker, a network in process
+    /// its family's count per worker (TWIST2 4, BeyondMimic family 8)].
     #[arg(long)]
     pub envs: Option<usize>,
     /// A policy process instead of `--policy`: a shell command joining session

@@ -15,7 +15,9 @@ use thorarena_ipc::{SimConfig, WaitPolicy};
 #[derive(Debug, Clone, clap::Args)]
 pub struct PolicyIoArgs {
     /// Environment slots stepped in lock-step; one batch of this many observations goes to
-    /// the policy each control step [default: the number of workers].
+    /// the policy each control step [default: one per worker; a network in process more
+    /// per worker, its family's count (TWIST2 4, BeyondMimic family 8), which its calls
+    /// share. Records do not depend on it].
     #[arg(long)]
     pub envs: Option<usize>,
     /// 2: split the slots in two halves and step one half's physics while the policy

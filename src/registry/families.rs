@@ -52,6 +52,14 @@ impl PolicyFamily {
 /// 4 slots 11.9–12.4 s.
 pub const NETWORK_SLOTS_PER_WORKER: usize = 4;
 
+/// Environment slots per worker by default for a BeyondMimic-family network (and
+/// wbc-mjlab's): one whole network call per worker step
+/// ([`crate::policy::beyondmimic::INFERENCE_BATCH`] rows), so no row of a call is padding.
+/// Measured (`thorarena bench eval`, wbc-mjlab, rapier, 60 synthetic sequences × 2
+/// settings, 2 workers): 8 slots per worker and 8 rows per call 68.7 s, run ÷ floor 1.08;
+/// 4 and 4, 69.4–70.9 s, 1.10.
+pub const BEYONDMIMIC_SLOTS_PER_WORKER: usize = crate::policy::beyondmimic::INFERENCE_BATCH;
+
 /// Every policy family, built-ins first.
 pub const POLICY_FAMILIES: [PolicyFamily; 7] = [
     PolicyFamily {
@@ -96,7 +104,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 7] = [
         what: "a BeyondMimic-style tracker exported by mjlab, whole_body_tracking or holosoma",
         supplies: "the network file; for a file naming no observation terms, a profile that does (holosoma: --profile holosoma-wbt)",
         profile: "beyondmimic",
-        slots_per_worker: NETWORK_SLOTS_PER_WORKER,
+        slots_per_worker: BEYONDMIMIC_SLOTS_PER_WORKER,
         runs: Runs::InProcess,
     },
     PolicyFamily {
@@ -105,7 +113,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 7] = [
         what: "wbc-mjlab's general G1 tracker (a residual on the reference joints, 132 inputs), run as a BeyondMimic-family network",
         supplies: "the network file (wbc_g1_policy.onnx of wbc-mjlab/wbc-g1-deploy)",
         profile: "wbc-mjlab",
-        slots_per_worker: NETWORK_SLOTS_PER_WORKER,
+        slots_per_worker: BEYONDMIMIC_SLOTS_PER_WORKER,
         runs: Runs::InProcess,
     },
     PolicyFamily {

@@ -87,13 +87,16 @@ impl JointOrderFrom {
 /// Rows of every network call: a worker's environments go through the network this many
 /// at a time, the last call zero-padded, so an environment's action never depends on how
 /// many others share its call (records are the same for any `--envs` and `--workers`;
-/// `tests/batched_inference.rs`). One, for now, as for TWIST2 (`twist2::INFERENCE_BATCH`):
-/// four rows cost wbc-mjlab's tracker 0.34× one row per environment (`thorarena bench
-/// inference`) and bring a rapier run from 1.21 to 1.10 of its physics floor, but they
-/// round differently, and that alone made holosoma's FastSAC dance fall at 29.6 s in
-/// process on MuJoCo where one row per call dances all 135 s (README, "Measured"). A
-/// network whose graph plans for one row only runs one row per call whatever this is.
-pub const INFERENCE_BATCH: usize = 1;
+/// `tests/batched_inference.rs`). Eight: wbc-mjlab's tracker costs 167 µs per call of one
+/// row and 30 µs per row in calls of eight (`thorarena bench inference`), which takes a
+/// rapier run from 1.21 to 1.08 of its physics floor (README, "Measured"). Any count from
+/// 2 to 16 gives the same records here (tract runs one kernel for all of them); one row
+/// runs another and rounds differently (~1e-6). That rounding once looked like a cost:
+/// holosoma's FastSAC dance on MuJoCo dances all 135 s at one row and falls at 29.6 s at
+/// more. It is the dance, not the call shape: with its first input nudged by 1e-6 to 2e-5,
+/// 2 of 24 runs fall there, one at one row and one at four. A network whose graph plans for one
+/// row only runs one row per call whatever this is.
+pub const INFERENCE_BATCH: usize = 8;
 
 /// A loaded BeyondMimic-style network and how to talk to it.
 pub struct BeyondMimicPolicy {
