@@ -542,3 +542,67 @@ fn a_python_policy_in_another_pid_namespace_judges_the_simulator_by_its_node() {
         "not noticed: {stderr}"
     );
 }
+
+/// A Python policy over the C ABI (`transport="native"`) whose simulator goes without
+/// ending the run raises `SimulatorGone`, naming the simulator, within seconds: the
+/// library's liveness check reaches Python as its own error, not as a timeout or a
+/// transport failure.
+#[test]
+fn a_python_policy_over_the_c_abi_sees_the_simulator_go() {
+    const TEST: &str = "python_client::c_abi_simulator_gone";
+    if !python_ready(TEST) {
+        return;
+    }
+    let session = unique("gone-native");
+    let mut sim = SimSession::create(sim_config(&session, 1, None)).unwrap();
+    let script = "import sys, thorarena as ta\n\
+                  s = ta.connect(sys.argv[1], name='echo', joint_names=ta.G1_JOINT_NAMES, \
+                  transport='native', timeout_s=60)\n\
+                  print('connected', type(s).__name__, flush=True)\n\
+                  try:\n\
+                  \x20   for obs, actions in s.steps():\n\
+                  \x20       actions[:] = obs['q']\n\
+                  except ta.SimulatorGone as e:\n\
+                  \x20   print('gone:', e, flush=True)\n\
+                  \x20   sys.exit(3)\n";
+    let mut python = Python::spawn_with_env(
+        &["-c", script, &session],
+        &[("THORARENA_IPC_LIB", ipc_library())],
+    );
+    sim.accept(Some(Duration::from_secs(30)), |_| {}).unwrap();
+    for k in 0..3u64 {
+        let outcome = sim
+            .step(
+                |batch| {
+                    let mut env = batch.env(0);
+                    env.set_header(&active_header(k));
+                    env.array("q").fill(k as f64);
+                },
+                Some(Duration::from_secs(10)),
+                |actions| assert_eq!(actions.env(0), vec![k as f64; 29].as_slice()),
+            )
+            .unwrap();
+        assert_eq!(outcome, StepOutcome::Answered, "step {k}");
+    }
+    drop(sim);
+    let start = Instant::now();
+    while !python.exited() && start.elapsed() < Duration::from_secs(10) {
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let noticed_after = start.elapsed();
+    let out = python.wait();
+    let (stdout, stderr) = (text(&out.stdout), text(&out.stderr));
+    assert_eq!(out.status.code(), Some(3), "{stdout}{stderr}");
+    assert!(stdout.contains("connected NativeSession"), "{stdout}");
+    assert!(
+        stdout.contains(&format!(
+            "gone: the simulator (pid {}) is gone",
+            std::process::id()
+        )),
+        "{stdout}{stderr}"
+    );
+    assert!(
+        noticed_after < Duration::from_secs(10),
+        "not noticed: {stdout}{stderr}"
+    );
+}
