@@ -141,6 +141,21 @@ fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
+/// Step `k` of a one-environment session whose policy echoes: `q` is `k` on every joint,
+/// and an answer must be the same.
+fn echo_step(sim: &mut SimSession, k: u64, budget: Duration) -> StepOutcome {
+    sim.step(
+        |batch| {
+            let mut env = batch.env(0);
+            env.set_header(&active_header(k));
+            env.array("q").fill(k as f64);
+        },
+        Some(budget),
+        |actions| assert_eq!(actions.env(0), vec![k as f64; 29].as_slice()),
+    )
+    .unwrap()
+}
+
 fn active_header(step: u64) -> EnvHeader {
     EnvHeader {
         episode_id: 0,
@@ -323,17 +338,7 @@ fn a_killed_python_policy_is_gone_before_the_deadline() {
     sim.accept(Some(Duration::from_secs(30)), |_| {}).unwrap();
     let mut outcomes = Vec::new();
     for step in 0..6u64 {
-        let outcome = sim
-            .step(
-                |batch| {
-                    let mut env = batch.env(0);
-                    env.set_header(&active_header(step));
-                    env.array("q").fill(step as f64);
-                },
-                Some(budget),
-                |actions| assert_eq!(actions.env(0), vec![step as f64; 29].as_slice()),
-            )
-            .unwrap();
+        let outcome = echo_step(&mut sim, step, budget);
         if outcome == StepOutcome::PolicyGone {
             // Found dead by the liveness check, not by waiting out the budget.
             assert!(
@@ -492,18 +497,7 @@ fn a_python_policy_in_another_pid_namespace_judges_the_simulator_by_its_node() {
             .unwrap(),
     ));
     sim.accept(Some(Duration::from_secs(30)), |_| {}).unwrap();
-    let mut step = |k: u64| {
-        sim.step(
-            |batch| {
-                let mut env = batch.env(0);
-                env.set_header(&active_header(k));
-                env.array("q").fill(k as f64);
-            },
-            Some(Duration::from_secs(10)),
-            |actions| assert_eq!(actions.env(0), vec![k as f64; 29].as_slice()),
-        )
-        .unwrap()
-    };
+    let mut step = |k: u64| echo_step(&mut sim, k, Duration::from_secs(10));
     for k in 0..3 {
         let outcome = step(k);
         if outcome != StepOutcome::Answered {
@@ -571,17 +565,7 @@ fn a_python_policy_over_the_c_abi_sees_the_simulator_go() {
     );
     sim.accept(Some(Duration::from_secs(30)), |_| {}).unwrap();
     for k in 0..3u64 {
-        let outcome = sim
-            .step(
-                |batch| {
-                    let mut env = batch.env(0);
-                    env.set_header(&active_header(k));
-                    env.array("q").fill(k as f64);
-                },
-                Some(Duration::from_secs(10)),
-                |actions| assert_eq!(actions.env(0), vec![k as f64; 29].as_slice()),
-            )
-            .unwrap();
+        let outcome = echo_step(&mut sim, k, Duration::from_secs(10));
         assert_eq!(outcome, StepOutcome::Answered, "step {k}");
     }
     drop(sim);
