@@ -40,12 +40,7 @@ fn a_row_of_a_fixed_size_batch_answers_the_same_wherever_it_sits_and_whatever_it
     let width = thorarena::policy::twist2::OBS_LEN;
     // A call shape of several rows: where the kernel's row tiling could matter.
     let batch = 4;
-    // Rows of distinct, deterministic inputs in the range observations take.
-    let row = |r: usize| -> Vec<f32> {
-        (0..width)
-            .map(|i| (((i * 7919 + r * 104_729) % 2001) as f32 / 1000.0 - 1.0) * 2.0)
-            .collect()
-    };
+    let row = |r: usize| input_row(width, r);
     // Row 0 at each position of the batch, among different neighbours (zeros, as padding
     // is, or other rows).
     let mut answers = Vec::new();
@@ -67,11 +62,7 @@ fn a_row_of_a_fixed_size_batch_answers_the_same_wherever_it_sits_and_whatever_it
     }
     // Against batch one (another tract kernel) the rounding differs: by how much.
     let alone = policy.infer(&row(0)).unwrap();
-    let max_diff = alone
-        .iter()
-        .zip(&answers[0])
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0f32, f32::max);
+    let max_diff = largest_difference(&alone, &answers[0]);
     eprintln!("batch {batch} against batch one: largest difference {max_diff:e}");
     assert!(max_diff < 1e-5, "{max_diff:e}");
 }
@@ -90,10 +81,7 @@ fn every_call_shape_of_several_rows_rounds_alike_and_one_row_within_1e_5() {
     use tract_onnx::prelude::Framework;
     let model = tract_onnx::onnx().model_for_path(&onnx).unwrap();
     let plans = thorarena::policy::BatchPlans::new(model, width).unwrap();
-    // Normalised observations are of order one.
-    let row: Vec<f32> = (0..width)
-        .map(|i| ((i * 7919 % 2001) as f32 / 1000.0 - 1.0) * 2.0)
-        .collect();
+    let row = input_row(width, 0);
     let alone = plans.run(&row, 1).unwrap();
     let in_a_call = |rows: usize| {
         let mut inputs = row.clone();
@@ -107,13 +95,25 @@ fn every_call_shape_of_several_rows_rounds_alike_and_one_row_within_1e_5() {
             "{rows} rows per call round otherwise than {INFERENCE_BATCH}"
         );
     }
-    let max_diff = alone
-        .iter()
-        .zip(&eight)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0f32, f32::max);
+    let max_diff = largest_difference(&alone, &eight);
     eprintln!("wbc-mjlab, {INFERENCE_BATCH} rows against one: largest difference {max_diff:e}");
     assert!(max_diff < 1e-5, "{max_diff:e}");
+}
+
+/// Row `r` of distinct, deterministic network inputs, `width` floats in [-2, 2], the range
+/// normalised observations take.
+fn input_row(width: usize, r: usize) -> Vec<f32> {
+    (0..width)
+        .map(|i| (((i * 7919 + r * 104_729) % 2001) as f32 / 1000.0 - 1.0) * 2.0)
+        .collect()
+}
+
+/// The largest absolute difference between two answers.
+fn largest_difference(a: &[f32], b: &[f32]) -> f32 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max)
 }
 
 /// The same policy without its worker copies: it acts on the coordinator.

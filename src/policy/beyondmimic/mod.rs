@@ -93,9 +93,9 @@ impl JointOrderFrom {
 /// 2 to 16 gives the same records here (tract runs one kernel for all of them); one row
 /// runs another and rounds differently (~1e-6). That rounding once looked like a cost:
 /// holosoma's FastSAC dance on MuJoCo dances all 135 s at one row and falls at 29.6 s at
-/// more. It is the dance, not the call shape: with its first input nudged by 1e-6 to 2e-5,
-/// 2 of 24 runs fall there, one at one row and one at four. A network whose graph plans for one
-/// row only runs one row per call whatever this is.
+/// more. It is the dance, not the call shape: with its first input nudged by 1e-6 to
+/// 2e-5, 2 of 24 runs fall there, one at one row and one at four. A network whose graph
+/// plans for one row only runs one row per call whatever this is.
 pub const INFERENCE_BATCH: usize = 8;
 
 /// A loaded BeyondMimic-style network and how to talk to it.
