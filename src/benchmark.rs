@@ -152,7 +152,9 @@ pub fn evaluate(
     options: EvalOptions,
     observer: &mut dyn EvalObserver,
 ) -> Result<Evaluated, BenchmarkError> {
+    let _writer = run.lock()?;
     let mut header = RunHeader::of(spec, policy.name());
+    header.network_kernels = policy.network_kernels().map(|k| k.isa.clone());
     header.sanity = Some(sanity(spec, policy)?);
     let started = run.start(&header, options.resume)?;
     let finished: HashSet<_> = started.kept.iter().map(EpisodeRecord::key).collect();
@@ -184,22 +186,18 @@ pub fn evaluate(
     if let Some(e) = write_error {
         return Err(e.into());
     }
+    let resumed_episodes = started.kept.len();
+    let mut records = started.kept;
+    records.extend(outcome.records);
+    // Faults are in every record, kept or new; latency percentiles only of this attempt
+    // (the run keeps no samples), which the report says when a resume kept episodes.
     let io = PolicyIoReport {
         latency: outcome.latency,
         transport: outcome.transport,
-        deadline_misses: outcome
-            .records
-            .iter()
-            .map(|r| r.faults.deadline_misses)
-            .sum(),
-        invalid_actions: outcome
-            .records
-            .iter()
-            .map(|r| r.faults.invalid_actions)
-            .sum(),
+        deadline_misses: records.iter().map(|r| r.faults.deadline_misses).sum(),
+        invalid_actions: records.iter().map(|r| r.faults.invalid_actions).sum(),
+        resumed_episodes,
     };
-    let mut records = started.kept;
-    records.extend(outcome.records);
     let thresholds = task_thresholds(&spec.sequences, header.control_dt_s);
     let summary = run.finish(&header, &mut records, thresholds, Some(io))?;
     let tables = crate::report::write_run_tables(run.path(), &summary)?;
@@ -233,6 +231,7 @@ pub fn merge(
     out: &RunDir,
     robot: &RobotModel,
 ) -> Result<Merged, BenchmarkError> {
+    let _writer = out.lock()?;
     let read = read_shards(shards)?;
     let header = read.header.clone();
     let ds = Dataset::open(std::path::Path::new(&header.dataset), robot)?;

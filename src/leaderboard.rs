@@ -64,6 +64,18 @@ pub enum LeaderboardError {
         /// Why.
         source: Box<BenchmarkError>,
     },
+    /// Two rows of the board would write one run directory, or one engine is asked
+    /// twice, or a process's name cannot name a run: refused before anything runs.
+    #[error("{0}")]
+    Names(String),
+    /// `--out` holds something a leaderboard must not write over.
+    #[error("--out {}: {why}; choose another --out", .out.display())]
+    Out {
+        /// The directory.
+        out: PathBuf,
+        /// What it holds.
+        why: &'static str,
+    },
     /// A policy file is unreadable or invalid.
     #[error("{path}: {message}")]
     PolicyFile {
@@ -268,6 +280,66 @@ pub fn run_name(policy: &str, engine: EngineChoice) -> String {
     format!("{clean}-{}", engine_name(engine))
 }
 
+/// Refuses, before the first run, what would otherwise fail late or overwrite a run: an
+/// engine asked twice, a process's name that cannot name a run directory, and two rows
+/// that would share one run directory (two policies of one name, or whose names clean
+/// to the same directory name).
+fn check_names(
+    runs: &[(Player, PathBuf, bool)],
+    engines: &[EngineChoice],
+) -> Result<(), LeaderboardError> {
+    for (i, e) in engines.iter().enumerate() {
+        if engines[..i].contains(e) {
+            return Err(LeaderboardError::Names(format!(
+                "--engines names {} twice",
+                engine_name(*e)
+            )));
+        }
+    }
+    let mut seen: std::collections::BTreeMap<String, &str> = Default::default();
+    for (player, _, own_clip) in runs {
+        if let Player::Process(p) = player {
+            crate::names::check_name("policy name", &p.name)
+                .map_err(|e| LeaderboardError::Names(e.to_string()))?;
+        }
+        let dir = format!(
+            "{}{}",
+            run_name(player.name(), EngineChoice::Rapier),
+            if *own_clip { "-own-clip" } else { "" }
+        );
+        if let Some(other) = seen.insert(dir.clone(), player.name()) {
+            return Err(LeaderboardError::Names(format!(
+                "`{other}` and `{}` would share the run directory runs/{dir}: give each policy a name of its own",
+                player.name()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A leaderboard writes `runs/`, `leaderboard.md` and its reports into `out`: a new
+/// directory or an earlier leaderboard's (whose runs it resumes), never a run, a dataset
+/// or a directory holding another command's report.
+fn check_out(out: &Path) -> Result<(), LeaderboardError> {
+    let refuse = |why| {
+        Err(LeaderboardError::Out {
+            out: out.to_path_buf(),
+            why,
+        })
+    };
+    if crate::results::RunDir::new(out).holds_run() {
+        return refuse("it holds a run");
+    }
+    if out.join(crate::motion::MANIFEST).is_file() {
+        return refuse("it holds a dataset");
+    }
+    let earlier_board = out.join("leaderboard.md").is_file() || out.join("runs").is_dir();
+    if !earlier_board && out.join("report.html").exists() {
+        return refuse("it holds a report.html no leaderboard wrote");
+    }
+    Ok(())
+}
+
 fn engine_name(engine: EngineChoice) -> &'static str {
     match engine {
         EngineChoice::Rapier => "rapier",
@@ -297,6 +369,8 @@ pub fn run_leaderboard(
         .iter()
         .map(|c| (Player::Argument(c.policy.clone()), c.dataset.clone(), true));
     let runs: Vec<(Player, PathBuf, bool)> = general.chain(own).collect();
+    check_names(&runs, &request.engines)?;
+    check_out(&request.out)?;
     let total = runs.len() * request.engines.len();
     let mut entries = Vec::new();
     for &engine in &request.engines {
@@ -340,11 +414,18 @@ fn run_one(
 ) -> Result<Summary, LeaderboardError> {
     let name = player.name();
     let engine_name = engine_name(engine);
-    // A policy process serves a session of its own, named after it and this process.
+    // A policy process serves a session of its own: short whatever the policy's name
+    // (a session name has at most 64 characters), unique per run and per invocation.
     let session = format!(
         "leaderboard-{}-{}",
-        run.file_name()
-            .map_or("run".into(), |f| f.to_string_lossy()),
+        {
+            use sha2::Digest;
+            let digest = sha2::Sha256::digest(run.to_string_lossy().as_bytes());
+            digest[..4]
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect::<String>()
+        },
         std::process::id()
     );
     let (policy_arg, profile) = match player {
@@ -432,7 +513,11 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
     rule.push_str("---:|\n");
     out.push_str(&rule);
     for e in entries {
-        out.push_str(&format!("| {} | {} |", policy_label(&e.policy), e.engine));
+        out.push_str(&format!(
+            "| {} | {} |",
+            markdown_cell(&policy_label(&e.policy)),
+            e.engine
+        ));
         for s in &settings {
             match e.summary.settings.get(s.as_str()) {
                 Some(r) => {
@@ -460,6 +545,23 @@ pub fn policy_label(policy: &str) -> String {
         Some((family, stem)) => format!("{family} ({stem})"),
         None => policy.to_string(),
     }
+}
+
+/// Text that stays one cell of a Markdown table and shows as text: `|` escaped, HTML's
+/// special characters as entities (a file stem may hold either).
+fn markdown_cell(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '|' => out.push_str("\\|"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '&' => out.push_str("&amp;"),
+            c if c.is_control() => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 fn minutes(s: f64) -> String {

@@ -9,6 +9,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod atomic_file;
 pub mod benchmark;
 pub mod dds;
 pub mod embedded_data;
@@ -19,6 +20,7 @@ pub mod leaderboard;
 pub mod metrics;
 pub mod motion;
 pub mod names;
+pub mod network_kernels;
 pub mod onnx_export;
 pub mod perf;
 pub mod physics;

@@ -85,3 +85,41 @@ mod tests {
         assert!(check_name("task", &"x".repeat(MAX_LEN + 1)).is_err());
     }
 }
+
+/// Text cells of the CSV files ThorArena writes (`episodes.csv`, a report's `-fats.csv`,
+/// a sweep's `results.csv`, `crosscheck.csv`), safe to open in a spreadsheet: a cell that
+/// begins with `=`, `+`, `-`, `@`, a tab or a carriage return would be read as a formula
+/// (`=HYPERLINK(…)` as a policy name, `=1+2` as a sequence id: both are plain names), so it
+/// is written with a leading `'`, which spreadsheets show as text and this module's
+/// reader removes again. Numbers are written as numbers and never pass through here.
+pub mod csv_text {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    /// Whether a spreadsheet would read `text` as a formula.
+    fn formula_like(text: &str) -> bool {
+        text.starts_with(['=', '+', '-', '@', '\t', '\r'])
+    }
+
+    /// `text` as a cell: with a leading `'` when it would read as a formula.
+    pub fn cell(text: &str) -> std::borrow::Cow<'_, str> {
+        if formula_like(text) {
+            format!("'{text}").into()
+        } else {
+            text.into()
+        }
+    }
+
+    /// For `#[serde(with = "crate::names::csv_text")]` on a `String` field.
+    pub fn serialize<S: Serializer>(text: &str, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&cell(text))
+    }
+
+    /// Reads a cell [`serialize`] wrote.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<String, D::Error> {
+        let text = String::deserialize(d)?;
+        Ok(match text.strip_prefix('\'') {
+            Some(rest) if formula_like(rest) => rest.to_string(),
+            _ => text,
+        })
+    }
+}

@@ -58,6 +58,9 @@ pub struct SanityOptions {
     pub engine: Engine,
     /// The keypoint set errors are measured on.
     pub keypoints: String,
+    /// Say each check as it starts and what it took (`log::info!`): `policy check` on a
+    /// slow network would otherwise print nothing for minutes.
+    pub announce: bool,
 }
 
 impl Default for SanityOptions {
@@ -69,6 +72,7 @@ impl Default for SanityOptions {
             zero_worse_ratio: 1.5,
             engine: Engine::Rapier,
             keypoints: "default".into(),
+            announce: false,
         }
     }
 }
@@ -126,6 +130,25 @@ impl SanityReport {
 struct Run {
     survival: f64,
     kp_rms_mm: Option<f64>,
+    /// Control steps whose action had a non-finite value (the previous action was held
+    /// instead, as an evaluation's miss rule would), and the first of them.
+    non_finite: Option<(usize, usize)>,
+}
+
+impl Run {
+    /// The check's verdict, failed by any non-finite action, and its detail, which then
+    /// says so.
+    fn verdict(&self, passed: bool, detail: String) -> (bool, String) {
+        match self.non_finite {
+            None => (passed, detail),
+            Some((steps, first)) => (
+                false,
+                format!(
+                    "{detail}; the network's actions were not finite on {steps} control steps (first at step {first}): a broken network or input"
+                ),
+            ),
+        }
+    }
 }
 
 /// Runs the four checks of `policy` under `profile` on `robot`, tracking `tracking` (the
@@ -170,23 +193,41 @@ pub fn check_policy(
         reference_offsets_s: policy.reference_offsets_s(),
     };
     let stand = standing_reference(robot, profile, options.stand_s);
+    let phase = |name: &str, seq: &Sequence| {
+        if options.announce {
+            log::info!("policy check: {name} ({:.1} s simulated)…", duration_s(seq));
+        }
+        std::time::Instant::now()
+    };
+    let done = |started: std::time::Instant| {
+        if options.announce {
+            log::info!("  took {:.1} s", started.elapsed().as_secs_f64());
+        }
+    };
+    let started = phase("stand", &stand);
     let stood = run_episode(policy, false, &setup, &stand, &options.engine)?;
-    checks.push(CheckOutcome {
-        name: "stand".into(),
-        passed: stood.survival >= 1.0,
-        detail: format!(
+    done(started);
+    let (passed, detail) = stood.verdict(
+        stood.survival >= 1.0,
+        format!(
             "{:.0} s standing on the profile's default pose: survival {:.3} (must be 1.0)",
             options.stand_s, stood.survival
         ),
+    );
+    checks.push(CheckOutcome {
+        name: "stand".into(),
+        passed,
+        detail,
         survival: Some(stood.survival),
         kp_rms_mm: stood.kp_rms_mm,
     });
+    let started = phase("track", &tracking);
     let tracked = run_episode(policy, false, &setup, &tracking, &options.engine)?;
+    done(started);
     let kp_ok = tracked.kp_rms_mm.is_some_and(|e| e < options.max_kp_rms_mm);
-    checks.push(CheckOutcome {
-        name: "track".into(),
-        passed: tracked.survival >= 1.0 && kp_ok,
-        detail: format!(
+    let (passed, detail) = tracked.verdict(
+        tracked.survival >= 1.0 && kp_ok,
+        format!(
             "{:.1} s of {}/{}: survival {:.3} (must be 1.0), keypoint error {} (must be under {:.0} mm)",
             duration_s(&tracking),
             tracking.task,
@@ -195,10 +236,17 @@ pub fn check_policy(
             mm(tracked.kp_rms_mm),
             options.max_kp_rms_mm
         ),
+    );
+    checks.push(CheckOutcome {
+        name: "track".into(),
+        passed,
+        detail,
         survival: Some(tracked.survival),
         kp_rms_mm: tracked.kp_rms_mm,
     });
+    let started = phase("zero action", &tracking);
     let zeroed = run_episode(policy, true, &setup, &tracking, &options.engine)?;
+    done(started);
     let worse = zeroed.survival < tracked.survival
         || match (zeroed.kp_rms_mm, tracked.kp_rms_mm) {
             (Some(z), Some(t)) => z >= options.zero_worse_ratio * t,
@@ -300,6 +348,9 @@ fn run_episode(
     let mut episode = Episode::start(setup, seq, physics.as_mut());
     policy.reset(0);
     let mut actions = vec![vec![0.0; setup.robot.n_joints()]];
+    let mut applied = vec![0.0; setup.robot.n_joints()];
+    let mut non_finite: Option<(usize, usize)> = None;
+    let mut step = 0;
     while !episode.is_done() {
         let obs: Observation = episode.observation();
         if policy.act(std::slice::from_ref(&obs), &mut actions) != ActOutcome::Acted {
@@ -308,13 +359,21 @@ fn run_episode(
         if zero {
             policy.zero_action(&obs, &mut actions[0]);
         }
-        episode.advance(physics.as_mut(), &actions[0]);
+        if actions[0].iter().all(|a| a.is_finite()) {
+            applied.copy_from_slice(&actions[0]);
+        } else {
+            let (n, _) = non_finite.get_or_insert((0, step));
+            *n += 1;
+        }
+        episode.advance(physics.as_mut(), &applied);
+        step += 1;
     }
     let (series, termination) = episode.finish();
     policy.episode_ended(0, termination.is_some());
     Ok(Run {
         survival: series.survival(),
         kp_rms_mm: series.kp_rms_m().map(|e| 1e3 * e),
+        non_finite,
     })
 }
 

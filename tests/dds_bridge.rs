@@ -169,6 +169,10 @@ fn deployment_code_on_unitrees_sdk_drives_a_scored_real_time_episode() {
     assert!(out.join("summary.json").is_file() && out.join("tables.md").is_file());
     let realtime: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("realtime.json")).unwrap()).unwrap();
+    assert_eq!(
+        realtime["command_stream"]["healthy"], true,
+        "one deployment commanding throughout: {realtime}"
+    );
     let commands = &realtime["commands"];
     let received = commands["received"].as_u64().unwrap();
     let bad = commands["bad_crc"].as_u64().unwrap();
@@ -279,7 +283,8 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success(), "{stderr}");
     assert!(
-        stderr.contains("no valid command on rt/lowcmd within 1s"),
+        stderr.contains("no valid command on rt/lowcmd within 1s")
+            && stderr.contains("none arrived at all"),
         "{stderr}"
     );
     assert!(
@@ -348,6 +353,203 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
         "{stderr}"
     );
     assert!(!out.join("run.json").exists());
+    // Issue 42: settings that could never work, accepted before.
+    for (extra, wants) in [
+        (vec!["--domain", "233"], "give 0 to 232"),
+        (vec!["--domain", "65535"], "give 0 to 232"),
+        (
+            vec!["--address", "8.8.8.8"],
+            "no interface of this machine has it",
+        ),
+        (vec!["--address", "0.0.0.0"], "it means every interface"),
+        (
+            vec![
+                "--remote",
+                "A@90s",
+                "--start-on",
+                "A",
+                "--start-timeout",
+                "60",
+            ],
+            "after --start-timeout 60 s",
+        ),
+    ] {
+        let o = Command::new(BIN)
+            .args(["dds", "--sequence", "pull_chair/pull_chair_000"])
+            .args(["--dataset", &format!("{ROOT}/data/sample")])
+            .args(&extra)
+            .args(["--out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && stderr.contains(wants) && !stderr.contains("panicked"),
+            "{extra:?}: {stderr}"
+        );
+    }
+    assert!(!out.join("run.json").exists());
+}
+
+/// A script publishing commands of one kind: only ones the robot ignores for 4 s (`crc`:
+/// every checksum broken; `nan`: every target NaN; `mode`: every motor in mode 255), or
+/// valid ones for 0.7 s (`brief`), or valid ones until the state stops coming (`steady`,
+/// every target `argv[3]` rad).
+const COMMANDS_SCRIPT: &str = r#"
+import sys, time
+from unitree_sdk2py.core.channel import ChannelFactoryInitialize, ChannelPublisher, ChannelSubscriber
+from unitree_sdk2py.idl.default import unitree_hg_msg_dds__LowCmd_
+from unitree_sdk2py.idl.unitree_hg.msg.dds_ import LowCmd_, LowState_
+from unitree_sdk2py.utils.crc import CRC
+ChannelFactoryInitialize(int(sys.argv[1]), "lo")
+kind = sys.argv[2]
+target = float(sys.argv[3]) if len(sys.argv) > 3 else 0.0
+seen = {"t": time.time()}
+def on_state(m):
+    seen["t"] = time.time()
+sub = ChannelSubscriber("rt/lowstate", LowState_)
+sub.Init(on_state, 10)
+pub = ChannelPublisher("rt/lowcmd", LowCmd_)
+pub.Init()
+crc = CRC()
+t0 = time.time()
+def going():
+    if kind == "brief":
+        return time.time() - t0 < 0.7
+    if kind == "steady":
+        return time.time() - seen["t"] < 1.0 and time.time() - t0 < 60
+    return time.time() - t0 < 4
+while going():
+    c = unitree_hg_msg_dds__LowCmd_()
+    for i in range(29):
+        m = c.motor_cmd[i]
+        m.mode, m.q, m.kp, m.kd = 1, target, 50.0, 1.0
+        if kind == "nan":
+            m.q = float("nan")
+        if kind == "mode":
+            m.mode = 255
+    c.crc = crc.Crc(c)
+    if kind == "crc":
+        c.crc ^= 0xFFFF
+    pub.Write(c)
+    time.sleep(0.002)
+"#;
+
+/// Issue 42: a bridge that got thousands of commands, all ignored, said "is the
+/// deployment code running on the same DDS domain…?" — and a motor mode of 255 was
+/// applied as if driven. Each kind of ignored command is counted and named.
+#[test]
+fn commands_the_robot_ignores_are_named_when_no_episode_starts() {
+    const TEST: &str = "dds_bridge::ignored_commands";
+    let Some(sdk) = prereq::unitree_sdk(TEST) else {
+        return;
+    };
+    let network = netns::PrivateNetwork::new(TEST);
+    for (kind, wants) in [
+        ("crc", "with a bad checksum"),
+        ("nan", "non-finite or negative values or a motor mode"),
+        ("mode", "non-finite or negative values or a motor mode"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("run");
+        let bridge = network
+            .command(BIN)
+            .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
+            .args(["--sequence", "pull_chair/pull_chair_000", "--domain", "3"])
+            .args(["--start-timeout", "3", "--out", out.to_str().unwrap()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let script = network
+            .command("python3")
+            .args(["-c", COMMANDS_SCRIPT, "3", kind])
+            .env("PYTHONPATH", &sdk)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let bridge = finished(bridge);
+        let _ = script.wait_with_output();
+        let stderr = String::from_utf8_lossy(&bridge.stderr);
+        assert!(!bridge.status.success(), "{kind}: {stderr}");
+        assert!(
+            stderr.contains("arrived and none was usable") && stderr.contains(wants),
+            "{kind}: {stderr}"
+        );
+        assert!(!stderr.contains("none arrived at all"), "{kind}: {stderr}");
+    }
+}
+
+/// Issue 42: a deploy script that stopped publishing after 0.7 s had its last command
+/// held for the rest of the episode and the run said nothing; two publishers with
+/// conflicting targets were applied interleaved, unrecorded. `realtime.json` and the
+/// tables now say the command stream broke, and why.
+#[test]
+fn a_command_stream_that_stops_or_has_two_publishers_is_flagged() {
+    const TEST: &str = "dds_bridge::command_stream";
+    let Some(sdk) = prereq::unitree_sdk(TEST) else {
+        return;
+    };
+    let network = netns::PrivateNetwork::new(TEST);
+    for (domain, scripts, wants) in [
+        ("4", vec![("brief", "0.0")], "the commands stopped"),
+        (
+            "5",
+            vec![("steady", "0.0"), ("steady", "0.3")],
+            "2 publishers sent commands",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("run");
+        let bridge = network
+            .command(BIN)
+            .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
+            .args([
+                "--sequence",
+                "pull_chair/pull_chair_000",
+                "--domain",
+                domain,
+            ])
+            .args(["--start-timeout", "30", "--out", out.to_str().unwrap()])
+            .args([
+                "--max-torso-height-error",
+                "100",
+                "--max-torso-tilt-error",
+                "100",
+            ])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let children: Vec<Child> = scripts
+            .iter()
+            .map(|(kind, target)| {
+                network
+                    .command("python3")
+                    .args(["-c", COMMANDS_SCRIPT, domain, kind, target])
+                    .env("PYTHONPATH", &sdk)
+                    .stdout(Stdio::null())
+                    .stderr(Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        let bridge = finished(bridge);
+        for c in children {
+            let _ = c.wait_with_output();
+        }
+        let stderr = String::from_utf8_lossy(&bridge.stderr);
+        assert!(bridge.status.success(), "{stderr}");
+        let realtime: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("realtime.json")).unwrap())
+                .unwrap();
+        let stream = &realtime["command_stream"];
+        assert_eq!(stream["healthy"], false, "{realtime}");
+        assert!(stream["problems"].to_string().contains(wants), "{stream}");
+        let tables = std::fs::read_to_string(out.join("tables.md")).unwrap();
+        assert!(tables.contains("Commands: BROKEN"), "{tables}");
+        assert!(stderr.contains("the command stream broke"), "{stderr}");
+    }
 }
 
 /// Whether this process may run a thread under `SCHED_FIFO` (root, or RLIMIT_RTPRIO, and

@@ -134,7 +134,7 @@ fn the_robot_endpoints_exchange_checked_messages_with_unitrees_python_sdk() {
         "{} of 50 commands arrived: {said}",
         commands.len()
     );
-    for c in &commands {
+    for (c, _writer) in &commands {
         assert_eq!(c.mode_machine, MODE_MACHINE_G1_29DOF);
         assert_eq!(c.motor_cmd[8].q, 1.0);
         assert_eq!((c.motor_cmd[8].kp, c.motor_cmd[8].kd), (60.0, 1.5));

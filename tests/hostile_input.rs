@@ -373,38 +373,40 @@ fn an_edited_or_planted_data_cache_is_never_used() {
 #[test]
 fn a_full_disk_is_reported_naming_the_file_once() {
     // /dev/full (Linux) stands in for a full disk: every write to it fails with ENOSPC.
+    // Only the appended record log writes into what is there; whole files (summary.json,
+    // tables.md) are written beside and renamed over it, so a symlink there is replaced,
+    // and their failure mid-way is `tests/one_writer.rs`' (under a file-size limit).
     let tmp = tempfile::tempdir().unwrap();
-    for file in ["episodes.jsonl", "summary.json", "tables.md"] {
-        let out = tmp.path().join(file.replace('.', "-"));
-        std::fs::create_dir(&out).unwrap();
-        std::os::unix::fs::symlink("/dev/full", out.join(file)).unwrap();
-        let o = thorarena(
-            tmp.path(),
-            &[
-                "eval",
-                "--dataset",
-                SAMPLE,
-                "--policy",
-                "hold",
-                "--settings",
-                "force",
-                "--shard",
-                "0/6",
-                "--out",
-                out.to_str().unwrap(),
-            ],
-        );
-        let e = failure(&o);
-        assert!(
-            e.contains(file) && e.contains("No space left on device"),
-            "{file}: {e}"
-        );
-        assert_eq!(
-            e.matches("No space left on device").count(),
-            1,
-            "{file}: {e}"
-        );
-    }
+    let file = "episodes.jsonl";
+    let out = tmp.path().join(file.replace('.', "-"));
+    std::fs::create_dir(&out).unwrap();
+    std::os::unix::fs::symlink("/dev/full", out.join(file)).unwrap();
+    let o = thorarena(
+        tmp.path(),
+        &[
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--policy",
+            "hold",
+            "--settings",
+            "force",
+            "--shard",
+            "0/6",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    let e = failure(&o);
+    assert!(
+        e.contains(file) && e.contains("No space left on device"),
+        "{file}: {e}"
+    );
+    assert_eq!(
+        e.matches("No space left on device").count(),
+        1,
+        "{file}: {e}"
+    );
 }
 
 #[test]
@@ -752,5 +754,91 @@ fn absurd_durations_and_steps_are_errors_not_panics_or_endless_runs() {
             "{args:?} took {:?}",
             started.elapsed()
         );
+    }
+}
+
+/// Issue 42, probe item 7: import accepted what an evaluation never finishes or what
+/// silently drops the forces — a frame rate of 1e-300 Hz (a 6e301 s motion), a force
+/// offset of NaN, 100 s or 1e300 s (force logs that were all 0 N once offset), and a
+/// force log covering 0.02 s of a 5 s motion. Each is refused, naming the file and what
+/// is wrong, and nothing is written.
+#[test]
+fn import_refuses_frame_rates_and_force_alignments_that_lose_the_motion_or_its_forces() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = g1();
+    let q0 = robot.default_pose();
+    // 150 frames at 30 fps: a 5 s motion.
+    let csv: String = (0..150)
+        .map(|k| {
+            let mut row = vec![0.002 * k as f64, 0.0, 0.78, 0.0, 0.0, 0.0, 1.0];
+            row.extend(&q0);
+            row.iter().map(f64::to_string).collect::<Vec<_>>().join(",") + "\n"
+        })
+        .collect();
+    let motion = dir.path().join("motion.csv");
+    std::fs::write(&motion, csv).unwrap();
+    let log = |name: &str, seconds: f64| {
+        let path = dir.path().join(name);
+        let rows: String = std::iter::once("time,fx,fy,fz\n".to_string())
+            .chain(
+                (0..=((seconds * 100.0).round() as usize))
+                    .map(|k| format!("{},10,0,0\n", k as f64 * 0.01)),
+            )
+            .collect();
+        std::fs::write(&path, rows).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let (full_l, full_r) = (log("left.csv", 5.0), log("right.csv", 5.0));
+    let (short_l, short_r) = (log("left-short.csv", 0.02), log("right-short.csv", 0.02));
+    let out = dir.path().join("out");
+    let import = |extra: &[&str]| {
+        let mut args = vec![
+            "data",
+            "import",
+            "--format",
+            "lafan-csv",
+            motion.to_str().unwrap(),
+            "--task",
+            "walk",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        thorarena(dir.path(), &args)
+    };
+    // The fixture imports as it is.
+    let fine = import(&["--forces", &full_l, &full_r]);
+    assert!(
+        fine.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fine.stderr)
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+    for (extra, wants) in [
+        (vec!["--fps", "1e-300"], vec!["fps", "1 to 1000 Hz"]),
+        (
+            vec!["--forces", &full_l, &full_r, "--force-offset", "NaN"],
+            vec!["force offset", "not a time offset"],
+        ),
+        (
+            vec!["--forces", &full_l, &full_r, "--force-offset", "100"],
+            vec!["left force log", "covers 0 of the motion's 150 frames"],
+        ),
+        (
+            vec!["--forces", &full_l, &full_r, "--force-offset", "1e300"],
+            vec!["left force log", "covers 0 of"],
+        ),
+        (
+            vec!["--forces", &short_l, &short_r],
+            vec!["left force log", "covers 1 of the motion's 150 frames"],
+        ),
+    ] {
+        let o = import(&extra);
+        let e = failure(&o);
+        assert!(e.contains("motion.csv"), "{extra:?}: {e}");
+        for w in wants {
+            assert!(e.contains(w), "{extra:?}: {e}");
+        }
+        assert!(!out.join(MANIFEST).exists(), "{extra:?} wrote a dataset");
     }
 }

@@ -237,3 +237,37 @@ fn the_profile_follows_the_policy_family_and_a_contradiction_is_an_error() {
     ]));
     assert!(e.contains("trained for the `twist2` profile"), "{e}");
 }
+
+/// Issue 42: `policy check` never said that a network's actions were not finite (NaN
+/// weights here): the robot just fell, and the report read like a bad tracker's. Now
+/// every check that ran on such actions fails saying so.
+#[test]
+fn policy_check_says_when_a_networks_actions_are_not_finite() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("nan.onnx");
+    let net = Network {
+        inputs: vec![("obs", vec![1, 160])],
+        outputs: vec![("actions", "obs", 29, f32::NAN)],
+        metadata: vec![],
+    };
+    std::fs::write(&path, net.bytes()).unwrap();
+    let o = thorarena(&[
+        "policy",
+        "check",
+        "--profile",
+        "beyondmimic",
+        &format!("beyondmimic:{}", path.display()),
+    ]);
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!o.status.success(), "{text}");
+    assert!(
+        text.contains("actions were not finite on") && text.contains("first at step 0"),
+        "{text}"
+    );
+    // And it said what it was doing while it did it.
+    assert!(text.contains("policy check: track"), "{text}");
+}

@@ -214,3 +214,73 @@ connect_timeout_s = 2
         "{stderr}"
     );
 }
+
+/// Issue 42, probe item 13: names that collide or cannot name a run were found late (a
+/// policy's log overwritten, an engine run twice), a name went verbatim into
+/// `leaderboard.md`, and a policy's `setsid` grandchild outlived the run. Each is refused
+/// before anything runs, or stopped with the policy.
+#[test]
+fn leaderboard_names_are_checked_first_and_a_policys_escaped_descendants_are_stopped() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |file_text: &str, extra: &[&str]| {
+        let file = dir.path().join("policies.toml");
+        std::fs::write(&file, file_text).unwrap();
+        Command::new(env!("CARGO_BIN_EXE_thorarena"))
+            .args(["leaderboard", "--policy-file"])
+            .arg(&file)
+            .args(["--per-task", "1", "--settings", "force", "--out"])
+            .arg(dir.path().join("lb"))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let process = |name: &str| {
+        format!(
+            "[[policy]]\nname = \"{name}\"\ncommand = \"{{thorarena}} client --session {{session}} --policy balance\"\n"
+        )
+    };
+    for (text, extra, wants) in [
+        (
+            format!("{}{}", process("dup"), process("dup")),
+            vec!["--engines", "rapier"],
+            "would share the run directory",
+        ),
+        (
+            process("fine"),
+            vec!["--engines", "rapier,rapier"],
+            "--engines names rapier twice",
+        ),
+        (
+            process("a|b"),
+            vec!["--engines", "rapier"],
+            "cannot become a file name",
+        ),
+    ] {
+        let o = run(&text, &extra);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && stderr.contains(wants), "{stderr}");
+        assert!(
+            !dir.path().join("lb/runs").exists(),
+            "{wants}: something ran before the refusal"
+        );
+    }
+    // A policy whose command leaves a grandchild in a session of its own, and a long
+    // name (its session name once grew past iceoryx2's limit).
+    let marker = 3_000_000 + std::process::id() % 1_000_000;
+    let long = "p".repeat(60);
+    let o = run(
+        &format!(
+            "[[policy]]\nname = \"{long}\"\ncommand = \"setsid sleep {marker} & {{thorarena}} client --session {{session}} --policy balance\"\nconnect_timeout_s = 60\n"
+        ),
+        &["--engines", "rapier"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let survivors: Vec<String> = std::fs::read_dir("/proc")
+        .unwrap()
+        .flatten()
+        .filter_map(|e| std::fs::read(e.path().join("cmdline")).ok())
+        .map(|c| String::from_utf8_lossy(&c).replace('\0', " "))
+        .filter(|c| c.contains(&format!("sleep {marker}")))
+        .collect();
+    assert!(survivors.is_empty(), "outlived the run: {survivors:?}");
+}

@@ -515,7 +515,11 @@ fn bad_specs_and_sweep_directories_are_clear_errors_that_write_nothing() {
     let text = String::from_utf8(before).unwrap();
     std::fs::write(
         out.join("plan.json"),
-        text.replacen("\"format\":2", "\"format\":99", 1),
+        text.replacen(
+            &format!("\"format\":{}", thorarena::sweep::PLAN_FORMAT),
+            "\"format\":99",
+            1,
+        ),
     )
     .unwrap();
     let e = err(&thorarena(&["sweep", "status", &out_s]));

@@ -421,6 +421,41 @@ fn edit_plan(dir: &Path, edit: impl FnOnce(&mut serde_json::Value)) {
     std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
 }
 
+/// Issue 42: a policy command edited in `plan.json` was executed (the plan was only
+/// checked for consistency, and a command is consistent with anything). The plan is
+/// sealed: an edit is refused before any of it runs.
+#[test]
+fn an_edited_policy_command_in_plan_json_is_never_run() {
+    let tmp = tempfile::tempdir().unwrap();
+    let spec = spec(
+        tmp.path(),
+        &format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\nshards = 1\n[[policy]]\nname = \"proc\"\ncommand = \"{{thorarena}} client --session {{session}} --policy hold\"\n"
+        ),
+    );
+    let dir = tmp.path().join("sweep");
+    plan(&spec, &dir);
+    let marker = tmp.path().join("MARKER");
+    edit_plan(&dir, |v| {
+        let command = v["cells"][0]["policy"]["command"]
+            .as_str()
+            .unwrap()
+            .to_string();
+        v["cells"][0]["policy"]["command"] =
+            serde_json::json!(format!("touch {}; {command}", marker.display()));
+    });
+    for args in [vec!["task", "--index", "0"], vec!["run"], vec!["status"]] {
+        let mut full = vec!["sweep", args[0], s(&dir)];
+        full.extend(&args[1..]);
+        let e = err(&thorarena(&full));
+        assert!(
+            e.contains("plan.json") && e.contains("seal"),
+            "{args:?}: {e}"
+        );
+    }
+    assert!(!marker.exists(), "the edited command ran");
+}
+
 #[test]
 fn a_tampered_plan_is_an_error_naming_plan_json_never_a_panic() {
     let tmp = tempfile::tempdir().unwrap();
@@ -571,6 +606,12 @@ fn collect_refuses_a_dataset_changed_since_the_runs() {
     let e = err(&thorarena(&["sweep", "collect", s(&dir)]));
     assert!(e.contains("changed") && e.contains(s(&ds)), "{e}");
     assert!(!dir.join("results.csv").exists());
+    // Issue 42: `status` said every task done where `collect` refused them all.
+    let status = out(&ok(thorarena(&["sweep", "status", s(&dir)])));
+    assert!(
+        status.contains("changed since the sweep was planned") && status.contains(" 0 done"),
+        "{status}"
+    );
 }
 
 // ---------------------------------------------------------------- G, H, I: spec values

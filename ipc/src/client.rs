@@ -167,7 +167,7 @@ impl PolicyClient {
             .client_builder()
             .create()
             .map_err(transport(TransportOp::CreatePort(Port::HelloClient)))?;
-        let welcome = say_hello(&hello_client, config, start, timeout)?;
+        let welcome = say_hello(&hello_client, &services.step, config, start, timeout)?;
         let layout = Layout {
             n_envs: welcome.n_envs as usize,
             n_joints: welcome.n_joints as usize,
@@ -342,8 +342,11 @@ fn refuse_if_served(step: &StepFactory, session: &str) -> Result<(), IpcError> {
 
 /// The handshake: sends the policy's hello through `client` and waits until `timeout`
 /// (from `start`) for the welcome; a welcome that refuses is an [`IpcError::Refused`].
+/// Another policy that starts serving `step` meanwhile won a race for the session: this
+/// one is refused as busy at once rather than left waiting for its whole timeout.
 fn say_hello(
     client: &HelloClient,
+    step: &StepFactory,
     config: &PolicyConfig,
     start: Instant,
     timeout: Duration,
@@ -373,6 +376,7 @@ fn say_hello(
         if start.elapsed() > timeout {
             return Err(IpcError::Timeout(timeout, "the simulator's welcome"));
         }
+        refuse_if_served(step, &config.session)?;
         std::thread::sleep(Duration::from_micros(200));
     };
     let status = Status::from_u32(welcome.status).unwrap_or(Status::ProtocolVersion);

@@ -595,6 +595,14 @@ impl<'a> ActionBatchMut<'a> {
         Self { layout, bytes }
     }
 
+    /// The header's bytes, writable: for fault injection only (`thorarena client
+    /// --bad-header-at-step`, which tests what the simulator does with a policy that
+    /// breaks the protocol).
+    #[doc(hidden)]
+    pub fn header_bytes_mut(&mut self) -> &mut [u8] {
+        &mut self.bytes[..std::mem::size_of::<ActionHeader>()]
+    }
+
     /// All actions, `n_envs × n_joints`, row-major.
     pub fn all(&mut self) -> &mut [f64] {
         f64s_mut(&mut self.bytes[std::mem::size_of::<ActionHeader>()..])

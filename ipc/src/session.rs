@@ -10,6 +10,7 @@ use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 mod precise_wait;
+pub mod private_root;
 use precise_wait::wait_for_event;
 
 /// Every way the transport can fail, for both sides.
@@ -38,6 +39,15 @@ pub enum IpcError {
     /// Nothing connected or answered in time.
     #[error("timed out after {0:?} waiting for {1}")]
     Timeout(Duration, &'static str),
+    /// This user's iceoryx2 directory, or a file in `/dev/shm` carrying this user's
+    /// prefix, cannot be trusted or used ([`private_root`]).
+    #[error("iceoryx2 files: {}: {problem}", .path.display())]
+    PrivateRoot {
+        /// The directory or file.
+        path: std::path::PathBuf,
+        /// What is wrong with it, and what to do.
+        problem: String,
+    },
     /// The other process died or left.
     #[error("the {0} process is gone")]
     PeerGone(&'static str),
@@ -249,16 +259,27 @@ pub(crate) fn service_names(session: &str) -> Result<ServiceNames, IpcError> {
     })
 }
 
-/// A node that leaves signals to the host program and first removes what crashed
-/// processes left behind in `/dev/shm` and `/tmp/iceoryx2`.
+/// A node in this user's private iceoryx2 root ([`private_root`]) that leaves signals to
+/// the host program and first removes what crashed processes left behind.
 pub(crate) fn create_node(name: &str) -> Result<Node<ipc::Service>, IpcError> {
     set_log_level_from_env_or(LogLevel::Error);
     let node_name = NodeName::new(name).map_err(transport(TransportOp::NameNode))?;
+    let config = private_root::config()?;
     let node = NodeBuilder::new()
         .name(&node_name)
+        .config(&config)
         .signal_handling_mode(SignalHandlingMode::Disabled)
         .create::<ipc::Service>()
-        .map_err(transport(TransportOp::CreateNode))?;
+        .map_err(|e| IpcError::PrivateRoot {
+            path: std::path::PathBuf::from(format!(
+                "/dev/shm/{}*",
+                private_root::file_prefix()
+            )),
+            problem: format!(
+                "iceoryx2 could not create a node ({e:?}); if no session of yours is running, remove these files and try again"
+            ),
+        })?;
+    private_root::make_shm_files_private();
     node.try_cleanup_dead_nodes();
     Ok(node)
 }

@@ -11,8 +11,9 @@ use crate::handshake::{joint_names_hash, Hello, Welcome, MAX_JOINTS};
 use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
 use crate::session::{
     create_node, service_names, transport, wait_for, AnswersNoticed, Event, IpcError, Message,
-    PeerNode, Port, RecentTurns, TransportCause, TransportOp, WaitPolicy, Waited,
+    PeerNode, Port, RecentTurns, ServiceNames, TransportCause, TransportOp, WaitPolicy, Waited,
 };
+use iceoryx2::node::NodeView;
 use iceoryx2::pending_response::PendingResponse;
 use iceoryx2::port::client::Client;
 use iceoryx2::port::listener::Listener;
@@ -150,55 +151,21 @@ impl SimSession {
             ));
         }
         let node = create_node(&format!("thorarena-sim-{}", config.session))?;
-        let step = node
-            .service_builder(&names.step)
-            .request_response::<[u64], [u64]>()
-            .max_servers(1)
-            .max_clients(1)
-            // The current request, the overdue one, and the end-of-run notice.
-            .max_active_requests_per_client(3)
-            .max_response_buffer_size(2)
-            // The batch being filled, and the next one, prepared while the policy computes.
-            .max_loaned_requests(2)
-            .max_borrowed_responses_per_pending_response(1)
-            .enable_fire_and_forget_requests(true)
-            .create()
-            .map_err(|e| service_creation_failed(&config.session, e))?;
-        let obs_ready = node
-            .service_builder(&names.obs_ready)
-            .event()
-            .max_notifiers(2)
-            .max_listeners(4)
-            .create()
-            .map_err(|e| service_creation_failed(&config.session, e))?
-            .notifier_builder()
-            .create()
-            .map_err(transport(TransportOp::CreatePort(Port::ObsReadyNotifier)))?;
-        let action_ready = node
-            .service_builder(&names.action_ready)
-            .event()
-            .max_notifiers(4)
-            .max_listeners(2)
-            .create()
-            .map_err(|e| service_creation_failed(&config.session, e))?
-            .listener_builder()
-            .create()
-            .map_err(transport(TransportOp::CreatePort(
-                Port::ActionReadyListener,
-            )))?;
-        // Last: a policy that finds `hello` finds the other three.
-        let hello_service = node
-            .service_builder(&names.hello)
-            .request_response::<Hello, Welcome>()
-            .max_servers(1)
-            .max_clients(8)
-            .max_active_requests_per_client(1)
-            .create()
-            .map_err(|e| service_creation_failed(&config.session, e))?;
-        let hello = hello_service
-            .server_builder()
-            .create()
-            .map_err(transport(TransportOp::CreatePort(Port::HelloServer)))?;
+        // A policy process of the previous run on this session may still hold its ports
+        // while it exits (`serve` makes the session again at once): its services are then
+        // still there. Only a live simulator makes the session another run's; lingering
+        // policy processes are waited for.
+        let deadline = Instant::now() + LINGERING_POLICY_GRACE;
+        let (step, obs_ready, action_ready, hello_service, hello) = loop {
+            match create_services(&node, &names, &config.session) {
+                Err(IpcError::SessionInUse(session))
+                    if Instant::now() < deadline && !another_simulator_lives(&node, &session) =>
+                {
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+                other => break other?,
+            }
+        };
         Ok(Self {
             joint_hash: joint_names_hash(&config.joint_names),
             config,
@@ -431,6 +398,98 @@ impl SimSession {
         }
         self.connection = None;
     }
+}
+
+/// How long a new session waits for the policy processes of an earlier run on the same
+/// session name to let go of its services.
+const LINGERING_POLICY_GRACE: Duration = Duration::from_secs(10);
+
+/// The session's services and the simulator's ports on them.
+type Services = (
+    StepFactory,
+    Notifier<ipc::Service>,
+    Listener<ipc::Service>,
+    HelloFactory,
+    Server<ipc::Service, Hello, (), Welcome, ()>,
+);
+
+/// Creates `names`' four services and this side's ports, or says why not.
+fn create_services(
+    node: &Node<ipc::Service>,
+    names: &ServiceNames,
+    session: &str,
+) -> Result<Services, IpcError> {
+    let step = node
+        .service_builder(&names.step)
+        .request_response::<[u64], [u64]>()
+        .max_servers(1)
+        .max_clients(1)
+        // The current request, the overdue one, and the end-of-run notice.
+        .max_active_requests_per_client(3)
+        .max_response_buffer_size(2)
+        // The batch being filled, and the next one, prepared while the policy computes.
+        .max_loaned_requests(2)
+        .max_borrowed_responses_per_pending_response(1)
+        .enable_fire_and_forget_requests(true)
+        .create()
+        .map_err(|e| service_creation_failed(session, e))?;
+    let obs_ready = node
+        .service_builder(&names.obs_ready)
+        .event()
+        .max_notifiers(2)
+        .max_listeners(4)
+        .create()
+        .map_err(|e| service_creation_failed(session, e))?
+        .notifier_builder()
+        .create()
+        .map_err(transport(TransportOp::CreatePort(Port::ObsReadyNotifier)))?;
+    let action_ready = node
+        .service_builder(&names.action_ready)
+        .event()
+        .max_notifiers(4)
+        .max_listeners(2)
+        .create()
+        .map_err(|e| service_creation_failed(session, e))?
+        .listener_builder()
+        .create()
+        .map_err(transport(TransportOp::CreatePort(
+            Port::ActionReadyListener,
+        )))?;
+    // Last: a policy that finds `hello` finds the other three.
+    let hello_service = node
+        .service_builder(&names.hello)
+        .request_response::<Hello, Welcome>()
+        .max_servers(1)
+        .max_clients(8)
+        .max_active_requests_per_client(1)
+        .create()
+        .map_err(|e| service_creation_failed(session, e))?;
+    let hello = hello_service
+        .server_builder()
+        .create()
+        .map_err(transport(TransportOp::CreatePort(Port::HelloServer)))?;
+    Ok((step, obs_ready, action_ready, hello_service, hello))
+}
+
+/// Whether a simulator other than this node serves `session` (a live node of its name).
+fn another_simulator_lives(node: &Node<ipc::Service>, session: &str) -> bool {
+    let name = format!("thorarena-sim-{session}");
+    let own = node.id().value();
+    let mut found = false;
+    let _ = Node::<ipc::Service>::list(node.config(), |state| {
+        if let NodeState::Alive(view) = &state {
+            if view.id().value() != own
+                && view
+                    .details()
+                    .as_ref()
+                    .is_some_and(|d| d.name().as_str() == name)
+            {
+                found = true;
+            }
+        }
+        CallbackProgression::Continue
+    });
+    found
 }
 
 /// A service-creation error of iceoryx2 that may say "another live node owns this

@@ -82,7 +82,12 @@ fn play_role() -> bool {
 /// the step server.
 fn hello_then_die(session: &str, pid: u32) {
     use iceoryx2::prelude::*;
-    let node = NodeBuilder::new().create::<ipc::Service>().unwrap();
+    // ThorArena's sessions live in this user's own iceoryx2 root.
+    let config = thorarena_ipc::session::private_root::config().unwrap();
+    let node = NodeBuilder::new()
+        .config(&config)
+        .create::<ipc::Service>()
+        .unwrap();
     let name = ServiceName::new(&format!("thorarena/{session}/hello")).unwrap();
     let hello = node
         .service_builder(&name)

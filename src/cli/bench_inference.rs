@@ -5,7 +5,6 @@
 use std::path::PathBuf;
 use std::time::Instant;
 use thorarena::policy::BatchPlans;
-use tract_onnx::prelude::*;
 
 /// Arguments of `bench inference`.
 #[derive(Debug, clap::Args)]
@@ -21,7 +20,7 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let model = tract_onnx::onnx().model_for_path(&args.onnx)?;
+    let model = thorarena::policy::load_onnx(&args.onnx)?;
     let width = thorarena::onnx_export::fixed_width(model.input_fact(0)?).ok_or_else(|| {
         anyhow::anyhow!(
             "{}: the first input has no fixed width",

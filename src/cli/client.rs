@@ -50,6 +50,10 @@ pub struct Args {
     /// from 1).
     #[arg(long)]
     pub nan_at_step: Option<u64>,
+    /// Testing: answer this step (1-based) with a batch whose header is not the
+    /// protocol's (its magic zeroed), as a broken policy would.
+    #[arg(long, hide = true)]
+    pub bad_header_at_step: Option<u64>,
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -92,7 +96,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     std::io::stdout().flush()?;
     let n_refs = info.layout.n_refs;
     let mut wire = WireAnswer::default();
-    let mut episodes = EpisodeContinuity::default();
+    let mut episodes = EpisodeContinuity::new(info.budget.is_some());
     let mut steps = 0u64;
     loop {
         let mut step = match client.next_step(Some(Duration::from_secs(1)))? {
@@ -121,6 +125,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             if args.nan_at_step == Some(steps) {
                 out.all().fill(f64::NAN);
             }
+            if args.bad_header_at_step == Some(steps) {
+                out.header_bytes_mut()[..4].fill(0);
+            }
         })?;
         if let Some(why) = broken {
             bail!("{why}");
@@ -140,19 +147,29 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
 
 /// Which episode each slot runs, as this process saw it start: the simulator never hands
 /// a policy the middle of an episode it did not begin (after a reconnect, episodes cut
-/// short run again from their start), and this client holds it to that.
-#[derive(Default)]
+/// short run again from their start), and this client holds it to that — in lock-step.
+/// Under a latency budget the simulator steps on without a late policy (the miss rule
+/// acts for it), so a slow policy may first see an episode at any step: that is a
+/// deadline missed, which the run scores, not a broken promise.
 struct EpisodeContinuity {
     started: Vec<Option<u64>>,
+    under_budget: bool,
 }
 
 impl EpisodeContinuity {
+    fn new(under_budget: bool) -> Self {
+        Self {
+            started: Vec::new(),
+            under_budget,
+        }
+    }
+
     /// Why `obs` breaks the rule, if it does.
     fn check(&mut self, obs: &thorarena_ipc::ObsBatch) -> Option<String> {
         self.started.resize(obs.n_envs(), None);
         for i in (0..obs.n_envs()).filter(|&i| obs.env(i).is_active()) {
             let header = obs.env(i).header();
-            if header.step == 0 {
+            if header.step == 0 || self.under_budget {
                 self.started[i] = Some(header.episode_id);
             } else if self.started[i] != Some(header.episode_id) {
                 return Some(format!(

@@ -15,6 +15,12 @@ pub(super) fn run(args: &SynthArgs) -> anyhow::Result<()> {
             args.per_task
         );
     }
+    if thorarena::results::RunDir::new(&args.out).holds_run() {
+        bail!(
+            "--out {} holds a run: a dataset is never written over one; choose another --out",
+            args.out.display()
+        );
+    }
     let robot = thorarena::registry::robot(&args.robot)?;
     let opts = SynthOptions {
         per_task: args.per_task,

@@ -116,10 +116,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             ),
         },
     };
+    if let Some(at) = start_button.and_then(|bits| args.remote.first_press(bits)) {
+        if at.as_secs_f64() >= args.start_timeout {
+            bail!("--start-on {} presses at {:.1} s, after --start-timeout {} s: the bridge would give up first", args.start_on, at.as_secs_f64(), args.start_timeout);
+        }
+    }
     let address = match &args.interface {
         Some(name) => std::net::IpAddr::V4(thorarena::dds::interface::ipv4_of(name)?),
         None => args.address,
     };
+    thorarena::dds::interface::check_local_address(address)?;
+    if args.domain > thorarena::dds::MAX_DOMAIN {
+        bail!("{}", thorarena::dds::DdsError::Domain(args.domain));
+    }
     let Some((task, _)) = args.sequence.split_once('/') else {
         bail!("--sequence {}: give TASK/SEQUENCE_ID", args.sequence);
     };
@@ -153,6 +162,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             spec.sequences.len()
         );
     };
+    super::eval::refuse_out_over_dataset(&args.out, Some(&args.dataset))?;
     let run = RunDir::new(&args.out);
     if run.holds_run() && !args.overwrite {
         bail!(
@@ -161,6 +171,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     run.check_writable()?;
+    // The one writer of the run from now until its last file: a second bridge given the
+    // same --out is refused before it joins the domain.
+    let _writer = run.lock()?;
     let robot = Arc::new(spec.robot.clone());
     let mut physics = make_physics(
         &spec.engine,
@@ -268,7 +281,7 @@ fn write_realtime(
     tables: &mut String,
 ) -> anyhow::Result<()> {
     let path = run.path().join("realtime.json");
-    std::fs::write(&path, serde_json::to_string_pretty(report)?)
+    thorarena::atomic_file::write(&path, serde_json::to_string_pretty(report)?)
         .with_context(|| format!("writing {}", path.display()))?;
     let c = &report.commands;
     let line = format!(
@@ -292,11 +305,29 @@ fn write_realtime(
         report.scheduling,
     );
     tables.push_str(&line);
+    let stream = &report.command_stream;
+    tables.push_str(&if stream.healthy {
+        format!(
+            "\nCommands: one publisher throughout (longest gap {:.1} ms, the last {:.1} ms before the end).\n",
+            stream.longest_gap_ms, stream.silent_at_end_ms
+        )
+    } else {
+        format!(
+            "\nCommands: BROKEN — {}; these scores are not those of a deployment.\n",
+            stream.problems.join("; ")
+        )
+    });
     let tables_path = run.path().join("tables.md");
-    std::fs::write(&tables_path, tables.as_bytes())
+    thorarena::atomic_file::write(&tables_path, tables.as_bytes())
         .with_context(|| format!("writing {}", tables_path.display()))?;
     if !report.kept_real_time {
         eprintln!("warning: the run did not keep real time (realtime.json)");
+    }
+    if !stream.healthy {
+        eprintln!(
+            "warning: the command stream broke: {} (realtime.json)",
+            stream.problems.join("; ")
+        );
     }
     Ok(())
 }

@@ -235,6 +235,7 @@ fn default_out(policy: &str, spec: &EvalSpec) -> PathBuf {
 /// Refuses to replace a finished or started run unless `--resume` or `--overwrite` says
 /// what to do with it, and checks that the directory can be written.
 pub(super) fn check_out(out: &Path, args: &RunArgs) -> anyhow::Result<()> {
+    refuse_out_over_dataset(out, args.dataset.as_deref())?;
     let run = RunDir::new(out);
     if run.holds_run() && !args.resume && !args.overwrite {
         bail!(
@@ -244,6 +245,22 @@ pub(super) fn check_out(out: &Path, args: &RunArgs) -> anyhow::Result<()> {
     }
     // The run makes it again when it starts: a policy that fails to load leaves nothing.
     run.check_writable()?;
+    Ok(())
+}
+
+/// Refuses a run directory that is a dataset, or inside or around the dataset read (a
+/// run written there would mix its files with the dataset's, and `--overwrite` would
+/// replace them).
+pub(super) fn refuse_out_over_dataset(out: &Path, dataset: Option<&Path>) -> anyhow::Result<()> {
+    if out.join(thorarena::motion::MANIFEST).is_file() {
+        bail!(
+            "--out {} holds a dataset: a run is never written over one; choose another --out",
+            out.display()
+        );
+    }
+    if let Some(dataset) = dataset {
+        thorarena::results::check_dir(out, true, &[dataset.to_path_buf()])?;
+    }
     Ok(())
 }
 

@@ -39,6 +39,10 @@ impl LaunchedPolicy {
         let err = out
             .try_clone()
             .map_err(|e| format!("{}: {e}", log.display()))?;
+        // A descendant that leaves the group (`setsid`) is adopted by this process when
+        // its parent dies, and stopped with the rest.
+        // SAFETY: prctl with PR_SET_CHILD_SUBREAPER takes no pointers.
+        unsafe { libc::prctl(libc::PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) };
         let mut cmd = Command::new("sh");
         cmd.args(["-c", &line])
             .current_dir(&process.workdir)
@@ -88,6 +92,45 @@ impl LaunchedPolicy {
 impl Drop for LaunchedPolicy {
     fn drop(&mut self) {
         stop_group(&mut self.child);
+        stop_adopted();
+    }
+}
+
+/// Stops and reaps every process adopted by this one (its parent died): a launched
+/// policy's descendants that left its process group. The leaderboard runs no other
+/// child of its own meanwhile, so each one adopted is the policy's.
+fn stop_adopted() {
+    // SAFETY: getpid has no preconditions.
+    let me = unsafe { libc::getpid() };
+    let deadline = std::time::Instant::now() + Duration::from_secs(1);
+    loop {
+        let adopted: Vec<libc::pid_t> = std::fs::read_dir("/proc")
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter_map(|e| e.file_name().to_str()?.parse::<libc::pid_t>().ok())
+            .filter(|pid| {
+                std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+                    stat.rsplit_once(')')
+                        .and_then(|(_, rest)| rest.split_whitespace().nth(1))
+                        .and_then(|ppid| ppid.parse::<libc::pid_t>().ok())
+                        == Some(me)
+                })
+            })
+            .collect();
+        for &pid in &adopted {
+            // SAFETY: signalling and reaping a child of this process.
+            unsafe {
+                libc::kill(pid, libc::SIGKILL);
+                libc::waitpid(pid, std::ptr::null_mut(), 0);
+            }
+        }
+        if (adopted.is_empty() && std::time::Instant::now() > deadline)
+            || std::time::Instant::now() > deadline + Duration::from_secs(1)
+        {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(20));
     }
 }
 

@@ -128,7 +128,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         std::env::args().skip(1).collect::<Vec<_>>().join(" "),
         started.elapsed().as_secs_f64()
     );
-    std::fs::write(&md_path, &text).with_context(|| format!("writing {}", md_path.display()))?;
+    thorarena::atomic_file::write(&md_path, &text)
+        .with_context(|| format!("writing {}", md_path.display()))?;
     print!("{table}");
     let script = bundle.script(Page::Report)?;
     for (own_clip, page) in [(false, "report.html"), (true, "single-clip.html")] {

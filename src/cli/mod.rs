@@ -143,6 +143,11 @@ pub enum BenchCommand {
 pub fn run() -> anyhow::Result<()> {
     let cli = Cli::parse();
     logging::init();
+    if let Command::Bench(bench) = &cli.command {
+        if !matches!(bench, BenchCommand::SocketPeer(_)) {
+            println!("{}", thorarena::perf::Machine::this());
+        }
+    }
     match cli.command {
         Command::Robot(RobotCommand::Info(args)) => robot_info::run(&args),
         Command::Robot(RobotCommand::Mjcf(args)) => robot_info::mjcf(&args),

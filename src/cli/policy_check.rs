@@ -110,6 +110,7 @@ fn check(args: &Args) -> anyhow::Result<SanityReport> {
         track_s: args.track_seconds,
         max_kp_rms_mm: args.max_kp_error_mm,
         engine,
+        announce: true,
         ..SanityOptions::default()
     };
     Ok(check_policy(

@@ -42,7 +42,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         std::fs::create_dir_all(parent)
             .with_context(|| format!("creating {}", parent.display()))?;
     }
-    std::fs::write(&args.out, html).with_context(|| format!("writing {}", args.out.display()))?;
+    thorarena::atomic_file::write(&args.out, html)
+        .with_context(|| format!("writing {}", args.out.display()))?;
     eprintln!(
         "wrote {} ({} steps{})",
         args.out.display(),

@@ -79,8 +79,8 @@ pub struct CommandCounts {
     pub bad_crc: u64,
     /// Commands that could not be decoded: ignored.
     pub undecodable: u64,
-    /// Commands with a non-finite or negative gain, or a non-finite target, velocity or
-    /// torque: ignored.
+    /// Commands with a non-finite or negative gain, a non-finite target, velocity or
+    /// torque, or a motor mode other than 0 (limp) or 1 (driven): ignored.
     pub unusable: u64,
     /// Applied commands that asked for a feed-forward torque or a target velocity (both
     /// applied: `τ_ff + kd q̇*` is added to the PD torque before its clamp).
@@ -88,6 +88,58 @@ pub struct CommandCounts {
     /// Applied commands in the parallel ankle mode (`mode_pr` 1, A/B motors): the
     /// simulated ankle has pitch and roll joints, so their targets were taken as those.
     pub parallel_ankle_mode: u64,
+}
+
+/// The longest a deployment may leave the robot without a new command before the run's
+/// command stream counts as broken, ms: five 50 Hz policy periods. A robot left on the
+/// last command holds it, so a script that stopped after 0.7 s would otherwise score as
+/// a steady stand.
+pub const MAX_COMMAND_GAP_MS: f64 = 100.0;
+
+/// What the command stream was during the episode (`realtime.json`'s `command_stream`):
+/// one deployment, commanding throughout, or not — and then the run's scores are not a
+/// deployment's, which the tables say.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+pub struct CommandStream {
+    /// DDS writers whose usable commands were applied (a deployment is one).
+    pub publishers: u64,
+    /// Longest time between two usable commands during the episode, ms.
+    pub longest_gap_ms: f64,
+    /// Time from the last usable command to the episode's end, ms.
+    pub silent_at_end_ms: f64,
+    /// One publisher, and no gap (nor silence at the end) over [`MAX_COMMAND_GAP_MS`].
+    pub healthy: bool,
+    /// What broke it, in words.
+    pub problems: Vec<String>,
+}
+
+impl CommandStream {
+    fn judge(publishers: u64, longest_gap_ms: f64, silent_at_end_ms: f64) -> Self {
+        let mut problems = Vec::new();
+        if publishers > 1 {
+            problems.push(format!(
+                "{publishers} publishers sent commands that were applied interleaved"
+            ));
+        }
+        if longest_gap_ms > MAX_COMMAND_GAP_MS {
+            problems.push(format!(
+                "no command for {longest_gap_ms:.0} ms during the episode (the last one was held)"
+            ));
+        }
+        if silent_at_end_ms > MAX_COMMAND_GAP_MS {
+            problems.push(format!(
+                "the commands stopped {:.2} s before the episode's end (the last one was held)",
+                silent_at_end_ms / 1e3
+            ));
+        }
+        Self {
+            publishers,
+            longest_gap_ms,
+            silent_at_end_ms,
+            healthy: problems.is_empty(),
+            problems,
+        }
+    }
 }
 
 /// How well a run kept real time (`realtime.json`).
@@ -128,6 +180,9 @@ pub struct RealTimeReport {
     pub kept_real_time: bool,
     /// The scheduling the physics loop ran under ([`super::scheduling`]).
     pub scheduling: Scheduling,
+    /// Whether one deployment commanded the robot throughout.
+    #[serde(default)]
+    pub command_stream: CommandStream,
 }
 
 /// Where a running episode is, for a progress display (every half second of it).
@@ -175,7 +230,11 @@ pub fn run_episode(
             }
         }
         if bridge_start.elapsed() > options.start_timeout {
-            return Err(DdsError::NoCommand(options.start_timeout));
+            io.counts.undecodable = endpoints.undecodable_commands();
+            return Err(DdsError::NoCommand {
+                waited: options.start_timeout,
+                counts: io.counts,
+            });
         }
         std::thread::sleep(Duration::from_micros(500));
     };
@@ -244,7 +303,17 @@ pub fn run_episode(
     let simulated_s = steps as f64 * dt.as_secs_f64();
     let real_time_factor = simulated_s / wall_s.max(f64::MIN_POSITIVE);
     io.counts.undecodable = endpoints.undecodable_commands();
+    let end = Instant::now();
+    let silent_at_end_ms = io
+        .last_usable_at
+        .map_or(0.0, |t| (end - t).as_secs_f64() * 1e3);
+    let command_stream = CommandStream::judge(
+        io.applied_from.len() as u64,
+        io.longest_gap.as_secs_f64() * 1e3,
+        silent_at_end_ms,
+    );
     Ok(RealTimeReport {
+        command_stream,
         start_offset_s,
         physics_steps: steps,
         simulated_s,
@@ -273,6 +342,12 @@ struct RobotIo {
     started: Instant,
     counts: CommandCounts,
     last_command_at: Option<Instant>,
+    /// When the last usable command arrived, and the longest wait between two during
+    /// the episode.
+    last_usable_at: Option<Instant>,
+    longest_gap: Duration,
+    /// The writers whose usable commands arrived during the episode.
+    applied_from: std::collections::BTreeSet<String>,
     interarrival_ms: Vec<f64>,
     /// Targets of the command in force, rad.
     targets: Option<Vec<f64>>,
@@ -305,6 +380,9 @@ impl RobotIo {
             started: now,
             counts: CommandCounts::default(),
             last_command_at: None,
+            last_usable_at: None,
+            longest_gap: Duration::ZERO,
+            applied_from: Default::default(),
             interarrival_ms: Vec::new(),
             targets: None,
             gains_in_force: None,
@@ -367,7 +445,7 @@ impl RobotIo {
         endpoints: &mut RobotEndpoints,
     ) -> Result<Option<LowCmd>, DdsError> {
         let mut newest = None;
-        for command in endpoints.commands()? {
+        for (command, writer) in endpoints.commands()? {
             let now = Instant::now();
             if let Some(before) = self.last_command_at.replace(now) {
                 self.interarrival_ms
@@ -379,6 +457,14 @@ impl RobotIo {
             } else if !usable(&command, self.limits.kp.len()) {
                 self.counts.unusable += 1;
             } else {
+                // The stream's health counts from the episode's start.
+                if self.episode_offset_s.is_some() {
+                    if let Some(before) = self.last_usable_at {
+                        self.longest_gap = self.longest_gap.max(now - before);
+                    }
+                    self.applied_from.insert(format!("{writer:?}"));
+                }
+                self.last_usable_at = Some(now);
                 newest = Some(command);
             }
         }
@@ -452,6 +538,7 @@ fn usable(command: &LowCmd, n_joints: usize) -> bool {
             [m.q, m.dq, m.tau, m.kp, m.kd].iter().all(|v| v.is_finite())
                 && m.kp >= 0.0
                 && m.kd >= 0.0
+                && m.mode <= 1
         })
 }
 

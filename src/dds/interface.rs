@@ -11,6 +11,14 @@ pub enum InterfaceError {
     /// The kernel's interface list could not be read.
     #[error("listing the network interfaces: {0}")]
     List(std::io::Error),
+    /// An address that is not one of this machine's interfaces.
+    #[error("--address {address}: {why}")]
+    NotLocal {
+        /// The address given.
+        address: std::net::IpAddr,
+        /// Why it cannot be used.
+        why: String,
+    },
     /// No interface of that name has an IPv4 address.
     #[error("no network interface `{name}` with an IPv4 address (those with one: {known})")]
     Unknown {
@@ -19,6 +27,42 @@ pub enum InterfaceError {
         /// The interfaces that have one, with their addresses.
         known: String,
     },
+}
+
+/// Refuses an address the bridge cannot be reached on: the unspecified address (every
+/// interface, which `--address` does not mean) and one no interface of this machine has
+/// (8.8.8.8: DDS would bind nothing and wait for commands that cannot come).
+pub fn check_local_address(address: std::net::IpAddr) -> Result<(), InterfaceError> {
+    if address.is_unspecified() {
+        return Err(InterfaceError::NotLocal {
+            address,
+            why: "it means every interface; give one interface's address (127.0.0.1 keeps DDS on this machine), or --interface NAME".into(),
+        });
+    }
+    match address {
+        std::net::IpAddr::V4(v4) => {
+            let all = ipv4_interfaces()?;
+            if all.iter().any(|(_, a)| *a == v4) {
+                Ok(())
+            } else {
+                Err(InterfaceError::NotLocal {
+                    address,
+                    why: format!(
+                        "no interface of this machine has it (those with IPv4: {})",
+                        all.iter()
+                            .map(|(n, a)| format!("{n} {a}"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                })
+            }
+        }
+        std::net::IpAddr::V6(v6) if v6.is_loopback() => Ok(()),
+        std::net::IpAddr::V6(_) => Err(InterfaceError::NotLocal {
+            address,
+            why: "give an IPv4 address, or --interface NAME".into(),
+        }),
+    }
 }
 
 /// The first IPv4 address of interface `name`.

@@ -17,7 +17,7 @@ pub mod unitree_go;
 pub mod unitree_hg;
 pub mod zmq_clock;
 
-pub use transport::{DdsError, RobotEndpoints};
+pub use transport::{DdsError, RobotEndpoints, MAX_DOMAIN};
 pub use unitree_go::WirelessController;
 pub use unitree_hg::{ImuState, LowCmd, LowState, MotorCmd, MotorState};
 

@@ -90,6 +90,15 @@ impl RemoteScript {
         bits != 0 && self.presses.iter().any(|(_, b)| b & bits == bits)
     }
 
+    /// When `bits` are first all held down together, after the bridge starts.
+    pub fn first_press(&self, bits: u16) -> Option<Duration> {
+        self.presses
+            .iter()
+            .filter(|(_, b)| bits != 0 && b & bits == bits)
+            .map(|(at, _)| *at)
+            .min()
+    }
+
     /// The buttons held down `since` the bridge started publishing.
     pub fn buttons_at(&self, since: Duration) -> u16 {
         self.presses

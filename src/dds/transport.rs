@@ -29,6 +29,24 @@ pub const WIRELESS_CONTROLLER_TOPIC: &str = "rt/wirelesscontroller";
 /// Motor commands from the deployment code.
 pub const LOW_COMMAND_TOPIC: &str = "rt/lowcmd";
 
+/// The largest DDS domain id whose RTPS ports fit in 16 bits.
+pub const MAX_DOMAIN: u16 = 232;
+
+/// Why no command started the episode, from what arrived: nothing at all (the deployment
+/// code elsewhere), or commands the robot would ignore too.
+fn no_command_why(c: &super::bridge::CommandCounts) -> String {
+    if c.received == 0 && c.undecodable == 0 {
+        return "none arrived at all: is the deployment code running on the same DDS domain and network interface?".into();
+    }
+    format!(
+        "{} arrived and none was usable — {} with a bad checksum (the robot ignores those: is the CRC computed over the C struct?), {} undecodable, {} with non-finite or negative values or a motor mode other than 0 or 1",
+        c.received + c.undecodable,
+        c.bad_crc,
+        c.undecodable,
+        c.unusable
+    )
+}
+
 /// Why the DDS interface failed.
 #[derive(Debug, thiserror::Error)]
 pub enum DdsError {
@@ -48,9 +66,17 @@ pub enum DdsError {
         /// rustdds' account.
         detail: String,
     },
-    /// No usable command arrived in time to start the episode.
-    #[error("no valid command on {LOW_COMMAND_TOPIC} within {0:?}: is the deployment code running on the same DDS domain and network interface?")]
-    NoCommand(std::time::Duration),
+    /// No usable command arrived in time to start the episode: why, by what did arrive.
+    #[error("no valid command on {LOW_COMMAND_TOPIC} within {waited:?}: {}", no_command_why(.counts))]
+    NoCommand {
+        /// How long the bridge waited.
+        waited: std::time::Duration,
+        /// What arrived meanwhile.
+        counts: super::bridge::CommandCounts,
+    },
+    /// A DDS domain RTPS cannot map to ports.
+    #[error("DDS domain {0}: give 0 to {MAX_DOMAIN} (RTPS puts domain d's ports at 7400 + 250·d, which must fit in 16 bits)")]
+    Domain(u16),
     /// The command reader failed (not a bad message: those are counted).
     #[error("DDS: reading {LOW_COMMAND_TOPIC}: {0}")]
     Read(String),
@@ -142,6 +168,9 @@ impl RobotEndpoints {
     /// `only_address` (e.g. 127.0.0.1, what `lo` carries) discovery and multicast use that
     /// interface alone, so nothing leaves the machine.
     pub fn join(domain: u16, only_address: Option<std::net::IpAddr>) -> Result<Self, DdsError> {
+        if domain > MAX_DOMAIN {
+            return Err(DdsError::Domain(domain));
+        }
         let create = |what: &'static str| {
             move |e: rustdds::dds::CreateError| DdsError::Create {
                 what,
@@ -252,11 +281,14 @@ impl RobotEndpoints {
 
     /// Every command that arrived since the last call, oldest first (checksums not yet
     /// checked: that is the robot's business, [`LowCmd::crc_ok`]).
-    pub fn commands(&mut self) -> Result<Vec<LowCmd>, DdsError> {
+    pub fn commands(&mut self) -> Result<Vec<(LowCmd, rustdds::GUID)>, DdsError> {
         let mut out = Vec::new();
         loop {
             match self.low_command.take_next_sample() {
-                Ok(Some(sample)) => out.push(sample.into_value()),
+                Ok(Some(sample)) => {
+                    let writer = sample.sample_info().writer_guid();
+                    out.push((sample.into_value(), writer));
+                }
                 Ok(None) => return Ok(out),
                 Err(rustdds::dds::ReadError::Deserialization { .. }) => self.undecodable += 1,
                 Err(e) => return Err(DdsError::Read(e.to_string())),

@@ -116,11 +116,16 @@ impl Dataset {
                 crate::names::check_name(field, value)
                     .map_err(|n| bad(&path, format!("sequences[{i}].{field}"), n.to_string()))?;
             }
-            if !(e.fps.is_finite() && e.fps > 0.0) {
+            if !crate::motion::FPS_RANGE.contains(&e.fps) {
                 return Err(bad(
                     &path,
                     format!("sequences[{i}].fps"),
-                    format!("must be > 0, got {}", e.fps),
+                    format!(
+                        "must be a frame rate of {} to {} Hz, got {}",
+                        crate::motion::FPS_RANGE.start(),
+                        crate::motion::FPS_RANGE.end(),
+                        e.fps
+                    ),
                 ));
             }
             if !seen.insert((e.task.as_str(), e.sequence_id.as_str())) {
@@ -359,7 +364,7 @@ impl DatasetWriter {
         let mut text = serde_json::to_string_pretty(&self.manifest)
             .map_err(|e| bad(&path, "(document)", e.to_string()))?;
         text.push('\n');
-        std::fs::write(&path, text).map_err(|source| DataError::Io {
+        crate::atomic_file::write(&path, text).map_err(|source| DataError::Io {
             path: path.clone(),
             source,
         })?;

@@ -54,7 +54,7 @@ pub fn export_npz(
     });
     let text = serde_json::to_string_pretty(&doc)
         .map_err(|e| bad(&index_path, "(document)", e.to_string()))?;
-    std::fs::write(&index_path, text + "\n").map_err(|source| DataError::Io {
+    crate::atomic_file::write(&index_path, text + "\n").map_err(|source| DataError::Io {
         path: index_path.clone(),
         source,
     })?;

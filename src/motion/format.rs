@@ -115,7 +115,7 @@ pub fn write_sequence(seq: &Sequence, path: &Path) -> Result<String, DataError> 
             source,
         })?;
     }
-    std::fs::write(path, &bytes).map_err(|source| DataError::Io {
+    crate::atomic_file::write(path, &bytes).map_err(|source| DataError::Io {
         path: path.to_path_buf(),
         source,
     })?;

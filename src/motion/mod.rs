@@ -13,6 +13,11 @@ mod selection;
 mod sequence;
 pub mod synth;
 
+/// Frame rates a motion may have, Hz: any capture or simulation rate, and nothing that
+/// makes a clip last longer than its frames could fill (a `fps` of 1e-300 once imported
+/// as a motion of 6e301 s, which no evaluation finishes).
+pub const FPS_RANGE: std::ops::RangeInclusive<f64> = 1.0..=1000.0;
+
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use describe::{describe, joint_limit_margin, plural, total_hand_force};
 pub use error::DataError;

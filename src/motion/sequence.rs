@@ -59,8 +59,17 @@ impl Sequence {
     /// Checks every invariant of the format; `file` names the source in errors.
     pub fn validate(&self, file: &Path) -> Result<(), DataError> {
         let t = self.n_frames();
-        if !(self.fps.is_finite() && self.fps > 0.0) {
-            return Err(bad(file, "fps", format!("must be > 0, got {}", self.fps)));
+        if !crate::motion::FPS_RANGE.contains(&self.fps) {
+            return Err(bad(
+                file,
+                "fps",
+                format!(
+                    "must be a frame rate of {} to {} Hz, got {}",
+                    crate::motion::FPS_RANGE.start(),
+                    crate::motion::FPS_RANGE.end(),
+                    self.fps
+                ),
+            ));
         }
         if t < 2 {
             return Err(bad(

@@ -5,12 +5,14 @@
 
 mod episode_loop;
 mod full_run;
+mod machine;
 mod physics_step;
 mod round_trip;
 mod socket;
 
 pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
 pub use full_run::{physics_floor, process_cpu_time, process_group_cpu_time, time_run, RunTiming};
+pub use machine::Machine;
 pub use physics_step::{python_mujoco_step, time_physics_steps, PythonMujocoTiming, StepTiming};
 pub use round_trip::{
     adapter_round_trips, echo_round_trips, fill_echo_observations, standing_observation,

@@ -7,9 +7,13 @@ pub mod beyondmimic;
 mod builtin;
 pub mod inputs;
 mod remote;
+mod stall_watch;
 pub mod twist2;
 pub mod wire;
 
+pub use crate::network_kernels::{
+    load_onnx, network_kernels, NetworkKernels, KERNELS_ENV, PINNED_FAMILY,
+};
 pub use batch_plans::BatchPlans;
 pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
@@ -124,6 +128,13 @@ pub trait Policy {
     /// or a built-in costing next to nothing. A policy may offer copies only if an
     /// environment's action depends on that environment's observations alone.
     fn worker_copies(&self, _n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
+        None
+    }
+
+    /// The kernels a network computed this policy's actions on, when it is a network run
+    /// in process ([`network_kernels`]); `None` for everything else, whose arithmetic is
+    /// its own (a policy process) or has no kernels to choose (a baseline).
+    fn network_kernels(&self) -> Option<&'static NetworkKernels> {
         None
     }
 }

@@ -60,6 +60,8 @@ pub struct RemotePolicy {
     stats: TransportStats,
     /// The network input the policy asked the simulator to build, and its builder.
     input: Option<(String, InputBuilder)>,
+    /// Reports a policy that keeps a step waiting (lock-step waits as long as it lives).
+    stall_watch: super::stall_watch::StallWatch,
 }
 
 impl RemotePolicy {
@@ -86,6 +88,7 @@ impl RemotePolicy {
         Ok(Self {
             input,
             session,
+            stall_watch: super::stall_watch::StallWatch::new(info.name.clone()),
             name: info.name,
             offsets_s: info.reference_offsets_s,
             previous_terminated: vec![false; config.session.n_envs],
@@ -136,6 +139,7 @@ impl Policy for RemotePolicy {
         let prepare_next: Option<&mut dyn FnMut(&mut ObsBatchMut)> =
             if has_input { Some(&mut prepare) } else { None };
         self.stats.round_trips += 1;
+        self.stall_watch.waiting();
         let outcome = self.session.step_prepared(
             |batch, prepared| {
                 let mut input = input.borrow_mut();
@@ -177,6 +181,7 @@ impl Policy for RemotePolicy {
             },
         );
         self.last_round_trip = Some(self.session.last_round_trip());
+        self.stall_watch.answered();
         match outcome {
             Ok(StepOutcome::Answered) => ActOutcome::Acted,
             Ok(StepOutcome::Missed) => {
@@ -193,9 +198,11 @@ impl Policy for RemotePolicy {
             }
             Err(e) => {
                 // A malformed answer or a transport failure: the policy cannot be trusted
-                // with this session any more.
+                // with this session any more. It is told to leave (the end-of-run notice),
+                // or it would wait for observations while the run waits for a policy.
                 self.stats.policy_failures += 1;
-                log::warn!("policy `{}` failed: {e}", self.name);
+                log::warn!("policy `{}` failed: {e}; it is told to leave", self.name);
+                self.session.end();
                 self.session.drop_policy();
                 ActOutcome::Failed
             }

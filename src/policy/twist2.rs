@@ -248,7 +248,7 @@ impl Twist2Policy {
             return Err(Twist2Error::Joints(default_pose.len()));
         }
         let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
-            let plans = BatchPlans::new(onnx().model_for_path(path)?, OBS_LEN)?;
+            let plans = BatchPlans::new(super::load_onnx(path)?, OBS_LEN)?;
             let act_plan = plans.plan(INFERENCE_BATCH)?;
             Ok((plans, act_plan))
         };
@@ -286,6 +286,10 @@ impl Twist2Policy {
 impl Policy for Twist2Policy {
     fn name(&self) -> &str {
         "twist2"
+    }
+
+    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
+        Some(super::network_kernels())
     }
 
     fn reference_offsets_s(&self) -> Vec<f64> {

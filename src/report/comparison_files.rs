@@ -122,7 +122,7 @@ fn create_dir(dir: &Path) -> Result<(), ReportError> {
 }
 
 fn write(path: &Path, text: &str) -> Result<(), ReportError> {
-    std::fs::write(path, text).map_err(|source| ReportError::Write {
+    crate::atomic_file::write(path, text).map_err(|source| ReportError::Write {
         path: path.to_path_buf(),
         source,
     })

@@ -65,7 +65,8 @@ pub fn run_tables(summary: &Summary) -> String {
 pub fn write_run_tables(dir: &Path, summary: &Summary) -> Result<String, ResultsError> {
     let tables = run_tables(summary);
     let path = dir.join(TABLES_FILE);
-    std::fs::write(&path, &tables).map_err(|source| ResultsError::Io { path, source })?;
+    crate::atomic_file::write(&path, &tables)
+        .map_err(|source| ResultsError::Io { path, source })?;
     Ok(tables)
 }
 
@@ -78,11 +79,27 @@ fn policy_io_markdown(io: &PolicyIoReport, header: &RunHeader) -> String {
         .map_or("none (lock-step)".to_string(), |b| {
             format!("{:.3} ms", b * 1e3)
         });
+    let latency = if l.count == 0 {
+        "No control step ran in this attempt (a resume found every episode done): no latency"
+            .to_string()
+    } else {
+        format!(
+            "Per-step latency over {} steps (µs): p50 {:.1}, p90 {:.1}, p99 {:.1}, p99.9 {:.1}, max {:.1}",
+            l.count, l.p50_us, l.p90_us, l.p99_us, l.p999_us, l.max_us
+        )
+    };
+    let resumed = if io.resumed_episodes > 0 {
+        format!(
+            " The run was resumed: latency and the transport's counters are of its last attempt, without the {} episodes finished before; deadline misses and invalid actions count every episode.",
+            io.resumed_episodes
+        )
+    } else {
+        String::new()
+    };
     let mut s = format!(
             "## Policy I/O
 
-Per-step latency over {} steps (µs): p50 {:.1}, p90 {:.1}, p99 {:.1}, p99.9 {:.1}, max {:.1}. Budget {budget}, miss rule `{:?}`, latency mode `{:?}`. Deadline misses: {}; invalid actions: {}.",
-            l.count, l.p50_us, l.p90_us, l.p99_us, l.p999_us, l.max_us,
+{latency}. Budget {budget}, miss rule `{:?}`, latency mode `{:?}`. Deadline misses: {}; invalid actions: {}.{resumed}",
             header.io.miss_rule, header.io.latency_mode, io.deadline_misses, io.invalid_actions
         );
     if let Some(t) = &io.transport {

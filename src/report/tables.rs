@@ -293,7 +293,8 @@ impl NumberTable {
             std::iter::once(self.corner.as_str()).chain(self.columns.iter().map(|c| c.as_str()));
         w.write_record(header).expect("writing to memory");
         for r in &self.rows {
-            let cells = std::iter::once(r.name.clone()).chain(
+            let name = crate::names::csv_text::cell(&r.name).into_owned();
+            let cells = std::iter::once(name).chain(
                 r.values
                     .iter()
                     .map(|v| v.map_or(String::new(), |v| v.to_string())),

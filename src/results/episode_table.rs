@@ -17,10 +17,13 @@ pub const EPISODES_CSV_FILE: &str = "episodes.csv";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeRow {
     /// Task.
+    #[serde(with = "crate::names::csv_text")]
     pub task: String,
     /// Sequence id.
+    #[serde(with = "crate::names::csv_text")]
     pub sequence_id: String,
     /// Setting name.
+    #[serde(with = "crate::names::csv_text")]
     pub setting: String,
     /// Survival `s_i = min(T_i / T_ref, 1)`.
     pub survival: f64,
@@ -31,6 +34,7 @@ pub struct EpisodeRow {
     /// Episode score `S_i`, 0–100 (FATS is its mean over a task, then over tasks).
     pub score: f64,
     /// Why the episode ended early; empty when it ran to the end of its reference.
+    #[serde(with = "crate::names::csv_text")]
     pub termination: String,
 }
 
@@ -80,10 +84,13 @@ pub fn write_episodes_csv(path: &Path, rows: &[EpisodeRow]) -> Result<(), Result
         path: path.to_path_buf(),
         source,
     };
-    let mut w = csv::Writer::from_path(path).map_err(|e| failed(std::io::Error::other(e)))?;
+    let mut w = csv::Writer::from_writer(Vec::new());
     for row in rows {
         w.serialize(row)
             .map_err(|e| failed(std::io::Error::other(e)))?;
     }
-    w.flush().map_err(failed)
+    let bytes = w
+        .into_inner()
+        .map_err(|e| failed(std::io::Error::other(e.to_string())))?;
+    crate::atomic_file::write(path, bytes).map_err(failed)
 }

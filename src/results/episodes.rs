@@ -75,14 +75,12 @@ impl EpisodeLog {
     /// again), so appending continues from clean records.
     pub fn rewrite(path: &Path, keep: &[EpisodeRecord]) -> Result<(), ResultsError> {
         let io = ResultsError::io(path);
-        let write = || -> std::io::Result<()> {
-            let mut file = std::io::BufWriter::new(std::fs::File::create(path)?);
-            for r in keep {
-                write_record(&mut file, r)?;
-            }
-            file.flush()
-        };
-        write().map_err(io)
+        // Whole or not at all: a kill mid-way must not cost the records kept.
+        let mut text = Vec::new();
+        for r in keep {
+            write_record(&mut text, r).map_err(ResultsError::io(path))?;
+        }
+        crate::atomic_file::write(path, text).map_err(io)
     }
 }
 

@@ -80,6 +80,11 @@ pub struct RunHeader {
     /// before the check existed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sanity: Option<SanityRecord>,
+    /// The instruction sets a network in process ran on (`x86_64,avx,avx2,fma` on every
+    /// x86-64 machine that has them: `network_kernels`); `None` for policies
+    /// without one. Part of the run's identity: shards and resumed parts must agree.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub network_kernels: Option<String>,
 }
 
 impl RunHeader {
@@ -105,6 +110,7 @@ impl RunHeader {
             shard: spec.shard,
             io: spec.io,
             sanity: None,
+            network_kernels: None,
         }
     }
 
@@ -251,5 +257,5 @@ pub fn read_header(run: &Path) -> Result<RunHeader, ResultsError> {
 pub fn write_header(run: &Path, header: &RunHeader) -> Result<(), ResultsError> {
     let path = run.join(HEADER_FILE);
     let text = serde_json::to_string_pretty(header).expect("a header serializes") + "\n";
-    std::fs::write(&path, text).map_err(ResultsError::io(&path))
+    crate::atomic_file::write(&path, text).map_err(ResultsError::io(&path))
 }

@@ -39,7 +39,10 @@ pub use episodes::{write_record, EpisodeLog};
 pub use header::{read_header, write_header, PlannedSequence, RunHeader};
 pub use merge::{read_shards, MergeError, Shards};
 pub use output_guard::{check_dir, check_file, check_files_dir, OutputRefused};
-pub use run_dir::{RecordAppender, RunDir, Started, CROSSCHECK_SERIES_FILE, RUN_FILES, TRACES_DIR};
+pub use run_dir::{
+    RecordAppender, RunDir, RunLock, Started, CROSSCHECK_SERIES_FILE, LOCK_FILE, RUN_FILES,
+    TRACES_DIR,
+};
 pub use summary::{
     fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,
     SettingResults, SettingSummary, Summary,
@@ -88,6 +91,14 @@ pub enum ResultsError {
         path: PathBuf,
         /// Its version (0: written before versions existed).
         found: u64,
+    },
+    /// Another process is writing this run directory (it holds the directory's lock).
+    #[error("{} is being written by another thorarena process{}: two writers would interleave their records and lose the run; wait for it, or choose another --out", .path.display(), .holder.map(|p| format!(" (pid {p})")).unwrap_or_default())]
+    Busy {
+        /// The run directory.
+        path: PathBuf,
+        /// The pid the holder wrote into the lock file, when readable.
+        holder: Option<u32>,
     },
     /// A directory a run cannot be written to.
     #[error("{path} is not writable: {source}")]

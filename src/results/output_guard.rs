@@ -130,9 +130,6 @@ pub fn check_dir(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> Result<(), 
 /// Refuses output file `out` when it exists inside one of `inputs` (always), or inside a
 /// run or a dataset (unless `overwrite`).
 pub fn check_file(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> Result<(), OutputRefused> {
-    if !out.exists() {
-        return Ok(());
-    }
     if out.is_dir() {
         return Err(OutputRefused::FileIsDirectory(out.to_path_buf()));
     }
@@ -140,9 +137,12 @@ pub fn check_file(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> Result<(),
     for input in inputs {
         let input = resolved(input);
         let of_input = match target.strip_prefix(&input) {
-            // The input itself (a file), or what a run consists of.
+            // The input itself (a file), or anything inside an input directory (a run's
+            // own files, or a report dropped among them).
             Ok(rest) => {
-                rest.as_os_str().is_empty() || RUN_FILES.iter().any(|f| rest.starts_with(f))
+                rest.as_os_str().is_empty()
+                    || RUN_FILES.iter().any(|f| rest.starts_with(f))
+                    || input.is_dir()
             }
             Err(_) => false,
         };
@@ -152,6 +152,9 @@ pub fn check_file(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> Result<(),
                 input,
             });
         }
+    }
+    if !out.exists() {
+        return Ok(());
     }
     let parent = target.parent().unwrap_or(Path::new("/"));
     if let Some(what) = holds(parent) {

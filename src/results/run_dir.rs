@@ -33,6 +33,16 @@ pub const RUN_FILES: [&str; 6] = [
     TRACES_DIR,
 ];
 
+/// The lock file of a run directory: the process holding it (`flock`, released by the
+/// kernel when that process ends, however it ends) is the directory's one writer.
+pub const LOCK_FILE: &str = ".writer.lock";
+
+/// The writer's hold on a run directory ([`RunDir::lock`]); dropping it lets another in.
+#[derive(Debug)]
+pub struct RunLock {
+    _file: std::fs::File,
+}
+
 /// A run directory (it need not exist yet).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunDir {
@@ -120,6 +130,43 @@ impl RunDir {
         read_summary(&self.dir)
     }
 
+    /// Makes this process the directory's one writer until the returned lock drops, or
+    /// says who already is ([`ResultsError::Busy`]). Every writer of a run — `evaluate`,
+    /// `merge`, the DDS bridge — holds it from before its first write to after its last,
+    /// so two commands given one `--out` cannot interleave their files.
+    pub fn lock(&self) -> Result<RunLock, ResultsError> {
+        use std::os::fd::AsRawFd;
+        std::fs::create_dir_all(&self.dir).map_err(ResultsError::io(&self.dir))?;
+        let path = self.dir.join(LOCK_FILE);
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(ResultsError::io(&path))?;
+        // SAFETY: flock on a descriptor this function owns; no memory is shared.
+        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            let err = std::io::Error::last_os_error();
+            if err.raw_os_error() == Some(libc::EWOULDBLOCK) {
+                let holder = std::fs::read_to_string(&path)
+                    .ok()
+                    .and_then(|s| s.trim().parse().ok());
+                return Err(ResultsError::Busy {
+                    path: self.dir.clone(),
+                    holder,
+                });
+            }
+            return Err(ResultsError::Io { path, source: err });
+        }
+        let pid = std::process::id().to_string();
+        let written = file
+            .set_len(0)
+            .and_then(|()| std::io::Write::write_all(&mut file, pid.as_bytes()));
+        written.map_err(ResultsError::io(&path))?;
+        Ok(RunLock { _file: file })
+    }
+
     /// Whether the directory can be written: it is made if missing (and removed again if
     /// it was), and a probe file is written and removed, so a run fails before its policy
     /// loads rather than after its first episode.
@@ -194,7 +241,7 @@ impl RunDir {
             line: None,
             source,
         })?;
-        std::fs::write(&path, bytes).map_err(ResultsError::io(&path))
+        crate::atomic_file::write(&path, bytes).map_err(ResultsError::io(&path))
     }
 
     /// Finishes a run: sorts `records` into schedule order and writes the scores

@@ -32,6 +32,15 @@ pub struct PolicyIoReport {
     /// Control steps with unusable actions, summed over episodes.
     #[serde(default)]
     pub invalid_actions: u64,
+    /// Episodes a `--resume` kept from earlier attempts: counted in the faults above,
+    /// not in the latency percentiles nor the transport counters, which are this
+    /// attempt's.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub resumed_episodes: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// One setting's scores.
@@ -157,7 +166,7 @@ pub fn write_results(
     };
     let path = out.join(SUMMARY_FILE);
     let text = serde_json::to_string_pretty(&summary).expect("a summary serializes") + "\n";
-    std::fs::write(&path, text).map_err(ResultsError::io(&path))?;
+    crate::atomic_file::write(&path, text).map_err(ResultsError::io(&path))?;
     Ok(summary)
 }
 

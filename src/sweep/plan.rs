@@ -13,8 +13,8 @@ use std::path::{Path, PathBuf};
 pub const PLAN_FILE: &str = "plan.json";
 /// Version of the plan and task-record format; a sweep directory of another one is
 /// refused rather than misread. 2: the robot is recorded and eval arguments are
-/// `--flag=value` (a negative value is not read as a flag).
-pub const PLAN_FORMAT: u32 = 2;
+/// `--flag=value` (a negative value is not read as a flag). 3: the plan is sealed.
+pub const PLAN_FORMAT: u32 = 3;
 
 /// The `--policy` of a task whose policy is a launched process: the only argument in
 /// which [`Task::eval_argv`] fills in the session.
@@ -37,6 +37,11 @@ pub struct Plan {
     pub cells: Vec<Cell>,
     /// The tasks, in index order.
     pub tasks: Vec<Task>,
+    /// SHA-256 of the plan as planned, this field empty ([`Plan::seal_of`]): a plan
+    /// edited by hand — a policy command changed to run something else — no longer
+    /// matches it and is refused before anything of it runs.
+    #[serde(default)]
+    pub seal: String,
 }
 
 /// One combination of the axes: one evaluation configuration.
@@ -269,7 +274,7 @@ impl Plan {
                 }
             }
         }
-        let plan = Self {
+        let mut plan = Self {
             format: PLAN_FORMAT,
             thorarena_version: env!("CARGO_PKG_VERSION").into(),
             spec: spec_path.to_path_buf(),
@@ -277,10 +282,26 @@ impl Plan {
             robot: spec.robot.clone(),
             cells,
             tasks,
+            seal: String::new(),
         };
         plan.check()
             .map_err(|m| invalid(format!("the expanded plan is inconsistent: {m}")))?;
+        plan.seal = plan.seal_of();
         Ok(plan)
+    }
+
+    /// SHA-256 (hex) of this plan's JSON with an empty [`Plan::seal`].
+    pub fn seal_of(&self) -> String {
+        use sha2::{Digest, Sha256};
+        let unsealed = Self {
+            seal: String::new(),
+            ..self.clone()
+        };
+        let json = serde_json::to_vec(&unsealed).expect("a plan serializes");
+        Sha256::digest(json)
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
     }
 
     /// Reads `DIR/plan.json`, refusing another format version.
@@ -308,11 +329,17 @@ impl Plan {
             message: e.to_string(),
         })?;
         plan.check().map_err(|m| SweepError::BadRecord {
-            path,
+            path: path.clone(),
             message: format!(
                 "{m}: the plan does not hold what it claims (edited or damaged); plan the sweep again in a new directory"
             ),
         })?;
+        if plan.seal != plan.seal_of() {
+            return Err(SweepError::BadRecord {
+                path,
+                message: "it was changed after `sweep plan` wrote it (its seal does not match its content), so none of it runs: plan the sweep again (edit the spec, not the plan)".into(),
+            });
+        }
         Ok(plan)
     }
 

@@ -13,17 +13,26 @@ pub const RESULTS_CSV_FILE: &str = "results.csv";
 #[derive(Debug, Serialize)]
 pub struct ResultsRow {
     cell: usize,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     policy: String,
     /// As the spec names it: relative to the spec's directory when inside it.
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     dataset: String,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     setting: String,
     force_coefficient: Option<f64>,
     push_n: Option<f64>,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     latency_rule: String,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     budget: String,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     latency_mode: String,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     miss_rule: String,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     profile: String,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     keypoints: String,
     episodes: usize,
     episodes_expected: usize,
@@ -47,6 +56,7 @@ pub struct ResultsRow {
     deadline_misses: Option<u64>,
     invalid_actions: Option<u64>,
     policy_failures: Option<u64>,
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     engine: String,
     physics_dt_s: Option<f64>,
 }

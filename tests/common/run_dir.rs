@@ -46,6 +46,7 @@ pub fn header(policy: &str) -> RunHeader {
         shard: None,
         io: PolicyIoRules::default(),
         sanity: None,
+        network_kernels: None,
     }
 }
 
@@ -95,6 +96,7 @@ pub fn write_run(dir: &Path, header: &RunHeader, records: &[EpisodeRecord], tran
         }),
         deadline_misses: if transport { 2 } else { 0 },
         invalid_actions: 0,
+        resumed_episodes: 0,
     };
     let summary = write_results(dir, header, &records, thresholds, Some(io)).unwrap();
     thorarena::report::write_run_tables(dir, &summary).unwrap();

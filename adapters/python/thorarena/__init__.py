@@ -18,6 +18,7 @@ from .client import (
     IceoryxSession,
     LayoutMismatch,
     NoSession,
+    PrivateRootError,
     Session,
     SessionInfo,
     SessionRefused,
@@ -26,6 +27,7 @@ from .client import (
     Timeout,
     TransportError,
     connect,
+    private_root,
     process_alive,
 )
 from .protocol import (
@@ -58,6 +60,7 @@ __all__ = [
     "Layout",
     "LayoutMismatch",
     "NoSession",
+    "PrivateRootError",
     "Session",
     "SessionInfo",
     "SessionRefused",
@@ -69,6 +72,7 @@ __all__ = [
     "Welcome",
     "connect",
     "joint_names_hash",
+    "private_root",
     "process_alive",
 ]
 

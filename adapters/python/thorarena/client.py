@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import ctypes
 import os
+import stat as stat_module
 import time
 from collections import deque
 from collections.abc import Iterator, Sequence
@@ -541,18 +542,105 @@ class IceoryxSession(Session):
         self._node = None
 
 
+ROOT_ENV = "THORARENA_IPC_ROOT"
+"""Overrides this user's iceoryx2 root directory (as for the simulator)."""
+
+
+class PrivateRootError(ThorArenaError):
+    """This user's iceoryx2 directory, or a file in /dev/shm with this user's prefix,
+    cannot be trusted; the message names it and says what to do."""
+
+
+def private_root() -> tuple[str, str]:
+    """This user's iceoryx2 root directory and file prefix, the same as the simulator's
+    (`ipc/src/session/private_root.rs`): `$THORARENA_IPC_ROOT`, else
+    `/tmp/thorarena-iceoryx2-<uid>`, made 0700 when missing and refused when it is a
+    link, not a directory, another user's or writable by others; files `iox2_ta<uid>_*`,
+    none of them another user's."""
+    uid = os.geteuid()
+    root = os.environ.get(ROOT_ENV) or f"/tmp/thorarena-iceoryx2-{uid}"
+    prefix = f"iox2_ta{uid}_"
+
+    def refuse(path: str, problem: str) -> PrivateRootError:
+        return PrivateRootError(f"iceoryx2 files: {path}: {problem}")
+
+    if not os.path.isabs(root):
+        raise refuse(root, f"{ROOT_ENV} must be an absolute path")
+    with contextlib.suppress(FileExistsError):
+        os.mkdir(root, 0o700)
+    st = os.lstat(root)
+    if stat_module.S_ISLNK(st.st_mode):
+        raise refuse(
+            root,
+            "it is a symbolic link (it could lead into another user's directory): remove it",
+        )
+    if not stat_module.S_ISDIR(st.st_mode):
+        raise refuse(root, "it is not a directory: remove it")
+    if st.st_uid != uid:
+        raise refuse(
+            root,
+            f"it belongs to uid {st.st_uid}, not to you (uid {uid}): another user made it; "
+            f"remove it, or set {ROOT_ENV} to a directory of yours",
+        )
+    if st.st_mode & 0o022:
+        raise refuse(
+            root, f"others may write to it (mode {st.st_mode & 0o7777:o}): `chmod 700` it"
+        )
+    for path, st in _own_shm_files(prefix):
+        if st.st_uid != uid:
+            raise refuse(
+                path,
+                f"it carries your session files' prefix but belongs to uid {st.st_uid}: "
+                "another user planted it; remove it (as root, or ask its owner)",
+            )
+    return root, prefix
+
+
+def _own_shm_files(prefix: str) -> list[tuple[str, os.stat_result]]:
+    try:
+        names = os.listdir("/dev/shm")
+    except OSError:
+        return []
+    found = []
+    for name in names:
+        if name.startswith(prefix):
+            path = os.path.join("/dev/shm", name)
+            with contextlib.suppress(OSError):
+                found.append((path, os.lstat(path)))
+    return found
+
+
+def _make_shm_files_private(prefix: str) -> None:
+    """iceoryx2 makes its management segment world-writable: this user's only."""
+    uid = os.geteuid()
+    for path, st in _own_shm_files(prefix):
+        if st.st_uid == uid and stat_module.S_ISREG(st.st_mode) and st.st_mode & 0o077:
+            with contextlib.suppress(OSError):
+                os.chmod(path, 0o600)
+
+
 def _create_node(session: str) -> Any:
     iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
+    root, prefix = private_root()
+    config = iox2.config.global_config()
+    config.global_cfg.root_path = iox2.Path.new(root)
+    config.global_cfg.prefix = iox2.FileName.new(prefix)
     try:
         node = (
             iox2.NodeBuilder.new()
+            .config(config)
             .name(iox2.NodeName.new(f"thorarena-policy-{session}"))
             # Python keeps its own signal handling (Ctrl-C raises KeyboardInterrupt).
             .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
             .create(iox2.ServiceType.Ipc)
         )
     except Exception as e:
-        raise _transport("creating the node", e) from e
+        raise _transport(
+            f"creating the node (if no session of yours is running, remove "
+            f"/dev/shm/{prefix}* and try again)",
+            e,
+        ) from e
+    _make_shm_files_private(prefix)
     node.try_cleanup_dead_nodes()
     return node
 
@@ -660,7 +748,12 @@ def connect(
     hello.reference_offsets_s[: len(offsets)] = offsets
     ctypes.memmove(hello.name, to_fixed(name, NAME_BYTES), NAME_BYTES)
     ctypes.memmove(hello.input, to_fixed(input or "", INPUT_NAME_BYTES), INPUT_NAME_BYTES)
-    welcome = _say_hello(hello_service, hello, start, timeout_s)
+    try:
+        welcome = _say_hello(hello_service, step, session, hello, start, timeout_s)
+    except SessionRefused:
+        obs_ready.delete()
+        action_ready.delete()
+        raise
     if welcome.status != Status.OK:
         obs_ready.delete()
         action_ready.delete()
@@ -704,8 +797,12 @@ def connect(
     )
 
 
-def _say_hello(hello_service: Any, hello: Hello, start: float, timeout_s: float) -> Welcome:
-    """Sends `hello` and waits for the simulator's `Welcome` (a copy)."""
+def _say_hello(
+    hello_service: Any, step: Any, session: str, hello: Hello, start: float, timeout_s: float
+) -> Welcome:
+    """Sends `hello` and waits for the simulator's `Welcome` (a copy). Another policy that
+    starts serving `step` meanwhile won a race for the session: this one is refused as busy
+    at once, not left waiting for its whole timeout."""
     try:
         client = hello_service.client_builder().create()
         pending = client.send_copy(hello)
@@ -722,6 +819,12 @@ def _say_hello(hello_service: Any, hello: Hello, start: float, timeout_s: float)
                 return welcome
             if time.monotonic() - start > timeout_s:
                 raise Timeout(f"timed out after {timeout_s} s waiting for the simulator's welcome")
+            if step.dynamic_config.number_of_servers > 0:
+                raise SessionRefused(
+                    Status.BUSY,
+                    f"session {session!r} is in use: another policy is connected "
+                    "(a session serves one policy at a time)",
+                )
             time.sleep(0.0002)
     finally:
         pending.delete()

@@ -85,7 +85,8 @@ impl ThorarenaStatus {
             IpcError::Timeout(..) => Self::Timeout,
             IpcError::PeerGone(_) => Self::SimulatorGone,
             IpcError::Layout(_) => Self::Layout,
-            IpcError::Transport { .. } => Self::Transport,
+            // The message names the directory or file and what to do about it.
+            IpcError::Transport { .. } | IpcError::PrivateRoot { .. } => Self::Transport,
         }
     }
 

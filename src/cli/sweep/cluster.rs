@@ -47,7 +47,8 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
     let logs = slurm_logs_dir(&dir);
     std::fs::create_dir_all(&logs).with_context(|| format!("creating {}", logs.display()))?;
     let script = slurm_script_path(&dir);
-    std::fs::write(&script, &s).with_context(|| format!("writing {}", script.display()))?;
+    thorarena::atomic_file::write(&script, &s)
+        .with_context(|| format!("writing {}", script.display()))?;
     println!(
         "wrote {} ({} tasks: --array={array})",
         script.display(),
@@ -113,7 +114,8 @@ pub(super) fn k8s(args: &K8sArgs) -> anyhow::Result<()> {
     let path = k8s_manifest_path(&dir);
     let kdir = path.parent().expect("the manifest is in a directory");
     std::fs::create_dir_all(kdir).with_context(|| format!("creating {}", kdir.display()))?;
-    std::fs::write(&path, y).with_context(|| format!("writing {}", path.display()))?;
+    thorarena::atomic_file::write(&path, y)
+        .with_context(|| format!("writing {}", path.display()))?;
     println!(
         "wrote {} ({} tasks); run with: kubectl apply -f {}",
         path.display(),

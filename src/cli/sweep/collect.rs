@@ -126,7 +126,8 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     }
     let csv = thorarena::sweep::results_csv(&plan, &results);
     let csv_path = args.dir.join(thorarena::sweep::RESULTS_CSV_FILE);
-    std::fs::write(&csv_path, csv).with_context(|| format!("writing {}", csv_path.display()))?;
+    thorarena::atomic_file::write(&csv_path, csv)
+        .with_context(|| format!("writing {}", csv_path.display()))?;
     let cell_dirs: Vec<PathBuf> = results.iter().flatten().map(|r| r.dir.clone()).collect();
     let report = args.dir.join("report.html");
     let mut runs = thorarena::report::load_runs(&cell_dirs)?;
@@ -135,7 +136,8 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
     let script = thorarena::report::WebBundle::locate()?.script(thorarena::report::Page::Report)?;
     let title = sweep_title(&plan);
     let html = thorarena::report::sweep_report_html(&runs, &charts, &title, &script);
-    std::fs::write(&report, html).with_context(|| format!("writing {}", report.display()))?;
+    thorarena::atomic_file::write(&report, html)
+        .with_context(|| format!("writing {}", report.display()))?;
     let figures_dir = args.dir.join("report-figures");
     let figures =
         thorarena::report::svg_figures(&thorarena::report::report_figures(&runs, &charts));

@@ -11,11 +11,25 @@ pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
     // A task is done when its run counts, not merely when its done.json is there.
     let checked = CheckedCensus::of(&args.dir, &plan)?;
     let (c, not_counted) = (&checked.census, &checked.not_counted);
+    // A dataset changed since planning: `collect` refuses its cells, so their done tasks
+    // are not done either (they would be scored against other references).
+    let changed = changed_datasets(&plan);
+    for (dataset, why) in &changed {
+        println!(
+            "dataset {} {why}: `sweep collect` refuses its cells, and their tasks are not counted done; restore it, or plan a new sweep",
+            dataset.display()
+        );
+    }
+    let on_changed = c
+        .done
+        .iter()
+        .filter(|&&i| changed.contains_key(&plan.cells[plan.tasks[i].cell].dataset))
+        .count();
     println!(
-        "{}: {} tasks — {} done, {} failed, {} started (running or interrupted), {} not started{}",
+        "{}: {} tasks — {} done, {} failed, {} started (running or interrupted), {} not started{}{}",
         args.dir.display(),
         plan.tasks.len(),
-        c.done.len(),
+        c.done.len() - on_changed,
         c.failed.len(),
         c.started.len(),
         c.not_started.len(),
@@ -26,6 +40,11 @@ pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
                 ", {} marked done whose run does not count",
                 not_counted.len()
             )
+        },
+        if on_changed == 0 {
+            String::new()
+        } else {
+            format!(", {on_changed} marked done on a dataset changed since planning")
         }
     );
     // Records are policy output and files anyone may edit: printed bounded, with
@@ -67,4 +86,31 @@ pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
         println!("not done (--array): {}", compact_ranges(&not_done));
     }
     Ok(())
+}
+
+/// The planned datasets that are no longer what was planned: changed content, or gone.
+fn changed_datasets(plan: &Plan) -> std::collections::BTreeMap<std::path::PathBuf, String> {
+    let mut changed = std::collections::BTreeMap::new();
+    let Ok(robot) = thorarena::registry::robot(&plan.robot) else {
+        return changed;
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    for cell in &plan.cells {
+        if !seen.insert(cell.dataset.clone()) {
+            continue;
+        }
+        match thorarena::motion::Dataset::open(&cell.dataset, &robot) {
+            Ok(ds) if ds.content_hash() == cell.dataset_sha256 => {}
+            Ok(_) => {
+                changed.insert(
+                    cell.dataset.clone(),
+                    "changed since the sweep was planned (its content hash differs)".to_string(),
+                );
+            }
+            Err(e) => {
+                changed.insert(cell.dataset.clone(), format!("cannot be read ({e})"));
+            }
+        }
+    }
+    changed
 }

@@ -80,7 +80,7 @@ pub fn to_sequence(
     }
     let quats = root_quaternions(&raw.root_quat_wxyz, opts, &mut provenance, source)?;
     let times: Vec<f64> = (0..t).map(|k| (first_frame + k) as f64 / raw.fps).collect();
-    let (force_sensor, forces_recorded) = sensor_forces(opts, &times, &mut provenance);
+    let (force_sensor, forces_recorded) = sensor_forces(opts, &times, &mut provenance, source)?;
     let hand_quat = |side: usize| {
         let q = robot.hands[side].hand_from_sensor;
         [q.w, q.i, q.j, q.k]
@@ -133,11 +133,16 @@ fn check_frame_counts(raw: &RawMotion, source: &Path) -> Result<(), ImportError>
             ),
         ));
     }
-    if !(raw.fps.is_finite() && raw.fps > 0.0) {
+    if !crate::motion::FPS_RANGE.contains(&raw.fps) {
         return Err(bad_field(
             source,
             "fps",
-            format!("must be > 0, got {}", raw.fps),
+            format!(
+                "must be a frame rate of {} to {} Hz, got {}",
+                crate::motion::FPS_RANGE.start(),
+                crate::motion::FPS_RANGE.end(),
+                raw.fps
+            ),
         ));
     }
     if let Some(v) = &raw.joint_vel {
@@ -270,22 +275,55 @@ fn root_quaternions(
     Ok(quats)
 }
 
+/// Left and right sensor-frame forces, one per motion frame, N.
+type SensorForces = [Vec<[f64; 3]>; 2];
+
 /// The left and right sensor forces at the motion's frame `times` (s, source clock), N:
 /// the logs resampled, offset and signed as `opts` says, or zeros when none were recorded
 /// (the `bool`: whether they were). What was done is recorded in the provenance.
+///
+/// A force log must cover at least half of the motion's frames once offset: one that
+/// misses it (an offset of hours, a log of 0.02 s for a 5 s motion) would import as a
+/// motion "with forces" that are all 0 N, and score as a force task it is not.
 fn sensor_forces(
     opts: &ImportOptions,
     times: &[f64],
     provenance: &mut Map<String, Value>,
-) -> ([Vec<[f64; 3]>; 2], bool) {
+    source: &Path,
+) -> Result<(SensorForces, bool), ImportError> {
     let Some(logs) = &opts.forces else {
         provenance.insert("forces".into(), json!("none recorded: zero forces"));
         let t = times.len();
-        return ([vec![[0.0; 3]; t], vec![[0.0; 3]; t]], false);
+        return Ok(([vec![[0.0; 3]; t], vec![[0.0; 3]; t]], false));
     };
+    if !opts.force_offset_s.is_finite() {
+        return Err(bad_field(
+            source,
+            "force offset",
+            format!("{} s is not a time offset", opts.force_offset_s),
+        ));
+    }
     let mut out = [Vec::new(), Vec::new()];
     for side in [LEFT, RIGHT] {
         let (f, outside) = logs[side].resample(times, opts.force_offset_s);
+        if 2 * outside > times.len() {
+            let span = |t: &[f64]| match (t.first(), t.last()) {
+                (Some(a), Some(b)) => format!("{a:.3}–{b:.3} s"),
+                _ => "nothing".into(),
+            };
+            return Err(bad_field(
+                source,
+                if side == LEFT { "left force log" } else { "right force log" },
+                format!(
+                    "covers {} of the motion's {} frames: the log spans {} and the motion, offset by {} s, {}; check --force-offset (the log's time = the motion's + the offset)",
+                    times.len() - outside,
+                    times.len(),
+                    span(&logs[side].time_s),
+                    opts.force_offset_s,
+                    span(&times.iter().map(|t| t + opts.force_offset_s).collect::<Vec<_>>()),
+                ),
+            ));
+        }
         out[side] = f
             .into_iter()
             .map(|v| v.map(|x| x * opts.force_sign))
@@ -301,7 +339,7 @@ fn sensor_forces(
     }
     provenance.insert("force_offset_s".into(), json!(opts.force_offset_s));
     provenance.insert("force_sign".into(), json!(opts.force_sign));
-    (out, true)
+    Ok((out, true))
 }
 
 #[cfg(test)]

@@ -52,7 +52,7 @@ pub fn read_onnx_motion(
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
         });
     }
-    let model = onnx().model_for_path(path).map_err(tract_error(path))?;
+    let model = crate::network_kernels::load_onnx(path).map_err(tract_error(path))?;
     let props = crate::onnx_export::metadata_props(&model);
     let meta = crate::onnx_export::FileMetadata::from_props(&props)
         .map_err(|reason| format_error(path, reason))?;

@@ -287,6 +287,10 @@ impl Policy for BeyondMimicPolicy {
         &self.name
     }
 
+    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
+        Some(super::network_kernels())
+    }
+
     fn reference_offsets_s(&self) -> Vec<f64> {
         match self.action_mode {
             ActionMode::DefaultRelative => vec![0.0],

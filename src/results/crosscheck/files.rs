@@ -81,10 +81,13 @@ pub fn compare_runs(
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CrosscheckCsvRow {
     /// Task.
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     pub task: String,
     /// Sequence id.
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     pub sequence_id: String,
     /// Setting.
+    #[serde(serialize_with = "crate::names::csv_text::serialize")]
     pub setting: String,
     /// Survival on rapier.
     pub survival_rapier: Option<f64>,
@@ -165,13 +168,16 @@ pub fn write_crosscheck(
         line: None,
         source,
     })? + "\n";
-    std::fs::write(&json_path, text).map_err(ResultsError::io(&json_path))?;
+    crate::atomic_file::write(&json_path, text).map_err(ResultsError::io(&json_path))?;
     let csv_path = dir.join(CROSSCHECK_CSV_FILE);
     let csv_error = |e: csv::Error| ResultsError::io(&csv_path)(std::io::Error::other(e));
-    let mut w = csv::Writer::from_path(&csv_path).map_err(csv_error)?;
+    let mut w = csv::Writer::from_writer(Vec::new());
     for p in &check.pairs {
         w.serialize(CrosscheckCsvRow::of(p)).map_err(csv_error)?;
     }
-    w.flush().map_err(ResultsError::io(&csv_path))?;
+    let bytes = w
+        .into_inner()
+        .map_err(|e| ResultsError::io(&csv_path)(std::io::Error::other(e.to_string())))?;
+    crate::atomic_file::write(&csv_path, bytes).map_err(ResultsError::io(&csv_path))?;
     Ok([json_path, csv_path])
 }

@@ -1,0 +1,272 @@
+//! Issue 42, probe item 2: on a shared machine every user can run policy processes and
+//! none can disturb another's. Before, iceoryx2's root `/tmp/iceoryx2` was made 0750 by
+//! the first user (every later user's session failed with `InternalError`), and its
+//! management segment in `/dev/shm` was world-writable (16 bytes from any user and every
+//! later session failed with `UnableToGenerateUniqueNodeId`).
+//!
+//! Real users, not mocks: the test runs `thorarena` as two unprivileged uids through
+//! `setpriv`, so it needs root (CI runs as root; elsewhere it is counted as skipped).
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+mod prereq;
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+
+/// Two uids no account uses, distinct per test process.
+fn uids() -> (u32, u32) {
+    let base = 40_000 + (std::process::id() % 10_000) * 2;
+    (base, base + 1)
+}
+
+fn can_switch_users(test: &str) -> bool {
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } != 0 {
+        prereq::skip(
+            test,
+            "needs root, to run thorarena as two other users (setpriv)",
+        );
+        return false;
+    }
+    if Command::new("setpriv").arg("--version").output().is_err() {
+        prereq::skip(test, "setpriv (util-linux) is missing");
+        return false;
+    }
+    true
+}
+
+fn as_user(uid: u32, args: &[&str]) -> Command {
+    let mut c = Command::new("setpriv");
+    c.args([
+        &format!("--reuid={uid}"),
+        &format!("--regid={uid}"),
+        "--clear-groups",
+        "--",
+        BIN,
+    ])
+    .args(args)
+    .env_remove("THORARENA_IPC_ROOT")
+    .env_remove("XDG_CACHE_HOME")
+    .env("HOME", home_of(uid))
+    .stdout(Stdio::null())
+    .stderr(Stdio::piped());
+    c
+}
+
+/// A home directory of `uid`'s own (its data cache goes there).
+fn home_of(uid: u32) -> std::path::PathBuf {
+    let home = std::env::temp_dir().join(format!("thorarena-test-home-{uid}"));
+    std::fs::create_dir_all(&home).unwrap();
+    let c = std::ffi::CString::new(home.to_str().unwrap()).unwrap();
+    // SAFETY: chown on a path this test made; no memory is shared.
+    assert_eq!(unsafe { libc::chown(c.as_ptr(), uid, uid) }, 0);
+    home
+}
+
+/// One whole session as `uid`: `eval` over shared memory with `thorarena client`, on one
+/// sample sequence. Returns both outputs.
+fn session(uid: u32, out: &Path, name: &str) -> (Output, Output) {
+    let session = format!("users-{name}-{}", std::process::id());
+    let eval = as_user(
+        uid,
+        &[
+            "eval",
+            "--dataset",
+            &format!("{ROOT}/data/sample"),
+            "--policy",
+            &format!("ipc:{session}"),
+            "--settings",
+            "no-force",
+            "--sequences",
+            "push_chair_001",
+            "--connect-timeout",
+            "60",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    )
+    .spawn()
+    .unwrap();
+    let client = as_user(
+        uid,
+        &[
+            "client",
+            "--session",
+            &session,
+            "--policy",
+            "hold",
+            "--connect-timeout",
+            "60",
+        ],
+    )
+    .spawn()
+    .unwrap();
+    (
+        eval.wait_with_output().unwrap(),
+        client.wait_with_output().unwrap(),
+    )
+}
+
+fn assert_ran(what: &str, (eval, client): &(Output, Output)) {
+    assert!(
+        eval.status.success() && client.status.success(),
+        "{what}: eval: {}\nclient: {}",
+        String::from_utf8_lossy(&eval.stderr),
+        String::from_utf8_lossy(&client.stderr)
+    );
+}
+
+fn writable_dir() -> tempfile::TempDir {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::set_permissions(dir.path(), std::fs::Permissions::from_mode(0o777)).unwrap();
+    dir
+}
+
+#[test]
+fn two_users_each_run_sessions_and_neither_can_stop_the_others() {
+    const TEST: &str = "users_apart::two_users";
+    if !can_switch_users(TEST) {
+        return;
+    }
+    let (alice, mallory) = uids();
+    let dir = writable_dir();
+    // Alice first: her root and her files in /dev/shm are made.
+    assert_ran(
+        "alice's first session",
+        &session(alice, &dir.path().join("alice-1"), "a1"),
+    );
+    // Mallory, second on the machine, runs sessions too.
+    assert_ran(
+        "mallory's session after alice's",
+        &session(mallory, &dir.path().join("mallory-1"), "m1"),
+    );
+    // Mallory tries to break alice's files: every one of them is closed to her.
+    let alice_files: Vec<_> = std::fs::read_dir("/dev/shm")
+        .unwrap()
+        .flatten()
+        .filter(|e| {
+            e.file_name()
+                .to_string_lossy()
+                .starts_with(&format!("iox2_ta{alice}_"))
+        })
+        .map(|e| e.path())
+        .collect();
+    assert!(
+        !alice_files.is_empty(),
+        "alice's session left no management segment"
+    );
+    for file in &alice_files {
+        let wrote = Command::new("setpriv")
+            .args([
+                &format!("--reuid={mallory}"),
+                &format!("--regid={mallory}"),
+                "--clear-groups",
+                "--",
+                "dd",
+                "if=/dev/urandom",
+                &format!("of={}", file.display()),
+                "bs=16",
+                "count=1",
+                "conv=notrunc",
+            ])
+            .stderr(Stdio::null())
+            .status()
+            .unwrap();
+        assert!(!wrote.success(), "mallory wrote into {}", file.display());
+    }
+    let alice_root = format!("/tmp/thorarena-iceoryx2-{alice}");
+    let listed = Command::new("setpriv")
+        .args([
+            &format!("--reuid={mallory}"),
+            &format!("--regid={mallory}"),
+            "--clear-groups",
+            "--",
+            "ls",
+            &alice_root,
+        ])
+        .stderr(Stdio::null())
+        .status()
+        .unwrap();
+    assert!(!listed.success(), "mallory listed {alice_root}");
+    // Alice's next session is untouched by all of it.
+    assert_ran(
+        "alice's session after mallory's attempts",
+        &session(alice, &dir.path().join("alice-2"), "a2"),
+    );
+    for file in alice_files {
+        let _ = std::fs::remove_file(file);
+    }
+    for uid in [alice, mallory] {
+        let _ = std::fs::remove_dir_all(format!("/tmp/thorarena-iceoryx2-{uid}"));
+        for e in std::fs::read_dir("/dev/shm").unwrap().flatten() {
+            if e.file_name()
+                .to_string_lossy()
+                .starts_with(&format!("iox2_ta{uid}_"))
+            {
+                let _ = std::fs::remove_file(e.path());
+            }
+        }
+    }
+}
+
+#[test]
+fn a_planted_root_or_shm_file_is_refused_naming_it() {
+    const TEST: &str = "users_apart::planted";
+    if !can_switch_users(TEST) {
+        return;
+    }
+    let (victim, planter) = uids();
+    let (victim, planter) = (victim + 20_000, planter + 20_000);
+    let dir = writable_dir();
+    // The planter makes the victim's root before the victim's first session.
+    let root = format!("/tmp/thorarena-iceoryx2-{victim}");
+    let _ = std::fs::remove_dir_all(&root);
+    let made = Command::new("setpriv")
+        .args([
+            &format!("--reuid={planter}"),
+            &format!("--regid={planter}"),
+            "--clear-groups",
+            "--",
+            "mkdir",
+            "-m",
+            "777",
+            &root,
+        ])
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let (eval, _) = session(victim, &dir.path().join("v1"), "v1");
+    let err = String::from_utf8_lossy(&eval.stderr);
+    assert!(!eval.status.success());
+    assert!(
+        err.contains(&root) && err.contains(&format!("belongs to uid {planter}")),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&root).unwrap();
+    // A file with the victim's prefix in /dev/shm, planted by another user.
+    let planted = format!("/dev/shm/iox2_ta{victim}_node.planted");
+    let made = Command::new("setpriv")
+        .args([
+            &format!("--reuid={planter}"),
+            &format!("--regid={planter}"),
+            "--clear-groups",
+            "--",
+            "touch",
+            &planted,
+        ])
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let (eval, _) = session(victim, &dir.path().join("v2"), "v2");
+    let err = String::from_utf8_lossy(&eval.stderr);
+    let _ = std::fs::remove_file(&planted);
+    let _ = std::fs::remove_dir_all(&root);
+    assert!(!eval.status.success());
+    assert!(
+        err.contains(&planted) && err.contains("another user planted it"),
+        "{err}"
+    );
+}
