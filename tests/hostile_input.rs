@@ -842,3 +842,129 @@ fn import_refuses_frame_rates_and_force_alignments_that_lose_the_motion_or_its_f
         assert!(!out.join(MANIFEST).exists(), "{extra:?} wrote a dataset");
     }
 }
+
+/// Issue 42, probe item 10: ids like `=1+2`, `@SUM` and `-2+3` (plain names, allowed as
+/// ids) went unescaped into `episodes.csv` and a report's CSV, where a spreadsheet runs
+/// them as formulas. Every text cell that would read as one starts with `'`.
+#[test]
+fn csv_cells_never_read_as_spreadsheet_formulas() {
+    let tmp = tempfile::tempdir().unwrap();
+    let robot = g1();
+    let ds = tmp.path().join("ds");
+    let mut w = DatasetWriter::create(&ds, &robot).unwrap();
+    for (task, id) in [("=SUM", "=1+2"), ("=SUM", "@SUM"), ("-2+3", "-2+3")] {
+        let mut seq = sample_sequence(&robot, id);
+        seq.task = task.into();
+        w.add(&seq).unwrap();
+    }
+    w.finish().unwrap();
+    let d = ds.to_str().unwrap();
+    let o = thorarena(
+        tmp.path(),
+        &["eval", "--dataset", d, "--policy", "hold", "--out", "run"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = thorarena(tmp.path(), &["report", "run", "--out", "report.html"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for file in ["run/episodes.csv", "report-fats.csv"] {
+        let text = std::fs::read_to_string(tmp.path().join(file)).unwrap();
+        for line in text.lines().skip(1) {
+            for cell in line.split(',') {
+                let cell = cell.trim_matches('"');
+                assert!(
+                    !cell.starts_with(['=', '@', '+']) && !cell.starts_with("-2"),
+                    "{file}: a cell reads as a formula: {cell:?} in {line:?}"
+                );
+            }
+        }
+        assert!(text.contains("'=SUM") || text.contains("'=1+2"), "{file}: {text}");
+    }
+    let rows = std::fs::read_to_string(tmp.path().join("run/episodes.csv")).unwrap();
+    assert!(rows.contains("'@SUM") && rows.contains("'-2+3"), "{rows}");
+}
+
+/// Issue 42, probe item 15: commands wrote where the others refuse to — a report into a
+/// run directory, a run into its own dataset, a dataset over a run, a leaderboard over
+/// another command's report. Each is refused before anything is written.
+#[test]
+fn no_command_writes_into_a_run_a_dataset_or_another_commands_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    dataset_with_manifest(&ds, |_| {});
+    let d = ds.to_str().unwrap();
+    let o = thorarena(
+        tmp.path(),
+        &["eval", "--dataset", d, "--policy", "hold", "--out", "run"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::create_dir(tmp.path().join("mine")).unwrap();
+    std::fs::write(tmp.path().join("mine/report.html"), "x").unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["report", "run", "--out", "run/x.html"], "run/x.html"),
+        (
+            vec!["report", "run", "--out", "run/x.html", "--overwrite"],
+            "part of this command's input",
+        ),
+        (
+            vec!["eval", "--dataset", d, "--policy", "hold", "--out", d],
+            "holds a dataset",
+        ),
+        (
+            vec!["eval", "--dataset", d, "--policy", "hold", "--out", "ds/inner"],
+            "this command's input",
+        ),
+        (
+            vec![
+                "dds",
+                "--dataset",
+                d,
+                "--sequence",
+                "clean_table/a",
+                "--out",
+                d,
+            ],
+            "holds a dataset",
+        ),
+        (
+            vec!["data", "synth", "--per-task", "1", "--out", "run"],
+            "holds a run",
+        ),
+        (
+            vec![
+                "leaderboard",
+                "--policy",
+                "hold",
+                "--dataset",
+                d,
+                "--engines",
+                "rapier",
+                "--out",
+                "mine",
+            ],
+            "report.html no leaderboard wrote",
+        ),
+        (
+            vec![
+                "leaderboard",
+                "--policy",
+                "hold",
+                "--dataset",
+                d,
+                "--engines",
+                "rapier",
+                "--out",
+                "run",
+            ],
+            "it holds a run",
+        ),
+    ];
+    let before = std::fs::read(tmp.path().join("run/summary.json")).unwrap();
+    for (args, wants) in cases {
+        let e = failure(&thorarena(tmp.path(), &args));
+        assert!(e.contains(wants), "{args:?}: {e}");
+    }
+    assert!(!tmp.path().join("run/x.html").exists());
+    assert!(!tmp.path().join("ds/inner").exists());
+    assert_eq!(std::fs::read(tmp.path().join("run/summary.json")).unwrap(), before);
+    assert_eq!(std::fs::read(tmp.path().join("mine/report.html")).unwrap(), b"x");
+}
