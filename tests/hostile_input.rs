@@ -877,7 +877,10 @@ fn csv_cells_never_read_as_spreadsheet_formulas() {
                 );
             }
         }
-        assert!(text.contains("'=SUM") || text.contains("'=1+2"), "{file}: {text}");
+        assert!(
+            text.contains("'=SUM") || text.contains("'=1+2"),
+            "{file}: {text}"
+        );
     }
     let rows = std::fs::read_to_string(tmp.path().join("run/episodes.csv")).unwrap();
     assert!(rows.contains("'@SUM") && rows.contains("'-2+3"), "{rows}");
@@ -910,7 +913,15 @@ fn no_command_writes_into_a_run_a_dataset_or_another_commands_output() {
             "holds a dataset",
         ),
         (
-            vec!["eval", "--dataset", d, "--policy", "hold", "--out", "ds/inner"],
+            vec![
+                "eval",
+                "--dataset",
+                d,
+                "--policy",
+                "hold",
+                "--out",
+                "ds/inner",
+            ],
             "this command's input",
         ),
         (
@@ -965,6 +976,12 @@ fn no_command_writes_into_a_run_a_dataset_or_another_commands_output() {
     }
     assert!(!tmp.path().join("run/x.html").exists());
     assert!(!tmp.path().join("ds/inner").exists());
-    assert_eq!(std::fs::read(tmp.path().join("run/summary.json")).unwrap(), before);
-    assert_eq!(std::fs::read(tmp.path().join("mine/report.html")).unwrap(), b"x");
+    assert_eq!(
+        std::fs::read(tmp.path().join("run/summary.json")).unwrap(),
+        before
+    );
+    assert_eq!(
+        std::fs::read(tmp.path().join("mine/report.html")).unwrap(),
+        b"x"
+    );
 }
