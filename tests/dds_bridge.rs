@@ -552,6 +552,65 @@ fn a_command_stream_that_stops_or_has_two_publishers_is_flagged() {
     }
 }
 
+/// Issue 42: two bridges on one domain scored the same deployment with mixed states and
+/// neither warned. Each now sees the other's `rt/lowstate`, says so, and flags its run.
+#[test]
+fn two_bridges_on_one_domain_each_flag_the_other() {
+    const TEST: &str = "dds_bridge::two_bridges";
+    let Some(sdk) = prereq::unitree_sdk(TEST) else {
+        return;
+    };
+    let network = netns::PrivateNetwork::new(TEST);
+    let dir = tempfile::tempdir().unwrap();
+    let bridge = |name: &str| {
+        network
+            .command(BIN)
+            .args(["dds", "--dataset", &format!("{ROOT}/data/sample")])
+            .args(["--sequence", "pull_chair/pull_chair_000", "--domain", "6"])
+            .args(["--start-timeout", "30", "--rt-priority", "0"])
+            .args([
+                "--max-torso-height-error",
+                "100",
+                "--max-torso-tilt-error",
+                "100",
+            ])
+            .args(["--out", dir.path().join(name).to_str().unwrap()])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let (first, second) = (bridge("first"), bridge("second"));
+    let script = network
+        .command("python3")
+        .args(["-c", COMMANDS_SCRIPT, "6", "steady", "0.0"])
+        .env("PYTHONPATH", &sdk)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (first, second) = (finished(first), finished(second));
+    let _ = script.wait_with_output();
+    for (name, bridge) in [("first", first), ("second", second)] {
+        let stderr = String::from_utf8_lossy(&bridge.stderr);
+        assert!(bridge.status.success(), "{name}: {stderr}");
+        assert!(
+            stderr.contains("another robot publishes rt/lowstate"),
+            "{name}: {stderr}"
+        );
+        let realtime: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.path().join(name).join("realtime.json")).unwrap(),
+        )
+        .unwrap();
+        let stream = &realtime["command_stream"];
+        assert!(
+            stream["other_robots"].as_u64().unwrap() >= 1,
+            "{name}: {stream}"
+        );
+        assert_eq!(stream["healthy"], false, "{name}: {stream}");
+    }
+}
+
 /// Whether this process may run a thread under `SCHED_FIFO` (root, or RLIMIT_RTPRIO, and
 /// no container forbidding it), as `chrt` finds.
 fn real_time_priority_allowed() -> bool {

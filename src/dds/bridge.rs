@@ -107,15 +107,30 @@ pub struct CommandStream {
     pub longest_gap_ms: f64,
     /// Time from the last usable command to the episode's end, ms.
     pub silent_at_end_ms: f64,
-    /// One publisher, and no gap (nor silence at the end) over [`MAX_COMMAND_GAP_MS`].
+    /// Other robots seen on the domain: writers of `rt/lowstate` besides this bridge (a
+    /// second bridge), whose states the deployment may have read as this robot's.
+    #[serde(default)]
+    pub other_robots: u64,
+    /// One publisher, no other robot, and no gap (nor silence at the end) over
+    /// [`MAX_COMMAND_GAP_MS`].
     pub healthy: bool,
     /// What broke it, in words.
     pub problems: Vec<String>,
 }
 
 impl CommandStream {
-    fn judge(publishers: u64, longest_gap_ms: f64, silent_at_end_ms: f64) -> Self {
+    fn judge(
+        publishers: u64,
+        other_robots: u64,
+        longest_gap_ms: f64,
+        silent_at_end_ms: f64,
+    ) -> Self {
         let mut problems = Vec::new();
+        if other_robots > 0 {
+            problems.push(format!(
+                "another robot publishes rt/lowstate on this domain ({other_robots} writers besides this bridge): the deployment may have read its states as this robot's"
+            ));
+        }
         if publishers > 1 {
             problems.push(format!(
                 "{publishers} publishers sent commands that were applied interleaved"
@@ -134,6 +149,7 @@ impl CommandStream {
         }
         Self {
             publishers,
+            other_robots,
             longest_gap_ms,
             silent_at_end_ms,
             healthy: problems.is_empty(),
@@ -309,6 +325,7 @@ pub fn run_episode(
         .map_or(0.0, |t| (end - t).as_secs_f64() * 1e3);
     let command_stream = CommandStream::judge(
         io.applied_from.len() as u64,
+        io.other_robots.len() as u64,
         io.longest_gap.as_secs_f64() * 1e3,
         silent_at_end_ms,
     );
@@ -348,6 +365,8 @@ struct RobotIo {
     longest_gap: Duration,
     /// The writers whose usable commands arrived during the episode.
     applied_from: std::collections::BTreeSet<String>,
+    /// Writers of `rt/lowstate` that are not this bridge.
+    other_robots: std::collections::BTreeSet<String>,
     interarrival_ms: Vec<f64>,
     /// Targets of the command in force, rad.
     targets: Option<Vec<f64>>,
@@ -383,6 +402,7 @@ impl RobotIo {
             last_usable_at: None,
             longest_gap: Duration::ZERO,
             applied_from: Default::default(),
+            other_robots: Default::default(),
             interarrival_ms: Vec::new(),
             targets: None,
             gains_in_force: None,
@@ -439,11 +459,19 @@ impl RobotIo {
         self.publish_due(endpoints)
     }
 
-    /// The newest usable command among those that arrived, counting the rest.
+    /// The newest usable command among those that arrived, counting the rest; also notes
+    /// any other robot on the domain (said once each, as it is seen).
     fn take_commands(
         &mut self,
         endpoints: &mut RobotEndpoints,
     ) -> Result<Option<LowCmd>, DdsError> {
+        for writer in endpoints.other_robots() {
+            if self.other_robots.insert(writer.clone()) {
+                log::warn!(
+                    "another robot publishes rt/lowstate on this DDS domain (writer {writer}): the deployment may read its states; give each bridge its own --domain"
+                );
+            }
+        }
         let mut newest = None;
         for (command, writer) in endpoints.commands()? {
             let now = Instant::now();

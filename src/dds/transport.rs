@@ -156,6 +156,9 @@ pub struct RobotEndpoints {
     secondary_imu: DataWriter<ImuState, UnitreeCdr<ImuState>>,
     wireless_controller: DataWriter<WirelessController, UnitreeCdr<WirelessController>>,
     low_command: DataReader<LowCmd, UnitreeCdr<LowCmd>>,
+    /// `rt/lowstate` as a deployment reads it: a writer there other than ours is another
+    /// robot (a second bridge) on the domain, whose states the deployment may be reading.
+    state_watch: DataReader<LowState, UnitreeCdr<LowState>>,
     motion_switcher: super::motion_switcher::MotionSwitcher,
     /// Commands that arrived and could not be decoded.
     undecodable: u64,
@@ -205,12 +208,20 @@ impl RobotEndpoints {
         let subscriber = participant
             .create_subscriber(&reader_qos)
             .map_err(create("subscriber"))?;
+        let low_state_topic = topic(LOW_STATE_TOPIC, LowState::TYPE_NAME, &writer_qos)?;
         let low_state = publisher
-            .create_datawriter_no_key::<LowState, UnitreeCdr<LowState>>(
-                &topic(LOW_STATE_TOPIC, LowState::TYPE_NAME, &writer_qos)?,
-                None,
-            )
+            .create_datawriter_no_key::<LowState, UnitreeCdr<LowState>>(&low_state_topic, None)
             .map_err(create("rt/lowstate writer"))?;
+        let watch_qos = QosPolicyBuilder::new()
+            .reliability(Reliability::BestEffort)
+            .history(History::KeepLast { depth: 1 })
+            .build();
+        let state_watch = subscriber
+            .create_datareader_no_key::<LowState, UnitreeCdr<LowState>>(
+                &low_state_topic,
+                Some(watch_qos),
+            )
+            .map_err(create("rt/lowstate watcher"))?;
         let secondary_imu = publisher
             .create_datawriter_no_key::<ImuState, UnitreeCdr<ImuState>>(
                 &topic(SECONDARY_IMU_TOPIC, ImuState::TYPE_NAME, &writer_qos)?,
@@ -245,6 +256,7 @@ impl RobotEndpoints {
             secondary_imu,
             wireless_controller,
             low_command,
+            state_watch,
             motion_switcher,
             undecodable: 0,
             _participant: participant,
@@ -294,6 +306,21 @@ impl RobotEndpoints {
                 Err(e) => return Err(DdsError::Read(e.to_string())),
             }
         }
+    }
+
+    /// The writers of `rt/lowstate` other than this robot's whose states arrived since
+    /// the last call: other robots (bridges) on the domain.
+    pub fn other_robots(&mut self) -> Vec<String> {
+        use rustdds::RTPSEntity;
+        let own = self.low_state.guid();
+        let mut others = Vec::new();
+        while let Ok(Some(sample)) = self.state_watch.take_next_sample() {
+            let writer = sample.sample_info().writer_guid();
+            if writer.prefix != own.prefix {
+                others.push(format!("{writer:?}"));
+            }
+        }
+        others
     }
 
     /// Answers the robot's services' requests (`motion_switcher`) that arrived.
