@@ -902,6 +902,19 @@ fn no_command_writes_into_a_run_a_dataset_or_another_commands_output() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::create_dir(tmp.path().join("mine")).unwrap();
     std::fs::write(tmp.path().join("mine/report.html"), "x").unwrap();
+    let leaderboard_into = |out| {
+        vec![
+            "leaderboard",
+            "--policy",
+            "hold",
+            "--dataset",
+            d,
+            "--engines",
+            "rapier",
+            "--out",
+            out,
+        ]
+    };
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (vec!["report", "run", "--out", "run/x.html"], "run/x.html"),
         (
@@ -940,34 +953,8 @@ fn no_command_writes_into_a_run_a_dataset_or_another_commands_output() {
             vec!["data", "synth", "--per-task", "1", "--out", "run"],
             "holds a run",
         ),
-        (
-            vec![
-                "leaderboard",
-                "--policy",
-                "hold",
-                "--dataset",
-                d,
-                "--engines",
-                "rapier",
-                "--out",
-                "mine",
-            ],
-            "report.html no leaderboard wrote",
-        ),
-        (
-            vec![
-                "leaderboard",
-                "--policy",
-                "hold",
-                "--dataset",
-                d,
-                "--engines",
-                "rapier",
-                "--out",
-                "run",
-            ],
-            "it holds a run",
-        ),
+        (leaderboard_into("mine"), "report.html no leaderboard wrote"),
+        (leaderboard_into("run"), "it holds a run"),
     ];
     let before = std::fs::read(tmp.path().join("run/summary.json")).unwrap();
     for (args, wants) in cases {

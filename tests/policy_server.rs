@@ -92,6 +92,16 @@ fn over_ipc(session: &str, dir: &Path, client: impl FnOnce() -> Child) -> PathBu
     out
 }
 
+/// A run serving session `t-NAME-PID` with `extra` flags, in a fresh directory: the
+/// directory (kept while it lives), the session, the run directory and the `eval`.
+fn serving(name: &str, extra: &[&str]) -> (tempfile::TempDir, String, PathBuf, Child) {
+    let dir = tempfile::tempdir().unwrap();
+    let s = session(name);
+    let out = dir.path().join(&s);
+    let run = eval_cmd(&format!("ipc:{s}"), &out, extra).spawn().unwrap();
+    (dir, s, out, run)
+}
+
 #[path = "../ipc/tests/support/cpp_examples.rs"]
 mod cpp_examples;
 mod prereq;
@@ -270,12 +280,8 @@ fn a_late_policy_misses_its_deadline_and_the_late_reply_is_counted() {
 /// own client once quit with "this process never saw it start".
 #[test]
 fn a_policy_slower_than_its_budget_on_every_step_is_scored_not_failed() {
-    let dir = tempfile::tempdir().unwrap();
-    let s = session("slow");
-    let out = dir.path().join(&s);
-    let run = eval_cmd(
-        &format!("ipc:{s}"),
-        &out,
+    let (_dir, s, out, run) = serving(
+        "slow",
         &[
             "--budget",
             "5ms",
@@ -284,9 +290,7 @@ fn a_policy_slower_than_its_budget_on_every_step_is_scored_not_failed() {
             "--latency-mode",
             "measured",
         ],
-    )
-    .spawn()
-    .unwrap();
+    );
     let client = rust_client(&s, "replay", &["--delay-ms", "12", "--delay-at-step", "0"]);
     finished(run, "eval with a budget the policy never meets");
     finished(client, "slow policy");
@@ -433,10 +437,7 @@ fn serve_evaluates_the_policy_that_connects() {
 /// says which attempt it is of.
 #[test]
 fn a_resumed_run_reports_the_faults_of_every_episode() {
-    let dir = tempfile::tempdir().unwrap();
-    let s = session("resume-io");
-    let out = dir.path().join(&s);
-    let run = eval_cmd(&format!("ipc:{s}"), &out, &[]).spawn().unwrap();
+    let (_dir, s, out, run) = serving("resume-io", &[]);
     // Unusable actions at step 30, then dead at step 400: episodes before stay kept.
     let client = rust_client(
         &s,
@@ -492,12 +493,7 @@ fn a_resumed_run_reports_the_faults_of_every_episode() {
 /// word. The wait is reported after 10 s (and the run goes on when the answer comes).
 #[test]
 fn a_policy_that_keeps_lock_step_waiting_is_reported() {
-    let dir = tempfile::tempdir().unwrap();
-    let s = session("stall");
-    let out = dir.path().join(&s);
-    let run = eval_cmd(&format!("ipc:{s}"), &out, &["--tasks", "push_chair"])
-        .spawn()
-        .unwrap();
+    let (_dir, s, _out, run) = serving("stall", &["--tasks", "push_chair"]);
     let client = rust_client(&s, "hold", &["--delay-ms", "11500", "--delay-at-step", "5"]);
     let run = finished(run, "eval with a stalling policy");
     finished(client, "stalling policy");
@@ -513,10 +509,7 @@ fn a_policy_that_keeps_lock_step_waiting_is_reported() {
 /// the winner serves the session.
 #[test]
 fn the_loser_of_a_race_for_a_session_is_refused_as_busy_at_once() {
-    let dir = tempfile::tempdir().unwrap();
-    let s = session("race");
-    let out = dir.path().join(&s);
-    let run = eval_cmd(&format!("ipc:{s}"), &out, &[]).spawn().unwrap();
+    let (_dir, s, _out, run) = serving("race", &[]);
     let started = std::time::Instant::now();
     let a = rust_client(&s, "hold", &[]);
     let b = rust_client(&s, "hold", &[]);
@@ -630,12 +623,7 @@ fn a_run_told_to_wait_goes_on_with_a_policy_that_reconnects() {
 /// ever moved. Now it is told to leave, and the run goes on with the next policy.
 #[test]
 fn a_policy_dropped_for_a_broken_answer_is_told_to_leave_and_the_run_waits_for_another() {
-    let dir = tempfile::tempdir().unwrap();
-    let s = session("broken");
-    let out = dir.path().join(&s);
-    let run = eval_cmd(&format!("ipc:{s}"), &out, &["--on-policy-failure", "wait"])
-        .spawn()
-        .unwrap();
+    let (_dir, s, out, run) = serving("broken", &["--on-policy-failure", "wait"]);
     let broken = rust_client(&s, "replay", &["--bad-header-at-step", "40"]);
     let broken = wait_at_most(
         broken,

@@ -37,21 +37,28 @@ fn can_switch_users(test: &str) -> bool {
     true
 }
 
-fn as_user(uid: u32, args: &[&str]) -> Command {
+/// `program` run as `uid` (its own group, no supplementary groups).
+fn as_uid(uid: u32, program: &str) -> Command {
     let mut c = Command::new("setpriv");
     c.args([
         &format!("--reuid={uid}"),
         &format!("--regid={uid}"),
         "--clear-groups",
         "--",
-        BIN,
-    ])
-    .args(args)
-    .env_remove("THORARENA_IPC_ROOT")
-    .env_remove("XDG_CACHE_HOME")
-    .env("HOME", home_of(uid))
-    .stdout(Stdio::null())
-    .stderr(Stdio::piped());
+        program,
+    ]);
+    c
+}
+
+/// `thorarena ARGS` as `uid`, with a home of its own.
+fn as_user(uid: u32, args: &[&str]) -> Command {
+    let mut c = as_uid(uid, BIN);
+    c.args(args)
+        .env_remove("THORARENA_IPC_ROOT")
+        .env_remove("XDG_CACHE_HOME")
+        .env("HOME", home_of(uid))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped());
     c
 }
 
@@ -159,13 +166,8 @@ fn two_users_each_run_sessions_and_neither_can_stop_the_others() {
         "alice's session left no management segment"
     );
     for file in &alice_files {
-        let wrote = Command::new("setpriv")
+        let wrote = as_uid(mallory, "dd")
             .args([
-                &format!("--reuid={mallory}"),
-                &format!("--regid={mallory}"),
-                "--clear-groups",
-                "--",
-                "dd",
                 "if=/dev/urandom",
                 &format!("of={}", file.display()),
                 "bs=16",
@@ -178,15 +180,8 @@ fn two_users_each_run_sessions_and_neither_can_stop_the_others() {
         assert!(!wrote.success(), "mallory wrote into {}", file.display());
     }
     let alice_root = format!("/tmp/thorarena-iceoryx2-{alice}");
-    let listed = Command::new("setpriv")
-        .args([
-            &format!("--reuid={mallory}"),
-            &format!("--regid={mallory}"),
-            "--clear-groups",
-            "--",
-            "ls",
-            &alice_root,
-        ])
+    let listed = as_uid(mallory, "ls")
+        .arg(&alice_root)
         .stderr(Stdio::null())
         .status()
         .unwrap();
@@ -224,17 +219,8 @@ fn a_planted_root_or_shm_file_is_refused_naming_it() {
     // The planter makes the victim's root before the victim's first session.
     let root = format!("/tmp/thorarena-iceoryx2-{victim}");
     let _ = std::fs::remove_dir_all(&root);
-    let made = Command::new("setpriv")
-        .args([
-            &format!("--reuid={planter}"),
-            &format!("--regid={planter}"),
-            "--clear-groups",
-            "--",
-            "mkdir",
-            "-m",
-            "777",
-            &root,
-        ])
+    let made = as_uid(planter, "mkdir")
+        .args(["-m", "777", &root])
         .status()
         .unwrap();
     assert!(made.success());
@@ -248,17 +234,7 @@ fn a_planted_root_or_shm_file_is_refused_naming_it() {
     std::fs::remove_dir_all(&root).unwrap();
     // A file with the victim's prefix in /dev/shm, planted by another user.
     let planted = format!("/dev/shm/iox2_ta{victim}_node.planted");
-    let made = Command::new("setpriv")
-        .args([
-            &format!("--reuid={planter}"),
-            &format!("--regid={planter}"),
-            "--clear-groups",
-            "--",
-            "touch",
-            &planted,
-        ])
-        .status()
-        .unwrap();
+    let made = as_uid(planter, "touch").arg(&planted).status().unwrap();
     assert!(made.success());
     let (eval, _) = session(victim, &dir.path().join("v2"), "v2");
     let err = String::from_utf8_lossy(&eval.stderr);

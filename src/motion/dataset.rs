@@ -116,17 +116,8 @@ impl Dataset {
                 crate::names::check_name(field, value)
                     .map_err(|n| bad(&path, format!("sequences[{i}].{field}"), n.to_string()))?;
             }
-            if !crate::motion::FPS_RANGE.contains(&e.fps) {
-                return Err(bad(
-                    &path,
-                    format!("sequences[{i}].fps"),
-                    format!(
-                        "must be a frame rate of {} to {} Hz, got {}",
-                        crate::motion::FPS_RANGE.start(),
-                        crate::motion::FPS_RANGE.end(),
-                        e.fps
-                    ),
-                ));
+            if let Some(problem) = crate::motion::fps_problem(e.fps) {
+                return Err(bad(&path, format!("sequences[{i}].fps"), problem));
             }
             if !seen.insert((e.task.as_str(), e.sequence_id.as_str())) {
                 return Err(bad(

@@ -18,6 +18,17 @@ pub mod synth;
 /// as a motion of 6e301 s, which no evaluation finishes).
 pub const FPS_RANGE: std::ops::RangeInclusive<f64> = 1.0..=1000.0;
 
+/// Why `fps` is no frame rate of [`FPS_RANGE`], or `None` when it is one.
+pub fn fps_problem(fps: f64) -> Option<String> {
+    (!FPS_RANGE.contains(&fps)).then(|| {
+        format!(
+            "must be a frame rate of {} to {} Hz, got {fps}",
+            FPS_RANGE.start(),
+            FPS_RANGE.end()
+        )
+    })
+}
+
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use describe::{describe, joint_limit_margin, plural, total_hand_force};
 pub use error::DataError;

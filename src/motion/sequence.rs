@@ -59,17 +59,8 @@ impl Sequence {
     /// Checks every invariant of the format; `file` names the source in errors.
     pub fn validate(&self, file: &Path) -> Result<(), DataError> {
         let t = self.n_frames();
-        if !crate::motion::FPS_RANGE.contains(&self.fps) {
-            return Err(bad(
-                file,
-                "fps",
-                format!(
-                    "must be a frame rate of {} to {} Hz, got {}",
-                    crate::motion::FPS_RANGE.start(),
-                    crate::motion::FPS_RANGE.end(),
-                    self.fps
-                ),
-            ));
+        if let Some(problem) = crate::motion::fps_problem(self.fps) {
+            return Err(bad(file, "fps", problem));
         }
         if t < 2 {
             return Err(bad(

@@ -133,17 +133,8 @@ fn check_frame_counts(raw: &RawMotion, source: &Path) -> Result<(), ImportError>
             ),
         ));
     }
-    if !crate::motion::FPS_RANGE.contains(&raw.fps) {
-        return Err(bad_field(
-            source,
-            "fps",
-            format!(
-                "must be a frame rate of {} to {} Hz, got {}",
-                crate::motion::FPS_RANGE.start(),
-                crate::motion::FPS_RANGE.end(),
-                raw.fps
-            ),
-        ));
+    if let Some(problem) = crate::motion::fps_problem(raw.fps) {
+        return Err(bad_field(source, "fps", problem));
     }
     if let Some(v) = &raw.joint_vel {
         if v.len() != t {
