@@ -54,6 +54,9 @@ pub enum Format {
     BeyondmimicNpz,
     /// Unitree's retargeted LAFAN1 CSV (no header, 36 columns, xyzw).
     LafanCsv,
+    /// SoftMimic's clip CSV (LAFAN1's 36 columns and the left and right foot-contact flags;
+    /// 30 fps at speed 1).
+    SoftmimicCsv,
     /// The reference motion embedded in a BeyondMimic-style tracking network (holosoma's
     /// exports), read by evaluating its motion outputs at every time step; no forces.
     OnnxMotion,
@@ -163,6 +166,7 @@ fn source_format(args: &ImportArgs, robot: &RobotModel) -> anyhow::Result<Source
             joint_names: args.joint_names.clone(),
         },
         Format::LafanCsv => SourceFormat::LafanCsv { fps: args.fps },
+        Format::SoftmimicCsv => SourceFormat::SoftMimicCsv { fps: args.fps },
         Format::OnnxMotion => {
             let profile = thorarena::registry::profile(&args.profile, robot)?;
             SourceFormat::OnnxMotion {

@@ -29,6 +29,11 @@ pub enum SourceFormat {
         /// Its frame rate, Hz.
         fps: f64,
     },
+    /// A SoftMimic clip CSV (LAFAN's columns and two foot-contact flags) at `fps`.
+    SoftMimicCsv {
+        /// Its frame rate, Hz.
+        fps: f64,
+    },
     /// The reference motion embedded in a BeyondMimic-style ONNX export.
     OnnxMotion {
         /// The anchor body the export's motion is expressed in.
@@ -47,6 +52,7 @@ impl SourceFormat {
                 npz::read_beyondmimic_npz(path, joint_names.as_deref())
             }
             SourceFormat::LafanCsv { fps } => lafan_csv::read_lafan_csv(path, *fps),
+            SourceFormat::SoftMimicCsv { fps } => lafan_csv::read_softmimic_csv(path, *fps),
             SourceFormat::OnnxMotion {
                 anchor_body,
                 control_dt_s,
