@@ -23,7 +23,7 @@ pub enum PolicyCommand {
 pub struct Args {
     /// The policy, as `eval --policy` takes it (`thorarena policies`): a built-in or a
     /// network run in process (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`,
-    /// `wbc-mjlab:FILE.onnx`).
+    /// `wbc-mjlab:FILE.onnx`, `falcon:FILE.onnx`).
     pub policy: String,
     /// Dynamics profile [default: the one the policy family was trained with].
     #[arg(long)]

@@ -5,6 +5,7 @@
 mod batch_plans;
 pub mod beyondmimic;
 mod builtin;
+pub mod falcon;
 pub mod inputs;
 mod remote;
 mod stall_watch;
@@ -17,6 +18,7 @@ pub use crate::network_kernels::{
 pub use batch_plans::BatchPlans;
 pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
+pub use falcon::FalconPolicy;
 pub use remote::{RemoteConfig, RemoteError, RemotePolicy, TransportStats};
 pub use twist2::Twist2Policy;
 

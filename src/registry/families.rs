@@ -61,7 +61,7 @@ pub const NETWORK_SLOTS_PER_WORKER: usize = 4;
 pub const BEYONDMIMIC_SLOTS_PER_WORKER: usize = crate::policy::beyondmimic::INFERENCE_BATCH;
 
 /// Every policy family, built-ins first.
-pub const POLICY_FAMILIES: [PolicyFamily; 7] = [
+pub const POLICY_FAMILIES: [PolicyFamily; 8] = [
     PolicyFamily {
         name: "hold",
         spelling: "hold",
@@ -117,6 +117,15 @@ pub const POLICY_FAMILIES: [PolicyFamily; 7] = [
         runs: Runs::InProcess,
     },
     PolicyFamily {
+        name: "falcon",
+        spelling: "falcon:FILE.onnx",
+        what: "FALCON's force-adaptive loco-manipulation policy (RSS 2025), a command follower: velocity, height, stand and waist commands derived from the reference, arms residual on it",
+        supplies: "the network file (g1_29dof_falcon.onnx of LeCAR-Lab/FALCON)",
+        profile: "falcon",
+        slots_per_worker: NETWORK_SLOTS_PER_WORKER,
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
         name: "ipc",
         spelling: "ipc:SESSION",
         what: "a policy process in any language (Rust, C, C++, Python clients) joining the session",
@@ -162,6 +171,7 @@ mod tests {
             ("beyondmimic:dir/b.onnx", Some("beyondmimic")),
             ("wbc-mjlab:w.onnx", Some("wbc-mjlab")),
             ("ipc:demo", Some("ipc")),
+            ("falcon:f.onnx", Some("falcon")),
             ("twist2", None),
             ("holdx", None),
             ("beyondmimicx:f.onnx", None),

@@ -46,6 +46,9 @@ pub enum RegistryError {
     /// A TWIST2 network that cannot be used.
     #[error(transparent)]
     Twist2(#[from] crate::policy::twist2::Twist2Error),
+    /// A FALCON network that cannot be used.
+    #[error(transparent)]
+    Falcon(#[from] crate::policy::falcon::FalconError),
     /// A BeyondMimic-style network that cannot be used.
     #[error(transparent)]
     BeyondMimic(#[from] crate::policy::beyondmimic::BeyondMimicError),
@@ -132,6 +135,12 @@ pub fn profile_fits(policy: &str, profile: &Profile) -> Result<(), String> {
     {
         return Err(format!(
             "BeyondMimic-style networks run on `beyondmimic` or a profile with a [beyondmimic] section (holosoma-wbt); `{}` is neither",
+            profile.name
+        ));
+    }
+    if policy.starts_with("falcon:") && profile.name != "falcon" {
+        return Err(format!(
+            "FALCON's network runs on the `falcon` profile (its gains, 0.25 action scale, default pose and 50 Hz); `{}` contradicts it",
             profile.name
         ));
     }

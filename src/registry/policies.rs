@@ -5,7 +5,8 @@
 
 use super::{did_you_mean, RegistryError};
 use crate::policy::{
-    BalanceGains, BalancePolicy, BeyondMimicPolicy, HoldPolicy, Policy, ReplayPolicy, Twist2Policy,
+    BalanceGains, BalancePolicy, BeyondMimicPolicy, FalconPolicy, HoldPolicy, Policy, ReplayPolicy,
+    Twist2Policy,
 };
 use crate::profile::Profile;
 use crate::robot::RobotModel;
@@ -54,6 +55,8 @@ pub fn policy<'a>(
                     BeyondMimicPolicy::load(Path::new(path), Arc::new(robot.clone()), profile)?
                         .named("wbc-mjlab"),
                 )
+            } else if let Some(path) = other.strip_prefix("falcon:") {
+                Box::new(FalconPolicy::load(Path::new(path), profile)?)
             } else if let Some(session) = ipc_session(other) {
                 return Ok(PolicyChoice::Session(session));
             } else {
@@ -91,6 +94,7 @@ pub fn unknown_policy(spec: &str) -> String {
         "twist2" => Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
         "beyondmimic" => Some("policy.onnx, an mjlab or holosoma G1 export"),
         "wbc-mjlab" => Some("wbc_g1_policy.onnx, wbc-mjlab's general G1 tracker"),
+        "falcon" => Some("g1_29dof_falcon.onnx, FALCON's released G1 network"),
         _ => None,
     };
     if let Some(example) = example {
@@ -110,5 +114,5 @@ pub fn unknown_policy(spec: &str) -> String {
         })
         .collect();
     let hint = did_you_mean(spec, names.iter().map(String::as_str));
-    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; wbc-mjlab:FILE.onnx; or ipc:SESSION for a policy process")
+    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; wbc-mjlab:FILE.onnx; falcon:FILE.onnx; or ipc:SESSION for a policy process")
 }

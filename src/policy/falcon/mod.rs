@@ -1,0 +1,260 @@
+//! FALCON (Zhang et al., "FALCON: Learning Force-Adaptive Humanoid Loco-Manipulation",
+//! RSS 2025; github.com/LeCAR-Lab/FALCON, MIT), its released G1 29-DoF network in process:
+//! `--policy falcon:g1_29dof_falcon.onnx` under the `falcon` profile.
+//!
+//! FALCON was trained with a force curriculum on both hands, and it follows **commands**,
+//! not a reference's joints: a velocity, a yaw rate, a base height, a stand flag, three
+//! waist angles and the fourteen arm joints. [`commands`] derives them from the reference
+//! at each step; [`observation`] builds the 575 inputs as the deploy does. The network's
+//! output is 15 lower-body actions (legs and waist, relative to the default pose) and 14
+//! arm actions, a residual on the commanded arm joints (`residual_upper_body_action`); the
+//! profile maps every action as default + 0.25 · a, so the adapter adds the arms'
+//! reference offset to the raw action it hands on, and keeps the network's own output for
+//! the `actions` term.
+
+pub mod commands;
+pub mod observation;
+
+use super::batch_plans::BatchPlans;
+use super::{ActOutcome, Observation, Policy, Wiring};
+use crate::profile::Profile;
+use commands::UPPER;
+use observation::{History, N_JOINTS, OBS_LEN};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use tract_onnx::prelude::*;
+
+/// FALCON's default joint angles, canonical order (`DEFAULT_DOF_ANGLES`,
+/// `sim2real/config/robot/g1_29dof_falcon.yaml:153-183`).
+pub const DEFAULT_POSE: [f64; N_JOINTS] = {
+    let mut q = [0.0; N_JOINTS];
+    q[0] = -0.1;
+    q[3] = 0.3;
+    q[4] = -0.2;
+    q[6] = -0.1;
+    q[9] = 0.3;
+    q[10] = -0.2;
+    q
+};
+/// Action scale (`loco_manip.py:21`, `action_scale: 0.25`).
+pub const ACTION_SCALE: f64 = 0.25;
+/// The network's output is clipped to ±this before use and in the `actions` term
+/// (`loco_manip.py:86`).
+pub const ACTION_CLIP: f64 = 100.0;
+/// Control period, s (`rl_rate` 50 Hz, `loco_manip.py:21`).
+pub const CONTROL_DT_S: f64 = 0.02;
+
+/// Why the policy could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum FalconError {
+    /// tract could not load or prepare the network.
+    #[error("loading the FALCON network {path}: {message} (FALCON's network takes [1, {OBS_LEN}] and gives [1, {N_JOINTS}])")]
+    Load {
+        /// The ONNX file.
+        path: PathBuf,
+        /// tract's message.
+        message: String,
+    },
+    /// The robot is not the 29-joint G1.
+    #[error("FALCON needs the 29-joint G1 (got {0} joints)")]
+    Joints(usize),
+}
+
+/// One environment's state between steps.
+#[derive(Debug, Clone, Default)]
+struct Slot {
+    history: History,
+    /// The network's last output, clipped (the `actions` term).
+    last_raw: Vec<f64>,
+    /// The stand flag of the last step (`None` before an episode's first).
+    walking: Option<bool>,
+}
+
+/// FALCON in process.
+pub struct FalconPolicy {
+    plans: BatchPlans,
+    plan: Arc<TypedRunnableModel>,
+    /// The profile's action offset and scale, to express the arms' residual as a raw action.
+    profile_offset: Vec<f64>,
+    profile_scale: Vec<f64>,
+    /// What the profile contradicts in FALCON's own wiring.
+    disagreements: Vec<String>,
+    slots: Vec<Slot>,
+    input: Vec<f32>,
+    last_inputs: Vec<Vec<f32>>,
+}
+
+impl FalconPolicy {
+    /// Loads the network (input `[1, 575]` float32, output `[1, 29]`) to run under
+    /// `profile` (FALCON's is `falcon`; another is reported by [`Policy::wiring`]).
+    pub fn load(path: &Path, profile: &Profile) -> Result<Self, FalconError> {
+        if profile.action_offset_rad.len() != N_JOINTS {
+            return Err(FalconError::Joints(profile.action_offset_rad.len()));
+        }
+        let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
+            let plans = BatchPlans::new(super::load_onnx(path)?, OBS_LEN)?;
+            let plan = plans.plan(1)?;
+            Ok((plans, plan))
+        };
+        let (plans, plan) = load().map_err(|e| FalconError::Load {
+            path: path.to_path_buf(),
+            message: format!("{e:#}"),
+        })?;
+        Ok(Self {
+            plans,
+            plan,
+            profile_offset: profile.action_offset_rad.clone(),
+            profile_scale: profile.action_scale.clone(),
+            disagreements: disagreements(profile),
+            slots: Vec::new(),
+            input: vec![0.0; OBS_LEN],
+            last_inputs: Vec::new(),
+        })
+    }
+
+    /// The network's inputs of the last `act`, one per observation (for tests).
+    pub fn last_inputs(&self) -> &[Vec<f32>] {
+        &self.last_inputs
+    }
+
+    /// Runs the network on one observation.
+    pub fn infer(&self, input: &[f32]) -> TractResult<Vec<f32>> {
+        self.plans.run_on(&self.plan, input, 1)
+    }
+
+    /// The raw action (under the profile's mapping) that puts arm joint `c` at `target`.
+    fn raw_for_target(&self, c: usize, target: f64) -> f64 {
+        (target - self.profile_offset[c]) / self.profile_scale[c]
+    }
+}
+
+/// Where `profile` contradicts FALCON's deploy: its rate, action scale and default pose.
+fn disagreements(profile: &Profile) -> Vec<String> {
+    let mut out = Vec::new();
+    if (profile.control_dt_s - CONTROL_DT_S).abs() > 1e-9 {
+        out.push(format!(
+            "FALCON runs at 50 Hz; the profile `{}` controls every {} s",
+            profile.name, profile.control_dt_s
+        ));
+    }
+    if let Some(j) = (0..N_JOINTS).find(|&j| (profile.action_scale[j] - ACTION_SCALE).abs() > 1e-9)
+    {
+        out.push(format!(
+            "FALCON's action scale is {ACTION_SCALE}; the profile `{}` scales joint {j} by {}",
+            profile.name, profile.action_scale[j]
+        ));
+    }
+    if let Some(j) =
+        (0..N_JOINTS).find(|&j| (profile.action_offset_rad[j] - DEFAULT_POSE[j]).abs() > 1e-9)
+    {
+        out.push(format!(
+            "FALCON's default pose has joint {j} at {} rad; the profile `{}` offsets it to {}",
+            DEFAULT_POSE[j], profile.name, profile.action_offset_rad[j]
+        ));
+    }
+    out
+}
+
+impl Policy for FalconPolicy {
+    fn name(&self) -> &str {
+        "falcon"
+    }
+
+    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
+        Some(super::network_kernels())
+    }
+
+    fn reference_offsets_s(&self) -> Vec<f64> {
+        commands::reference_offsets_s()
+    }
+
+    fn sanity_exempt(&self) -> Option<&'static str> {
+        None
+    }
+
+    fn reset(&mut self, env: usize) {
+        if let Some(slot) = self.slots.get_mut(env) {
+            *slot = Slot::default();
+        }
+    }
+
+    fn wiring(&self) -> Wiring {
+        Wiring {
+            facts: vec![
+                format!("{OBS_LEN} inputs: FALCON's 5 frames of 115 (terms in alphabetical order), oldest first"),
+                "a command-following policy: velocity, yaw rate, base height, stand flag and waist commands derived from the reference, arm joints one step ahead".into(),
+                format!("{N_JOINTS} actions: legs and waist relative to the default pose, arms a residual on the commanded arm joints, scale {ACTION_SCALE}"),
+            ],
+            disagreements: self.disagreements.clone(),
+        }
+    }
+
+    fn zero_action(&self, obs: &Observation, out: &mut [f64]) {
+        out.fill(0.0);
+        for c in UPPER {
+            out[c] = self.raw_for_target(c, obs.reference[0].joint_pos[c]);
+        }
+    }
+
+    fn worker_copies(&self, n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
+        Some(
+            (0..n)
+                .map(|_| {
+                    Box::new(Self {
+                        plans: self.plans.clone(),
+                        plan: self.plan.clone(),
+                        profile_offset: self.profile_offset.clone(),
+                        profile_scale: self.profile_scale.clone(),
+                        disagreements: self.disagreements.clone(),
+                        slots: Vec::new(),
+                        input: vec![0.0; OBS_LEN],
+                        last_inputs: Vec::new(),
+                    }) as Box<dyn Policy + Send>
+                })
+                .collect(),
+        )
+    }
+
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
+        self.last_inputs.clear();
+        for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+            if self.slots.len() <= obs.env {
+                self.slots.resize_with(obs.env + 1, Slot::default);
+            }
+            let starts = obs.step == 0;
+            let slot = &mut self.slots[obs.env];
+            if starts || slot.last_raw.len() != N_JOINTS {
+                *slot = Slot {
+                    last_raw: vec![0.0; N_JOINTS],
+                    ..Slot::default()
+                };
+            }
+            let cmd = commands::commands(&obs.root, &obs.reference, slot.walking);
+            slot.walking = Some(cmd.stand > 0.5);
+            let frame = observation::frame(obs, &DEFAULT_POSE, &slot.last_raw, &cmd);
+            slot.history.push_into(frame, starts, &mut self.input);
+            self.last_inputs.push(self.input.clone());
+            match self.plans.run_on(&self.plan, &self.input, 1) {
+                Ok(out) => {
+                    let slot = &mut self.slots[obs.env];
+                    for (last, o) in slot.last_raw.iter_mut().zip(&out) {
+                        *last = f64::from(*o).clamp(-ACTION_CLIP, ACTION_CLIP);
+                    }
+                    action.copy_from_slice(&slot.last_raw);
+                    for (k, c) in UPPER.enumerate() {
+                        // target = reference arm joint + 0.25 · a, as default + 0.25 · a'.
+                        let target = cmd.upper[k] + ACTION_SCALE * action[c];
+                        action[c] = self.raw_for_target(c, target);
+                    }
+                }
+                // A network that fails at run time answers NaN: the runner's miss rule
+                // keeps it away from the physics and counts it.
+                Err(e) => {
+                    log::warn!("falcon: inference failed: {e:#}");
+                    action.fill(f64::NAN);
+                }
+            }
+        }
+        ActOutcome::Acted
+    }
+}

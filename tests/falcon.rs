@@ -1,0 +1,165 @@
+//! FALCON (RSS 2025, github.com/LeCAR-Lab/FALCON, MIT) in process: its observation at two
+//! hand-made steps against the values `tests/fixtures/falcon_golden/golden.py` computes
+//! from the deploy code's formulas (numpy, independently of this crate), the released
+//! network's actions on that observation against the same script's numpy forward pass,
+//! and `policy check` on the bundled walk. Skipped, saying so, when
+//! `../shared/reference` is absent; never in CI.
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use std::path::Path;
+use std::process::Command;
+use thorarena::physics::RootState;
+use thorarena::policy::falcon::commands::Commands;
+use thorarena::policy::falcon::observation::{frame, History, OBS_LEN};
+use thorarena::policy::falcon::{FalconPolicy, DEFAULT_POSE};
+use thorarena::policy::Observation;
+
+mod common;
+mod prereq;
+
+const FIXTURES: &str = "tests/fixtures/falcon_golden";
+
+fn numbers(file: &str) -> Vec<f64> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(FIXTURES)
+        .join(file);
+    std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect()
+}
+
+/// The robot of one step: upright or pitched by `pitch` rad, its root-frame angular
+/// velocity `w_b`, joints `q`, `qd`.
+fn observation(step: usize, pitch: f64, w_b: [f64; 3], q: Vec<f64>, qd: Vec<f64>) -> Observation {
+    let rotation = UnitQuaternion::from_euler_angles(0.0, pitch, 0.0);
+    let mut root = RootState::at_rest(Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, 0.78),
+        rotation,
+    ));
+    root.ang_vel_w = rotation * Vector3::from(w_b);
+    Observation {
+        env: 0,
+        episode_id: 0,
+        step,
+        time_s: step as f64 * 0.02,
+        root,
+        q,
+        qd,
+        last_action: vec![0.0; 29],
+        reference: Vec::new(),
+    }
+}
+
+/// The golden script's two steps (its docstring states them), built with the crate's frame
+/// and history.
+fn golden_input() -> Vec<f32> {
+    let commands = |upper0: f64| {
+        let mut upper = [0.0; 14];
+        upper[0] = upper0;
+        Commands {
+            lin_vel: [0.5, 0.0],
+            ang_vel: 0.2,
+            stand: 1.0,
+            base_height_m: 0.75,
+            waist: [0.0; 3],
+            upper,
+        }
+    };
+    let mut history = History::default();
+    let mut input = vec![0.0f32; OBS_LEN];
+
+    let mut qd = vec![0.0; 29];
+    qd[3] = 1.0;
+    let a1: Vec<f64> = (0..29)
+        .map(|i| 0.01 * (i + 1) as f64 * if i % 2 == 0 { 1.0 } else { -1.0 })
+        .collect();
+    let step1 = observation(0, 0.0, [0.1, -0.2, 0.3], DEFAULT_POSE.to_vec(), qd);
+    history.push_into(
+        frame(&step1, &DEFAULT_POSE, &a1, &commands(0.0)),
+        true,
+        &mut input,
+    );
+
+    let mut q = DEFAULT_POSE.to_vec();
+    q[0] = -0.05;
+    q[12] = 0.02;
+    q[15] = 0.1;
+    let mut qd = vec![0.0; 29];
+    qd[3] = 0.5;
+    qd[6] = -0.3;
+    let a2: Vec<f64> = (0..29).map(|i| -0.02 * (i as f64 - 14.0)).collect();
+    let step2 = observation(1, 0.1, [0.05, -0.1, 0.25], q, qd);
+    history.push_into(
+        frame(&step2, &DEFAULT_POSE, &a2, &commands(0.2)),
+        false,
+        &mut input,
+    );
+    input
+}
+
+#[test]
+fn the_observation_matches_the_deploy_formulas_at_two_hand_made_steps() {
+    let golden = numbers("observation_step2.txt");
+    assert_eq!(golden.len(), OBS_LEN);
+    let ours = golden_input();
+    // The three oldest frames are the zeros the deploy starts from.
+    assert!(golden[..345].iter().all(|v| *v == 0.0));
+    for (i, (o, g)) in ours.iter().zip(&golden).enumerate() {
+        assert!(
+            (f64::from(*o) - g).abs() < 1e-7,
+            "input {i} (frame {}, offset {}): ours {o}, deploy formulas {g}",
+            i / 115,
+            i % 115
+        );
+    }
+}
+
+#[test]
+fn the_released_network_gives_the_numpy_forward_pass_actions() {
+    const TEST: &str = "the_released_network_gives_the_numpy_forward_pass_actions";
+    let Some(onnx) = prereq::reference(TEST, "falcon/g1_29dof_falcon.onnx") else {
+        return;
+    };
+    let robot = common::g1();
+    let profile = thorarena::registry::profile("falcon", &robot).unwrap();
+    let policy = FalconPolicy::load(&onnx, &profile).unwrap();
+    let actions = policy.infer(&golden_input()).unwrap();
+    let golden = numbers("actions_step2.txt");
+    assert_eq!(actions.len(), golden.len());
+    for (i, (a, g)) in actions.iter().zip(&golden).enumerate() {
+        assert!(
+            (f64::from(*a) - g).abs() < 1e-5,
+            "action {i}: ours {a}, numpy {g}"
+        );
+    }
+}
+
+#[test]
+fn policy_check_passes_on_the_bundled_walk_and_the_network_does_the_work() {
+    const TEST: &str = "policy_check_passes_on_the_bundled_walk_and_the_network_does_the_work";
+    let Some(onnx) = prereq::reference(TEST, "falcon/g1_29dof_falcon.onnx") else {
+        return;
+    };
+    let out = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["policy", "check", &format!("falcon:{}", onnx.display())])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("under profile `falcon`"), "{stdout}");
+    assert!(stdout.contains("command-following"), "{stdout}");
+    for check in ["wiring", "stand", "track", "zero_action"] {
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.trim_start().starts_with(&format!("pass {check}"))),
+            "{check}: {stdout}"
+        );
+    }
+}
