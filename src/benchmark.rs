@@ -155,6 +155,11 @@ pub fn evaluate(
     let _writer = run.lock()?;
     let mut header = RunHeader::of(spec, policy.name());
     header.network_kernels = policy.network_kernels().map(|k| k.isa.clone());
+    header.policy_parameters = policy
+        .parameters()
+        .into_iter()
+        .map(|(name, value)| (name.to_string(), value))
+        .collect();
     header.sanity = Some(sanity(spec, policy)?);
     let started = run.start(&header, options.resume)?;
     let finished: HashSet<_> = started.kept.iter().map(EpisodeRecord::key).collect();

@@ -1,5 +1,9 @@
 //! SoftMimic (arXiv:2510.17792, github.com/Improbable-AI/softmimic, MIT): its published
-//! clips imported with `data import --format softmimic-csv`, and what is refused.
+//! clips imported with `data import --format softmimic-csv`, and what is refused; its
+//! 285-wide observation against `tests/fixtures/softmimic_golden/golden.py` (numpy, from the
+//! deploy code's formulas), the released networks' actions against the same script's
+//! forward pass, the stiffness command reaching the network and `run.json`, and
+//! `policy check` for all six networks on their own clips.
 //! Skipped, saying so, when `../shared/reference` is absent; never in CI.
 
 use std::path::{Path, PathBuf};
@@ -133,4 +137,340 @@ fn a_truncated_clip_is_refused_naming_its_file_and_row() {
         stderr.contains("short.csv") && stderr.contains("2 frame(s)"),
         "{stderr}"
     );
+}
+
+// ---- the adapter: golden observations, the stiffness command, policy check ----
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use thorarena::physics::RootState;
+use thorarena::policy::softmimic::observation::{
+    frame, History, Layout, Stiffness, ISAAC_FROM_CANONICAL,
+};
+use thorarena::policy::softmimic::{SoftMimicPolicy, DEFAULT_POSE, DEFAULT_STIFFNESS};
+use thorarena::policy::{Observation, Policy};
+
+const GOLDEN: &str = "tests/fixtures/softmimic_golden";
+
+fn numbers(file: &str) -> Vec<f64> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(GOLDEN)
+        .join(file);
+    std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect()
+}
+
+fn assert_close(ours: &[f32], golden: &[f64], tolerance: f64, what: &str) {
+    assert_eq!(ours.len(), golden.len(), "{what}");
+    for (i, (o, g)) in ours.iter().zip(golden).enumerate() {
+        assert!(
+            (f64::from(*o) - g).abs() < tolerance,
+            "{what} {i}: ours {o}, golden {g}"
+        );
+    }
+}
+
+/// An observation of the robot (no reference: StaticStand observes none).
+fn observation(
+    step: usize,
+    rotation: UnitQuaternion<f64>,
+    w_b: [f64; 3],
+    q: Vec<f64>,
+    qd: Vec<f64>,
+) -> Observation {
+    let mut root = RootState::at_rest(Isometry3::from_parts(
+        Translation3::new(0.0, 0.0, 0.78),
+        rotation,
+    ));
+    root.ang_vel_w = rotation * Vector3::from(w_b);
+    Observation {
+        env: 0,
+        episode_id: 0,
+        step,
+        time_s: 0.0,
+        root,
+        q,
+        qd,
+        last_action: vec![0.0; 29],
+        reference: Vec::new(),
+    }
+}
+
+/// Case A of the golden script: the default pose at rest, first step, stiffness `k`.
+fn case_a(k: f64) -> Vec<f32> {
+    let obs = observation(
+        0,
+        UnitQuaternion::identity(),
+        [0.0; 3],
+        DEFAULT_POSE.to_vec(),
+        vec![0.0; 29],
+    );
+    let s = Stiffness {
+        linear: k,
+        rotational: k / 60.0,
+    };
+    let f = frame(Layout::Stand, &obs, &DEFAULT_POSE, &[0.0; 29], [1.0; 2], s);
+    let mut out = vec![0.0; 285];
+    History::default().push_into(Layout::Stand, f, true, &[], &mut out);
+    out
+}
+
+/// Case B: three different frames (the script's `case_b_frames`), oldest first.
+fn case_b() -> Vec<f32> {
+    let mut history = History::default();
+    let mut out = vec![0.0; 285];
+    for k in 0..3 {
+        let kf = k as f64;
+        let rotation = UnitQuaternion::from_quaternion(Quaternion::new(
+            1.0,
+            0.02 * kf + 0.01,
+            -0.03,
+            0.05 * kf,
+        ));
+        let q: Vec<f64> = (0..29)
+            .map(|j| {
+                DEFAULT_POSE[j]
+                    + 0.01 * (j + 1) as f64 * (kf + 1.0) * if j % 2 == 0 { 1.0 } else { -1.0 }
+            })
+            .collect();
+        let qd: Vec<f64> = (0..29)
+            .map(|j| 0.1 * (j as f64 - 14.0) + 0.05 * kf)
+            .collect();
+        let last: Vec<f64> = (0..29)
+            .map(|i| 0.02 * (i as f64 - 14.0) + 0.1 * kf)
+            .collect();
+        let s = 60.0 * 1.25f64.powi(k);
+        let obs = observation(
+            k as usize,
+            rotation,
+            [0.1 + 0.1 * kf, -0.2, 0.3 * kf],
+            q,
+            qd,
+        );
+        let f = frame(
+            Layout::Stand,
+            &obs,
+            &DEFAULT_POSE,
+            &last,
+            [1.0; 2],
+            Stiffness {
+                linear: s,
+                rotational: s / 60.0,
+            },
+        );
+        history.push_into(Layout::Stand, f, k == 0, &[], &mut out);
+    }
+    out
+}
+
+#[test]
+fn the_285_observation_matches_the_deploy_formulas() {
+    assert_close(
+        &case_a(60.0),
+        &numbers("observation_a.txt"),
+        1e-6,
+        "case A input",
+    );
+    assert_close(
+        &case_b(),
+        &numbers("observation_b.txt"),
+        1e-6,
+        "case B input",
+    );
+}
+
+fn network(test: &str, name: &str) -> Option<std::path::PathBuf> {
+    prereq::reference(test, &format!("softmimic/onnx/{name}.onnx"))
+}
+
+fn load(path: &Path, stiffness: Stiffness) -> SoftMimicPolicy {
+    let robot = std::sync::Arc::new(common::g1());
+    let profile = thorarena::registry::profile("softmimic", &robot).unwrap();
+    SoftMimicPolicy::load(path, robot, &profile, stiffness).unwrap()
+}
+
+#[test]
+fn the_released_networks_give_the_numpy_forward_pass_actions() {
+    const TEST: &str = "the_released_networks_give_the_numpy_forward_pass_actions";
+    let (Some(soft), Some(base)) = (
+        network(TEST, "StaticStand-SoftMimic"),
+        network(TEST, "StaticStand-Baseline"),
+    ) else {
+        return;
+    };
+    let soft = load(&soft, DEFAULT_STIFFNESS);
+    assert_eq!(soft.layout(), Layout::Stand);
+    let a = soft.infer(&case_a(60.0)).unwrap();
+    assert_close(&a, &numbers("actions_a.txt"), 2e-5, "case A action");
+    let b = soft.infer(&case_b()).unwrap();
+    assert_close(&b, &numbers("actions_b.txt"), 2e-5, "case B action");
+    let baseline = load(&base, DEFAULT_STIFFNESS).infer(&case_a(60.0)).unwrap();
+    assert_close(
+        &baseline,
+        &numbers("actions_a_baseline.txt"),
+        2e-5,
+        "baseline action",
+    );
+}
+
+#[test]
+fn the_stiffness_command_reaches_the_network_and_the_record() {
+    const TEST: &str = "the_stiffness_command_reaches_the_network_and_the_record";
+    let (Some(onnx), Some(clip)) = (
+        network(TEST, "StaticStand-SoftMimic"),
+        prereq::reference(TEST, "softmimic/motions/pour_pause.csv"),
+    ) else {
+        return;
+    };
+    // The same state, two stiffness commands: the actions differ, each as the deploy's
+    // formulas and a numpy forward pass give them.
+    let soft = load(&onnx, DEFAULT_STIFFNESS);
+    let a40 = soft.infer(&case_a(40.0)).unwrap();
+    let a800 = soft.infer(&case_a(800.0)).unwrap();
+    assert_close(&a40, &numbers("actions_a_stiffness40.txt"), 2e-5, "k = 40");
+    assert_close(
+        &a800,
+        &numbers("actions_a_stiffness800.txt"),
+        2e-5,
+        "k = 800",
+    );
+    let largest = a40
+        .iter()
+        .zip(&a800)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        largest > 0.01,
+        "the stiffness changes the actions by {largest} at most"
+    );
+    // Through the policy argument, into the run's record.
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    assert!(import(&[&clip], &ds, "pour", &[]).status.success());
+    for k in ["40", "300"] {
+        let out = tmp.path().join(format!("run{k}"));
+        let run = thorarena(&[
+            "eval",
+            "--dataset",
+            ds.to_str().unwrap(),
+            "--policy",
+            &format!("softmimic:{}@stiffness={k}", onnx.display()),
+            "--settings",
+            "no-force",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let header: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+        let k: f64 = k.parse().unwrap();
+        assert_eq!(header["policy_parameters"]["stiffness_n_per_m"], k);
+        assert_eq!(
+            header["policy_parameters"]["rotational_stiffness_nm_per_rad"],
+            k / 60.0
+        );
+        assert_eq!(
+            header["policy"],
+            format!("softmimic:StaticStand-SoftMimic@stiffness={k}")
+        );
+        assert_eq!(header["profile"], "softmimic");
+    }
+    // A stiffness the networks never saw is refused, naming the range.
+    let run = thorarena(&[
+        "eval",
+        "--dataset",
+        ds.to_str().unwrap(),
+        "--policy",
+        &format!("softmimic:{}@stiffness=5000", onnx.display()),
+        "--out",
+        tmp.path().join("bad").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(stderr.contains("10–1000 N/m"), "{stderr}");
+}
+
+/// Each released network with the clip it goes with (`deploy/run_mujoco.sh` names stand
+/// and walk; pouring and box picking by name).
+const PAIRS: [(&str, &str); 6] = [
+    ("StaticStand-SoftMimic", "stand"),
+    ("StaticStand-Baseline", "stand"),
+    ("Pour-SoftMimic", "pour_single"),
+    ("Pour-Baseline", "pour_single"),
+    ("GMTWalkStand-SoftMimic", "walk_single"),
+    ("AMASSPick1-SoftMimic", "boxpick_single"),
+];
+
+#[test]
+fn policy_check_passes_for_every_released_network_on_its_own_clip() {
+    const TEST: &str = "policy_check_passes_for_every_released_network_on_its_own_clip";
+    let Some(dir) = prereq::reference(TEST, "softmimic") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let clips: Vec<PathBuf> = ["stand", "pour_single", "walk_single", "boxpick_single"]
+        .iter()
+        .map(|c| dir.join(format!("motions/{c}.csv")))
+        .collect();
+    let refs: Vec<&Path> = clips.iter().map(PathBuf::as_path).collect();
+    let run = import(&refs, &ds, "softmimic", &["--renormalize-quaternions"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for (network, clip) in PAIRS {
+        let out = thorarena(&[
+            "policy",
+            "check",
+            &format!(
+                "softmimic:{}",
+                dir.join(format!("onnx/{network}.onnx")).display()
+            ),
+            "--dataset",
+            ds.to_str().unwrap(),
+            "--sequence",
+            clip,
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{network} on {clip}:\n{stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(stdout.contains("under profile `softmimic`"), "{stdout}");
+        assert!(stdout.contains(&format!("softmimic/{clip}")), "{stdout}");
+    }
+}
+
+#[test]
+fn the_policy_acts_in_the_canonical_order() {
+    const TEST: &str = "the_policy_acts_in_the_canonical_order";
+    let Some(onnx) = network(TEST, "StaticStand-SoftMimic") else {
+        return;
+    };
+    let mut policy = load(&onnx, DEFAULT_STIFFNESS);
+    let obs = observation(
+        0,
+        UnitQuaternion::identity(),
+        [0.0; 3],
+        DEFAULT_POSE.to_vec(),
+        vec![0.0; 29],
+    );
+    let mut actions = vec![vec![0.0; 29]];
+    policy.act(std::slice::from_ref(&obs), &mut actions);
+    let golden = numbers("actions_a.txt");
+    for (i, &c) in ISAAC_FROM_CANONICAL.iter().enumerate() {
+        assert!(
+            (actions[0][c] - golden[i]).abs() < 2e-5,
+            "Isaac joint {i} → canonical {c}"
+        );
+    }
 }

@@ -8,6 +8,7 @@ mod builtin;
 pub mod falcon;
 pub mod inputs;
 mod remote;
+pub mod softmimic;
 mod stall_watch;
 pub mod twist2;
 pub mod wire;
@@ -20,6 +21,7 @@ pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use falcon::FalconPolicy;
 pub use remote::{RemoteConfig, RemoteError, RemotePolicy, TransportStats};
+pub use softmimic::SoftMimicPolicy;
 pub use twist2::Twist2Policy;
 
 use crate::motion::ReferenceFrame;
@@ -138,6 +140,12 @@ pub trait Policy {
     /// its own (a policy process) or has no kernels to choose (a baseline).
     fn network_kernels(&self) -> Option<&'static NetworkKernels> {
         None
+    }
+
+    /// The parameters the policy runs with that change its actions — SoftMimic's stiffness
+    /// command — by name with their unit, for `run.json` (`RunHeader::policy_parameters`).
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        Vec::new()
     }
 }
 

@@ -61,7 +61,7 @@ pub const NETWORK_SLOTS_PER_WORKER: usize = 4;
 pub const BEYONDMIMIC_SLOTS_PER_WORKER: usize = crate::policy::beyondmimic::INFERENCE_BATCH;
 
 /// Every policy family, built-ins first.
-pub const POLICY_FAMILIES: [PolicyFamily; 8] = [
+pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
     PolicyFamily {
         name: "hold",
         spelling: "hold",
@@ -126,6 +126,15 @@ pub const POLICY_FAMILIES: [PolicyFamily; 8] = [
         runs: Runs::InProcess,
     },
     PolicyFamily {
+        name: "softmimic",
+        spelling: "softmimic:FILE.onnx[@stiffness=N]",
+        what: "SoftMimic's compliant trackers and their stiff baselines (arXiv:2510.17792), with a stiffness command in their input (10–1000 N/m; default 60)",
+        supplies: "the network file (onnx/*.onnx converted from SoftMimic's released TorchScript); optionally the stiffness, N/m",
+        profile: "softmimic",
+        slots_per_worker: NETWORK_SLOTS_PER_WORKER,
+        runs: Runs::InProcess,
+    },
+    PolicyFamily {
         name: "ipc",
         spelling: "ipc:SESSION",
         what: "a policy process in any language (Rust, C, C++, Python clients) joining the session",
@@ -142,10 +151,20 @@ pub fn policy_family(spec: &str) -> Option<&'static PolicyFamily> {
 }
 
 /// The family and the file of a policy argument naming a network file
-/// (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`, …), so a sweep can resolve the path.
+/// (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`, …), so a sweep can resolve the path; a
+/// family's parameters (`softmimic:FILE.onnx@stiffness=200`) are not part of the file.
 pub fn policy_file(spec: &str) -> Option<(&'static PolicyFamily, &str)> {
     let family = policy_family(spec).filter(|f| f.spelling.contains(":FILE"))?;
-    Some((family, &spec[family.name.len() + 1..]))
+    Some((family, split_parameters(&spec[family.name.len() + 1..]).0))
+}
+
+/// `FILE@KEY=VALUE,…` → (`FILE`, `Some("KEY=VALUE,…")`); a file with no `@` followed by a
+/// `KEY=` → (it, `None`).
+pub fn split_parameters(file_and_parameters: &str) -> (&str, Option<&str>) {
+    match file_and_parameters.rsplit_once('@') {
+        Some((file, params)) if params.contains('=') => (file, Some(params)),
+        _ => (file_and_parameters, None),
+    }
 }
 
 /// The family name and the network file's stem of a policy argument naming a network
@@ -172,6 +191,7 @@ mod tests {
             ("wbc-mjlab:w.onnx", Some("wbc-mjlab")),
             ("ipc:demo", Some("ipc")),
             ("falcon:f.onnx", Some("falcon")),
+            ("softmimic:s.onnx@stiffness=200", Some("softmimic")),
             ("twist2", None),
             ("holdx", None),
             ("beyondmimicx:f.onnx", None),
@@ -179,6 +199,17 @@ mod tests {
             assert_eq!(policy_family(spec).map(|f| f.name), family, "{spec}");
             assert!(POLICY_FAMILIES.iter().filter(|f| f.names(spec)).count() <= 1);
         }
+    }
+
+    #[test]
+    fn parameters_are_not_part_of_the_file() {
+        let (_, file) = policy_file("softmimic:dir/a@b.onnx@stiffness=200").unwrap();
+        assert_eq!(file, "dir/a@b.onnx");
+        assert_eq!(policy_file("twist2:x@y.onnx").unwrap().1, "x@y.onnx");
+        assert_eq!(
+            policy_file_stem("softmimic:d/Pour-SoftMimic.onnx@stiffness=200"),
+            Some(("softmimic", "Pour-SoftMimic".to_string()))
+        );
     }
 
     #[test]

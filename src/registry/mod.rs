@@ -10,8 +10,8 @@ mod policies;
 mod suggest;
 
 pub use families::{
-    policy_family, policy_file, policy_file_stem, PolicyFamily, Runs, NETWORK_SLOTS_PER_WORKER,
-    POLICY_FAMILIES,
+    policy_family, policy_file, policy_file_stem, split_parameters, PolicyFamily, Runs,
+    NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
 };
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
 pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};
@@ -49,6 +49,9 @@ pub enum RegistryError {
     /// A FALCON network that cannot be used.
     #[error(transparent)]
     Falcon(#[from] crate::policy::falcon::FalconError),
+    /// A SoftMimic network, or its parameters, that cannot be used.
+    #[error(transparent)]
+    SoftMimic(#[from] crate::policy::softmimic::SoftMimicError),
     /// A BeyondMimic-style network that cannot be used.
     #[error(transparent)]
     BeyondMimic(#[from] crate::policy::beyondmimic::BeyondMimicError),
@@ -141,6 +144,12 @@ pub fn profile_fits(policy: &str, profile: &Profile) -> Result<(), String> {
     if policy.starts_with("falcon:") && profile.name != "falcon" {
         return Err(format!(
             "FALCON's network runs on the `falcon` profile (its gains, 0.25 action scale, default pose and 50 Hz); `{}` contradicts it",
+            profile.name
+        ));
+    }
+    if policy.starts_with("softmimic:") && profile.name != "softmimic" {
+        return Err(format!(
+            "SoftMimic's networks run on the `softmimic` profile (its gains, 0.5 action scale, default pose and 50 Hz); `{}` contradicts it",
             profile.name
         ));
     }

@@ -6,7 +6,7 @@
 use super::{did_you_mean, RegistryError};
 use crate::policy::{
     BalanceGains, BalancePolicy, BeyondMimicPolicy, FalconPolicy, HoldPolicy, Policy, ReplayPolicy,
-    Twist2Policy,
+    SoftMimicPolicy, Twist2Policy,
 };
 use crate::profile::Profile;
 use crate::robot::RobotModel;
@@ -57,6 +57,15 @@ pub fn policy<'a>(
                 )
             } else if let Some(path) = other.strip_prefix("falcon:") {
                 Box::new(FalconPolicy::load(Path::new(path), profile)?)
+            } else if let Some(rest) = other.strip_prefix("softmimic:") {
+                let (path, params) = super::split_parameters(rest);
+                let stiffness = crate::policy::softmimic::stiffness_from(params)?;
+                Box::new(SoftMimicPolicy::load(
+                    Path::new(path),
+                    Arc::new(robot.clone()),
+                    profile,
+                    stiffness,
+                )?)
             } else if let Some(session) = ipc_session(other) {
                 return Ok(PolicyChoice::Session(session));
             } else {
@@ -95,6 +104,9 @@ pub fn unknown_policy(spec: &str) -> String {
         "beyondmimic" => Some("policy.onnx, an mjlab or holosoma G1 export"),
         "wbc-mjlab" => Some("wbc_g1_policy.onnx, wbc-mjlab's general G1 tracker"),
         "falcon" => Some("g1_29dof_falcon.onnx, FALCON's released G1 network"),
+        "softmimic" => Some(
+            "StaticStand-SoftMimic.onnx@stiffness=60, a SoftMimic network and its stiffness in N/m",
+        ),
         _ => None,
     };
     if let Some(example) = example {
@@ -114,5 +126,5 @@ pub fn unknown_policy(spec: &str) -> String {
         })
         .collect();
     let hint = did_you_mean(spec, names.iter().map(String::as_str));
-    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; wbc-mjlab:FILE.onnx; falcon:FILE.onnx; or ipc:SESSION for a policy process")
+    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; wbc-mjlab:FILE.onnx; falcon:FILE.onnx; softmimic:FILE.onnx[@stiffness=N]; or ipc:SESSION for a policy process")
 }

@@ -85,6 +85,10 @@ pub struct RunHeader {
     /// without one. Part of the run's identity: shards and resumed parts must agree.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub network_kernels: Option<String>,
+    /// The policy's parameters as it ran (SoftMimic's stiffness command: `Policy::parameters`),
+    /// by name with their unit; empty for a policy without any.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub policy_parameters: std::collections::BTreeMap<String, f64>,
 }
 
 impl RunHeader {
@@ -111,6 +115,7 @@ impl RunHeader {
             io: spec.io,
             sanity: None,
             network_kernels: None,
+            policy_parameters: Default::default(),
         }
     }
 
@@ -205,6 +210,14 @@ impl RunHeader {
         check("sanity", self.sanity == other.sanity);
         check("shard", self.shard == other.shard);
         check("io", self.io == other.io);
+        check(
+            "network_kernels",
+            self.network_kernels == other.network_kernels,
+        );
+        check(
+            "policy_parameters",
+            self.policy_parameters == other.policy_parameters,
+        );
         d
     }
 

@@ -103,8 +103,23 @@ pub fn center_of_mass(model: &RobotModel, world_from_body: &[Isometry3<f64>]) ->
 /// Height of the lowest point of the sole shapes, world frame; `None` if the model has no
 /// sole shapes.
 pub fn lowest_sole_point_z(model: &RobotModel, world_from_body: &[Isometry3<f64>]) -> Option<f64> {
+    lowest_sole_point_z_of(model, world_from_body, |_| true)
+}
+
+/// [`lowest_sole_point_z`] over the bodies `which` accepts (by body index): one foot's.
+pub fn lowest_sole_point_z_of(
+    model: &RobotModel,
+    world_from_body: &[Isometry3<f64>],
+    which: impl Fn(usize) -> bool,
+) -> Option<f64> {
     let mut lowest: Option<f64> = None;
-    for (body, pose) in model.bodies.iter().zip(world_from_body) {
+    for (_, (body, pose)) in model
+        .bodies
+        .iter()
+        .zip(world_from_body)
+        .enumerate()
+        .filter(|(i, _)| which(*i))
+    {
         for shape in body.shapes.iter().filter(|s| s.is_sole) {
             let p = pose * shape.body_from_shape;
             let z = p.translation.vector.z - support_depth(&shape.geometry, &p.rotation);

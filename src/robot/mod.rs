@@ -15,7 +15,7 @@ pub use describe::describe;
 pub use error::RobotError;
 pub use kinematics::{
     center_of_mass, forward_kinematics, frame_pose, frame_velocity_w, keypoint_positions,
-    lowest_sole_point_z,
+    lowest_sole_point_z, lowest_sole_point_z_of,
 };
 pub use load::{build_model, bundled_robot_dir, load_robot_dir};
 pub use model::{Body, Frame, Geometry, Hand, Joint, KeypointSet, RobotModel, Shape};

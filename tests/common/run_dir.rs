@@ -47,6 +47,7 @@ pub fn header(policy: &str) -> RunHeader {
         io: PolicyIoRules::default(),
         sanity: None,
         network_kernels: None,
+        policy_parameters: Default::default(),
     }
 }
 

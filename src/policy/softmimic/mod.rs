@@ -1,0 +1,430 @@
+//! SoftMimic (Lee et al., "SoftMimic: Learning Compliant Whole-body Control from
+//! Examples", arXiv:2510.17792; github.com/Improbable-AI/softmimic, MIT), its released G1
+//! networks in process: `--policy softmimic:FILE.onnx[@stiffness=N]` under the `softmimic`
+//! profile.
+//!
+//! Every released network observes a **stiffness command** — how hard the robot should
+//! hold its reference against a push, N/m, and N·m/rad for rotation — the compliant
+//! members (`*-SoftMimic`) trained to yield as that stiffness asks, their baselines
+//! (`*-Baseline`) trained on the same clips to track stiffly whatever it says. The command
+//! is a policy parameter: `@stiffness=K` (N/m) sets it, the rotational one following as
+//! K / 60 N·m/rad (the deploy's MuJoCo joystick, `mujoco_joystick.py`
+//! `get_rotational_stiffness`), unless `@rotational_stiffness=R` names it. Without one the
+//! deploy's default holds: 60 N/m and 1 N·m/rad (`deploy/sensors/desired_stiffness_log_sensor.py:20`).
+//!
+//! The action is `default + 0.5 · a` in Isaac Lab's joint order (`SS:1553-1563`); the
+//! adapter reorders it to the canonical order and the profile maps it.
+
+pub mod observation;
+
+use super::batch_plans::BatchPlans;
+use super::{ActOutcome, Observation, Policy, Wiring};
+use crate::profile::Profile;
+use crate::robot::{forward_kinematics, lowest_sole_point_z_of, RobotModel};
+use nalgebra::Isometry3;
+use observation::{History, Layout, Stiffness, ISAAC_FROM_CANONICAL, N_JOINTS};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use tract_onnx::prelude::*;
+
+/// Default stiffness command (the deploy's), N/m and N·m/rad.
+pub const DEFAULT_STIFFNESS: Stiffness = Stiffness {
+    linear: 60.0,
+    rotational: 1.0,
+};
+/// Linear stiffness range of the training data, N/m: each force event drew it log-uniform
+/// in it (`compliant_motion_augmentation/constants.py` `MIN/MAX_ROBOT_STIFFNESS`).
+pub const STIFFNESS_RANGE: (f64, f64) = (10.0, 1000.0);
+/// Rotational stiffness range of the training data, N·m/rad (same file).
+pub const ROTATIONAL_RANGE: (f64, f64) = (0.1, 10.0);
+/// The rotational stiffness a linear one implies when none is named (÷ 60).
+pub const ROTATIONAL_PER_LINEAR: f64 = 1.0 / 60.0;
+/// Action scale, every joint (`SS:1553-1563`).
+pub const ACTION_SCALE: f64 = 0.5;
+/// Default joint angles, canonical order (`SS:147-155`, `deploy/robots/g1_config.py:104-120`).
+pub const DEFAULT_POSE: [f64; N_JOINTS] = [
+    -0.2, 0.0, 0.0, 0.42, -0.23, 0.0, -0.2, 0.0, 0.0, 0.42, -0.23, 0.0, 0.0, 0.0, 0.0, 0.35, 0.16,
+    0.0, 0.87, 0.0, 0.0, 0.0, 0.35, -0.16, 0.0, 0.87, 0.0, 0.0, 0.0,
+];
+/// A reference foot is in contact when its sole's lowest point is below this height, m.
+/// The clips carry contact labels the dataset does not keep (`motion/import/lafan_csv.rs`);
+/// the standing, pouring and box-picking clips label every frame 1, which this gives.
+pub const CONTACT_HEIGHT_M: f64 = 0.03;
+
+/// Why the policy could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SoftMimicError {
+    /// tract could not load or prepare the network at either width.
+    #[error("loading the SoftMimic network {path}: {message} (SoftMimic's networks take [1, 285] or [1, 1159] and give [1, 29])")]
+    Load {
+        /// The ONNX file.
+        path: PathBuf,
+        /// tract's message.
+        message: String,
+    },
+    /// The robot is not the 29-joint G1.
+    #[error("SoftMimic needs the 29-joint G1 (got {0} joints)")]
+    Joints(usize),
+    /// A stiffness outside what the network was trained on, or a parameter it does not take.
+    #[error("softmimic policy parameter: {0}")]
+    Parameter(String),
+}
+
+/// Reads the policy parameters of `softmimic:FILE.onnx@stiffness=K[,rotational_stiffness=R]`
+/// (`params` is what follows the `@`; `None`: the default).
+pub fn stiffness_from(params: Option<&str>) -> Result<Stiffness, SoftMimicError> {
+    let Some(params) = params else {
+        return Ok(DEFAULT_STIFFNESS);
+    };
+    let bad = |m: String| SoftMimicError::Parameter(m);
+    let (mut linear, mut rotational) = (None, None);
+    for item in params.split(',') {
+        let (key, value) = item
+            .split_once('=')
+            .ok_or_else(|| bad(format!("`{item}` is not KEY=VALUE (e.g. @stiffness=200)")))?;
+        let v: f64 = value
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| bad(format!("{key}: `{value}` is not a number")))?;
+        match key.trim() {
+            "stiffness" => linear = Some(v),
+            "rotational_stiffness" => rotational = Some(v),
+            other => {
+                return Err(bad(format!(
+                    "unknown parameter `{other}` (softmimic takes stiffness=N/m and rotational_stiffness=N·m/rad)"
+                )))
+            }
+        }
+    }
+    let linear = linear.unwrap_or(DEFAULT_STIFFNESS.linear);
+    let rotational = rotational.unwrap_or(linear * ROTATIONAL_PER_LINEAR);
+    let within = |v: f64, (lo, hi): (f64, f64)| (lo..=hi).contains(&v);
+    if !within(linear, STIFFNESS_RANGE) {
+        return Err(bad(format!(
+            "stiffness {linear} N/m is outside the {}–{} N/m the networks were trained on",
+            STIFFNESS_RANGE.0, STIFFNESS_RANGE.1
+        )));
+    }
+    if !within(rotational, ROTATIONAL_RANGE) {
+        return Err(bad(format!(
+            "rotational stiffness {rotational} N·m/rad is outside the {}–{} N·m/rad the networks were trained on{}",
+            ROTATIONAL_RANGE.0,
+            ROTATIONAL_RANGE.1,
+            if params.contains("rotational_stiffness") {
+                ""
+            } else {
+                " (it follows stiffness / 60 unless rotational_stiffness= names it)"
+            }
+        )));
+    }
+    Ok(Stiffness { linear, rotational })
+}
+
+/// One environment's state between steps.
+#[derive(Debug, Clone, Default)]
+struct Slot {
+    history: History,
+    /// The network's last output, Isaac Lab order (the `actions` term).
+    last_raw: Vec<f64>,
+}
+
+/// A SoftMimic network in process.
+pub struct SoftMimicPolicy {
+    name: String,
+    plans: BatchPlans,
+    plan: Arc<TypedRunnableModel>,
+    layout: Layout,
+    stiffness: Stiffness,
+    robot: Arc<RobotModel>,
+    disagreements: Vec<String>,
+    slots: Vec<Slot>,
+    input: Vec<f32>,
+    last_inputs: Vec<Vec<f32>>,
+    poses: Vec<Isometry3<f64>>,
+}
+
+impl SoftMimicPolicy {
+    /// Loads the network (input `[1, 285]` or `[1, 1159]`, output `[1, 29]`) to run on
+    /// `robot` under `profile` with the stiffness command `stiffness`.
+    pub fn load(
+        path: &Path,
+        robot: Arc<RobotModel>,
+        profile: &Profile,
+        stiffness: Stiffness,
+    ) -> Result<Self, SoftMimicError> {
+        if robot.n_joints() != N_JOINTS {
+            return Err(SoftMimicError::Joints(robot.n_joints()));
+        }
+        let load = |layout: Layout| -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
+            let plans = BatchPlans::new(super::load_onnx(path)?, layout.width())?;
+            let plan = plans.plan(1)?;
+            Ok((plans, plan))
+        };
+        let (layout, (plans, plan)) = match load(Layout::Stand) {
+            Ok(p) => (Layout::Stand, p),
+            Err(first) => match load(Layout::Track) {
+                Ok(p) => (Layout::Track, p),
+                Err(_) => {
+                    return Err(SoftMimicError::Load {
+                        path: path.to_path_buf(),
+                        message: format!("{first:#}"),
+                    })
+                }
+            },
+        };
+        // The stiffness is part of the name, so results of two stiffness commands never
+        // read as one policy's.
+        let name = format!(
+            "softmimic:{}@stiffness={}",
+            path.file_stem()
+                .map_or_else(|| "network".into(), |s| s.to_string_lossy()),
+            stiffness.linear
+        );
+        Ok(Self {
+            name,
+            plans,
+            plan,
+            layout,
+            stiffness,
+            robot,
+            disagreements: disagreements(profile),
+            slots: Vec::new(),
+            input: vec![0.0; layout.width()],
+            last_inputs: Vec::new(),
+            poses: Vec::new(),
+        })
+    }
+
+    /// Its input layout.
+    pub fn layout(&self) -> Layout {
+        self.layout
+    }
+
+    /// The stiffness command it observes.
+    pub fn stiffness(&self) -> Stiffness {
+        self.stiffness
+    }
+
+    /// The network's inputs of the last `act`, one per observation (for tests).
+    pub fn last_inputs(&self) -> &[Vec<f32>] {
+        &self.last_inputs
+    }
+
+    /// Runs the network on one observation; actions in Isaac Lab order.
+    pub fn infer(&self, input: &[f32]) -> TractResult<Vec<f32>> {
+        self.plans.run_on(&self.plan, input, 1)
+    }
+
+    /// Left and right foot contact of a reference frame, from its soles' height.
+    fn contacts(&mut self, frame: &crate::motion::ReferenceFrame) -> [f64; 2] {
+        forward_kinematics(
+            &self.robot,
+            &frame.world_from_root,
+            &frame.joint_pos,
+            &mut self.poses,
+        );
+        let robot = &self.robot;
+        ["left_", "right_"].map(|side| {
+            let z = lowest_sole_point_z_of(robot, &self.poses, |b| {
+                robot.bodies[b].name.starts_with(side)
+            });
+            f64::from(u8::from(z.is_some_and(|z| z < CONTACT_HEIGHT_M)))
+        })
+    }
+}
+
+/// Where `profile` contradicts SoftMimic's training: rate, action scale, default pose.
+fn disagreements(profile: &Profile) -> Vec<String> {
+    let mut out = Vec::new();
+    if (profile.control_dt_s - 0.02).abs() > 1e-9 {
+        out.push(format!(
+            "SoftMimic runs at 50 Hz; the profile `{}` controls every {} s",
+            profile.name, profile.control_dt_s
+        ));
+    }
+    if let Some(j) = (0..N_JOINTS).find(|&j| (profile.action_scale[j] - ACTION_SCALE).abs() > 1e-9)
+    {
+        out.push(format!(
+            "SoftMimic's action scale is {ACTION_SCALE}; the profile `{}` scales joint {j} by {}",
+            profile.name, profile.action_scale[j]
+        ));
+    }
+    if let Some(j) =
+        (0..N_JOINTS).find(|&j| (profile.action_offset_rad[j] - DEFAULT_POSE[j]).abs() > 1e-9)
+    {
+        out.push(format!(
+            "SoftMimic's default pose has joint {j} at {} rad; the profile `{}` offsets it to {}",
+            DEFAULT_POSE[j], profile.name, profile.action_offset_rad[j]
+        ));
+    }
+    out
+}
+
+impl Policy for SoftMimicPolicy {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
+        Some(super::network_kernels())
+    }
+
+    fn reference_offsets_s(&self) -> Vec<f64> {
+        self.layout.reference_offsets_s()
+    }
+
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        vec![
+            ("stiffness_n_per_m", self.stiffness.linear),
+            ("rotational_stiffness_nm_per_rad", self.stiffness.rotational),
+        ]
+    }
+
+    fn sanity_exempt(&self) -> Option<&'static str> {
+        None
+    }
+
+    fn reset(&mut self, env: usize) {
+        if let Some(slot) = self.slots.get_mut(env) {
+            *slot = Slot::default();
+        }
+    }
+
+    fn wiring(&self) -> Wiring {
+        let layout = match self.layout {
+            Layout::Stand => "285 inputs: proprioception and the stiffness command, 3 frames per term (no reference observed)",
+            Layout::Track => "1159 inputs: proprioception, the reference and the stiffness command, 3 frames per term, and 20 reference frames up to 1.9 s ahead",
+        };
+        Wiring {
+            facts: vec![
+                layout.into(),
+                format!(
+                    "stiffness command {} N/m, rotational {:.4} N·m/rad",
+                    self.stiffness.linear, self.stiffness.rotational
+                ),
+                format!("{N_JOINTS} actions in Isaac Lab order, relative to the default pose, scale {ACTION_SCALE}"),
+            ],
+            disagreements: self.disagreements.clone(),
+        }
+    }
+
+    fn worker_copies(&self, n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
+        Some(
+            (0..n)
+                .map(|_| {
+                    Box::new(Self {
+                        name: self.name.clone(),
+                        plans: self.plans.clone(),
+                        plan: self.plan.clone(),
+                        layout: self.layout,
+                        stiffness: self.stiffness,
+                        robot: self.robot.clone(),
+                        disagreements: self.disagreements.clone(),
+                        slots: Vec::new(),
+                        input: vec![0.0; self.layout.width()],
+                        last_inputs: Vec::new(),
+                        poses: Vec::new(),
+                    }) as Box<dyn Policy + Send>
+                })
+                .collect(),
+        )
+    }
+
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
+        self.last_inputs.clear();
+        for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+            if self.slots.len() <= obs.env {
+                self.slots.resize_with(obs.env + 1, Slot::default);
+            }
+            let starts = obs.step == 0;
+            if starts || self.slots[obs.env].last_raw.len() != N_JOINTS {
+                self.slots[obs.env] = Slot {
+                    last_raw: vec![0.0; N_JOINTS],
+                    ..Slot::default()
+                };
+            }
+            let (contacts_now, future) = match self.layout {
+                Layout::Stand => ([1.0; 2], Vec::new()),
+                Layout::Track => {
+                    let now = self.contacts(&obs.reference[0]);
+                    let future: Vec<Vec<f64>> = obs.reference[1..]
+                        .iter()
+                        .map(|f| {
+                            let c = self.contacts(f);
+                            let mut t = Vec::new();
+                            observation::reference_terms(f, c, &mut t);
+                            t
+                        })
+                        .collect();
+                    (now, future)
+                }
+            };
+            let slot = &mut self.slots[obs.env];
+            let frame = observation::frame(
+                self.layout,
+                obs,
+                &DEFAULT_POSE,
+                &slot.last_raw,
+                contacts_now,
+                self.stiffness,
+            );
+            slot.history
+                .push_into(self.layout, frame, starts, &future, &mut self.input);
+            self.last_inputs.push(self.input.clone());
+            match self.plans.run_on(&self.plan, &self.input, 1) {
+                Ok(out) => {
+                    let slot = &mut self.slots[obs.env];
+                    for (i, (last, o)) in slot.last_raw.iter_mut().zip(&out).enumerate() {
+                        *last = f64::from(*o);
+                        action[ISAAC_FROM_CANONICAL[i]] = *last;
+                    }
+                }
+                // A network that fails at run time answers NaN: the runner's miss rule
+                // keeps it away from the physics and counts it.
+                Err(e) => {
+                    log::warn!("softmimic: inference failed: {e:#}");
+                    action.fill(f64::NAN);
+                }
+            }
+        }
+        ActOutcome::Acted
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stiffness_parameters_parse_and_refuse_what_training_never_saw() {
+        assert_eq!(stiffness_from(None).unwrap(), DEFAULT_STIFFNESS);
+        let s = stiffness_from(Some("stiffness=300")).unwrap();
+        assert_eq!((s.linear, s.rotational), (300.0, 5.0));
+        let s = stiffness_from(Some("stiffness=300,rotational_stiffness=0.5")).unwrap();
+        assert_eq!(s.rotational, 0.5);
+        for bad in [
+            "stiffness=5",
+            "stiffness=900",
+            "stiffness=x",
+            "stiff=3",
+            "300",
+        ] {
+            assert!(stiffness_from(Some(bad)).is_err(), "{bad}");
+        }
+        // 900 N/m implies 15 N·m/rad, above the rotational range: the message says why.
+        let e = stiffness_from(Some("stiffness=900"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("stiffness / 60"), "{e}");
+    }
+
+    #[test]
+    fn the_layouts_have_the_networks_widths() {
+        assert_eq!(Layout::Stand.width(), 285);
+        assert_eq!(Layout::Track.width(), 1159);
+        assert_eq!(Layout::of_width(1159), Some(Layout::Track));
+        assert_eq!(Layout::Track.reference_offsets_s().len(), 21);
+    }
+}
