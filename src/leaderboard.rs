@@ -264,7 +264,10 @@ impl Player {
 /// stem (`wbc-mjlab-wbc_g1_policy-rapier`), or the built-in's name.
 pub fn run_name(policy: &str, engine: EngineChoice) -> String {
     let base = match registry::policy_file_stem(policy) {
-        Some((family, stem)) => format!("{family}-{stem}"),
+        Some((family, stem)) => match registry::policy_parameters(policy) {
+            Some(params) => format!("{family}-{stem}-{params}"),
+            None => format!("{family}-{stem}"),
+        },
         None => policy.to_string(),
     };
     let clean: String = base
@@ -542,7 +545,10 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
 /// (`twist2 (twist2_1017_25k)`), the argument itself otherwise.
 pub fn policy_label(policy: &str) -> String {
     match registry::policy_file_stem(policy) {
-        Some((family, stem)) => format!("{family} ({stem})"),
+        Some((family, stem)) => match registry::policy_parameters(policy) {
+            Some(params) => format!("{family} ({stem}, {params})"),
+            None => format!("{family} ({stem})"),
+        },
         None => policy.to_string(),
     }
 }

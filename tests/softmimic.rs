@@ -375,10 +375,7 @@ fn the_stiffness_command_reaches_the_network_and_the_record() {
             header["policy_parameters"]["rotational_stiffness_nm_per_rad"],
             k / 60.0
         );
-        assert_eq!(
-            header["policy"],
-            format!("softmimic:StaticStand-SoftMimic@stiffness={k}")
-        );
+        assert_eq!(header["policy"], "softmimic");
         assert_eq!(header["profile"], "softmimic");
     }
     // A stiffness the networks never saw is refused, naming the range.
@@ -473,4 +470,87 @@ fn the_policy_acts_in_the_canonical_order() {
             "Isaac joint {i} → canonical {c}"
         );
     }
+}
+
+#[test]
+fn a_sweep_varies_the_stiffness_like_any_axis_and_each_run_records_its_value() {
+    const TEST: &str = "a_sweep_varies_the_stiffness_like_any_axis_and_each_run_records_its_value";
+    let (Some(onnx), Some(clip)) = (
+        network(TEST, "StaticStand-SoftMimic"),
+        prereq::reference(TEST, "softmimic/motions/pour_pause.csv"),
+    ) else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    assert!(import(&[&clip], &ds, "pour", &[]).status.success());
+    let spec = tmp.path().join("stiffness.toml");
+    std::fs::write(
+        &spec,
+        format!(
+            "datasets = [\"ds\"]\nsettings = [\"push:20\"]\n\n[[policy]]\npolicy = \"softmimic:{}\"\nparameters = {{ stiffness = [40, 300] }}\n",
+            onnx.display()
+        ),
+    )
+    .unwrap();
+    let sweep = tmp.path().join("sweep");
+    for args in [
+        vec![
+            "sweep",
+            "plan",
+            spec.to_str().unwrap(),
+            "--out",
+            sweep.to_str().unwrap(),
+        ],
+        vec!["sweep", "run", sweep.to_str().unwrap(), "--jobs", "2"],
+        vec!["sweep", "collect", sweep.to_str().unwrap()],
+    ] {
+        let o = thorarena(&args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let csv = std::fs::read_to_string(sweep.join("results.csv")).unwrap();
+    assert_eq!(
+        csv.lines().count(),
+        3,
+        "a header and one row per stiffness:\n{csv}"
+    );
+    for k in ["40", "300"] {
+        assert!(
+            csv.contains(&format!("softmimic:StaticStand-SoftMimic@stiffness={k}")),
+            "{csv}"
+        );
+    }
+    let mut recorded: Vec<f64> = walk_run_headers(&sweep)
+        .iter()
+        .map(|h| {
+            h["policy_parameters"]["stiffness_n_per_m"]
+                .as_f64()
+                .unwrap()
+        })
+        .collect();
+    recorded.sort_by(f64::total_cmp);
+    recorded.dedup();
+    assert_eq!(
+        recorded,
+        [40.0, 300.0],
+        "the task runs and their collected copies"
+    );
+}
+
+/// Every `run.json` under `dir`.
+fn walk_run_headers(dir: &Path) -> Vec<serde_json::Value> {
+    let mut out = Vec::new();
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            out.extend(walk_run_headers(&path));
+        } else if path.file_name().is_some_and(|n| n == "run.json") {
+            out.push(serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap());
+        }
+    }
+    out
 }

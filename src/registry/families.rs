@@ -158,6 +158,13 @@ pub fn policy_file(spec: &str) -> Option<(&'static PolicyFamily, &str)> {
     Some((family, split_parameters(&spec[family.name.len() + 1..]).0))
 }
 
+/// The parameters a policy argument names after its file (`stiffness=200` of
+/// `softmimic:FILE.onnx@stiffness=200`), if any.
+pub fn policy_parameters(spec: &str) -> Option<&str> {
+    let family = policy_family(spec).filter(|f| f.spelling.contains(":FILE"))?;
+    split_parameters(&spec[family.name.len() + 1..]).1
+}
+
 /// `FILE@KEY=VALUE,…` → (`FILE`, `Some("KEY=VALUE,…")`); a file with no `@` followed by a
 /// `KEY=` → (it, `None`).
 pub fn split_parameters(file_and_parameters: &str) -> (&str, Option<&str>) {

@@ -10,8 +10,8 @@ mod policies;
 mod suggest;
 
 pub use families::{
-    policy_family, policy_file, policy_file_stem, split_parameters, PolicyFamily, Runs,
-    NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
+    policy_family, policy_file, policy_file_stem, policy_parameters, split_parameters,
+    PolicyFamily, Runs, NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
 };
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
 pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};

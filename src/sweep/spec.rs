@@ -101,6 +101,11 @@ pub struct PolicySpec {
     /// run); without it every task's `eval` checks a network in process first.
     #[serde(default)]
     pub unchecked: bool,
+    /// A policy parameter as an axis: each value becomes a policy of its own
+    /// (`parameters = { stiffness = [40, 200, 800] }` on a `softmimic:` network runs
+    /// `softmimic:FILE@stiffness=40`, …); several keys give every combination.
+    #[serde(default)]
+    pub parameters: std::collections::BTreeMap<String, Vec<f64>>,
 }
 
 /// One latency rule: `eval`'s `--budget`, `--latency-mode` and `--miss-rule`.
@@ -149,10 +154,18 @@ impl SweepSpec {
             path: path.to_path_buf(),
             source,
         })?;
-        let spec: Self = toml::from_str(&text).map_err(|e| SweepError::Toml {
+        let mut spec: Self = toml::from_str(&text).map_err(|e| SweepError::Toml {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
+        let mut policies = Vec::new();
+        for (i, p) in spec.policies.iter().enumerate() {
+            policies.extend(p.expanded().map_err(|m| SweepError::Invalid {
+                path: path.to_path_buf(),
+                message: format!("[[policy]] #{}: {m}", i + 1),
+            })?);
+        }
+        spec.policies = policies;
         spec.check(path)?;
         Ok(spec)
     }
@@ -230,6 +243,54 @@ impl SweepSpec {
 }
 
 impl PolicySpec {
+    /// One policy per combination of [`Self::parameters`]' values, each naming its values
+    /// in its policy argument (`FILE@stiffness=40`); itself when it has none.
+    pub fn expanded(&self) -> Result<Vec<PolicySpec>, String> {
+        if self.parameters.is_empty() {
+            return Ok(vec![self.clone()]);
+        }
+        let Some(policy) = &self.policy else {
+            return Err("`parameters` vary a policy in process (`policy = …`); a `command` takes its own arguments".into());
+        };
+        if crate::registry::policy_parameters(policy).is_some() {
+            return Err(format!(
+                "`{policy}` names its parameters already: give them in `parameters` or in the argument, not both"
+            ));
+        }
+        if self.name.is_some() {
+            return Err("`name` would label every value of `parameters` alike: drop it (each gets its own label)".into());
+        }
+        let mut combos: Vec<Vec<(String, f64)>> = vec![Vec::new()];
+        for (key, values) in &self.parameters {
+            if values.is_empty() {
+                return Err(format!(
+                    "the axis `parameters.{key}` is empty: give at least one value"
+                ));
+            }
+            combos = combos
+                .into_iter()
+                .flat_map(|c| {
+                    values.iter().map(move |v| {
+                        let mut c = c.clone();
+                        c.push((key.clone(), *v));
+                        c
+                    })
+                })
+                .collect();
+        }
+        Ok(combos
+            .into_iter()
+            .map(|combo| {
+                let params: Vec<String> = combo.iter().map(|(k, v)| format!("{k}={v}")).collect();
+                PolicySpec {
+                    policy: Some(format!("{policy}@{}", params.join(","))),
+                    parameters: Default::default(),
+                    ..self.clone()
+                }
+            })
+            .collect())
+    }
+
     /// Whether the table says what to run: `policy` (not a session no one starts) or
     /// `command` with `{session}`, one of them, and a usable connect timeout. Sweeps and
     /// the leaderboard's policy files hold it to the same rules.
@@ -268,7 +329,13 @@ impl PolicySpec {
         let policy = self.policy.as_ref()?;
         Some(match crate::registry::policy_file(policy) {
             Some((family, file)) => {
-                format!("{}:{}", family.name, resolve(workdir, file).display())
+                let params = crate::registry::policy_parameters(policy)
+                    .map_or_else(String::new, |p| format!("@{p}"));
+                format!(
+                    "{}:{}{params}",
+                    family.name,
+                    resolve(workdir, file).display()
+                )
             }
             None => policy.clone(),
         })
@@ -293,7 +360,11 @@ impl PolicySpec {
         }
         match (&self.policy, &self.command) {
             (Some(p), _) => match crate::registry::policy_file_stem(p) {
-                Some((family, stem)) => format!("{family}:{stem}"),
+                Some((family, stem)) => {
+                    let params = crate::registry::policy_parameters(p)
+                        .map_or_else(String::new, |p| format!("@{p}"));
+                    format!("{family}:{stem}{params}")
+                }
                 None => p.clone(),
             },
             (None, Some(c)) => c.split_whitespace().next().unwrap_or("command").to_string(),

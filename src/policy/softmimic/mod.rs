@@ -132,7 +132,6 @@ struct Slot {
 
 /// A SoftMimic network in process.
 pub struct SoftMimicPolicy {
-    name: String,
     plans: BatchPlans,
     plan: Arc<TypedRunnableModel>,
     layout: Layout,
@@ -174,16 +173,7 @@ impl SoftMimicPolicy {
                 }
             },
         };
-        // The stiffness is part of the name, so results of two stiffness commands never
-        // read as one policy's.
-        let name = format!(
-            "softmimic:{}@stiffness={}",
-            path.file_stem()
-                .map_or_else(|| "network".into(), |s| s.to_string_lossy()),
-            stiffness.linear
-        );
         Ok(Self {
-            name,
             plans,
             plan,
             layout,
@@ -263,8 +253,11 @@ fn disagreements(profile: &Profile) -> Vec<String> {
 }
 
 impl Policy for SoftMimicPolicy {
+    /// The family's name, as every in-process network's; the stiffness it ran with is in
+    /// [`Policy::parameters`] (`run.json`'s `policy_parameters`), and tables label runs by
+    /// their policy argument, which names it.
     fn name(&self) -> &str {
-        &self.name
+        "softmimic"
     }
 
     fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
@@ -315,7 +308,6 @@ impl Policy for SoftMimicPolicy {
             (0..n)
                 .map(|_| {
                     Box::new(Self {
-                        name: self.name.clone(),
                         plans: self.plans.clone(),
                         plan: self.plan.clone(),
                         layout: self.layout,
