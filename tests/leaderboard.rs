@@ -284,3 +284,125 @@ fn leaderboard_names_are_checked_first_and_a_policys_escaped_descendants_are_sto
         .collect();
     assert!(survivors.is_empty(), "outlived the run: {survivors:?}");
 }
+
+mod prereq;
+
+/// FALCON among the general policies and a SoftMimic pair on its own clip: the rows and
+/// cells are those of separate `eval` runs of the same policy and data.
+#[test]
+fn falcon_and_a_compliant_pair_on_the_leaderboard_equal_separate_eval_runs() {
+    const TEST: &str = "falcon_and_a_compliant_pair_on_the_leaderboard_equal_separate_eval_runs";
+    let (Some(falcon), Some(softmimic)) = (
+        prereq::reference(TEST, "falcon/g1_29dof_falcon.onnx"),
+        prereq::reference(TEST, "softmimic"),
+    ) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lb");
+    let clip = dir.path().join("stand");
+    let import = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["data", "import", "--format", "softmimic-csv"])
+        .arg(softmimic.join("motions/stand.csv"))
+        .args(["--task", "stand", "--out"])
+        .arg(&clip)
+        .output()
+        .unwrap();
+    assert!(
+        import.status.success(),
+        "{}",
+        String::from_utf8_lossy(&import.stderr)
+    );
+    let onnx = |name: &str| {
+        format!(
+            "softmimic:{}",
+            softmimic.join(format!("onnx/{name}.onnx")).display()
+        )
+    };
+    let pair = format!(
+        "{} vs {}@{}",
+        onnx("StaticStand-SoftMimic"),
+        onnx("StaticStand-Baseline"),
+        clip.display()
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args([
+            "leaderboard",
+            "--engines",
+            "rapier",
+            "--per-task",
+            "1",
+            "--settings",
+            "no-force",
+        ])
+        .args(["--policy", &format!("falcon:{}", falcon.display())])
+        .args([
+            "--pair",
+            &pair,
+            "--pair-seconds",
+            "3",
+            "--pair-stiffness",
+            "300",
+        ])
+        .args(["--pair-pushes", "20", "--pair-headings", "0,180"])
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{stderr}");
+    let table = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        table.contains("| falcon (g1_29dof_falcon) | rapier |"),
+        "{table}"
+    );
+    assert!(
+        table.contains("compliant − baseline") && table.contains("Δ survival"),
+        "{table}"
+    );
+    assert!(
+        table.contains("StaticStand-SoftMimic, stiffness=300"),
+        "{table}"
+    );
+
+    // FATS of FALCON's row: a separate eval's.
+    let board = summary(&out.join("runs/falcon-g1_29dof_falcon-rapier"));
+    let separate = in_process::eval(
+        &out.join("synthetic"),
+        &format!("falcon:{}", falcon.display()),
+        None,
+        &["no-force"],
+        &dir.path().join("separate-falcon"),
+    );
+    let avg = |s: &serde_json::Value| s["settings"]["no-force"]["average"].clone();
+    assert_eq!(avg(&board), avg(&summary(&separate)));
+
+    // The baseline's pushed cells: a separate eval on the pair's clip.
+    let pair_dir = out.join("pairs/StaticStand-SoftMimic-vs-StaticStand-Baseline");
+    let separate = in_process::eval(
+        &pair_dir.join("clip"),
+        &onnx("StaticStand-Baseline"),
+        None,
+        &["no-force", "push:20@0", "push:20@180"],
+        &dir.path().join("separate-baseline"),
+    );
+    let separate = summary(&separate);
+    let csv = std::fs::read_to_string(out.join("pairs.csv")).unwrap();
+    for setting in ["push-20@0", "push-20@180"] {
+        let fats = separate["settings"][setting]["average"]["fats"]
+            .as_f64()
+            .unwrap();
+        let row = csv
+            .lines()
+            .find(|l| {
+                l.contains(",baseline,") && l.contains(&format!(",push:20@{},", &setting[8..]))
+            })
+            .unwrap_or_else(|| panic!("{setting} not in\n{csv}"));
+        let cell: f64 = row.split(',').nth(6).unwrap().parse().unwrap();
+        assert_eq!(cell, fats, "{setting}: {row}");
+    }
+    // The force log replays a synthetic sequence's forces on the clip, and says so.
+    let grafted = std::fs::read_to_string(pair_dir.join("force-log/manifest.json")).unwrap();
+    assert!(grafted.contains("stand+forces-push_chair_000"), "{grafted}");
+    assert!(csv.contains("force-log:push_chair/push_chair_000"), "{csv}");
+}

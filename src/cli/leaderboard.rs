@@ -12,8 +12,8 @@ use thorarena::benchmark::{EvalObserver, Starting};
 use thorarena::evaluation::EvalSpec;
 use thorarena::evaluation::{EngineChoice, EpisodeRecord};
 use thorarena::leaderboard::{
-    leaderboard_table, load_policy_file, run_leaderboard, LeaderboardObserver, LeaderboardRequest,
-    OwnClip, PolicyProcess,
+    leaderboard_table, load_policy_file, pairs_table, run_leaderboard, run_pairs, write_pair_files,
+    CompliancePair, LeaderboardObserver, LeaderboardRequest, OwnClip, PairOptions, PolicyProcess,
 };
 use thorarena::motion::synth::{write_synthetic, SynthOptions, TASKS};
 use thorarena::motion::Dataset;
@@ -28,7 +28,7 @@ use thorarena::report::{
 pub struct Args {
     /// A general policy, as `eval --policy` takes it, run in process (`twist2:FILE.onnx`,
     /// `wbc-mjlab:FILE.onnx`, `beyondmimic:FILE.onnx`, a built-in); repeat for each.
-    #[arg(long = "policy", required_unless_present_any = ["clips", "policy_file"])]
+    #[arg(long = "policy", required_unless_present_any = ["clips", "policy_file", "pairs"])]
     pub policies: Vec<String>,
     /// More general policies from a TOML file of `[[policy]]` tables, in a sweep spec's
     /// format: `policy = "wbc-mjlab:FILE.onnx"` runs in process; `command = "…"` is a
@@ -43,6 +43,35 @@ pub struct Args {
     /// network); each runs under --clip-settings in a table of its own. Repeat for each.
     #[arg(long = "clip", value_parser = parse_clip)]
     pub clips: Vec<OwnClip>,
+    /// A compliant policy and its stiff twin trained on the same clip, on that clip:
+    /// `COMPLIANT vs BASELINE@DATASET` (a dataset of the clip alone, e.g.
+    /// `softmimic:Pour-SoftMimic.onnx vs softmimic:Pour-Baseline.onnx@pour`); each runs
+    /// under no force, --pair-pushes from --pair-headings, and the hand forces of a synthetic
+    /// --pair-force-task sequence replayed on the clip, the compliant one also at each
+    /// --pair-stiffness. Tables in OUT/pairs.md, every cell in OUT/pairs.csv. Repeat for each.
+    #[arg(long = "pair", value_parser = parse_pair)]
+    pub pairs: Vec<CompliancePair>,
+    /// The compliant member's stiffness sweep, N/m, comma separated (a softmimic network).
+    #[arg(long, value_delimiter = ',', default_value = "30,60,150,300,600")]
+    pub pair_stiffness: Vec<f64>,
+    /// Seconds of each pair's clip that run (from its start).
+    #[arg(long, default_value_t = 20.0)]
+    pub pair_seconds: f64,
+    /// Push magnitudes per hand of the pairs, N, comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "10,20,30,50")]
+    pub pair_pushes: Vec<f64>,
+    /// Push directions of the pairs, degrees from the clip's initial heading.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "0,90,180,270",
+        allow_negative_numbers = true
+    )]
+    pub pair_headings: Vec<f64>,
+    /// The synthetic task whose first sequence's hand forces are replayed on each pair's
+    /// clip (looped to its length).
+    #[arg(long, default_value = "push_chair")]
+    pub pair_force_task: String,
     /// Settings of the single-clip table, comma separated.
     #[arg(
         long,
@@ -105,7 +134,28 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         out: args.out.clone(),
         unchecked: args.unchecked,
     };
-    let entries = run_leaderboard(&request, &mut Progress::default())?;
+    let entries = if request.policies.is_empty()
+        && request.processes.is_empty()
+        && request.clips.is_empty()
+    {
+        Vec::new()
+    } else {
+        run_leaderboard(&request, &mut Progress::default())?
+    };
+    let pairs = run_pairs(
+        &args.pairs,
+        &PairOptions {
+            stiffness_n_per_m: args.pair_stiffness.clone(),
+            seconds: args.pair_seconds,
+            push_n: args.pair_pushes.clone(),
+            push_headings_deg: args.pair_headings.clone(),
+            force_task: args.pair_force_task.clone(),
+            engines: request.engines.clone(),
+            out: args.out.clone(),
+            unchecked: args.unchecked,
+        },
+        &mut Progress::default(),
+    )?;
     let general: Vec<_> = entries.iter().filter(|e| !e.own_clip).collect();
     let own: Vec<_> = entries.iter().filter(|e| e.own_clip).collect();
     let mut table = String::new();
@@ -118,6 +168,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
         table.push_str("Single-clip policies, each on its own clip:\n\n");
         table.push_str(&leaderboard_table(&own));
+    }
+    if !pairs.is_empty() {
+        if !table.is_empty() {
+            table.push('\n');
+        }
+        table.push_str("Compliant and stiff pairs, each on its own clip:\n\n");
+        table.push_str(&pairs_table(&pairs));
+        let written = write_pair_files(&args.out, &pairs)?;
+        eprintln!(
+            "wrote {} and {}",
+            written[0].display(),
+            written[1].display()
+        );
     }
     let md_path = args.out.join("leaderboard.md");
     let text = format!(
@@ -155,6 +218,11 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+fn parse_pair(text: &str) -> Result<CompliancePair, String> {
+    CompliancePair::parse(text)
+        .ok_or_else(|| format!("`{text}`: give COMPLIANT vs BASELINE@DATASET"))
 }
 
 fn parse_clip(text: &str) -> Result<OwnClip, String> {

@@ -5,6 +5,7 @@ mod dataset;
 mod describe;
 mod error;
 mod export;
+pub mod force_graft;
 mod format;
 mod glitch;
 pub mod import;

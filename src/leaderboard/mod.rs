@@ -19,6 +19,13 @@ use crate::results::{RunDir, Summary};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+mod pairs;
+
+pub use pairs::{
+    pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember, PairOptions,
+    PairResult,
+};
+
 /// Why the leaderboard could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum LeaderboardError {
@@ -87,6 +94,14 @@ pub enum LeaderboardError {
     /// No policy or no engine.
     #[error("the leaderboard needs at least one policy and one engine")]
     Empty,
+    /// A compliant/stiff pair's data could not be prepared.
+    #[error("pair {pair}: {message}")]
+    PairData {
+        /// The pair's name.
+        pair: String,
+        /// What is wrong.
+        message: String,
+    },
 }
 
 /// A single-clip policy and the dataset of its own clip.
@@ -392,7 +407,15 @@ pub fn run_leaderboard(
             } else {
                 &request.settings
             };
-            let summary = run_one(request, player, dataset, settings, engine, &run, observer)?;
+            let summary = run_one(
+                request.unchecked,
+                player,
+                dataset,
+                settings,
+                engine,
+                &run,
+                observer,
+            )?;
             entries.push(Entry {
                 policy: player.name().to_string(),
                 own_clip: *own_clip,
@@ -407,7 +430,7 @@ pub fn run_leaderboard(
 }
 
 fn run_one(
-    request: &LeaderboardRequest,
+    unchecked: bool,
     player: &Player,
     dataset: &Path,
     settings: &[String],
@@ -441,7 +464,7 @@ fn run_one(
         profile,
         settings: settings.to_vec(),
         engine,
-        unchecked: request.unchecked,
+        unchecked,
         ..EvalRequest::default()
     })
     .map_err(|source| LeaderboardError::Spec {
