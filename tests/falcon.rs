@@ -154,6 +154,8 @@ fn policy_check_passes_on_the_bundled_walk_and_the_network_does_the_work() {
     );
     assert!(stdout.contains("under profile `falcon`"), "{stdout}");
     assert!(stdout.contains("command-following"), "{stdout}");
+    assert!(stdout.contains("judged as a command follower"), "{stdout}");
+    assert!(stdout.contains("root velocity error"), "{stdout}");
     for check in ["wiring", "stand", "track", "zero_action"] {
         assert!(
             stdout

@@ -147,6 +147,14 @@ pub trait Policy {
     fn parameters(&self) -> Vec<(&'static str, f64)> {
         Vec::new()
     }
+
+    /// What the policy follows when it follows commands derived from the reference rather
+    /// than the reference's joints (FALCON), in a few words; `None` for a tracker. The
+    /// sanity check judges a follower by what it is asked to follow
+    /// (`crate::sanity::following`).
+    fn follows_commands(&self) -> Option<&'static str> {
+        None
+    }
 }
 
 /// A policy's account of its wiring, for the sanity check.

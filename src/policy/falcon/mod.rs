@@ -168,6 +168,10 @@ impl Policy for FalconPolicy {
         commands::reference_offsets_s()
     }
 
+    fn follows_commands(&self) -> Option<&'static str> {
+        Some("root velocity, heading and base height, arm joints")
+    }
+
     fn sanity_exempt(&self) -> Option<&'static str> {
         None
     }

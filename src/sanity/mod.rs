@@ -17,6 +17,8 @@
 //!
 //! Episodes run one at a time on one engine, through the same `Episode` as an evaluation.
 
+pub mod following;
+
 use crate::episode::{Episode, EpisodeSetup};
 use crate::evaluation::TerminationRule;
 use crate::motion::Sequence;
@@ -24,6 +26,7 @@ use crate::physics::{make_physics, Engine, EngineError, PhysicsSettings};
 use crate::policy::{ActOutcome, Observation, Policy};
 use crate::profile::Profile;
 use crate::robot::{forward_kinematics, lowest_sole_point_z, RobotModel};
+use following::{Following, FollowingMeter};
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -133,6 +136,9 @@ struct Run {
     /// Control steps whose action had a non-finite value (the previous action was held
     /// instead, as an evaluation's miss rule would), and the first of them.
     non_finite: Option<(usize, usize)>,
+    /// What a command follower was asked to follow, and how it did (measured when the
+    /// policy follows commands).
+    following: Option<Following>,
 }
 
 impl Run {
@@ -225,18 +231,48 @@ pub fn check_policy(
     let tracked = run_episode(policy, false, &setup, &tracking, &options.engine)?;
     done(started);
     let kp_ok = tracked.kp_rms_mm.is_some_and(|e| e < options.max_kp_rms_mm);
-    let (passed, detail) = tracked.verdict(
-        tracked.survival >= 1.0 && kp_ok,
-        format!(
-            "{:.1} s of {}/{}: survival {:.3} (must be 1.0), keypoint error {} (must be under {:.0} mm)",
-            duration_s(&tracking),
-            tracking.task,
-            tracking.sequence_id,
-            tracked.survival,
-            mm(tracked.kp_rms_mm),
-            options.max_kp_rms_mm
+    let (passed, detail) = match (policy.follows_commands(), tracked.following) {
+        (Some(what), Some(f)) => {
+            let problems = f.problems(options.max_kp_rms_mm);
+            tracked.verdict(
+                tracked.survival >= 1.0 && problems.is_empty(),
+                format!(
+                    "{:.1} s of {}/{}, judged as a command follower ({what}): survival {:.3} (must be 1.0), root velocity error {:.3} m/s over {} s windows (under {}), heading error {:.1}° (under {}°), height error {:.1} mm (under {} mm), upper-body keypoint error in the root frame {:.1} mm (under {:.0} mm); world keypoint error {} (not judged: commands leave drift uncorrected){}",
+                    duration_s(&tracking),
+                    tracking.task,
+                    tracking.sequence_id,
+                    tracked.survival,
+                    f.velocity_rms_m_per_s,
+                    following::VELOCITY_WINDOW_S,
+                    following::MAX_VELOCITY_RMS_M_PER_S,
+                    f.heading_rms_deg,
+                    following::MAX_HEADING_RMS_DEG,
+                    f.height_rms_mm,
+                    following::MAX_HEIGHT_RMS_MM,
+                    f.upper_kp_rms_mm,
+                    options.max_kp_rms_mm,
+                    mm(tracked.kp_rms_mm),
+                    if problems.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; fails: {}", problems.join(", "))
+                    }
+                ),
+            )
+        }
+        _ => tracked.verdict(
+            tracked.survival >= 1.0 && kp_ok,
+            format!(
+                "{:.1} s of {}/{}: survival {:.3} (must be 1.0), keypoint error {} (must be under {:.0} mm)",
+                duration_s(&tracking),
+                tracking.task,
+                tracking.sequence_id,
+                tracked.survival,
+                mm(tracked.kp_rms_mm),
+                options.max_kp_rms_mm
+            ),
         ),
-    );
+    };
     checks.push(CheckOutcome {
         name: "track".into(),
         passed,
@@ -247,22 +283,39 @@ pub fn check_policy(
     let started = phase("zero action", &tracking);
     let zeroed = run_episode(policy, true, &setup, &tracking, &options.engine)?;
     done(started);
+    // A command follower's zero action stands still where the reference moves: its
+    // velocity error, not its world keypoint error, shows the network at work.
     let worse = zeroed.survival < tracked.survival
-        || match (zeroed.kp_rms_mm, tracked.kp_rms_mm) {
-            (Some(z), Some(t)) => z >= options.zero_worse_ratio * t,
-            _ => false,
+        || match (zeroed.following, tracked.following) {
+            (Some(z), Some(t)) => {
+                z.velocity_rms_m_per_s >= options.zero_worse_ratio * t.velocity_rms_m_per_s
+            }
+            _ => match (zeroed.kp_rms_mm, tracked.kp_rms_mm) {
+                (Some(z), Some(t)) => z >= options.zero_worse_ratio * t,
+                _ => false,
+            },
         };
     checks.push(CheckOutcome {
         name: "zero_action".into(),
         passed: worse,
-        detail: format!(
-            "the same reference with zero action: survival {:.3} against {:.3}, keypoint error {} against {} (must survive less, or err {:.1}× more)",
-            zeroed.survival,
-            tracked.survival,
-            mm(zeroed.kp_rms_mm),
-            mm(tracked.kp_rms_mm),
-            options.zero_worse_ratio
-        ),
+        detail: match (zeroed.following, tracked.following) {
+            (Some(z), Some(t)) => format!(
+                "the same reference with zero action: survival {:.3} against {:.3}, root velocity error {:.3} against {:.3} m/s (must survive less, or err {:.1}× more)",
+                zeroed.survival,
+                tracked.survival,
+                z.velocity_rms_m_per_s,
+                t.velocity_rms_m_per_s,
+                options.zero_worse_ratio
+            ),
+            _ => format!(
+                "the same reference with zero action: survival {:.3} against {:.3}, keypoint error {} against {} (must survive less, or err {:.1}× more)",
+                zeroed.survival,
+                tracked.survival,
+                mm(zeroed.kp_rms_mm),
+                mm(tracked.kp_rms_mm),
+                options.zero_worse_ratio
+            ),
+        },
         survival: Some(zeroed.survival),
         kp_rms_mm: zeroed.kp_rms_mm,
     });
@@ -346,6 +399,14 @@ fn run_episode(
         setup.profile.gains.clone(),
     )?;
     let mut episode = Episode::start(setup, seq, physics.as_mut());
+    let mut meter = policy.follows_commands().map(|_| {
+        FollowingMeter::new(
+            setup.robot,
+            setup.keypoints,
+            seq,
+            setup.profile.control_dt_s,
+        )
+    });
     policy.reset(0);
     let mut actions = vec![vec![0.0; setup.robot.n_joints()]];
     let mut applied = vec![0.0; setup.robot.n_joints()];
@@ -353,6 +414,9 @@ fn run_episode(
     let mut step = 0;
     while !episode.is_done() {
         let obs: Observation = episode.observation();
+        if let Some(meter) = meter.as_mut() {
+            meter.step(obs.time_s, &obs.root, &obs.q);
+        }
         if policy.act(std::slice::from_ref(&obs), &mut actions) != ActOutcome::Acted {
             break;
         }
@@ -374,6 +438,7 @@ fn run_episode(
         survival: series.survival(),
         kp_rms_mm: series.kp_rms_m().map(|e| 1e3 * e),
         non_finite,
+        following: meter.map(|m| m.finish()),
     })
 }
 
