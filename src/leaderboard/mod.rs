@@ -444,14 +444,7 @@ fn run_one(
     // (a session name has at most 64 characters), unique per run and per invocation.
     let session = format!(
         "leaderboard-{}-{}",
-        {
-            use sha2::Digest;
-            let digest = sha2::Sha256::digest(run.to_string_lossy().as_bytes());
-            digest[..4]
-                .iter()
-                .map(|b| format!("{b:02x}"))
-                .collect::<String>()
-        },
+        &crate::motion::sha256_hex(run.to_string_lossy().as_bytes())[..8],
         std::process::id()
     );
     let (policy_arg, profile) = match player {

@@ -292,16 +292,12 @@ impl Plan {
 
     /// SHA-256 (hex) of this plan's JSON with an empty [`Plan::seal`].
     pub fn seal_of(&self) -> String {
-        use sha2::{Digest, Sha256};
         let unsealed = Self {
             seal: String::new(),
             ..self.clone()
         };
         let json = serde_json::to_vec(&unsealed).expect("a plan serializes");
-        Sha256::digest(json)
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect()
+        crate::motion::sha256_hex(&json)
     }
 
     /// Reads `DIR/plan.json`, refusing another format version.
