@@ -554,3 +554,108 @@ fn walk_run_headers(dir: &Path) -> Vec<serde_json::Value> {
     }
     out
 }
+
+/// Case C of the golden script: GMTWalkStand-SoftMimic on `walk.csv` at t = 0.02 s (the
+/// deploy's first step), the robot on the reference pose at rest. The reference terms come
+/// from ThorArena's own reference (the imported clip, interpolated), the golden's from the
+/// deploy's motion library (forward differences at 30 fps, its soft contact labels), so
+/// each term is held to what the two constructions can share: joints, height and gravity
+/// to 1e-4; the root velocities to 0.05 m/s and the yaw rates to 0.15 rad/s, because
+/// ThorArena's reference differentiates centrally and the deploy's library forward, half
+/// a 30 fps frame apart (measured here: 0.034 m/s and 0.121 rad/s at most, in the future
+/// frames of this turning walk; 0.009 and 0.015 at the current one); and the foot contacts
+/// wherever the clip's label is clear (≥ 0.99 or ≤ 0.01; between, the clip's labels are
+/// soft and the adapter's are not).
+#[test]
+fn the_1159_observation_matches_the_deploy_formulas_on_a_walk() {
+    const TEST: &str = "the_1159_observation_matches_the_deploy_formulas_on_a_walk";
+    let (Some(onnx), Some(walk)) = (
+        network(TEST, "GMTWalkStand-SoftMimic"),
+        prereq::reference(TEST, "softmimic/motions/walk.csv"),
+    ) else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let run = import(&[&walk], &ds, "walk", &["--renormalize-quaternions"]);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let seq = Dataset::open(&ds, &common::g1()).unwrap().load(0).unwrap();
+    let reference = thorarena::motion::Reference::new(&seq);
+    let t = 0.02;
+    let mut policy = load(&onnx, DEFAULT_STIFFNESS);
+    assert_eq!(policy.layout(), Layout::Track);
+    let frames: Vec<_> = policy
+        .reference_offsets_s()
+        .iter()
+        .map(|dt| reference.sample(t + dt))
+        .collect();
+    let now = &frames[0];
+    let mut obs = observation(
+        0,
+        now.world_from_root.rotation,
+        [0.0; 3],
+        now.joint_pos.clone(),
+        vec![0.0; 29],
+    );
+    obs.reference = frames.clone();
+    let mut actions = vec![vec![0.0; 29]];
+    policy.act(std::slice::from_ref(&obs), &mut actions);
+    let ours = &policy.last_inputs()[0];
+    let golden = numbers("observation_c_walk.txt");
+    assert_eq!(ours.len(), golden.len());
+    // Index ranges of the terms (history part: 3 frames each).
+    let mut at = 0;
+    let mut check = |width: usize, tolerance: f64, what: &str, clear_only: bool| {
+        for i in at..at + width {
+            let (o, mut g) = (f64::from(ours[i]), golden[i]);
+            if clear_only {
+                // A clear label is the contact it rounds to.
+                if (0.01..0.99).contains(&g) {
+                    continue;
+                }
+                g = g.round();
+            }
+            if std::env::var_os("SOFTMIMIC_GOLDEN_DIFFS").is_some() {
+                eprintln!("{what} {i} {:.5}", (o - g).abs());
+                continue;
+            }
+            assert!(
+                (o - g).abs() <= tolerance,
+                "{what} (input {i}): ours {o}, deploy {g}"
+            );
+        }
+        at += width;
+    };
+    for (width, tolerance, what) in [
+        (3, 1e-6, "base_ang_vel"),
+        (3, 1e-4, "projected_gravity"),
+        (29, 1e-5, "joint_pos"),
+        (29, 1e-6, "joint_vel"),
+        (29, 1e-6, "actions"),
+        (29, 1e-4, "reference_dof_pos"),
+        (2, 0.05, "reference_xy_vel"),
+        (1, 0.15, "reference_yaw_vel"),
+        (1, 1e-4, "reference_root_height"),
+        (3, 1e-3, "reference_gravity"),
+    ] {
+        check(width * 3, tolerance, what, false);
+    }
+    check(2 * 3, 0.0, "reference_foot_contact", true);
+    check(3, 1e-6, "desired_stiffness_log", false);
+    check(3, 1e-6, "desired_rotational_stiffness_log", false);
+    for (width, tolerance, what, clear) in [
+        (29, 1e-4, "reference_dof_pos_future", false),
+        (2, 0.05, "reference_xy_vel_future", false),
+        (1, 0.15, "reference_yaw_vel_future", false),
+        (1, 1e-4, "reference_root_height_future", false),
+        (3, 1e-3, "reference_gravity_future", false),
+        (2, 0.0, "reference_foot_contact_future", true),
+    ] {
+        check(width * 20, tolerance, what, clear);
+    }
+    assert_eq!(at, 1159);
+}
