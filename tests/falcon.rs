@@ -6,7 +6,6 @@
 //! `../shared/reference` is absent; never in CI.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use std::path::Path;
 use std::process::Command;
 use thorarena::physics::RootState;
 use thorarena::policy::falcon::commands::Commands;
@@ -17,17 +16,8 @@ use thorarena::policy::Observation;
 mod common;
 mod prereq;
 
-const FIXTURES: &str = "tests/fixtures/falcon_golden";
-
 fn numbers(file: &str) -> Vec<f64> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join(FIXTURES)
-        .join(file);
-    std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .lines()
-        .map(|l| l.trim().parse().unwrap())
-        .collect()
+    common::fixture_numbers("falcon_golden", file)
 }
 
 /// The robot of one step: upright or pitched by `pitch` rad, its root-frame angular

@@ -149,17 +149,8 @@ use thorarena::policy::softmimic::observation::{
 use thorarena::policy::softmimic::{SoftMimicPolicy, DEFAULT_POSE, DEFAULT_STIFFNESS};
 use thorarena::policy::{Observation, Policy};
 
-const GOLDEN: &str = "tests/fixtures/softmimic_golden";
-
 fn numbers(file: &str) -> Vec<f64> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join(GOLDEN)
-        .join(file);
-    std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-        .lines()
-        .map(|l| l.trim().parse().unwrap())
-        .collect()
+    common::fixture_numbers("softmimic_golden", file)
 }
 
 fn assert_close(ours: &[f32], golden: &[f64], tolerance: f64, what: &str) {

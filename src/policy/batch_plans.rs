@@ -58,6 +58,24 @@ impl BatchPlans {
         self.run_on(&self.plan(batch)?, inputs, batch)
     }
 
+    /// One row through `plan`, or `None` after logging why (`family`'s message): a network
+    /// that fails at run time answers NaN, which the runner's miss rule keeps away from the
+    /// physics and counts.
+    pub fn run_row(
+        &self,
+        plan: &Arc<TypedRunnableModel>,
+        input: &[f32],
+        family: &str,
+    ) -> Option<Vec<f32>> {
+        match self.run_on(plan, input, 1) {
+            Ok(out) => Some(out),
+            Err(e) => {
+                log::warn!("{family}: inference failed: {e:#}");
+                None
+            }
+        }
+    }
+
     /// [`Self::run`] on a plan taken from [`Self::plan`] beforehand: no lookup, for a
     /// caller that runs one shape every step.
     pub fn run_on(

@@ -10,6 +10,7 @@ pub mod inputs;
 mod remote;
 pub mod softmimic;
 mod stall_watch;
+mod trained_with;
 pub mod twist2;
 pub mod wire;
 

@@ -340,14 +340,8 @@ fn duration_s(seq: &Sequence) -> f64 {
 /// The first `seconds` of `seq` (all of it when shorter), forces dropped: the check runs
 /// without force.
 fn truncated(seq: &Sequence, seconds: f64) -> Sequence {
-    let frames = ((seconds * seq.fps).round() as usize + 1).min(seq.joint_pos.len());
-    let mut s = seq.clone();
-    s.root_pos.truncate(frames);
-    s.root_quat_wxyz.truncate(frames);
-    s.joint_pos.truncate(frames);
-    if let Some(v) = s.joint_vel.as_mut() {
-        v.truncate(frames);
-    }
+    let mut s = crate::motion::force_graft::first_seconds(seq, seconds);
+    let frames = s.n_frames();
     s.force_sensor = [vec![[0.0; 3]; frames], vec![[0.0; 3]; frames]];
     s.forces_recorded = false;
     s

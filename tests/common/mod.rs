@@ -5,6 +5,20 @@ use serde_json::json;
 use thorarena::motion::Sequence;
 use thorarena::robot::{self, RobotModel};
 
+/// The numbers of a fixture file, one per line (`tests/fixtures/DIR/FILE`: golden vectors
+/// a script computed independently of this crate).
+pub fn fixture_numbers(dir: &str, file: &str) -> Vec<f64> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(dir)
+        .join(file);
+    std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .map(|l| l.trim().parse().unwrap())
+        .collect()
+}
+
 /// The bundled G1.
 pub fn g1() -> RobotModel {
     robot::load_bundled("g1_29dof").unwrap()

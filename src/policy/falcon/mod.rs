@@ -130,29 +130,13 @@ impl FalconPolicy {
 
 /// Where `profile` contradicts FALCON's deploy: its rate, action scale and default pose.
 fn disagreements(profile: &Profile) -> Vec<String> {
-    let mut out = Vec::new();
-    if (profile.control_dt_s - CONTROL_DT_S).abs() > 1e-9 {
-        out.push(format!(
-            "FALCON runs at 50 Hz; the profile `{}` controls every {} s",
-            profile.name, profile.control_dt_s
-        ));
+    super::trained_with::TrainedWith {
+        family: "FALCON",
+        control_dt_s: CONTROL_DT_S,
+        action_scale: ACTION_SCALE,
+        default_pose: &DEFAULT_POSE,
     }
-    if let Some(j) = (0..N_JOINTS).find(|&j| (profile.action_scale[j] - ACTION_SCALE).abs() > 1e-9)
-    {
-        out.push(format!(
-            "FALCON's action scale is {ACTION_SCALE}; the profile `{}` scales joint {j} by {}",
-            profile.name, profile.action_scale[j]
-        ));
-    }
-    if let Some(j) =
-        (0..N_JOINTS).find(|&j| (profile.action_offset_rad[j] - DEFAULT_POSE[j]).abs() > 1e-9)
-    {
-        out.push(format!(
-            "FALCON's default pose has joint {j} at {} rad; the profile `{}` offsets it to {}",
-            DEFAULT_POSE[j], profile.name, profile.action_offset_rad[j]
-        ));
-    }
-    out
+    .contradictions(profile)
 }
 
 impl Policy for FalconPolicy {
@@ -238,8 +222,8 @@ impl Policy for FalconPolicy {
             let frame = observation::frame(obs, &DEFAULT_POSE, &slot.last_raw, &cmd);
             slot.history.push_into(frame, starts, &mut self.input);
             self.last_inputs.push(self.input.clone());
-            match self.plans.run_on(&self.plan, &self.input, 1) {
-                Ok(out) => {
+            match self.plans.run_row(&self.plan, &self.input, "falcon") {
+                Some(out) => {
                     let slot = &mut self.slots[obs.env];
                     for (last, o) in slot.last_raw.iter_mut().zip(&out) {
                         *last = f64::from(*o).clamp(-ACTION_CLIP, ACTION_CLIP);
@@ -251,12 +235,7 @@ impl Policy for FalconPolicy {
                         action[c] = self.raw_for_target(c, target);
                     }
                 }
-                // A network that fails at run time answers NaN: the runner's miss rule
-                // keeps it away from the physics and counts it.
-                Err(e) => {
-                    log::warn!("falcon: inference failed: {e:#}");
-                    action.fill(f64::NAN);
-                }
+                None => action.fill(f64::NAN),
             }
         }
         ActOutcome::Acted

@@ -234,29 +234,13 @@ impl SoftMimicPolicy {
 
 /// Where `profile` contradicts SoftMimic's training: rate, action scale, default pose.
 fn disagreements(profile: &Profile) -> Vec<String> {
-    let mut out = Vec::new();
-    if (profile.control_dt_s - 0.02).abs() > 1e-9 {
-        out.push(format!(
-            "SoftMimic runs at 50 Hz; the profile `{}` controls every {} s",
-            profile.name, profile.control_dt_s
-        ));
+    super::trained_with::TrainedWith {
+        family: "SoftMimic",
+        control_dt_s: 0.02,
+        action_scale: ACTION_SCALE,
+        default_pose: &DEFAULT_POSE,
     }
-    if let Some(j) = (0..N_JOINTS).find(|&j| (profile.action_scale[j] - ACTION_SCALE).abs() > 1e-9)
-    {
-        out.push(format!(
-            "SoftMimic's action scale is {ACTION_SCALE}; the profile `{}` scales joint {j} by {}",
-            profile.name, profile.action_scale[j]
-        ));
-    }
-    if let Some(j) =
-        (0..N_JOINTS).find(|&j| (profile.action_offset_rad[j] - DEFAULT_POSE[j]).abs() > 1e-9)
-    {
-        out.push(format!(
-            "SoftMimic's default pose has joint {j} at {} rad; the profile `{}` offsets it to {}",
-            DEFAULT_POSE[j], profile.name, profile.action_offset_rad[j]
-        ));
-    }
-    out
+    .contradictions(profile)
 }
 
 impl Policy for SoftMimicPolicy {
@@ -372,20 +356,15 @@ impl Policy for SoftMimicPolicy {
             slot.history
                 .push_into(self.layout, frame, starts, &future, &mut self.input);
             self.last_inputs.push(self.input.clone());
-            match self.plans.run_on(&self.plan, &self.input, 1) {
-                Ok(out) => {
+            match self.plans.run_row(&self.plan, &self.input, "softmimic") {
+                Some(out) => {
                     let slot = &mut self.slots[obs.env];
                     for (i, (last, o)) in slot.last_raw.iter_mut().zip(&out).enumerate() {
                         *last = f64::from(*o);
                         action[ISAAC_FROM_CANONICAL[i]] = *last;
                     }
                 }
-                // A network that fails at run time answers NaN: the runner's miss rule
-                // keeps it away from the physics and counts it.
-                Err(e) => {
-                    log::warn!("softmimic: inference failed: {e:#}");
-                    action.fill(f64::NAN);
-                }
+                None => action.fill(f64::NAN),
             }
         }
         ActOutcome::Acted
