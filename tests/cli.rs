@@ -188,7 +188,7 @@ fn misspelt_policies_and_profiles_get_the_nearest_name_and_what_exists() {
         (vec!["--policy", "ipc"], "ipc:NAME"),
         (
             vec!["--policy", "hold", "--profile", "twist"],
-            "did you mean `twist2`?) (bundled: beyondmimic, default, gmt, holosoma-ppo, holosoma-wbt, twist2, wbc-mjlab",
+            "did you mean `twist2`?) (bundled: beyondmimic, default, falcon, gmt, holosoma-ppo, holosoma-wbt, softmimic, twist2, wbc-mjlab",
         ),
     ] {
         let mut a = vec!["eval", "--out", out.to_str().unwrap()];

@@ -128,7 +128,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
     PolicyFamily {
         name: "softmimic",
         spelling: "softmimic:FILE.onnx[@stiffness=N]",
-        what: "SoftMimic's compliant trackers and their stiff baselines (arXiv:2510.17792), with a stiffness command in their input (10–1000 N/m; default 60)",
+        what: "SoftMimic's compliant trackers and their stiff baselines (arXiv:2510.17792), with a stiffness command in their input (10–1000 N/m as trained, up to 600 while the rotational one follows as N/60; default 60)",
         supplies: "the network file (onnx/*.onnx converted from SoftMimic's released TorchScript); optionally the stiffness, N/m",
         profile: "softmimic",
         slots_per_worker: NETWORK_SLOTS_PER_WORKER,
