@@ -85,8 +85,19 @@ fn evaluate(
         .collect()
 }
 
+/// Held by each test of this file while it runs: the latency bench times a round trip and
+/// the network call inside it in microseconds, which a simulation beside it on the same two
+/// cores would disturb (a C ABI row once measured its round trip's median 3 µs under its
+/// network call's with the walks running beside it).
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn one_at_a_time() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 #[test]
 fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
+    let _alone = one_at_a_time();
     let Some(reference) = reference_dir("twist2_reference::walks") else {
         return;
     };
@@ -141,6 +152,7 @@ fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
 
 #[test]
 fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
+    let _alone = one_at_a_time();
     use thorarena::episode::EpisodeSetup;
     use thorarena::evaluation::TerminationRule;
     use thorarena::policy::{Policy, Twist2Policy};
@@ -203,6 +215,7 @@ fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
 /// environment count and builder.
 #[test]
 fn bench_ipc_times_the_python_adapter_against_its_own_network_call() {
+    let _alone = one_at_a_time();
     const TEST: &str = "twist2_reference::bench_ipc_adapter";
     let Some(reference) = reference_dir(TEST) else {
         return;
