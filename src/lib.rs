@@ -57,7 +57,7 @@ pub fn data_dir() -> PathBuf {
         .unwrap_or_else(|_| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/data")))
 }
 
-/// Environment variable naming the published reference artifacts (README, "Reference
+/// Environment variable naming the published reference artifacts (docs/policies.md, "Reference
 /// artifacts"): the G1 model and TWIST2's MJCF, TWIST2's policy and walks, holosoma's
 /// policy. Only checks against real artifacts use them; the benchmark itself does not.
 pub const REFERENCE_DIR_ENV: &str = "THORARENA_REFERENCE";

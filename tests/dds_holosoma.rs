@@ -13,13 +13,13 @@
 //! which the FastSAC file lacks (it was trained with 1.0, holosoma at fc600e7); the deploy
 //! code's own flag `--task.no-action-scales-by-effort-limit-over-p-gain` restores 1.0, the
 //! `holosoma-wbt` profile's scale. Without it the robot falls after about 4 s, through the
-//! bridge as in process (README, "Your deployment code, unchanged").
+//! bridge as in process (docs/deployment.md, "Your deployment code, unchanged").
 //!
 //! The simulated robot runs on MuJoCo (the generated MJCF), both through the bridge and in
 //! process. The bridge must keep real time at holosoma's 2 ms step, and rapier's G1 step
 //! (≈ 0.5 ms with the episode's bookkeeping) leaves too little slack on a shared
 //! 2-vCPU VM whose vCPU slows 10–20× for milliseconds at a time: there 4–8 % of the steps
-//! start late, against 1 to 32 on MuJoCo (≈ 0.1 ms a step). README, "Real time", has the
+//! start late, against 1 to 32 on MuJoCo (≈ 0.1 ms a step). docs/deployment.md, "Real time needs slack", has the
 //! numbers; `THORARENA_DDS_TEST_ENGINE=rapier` runs this test on rapier. Even MuJoCo's
 //! loop is late when the machine stalls for long (this one, during a whole-suite run: 1 548
 //! of 18 000 steps, a step taking up to 16 ms): a deployed run the bridge reports as not
@@ -71,7 +71,7 @@ fn holosomas_inference_package_runs_unchanged_and_its_dance_is_scored() {
     if engine == "mujoco" && !cfg!(feature = "mujoco") {
         prereq::skip(
             TEST,
-            "built without the `mujoco` feature (./test.sh builds it; see README, \"MuJoCo backend\")",
+            "built without the `mujoco` feature (./test.sh builds it; see docs/engines.md, \"MuJoCo backend\")",
         );
         return;
     }
@@ -96,7 +96,7 @@ fn holosomas_inference_package_runs_unchanged_and_its_dance_is_scored() {
     // A run the machine did not keep in real time (the bridge says so, and its scores are
     // not a real-time run's) is not scored: it is run again, up to three times in all,
     // each attempt's report printed. Shared VMs stall the loop for milliseconds at a time
-    // (README, "Real time needs slack").
+    // (docs/deployment.md, "Real time needs slack").
     let mut attempts = Vec::new();
     let mut kept = None;
     for attempt in 1..=3 {
@@ -157,11 +157,11 @@ fn holosomas_inference_package_runs_unchanged_and_its_dance_is_scored() {
         number(&broken, "survival"),
     );
     // The deploy code danced: a robot held in its stiff start-up pose, or one scaled wrong,
-    // falls within seconds, deployed as in process at the same moment (README). A working
+    // falls within seconds, deployed as in process at the same moment (docs/deployment.md). A working
     // deployment dances at least twice as long as the wrong scale does in process. Not
     // always the whole dance: the policy acts on states that reach it through DDS at its
     // own 50 Hz, its clip 3 control steps behind, and on MuJoCo that has cost it a fall
-    // (README: 2 of 6 real-time runs, 29.6 s and 114.5 s in). In process too: the dance
+    // (docs/deployment.md: 2 of 6 real-time runs, 29.6 s and 114.5 s in). In process too: the dance
     // has a moment about 30 s in where rounding at the 1e-6 level decides (2 of 24 nudged
     // runs fall there), and the in-process run at eight rows per call is one that falls.
     // So both are held to the same bar: twice the wrong scale's dance.
@@ -172,7 +172,7 @@ fn holosomas_inference_package_runs_unchanged_and_its_dance_is_scored() {
         );
     }
     // The BeyondMimic check's tracking bound; and close to the lock-step run: the deploy
-    // code's clip runs a constant 3 control steps behind the reference (README), which
+    // code's clip runs a constant 3 control steps behind the reference (docs/deployment.md), which
     // cost it 8 to 12 mm on MuJoCo against a whole in-process dance (49.4 mm), 13 to 16
     // against the first 29.6 s (45.1 mm), not 20.
     assert!(number(&deployed, "kp_mm") < 100.0, "{deployed}");

@@ -1,7 +1,7 @@
 //! The two engines side by side (cargo feature `mujoco`): `crosscheck` on the same
 //! episodes (per setting and push force, joint divergence, the feet's slip and when it
 //! parts), its refusal of bad arguments before anything runs, the feet in both engines'
-//! traces, the known `push_chair` gap kept in view (README "Why the engines part under
+//! traces, the known `push_chair` gap kept in view (docs/engines.md "Why the engines part under
 //! force: the feet"), scripted stepping under a pull falling alike on both, and `report`
 //! refusing to mix engines unless asked. In a build without the feature these tests are
 //! counted as skipped (and fail in CI, which builds it).
@@ -15,7 +15,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
 /// Bound on the mean RMS joint-angle divergence of the `hold` policy between the engines
 /// over the first second without force, rad: 0.002 measured on the sample data; the
-/// open-loop cross-check's goal (README "Measured") is 0.005.
+/// open-loop cross-check's goal (docs/performance.md "Measured") is 0.005.
 const NO_FORCE_DIVERGENCE_BOUND_RAD: f64 = 0.01;
 
 fn run(args: &[&str]) -> std::process::Output {
@@ -418,7 +418,7 @@ fn traces_carry_the_feet_on_both_engines() {
 
 #[test]
 fn crosscheck_of_pushed_chairs_shows_where_the_engines_part() {
-    // The known difference of README "Why the engines part under force: the feet", kept in
+    // The known difference of docs/engines.md "Why the engines part under force: the feet", kept in
     // view: TWIST2 on 8 synthetic push_chair sequences under their forces, rapier against
     // MuJoCo on the generated MJCF at the same 5 ms. Measured: survival 0.763 / 0.315, and
     // the feet's slip parting in 8 of 8 episodes at 2.3–3.0 s, after the chair's
@@ -476,7 +476,7 @@ fn crosscheck_of_pushed_chairs_shows_where_the_engines_part() {
     );
     assert!(
         rapier - mujoco > 0.2,
-        "survival rapier {rapier:.3}, MuJoCo {mujoco:.3}: the known gap changed — update README"
+        "survival rapier {rapier:.3}, MuJoCo {mujoco:.3}: the known gap changed — update docs/engines.md"
     );
     let episodes = j["episodes"].as_array().unwrap();
     assert_eq!(episodes.len(), 8);
@@ -548,7 +548,7 @@ fn scripted_stepping_under_a_backward_pull_falls_alike_on_both_engines() {
     // Without a policy reacting, the engines agree on stepping under a sustained pull:
     // measured, the open-loop march falls at 0.97 / 0.96 s without force and 0.62 / 0.61 s
     // at 40 N per hand (rapier / MuJoCo). Their difference under force needs a policy's
-    // repeated touchdowns (README, "Why the engines part under force: the feet").
+    // repeated touchdowns (docs/engines.md, "Why the engines part under force: the feet").
     if !cfg!(feature = "mujoco") {
         return prereq::skip(
             "engine_comparison::scripted_stepping",

@@ -4,7 +4,7 @@
 //! network (what `data import --format onnx-motion` does), and `--policy beyondmimic:FILE` with
 //! `--profile holosoma-wbt` (as `eval` runs them, in process) tracks all 135 s of it without force — survival 1.0 and a
 //! keypoint error within 10 % of MuJoCo's on holosoma's own model
-//! (`tools/holosoma_mujoco.py`: 49.4 mm RMS). README's table of the two published
+//! (`tools/holosoma_mujoco.py`: 49.4 mm RMS). docs/policies.md's table of the two published
 //! policies under constant hand pushes is re-derived here. The Python BeyondMimic adapter
 //! builds the same observation and action step by step. holosoma's PPO dance
 //! (`ppo_g1_29dof_dancing.onnx`) tracks its motion under the `holosoma-ppo` profile's

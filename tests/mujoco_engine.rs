@@ -23,7 +23,7 @@ fn twist2_mjcf(test: &str) -> Option<PathBuf> {
     if !cfg!(feature = "mujoco") {
         prereq::skip(
             test,
-            "built without the `mujoco` feature (./test.sh builds it; see README, \"MuJoCo backend\")",
+            "built without the `mujoco` feature (./test.sh builds it; see docs/engines.md, \"MuJoCo backend\")",
         );
         return None;
     }

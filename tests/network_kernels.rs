@@ -22,7 +22,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 /// SHA-256 of the sorted records of TWIST2's walks (no-force, push:30) with the pinned
 /// kernels, rapier and MuJoCo (generated MJCF), measured on an AMD EPYC with AVX-512
 /// (x86-64-v4); another machine that passes this test wrote the same bits. A change meant
-/// to move records updates them, with README's figures.
+/// to move records updates them, with the documented figures.
 const RAPIER_RECORDS_SHA256: &str =
     "6117a998dd9efc3360ca3b8926c37c1fc400e1db6bf077678575276e6986b3fd";
 const MUJOCO_RECORDS_SHA256: &str =
@@ -140,7 +140,7 @@ fn every_kernel_family_this_machine_can_force_writes_the_same_rapier_records() {
     assert_eq!(
         sha256(&records),
         RAPIER_RECORDS_SHA256,
-        "the records differ from those measured on another machine (or a change moved them: then update the digest and README's figures together)"
+        "the records differ from those measured on another machine (or a change moved them: then update the digest and the documented figures together)"
     );
 }
 
@@ -161,7 +161,7 @@ fn every_kernel_family_this_machine_can_force_writes_the_same_mujoco_records() {
     assert_eq!(
         sha256(&records),
         MUJOCO_RECORDS_SHA256,
-        "the records differ from those measured on another machine (or a change moved them: then update the digest and README's figures together)"
+        "the records differ from those measured on another machine (or a change moved them: then update the digest and the documented figures together)"
     );
 }
 

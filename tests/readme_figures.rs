@@ -1,7 +1,7 @@
-//! README's figures are measured, not typed: every table between `<!-- figures: NAME -->`
+//! The documentation's figures (README.md, docs/) are measured, not typed: every table between `<!-- figures: NAME -->`
 //! and `<!-- /figures -->` is re-derived here (or, for the TWIST2 walks, in
-//! `tests/twist2_reference.rs`) with the command README shows beside it, and must match to
-//! the digits README prints.
+//! `tests/twist2_reference.rs`) with the command the page shows beside it, and must match to
+//! the digits the page prints.
 
 use std::path::Path;
 use std::process::Command;
@@ -11,7 +11,7 @@ use readme::readme_table;
 
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// Runs the README command on the sample; returns `tables.md`.
+/// Runs the documented command on the sample; returns `tables.md`.
 fn eval_sample(policy: &str, out: &Path) -> String {
     let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
         .args(["eval", "--dataset"])
@@ -63,7 +63,7 @@ fn the_baseline_table_is_what_eval_prints() {
         assert_eq!(
             shown,
             [bf, bn, hf, hn],
-            "README's `{label}` row differs from `thorarena eval` (balance force, no force, hold force, no force)"
+            "docs/policies.md's `{label}` row differs from `thorarena eval` (balance force, no force, hold force, no force)"
         );
     }
 }

@@ -1,4 +1,4 @@
-//! A run directory is read back as what it is (README, "What ThorArena guarantees"): every
+//! A run directory is read back as what it is (docs/guarantees.md, "What ThorArena guarantees"): every
 //! record is checked against its header, so a bad record is an error naming the file and
 //! line — never a panic in `report`, `merge` or `eval --resume`, never a score that moved
 //! silently — and a run holding less than its plan is reported as partial, cell by cell.

@@ -129,7 +129,7 @@ fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
         "survival {mean_survival:.2} under a 30 N push"
     );
 
-    // README's table is these measurements, to the digits it prints.
+    // docs/policies.md's table is these measurements, to the digits it prints.
     let table = readme::readme_table("twist2-walks");
     assert_eq!(table.len(), 3);
     for row in &table {
@@ -145,7 +145,7 @@ fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
         assert_eq!(
             row[1..],
             measured,
-            "README's TWIST2 row for {walk} differs from what was measured"
+            "docs/policies.md's TWIST2 row for {walk} differs from what was measured"
         );
     }
 }

@@ -4,7 +4,7 @@
 //! array in each file), `--policy wbc-mjlab:FILE` runs under its own profile without one
 //! being named, and it tracks every clip without force in rapier and in MuJoCo — survival
 //! 1.0 each, keypoint errors of the two engines within 10 % of each other per clip, and
-//! README's table of them is what was measured.
+//! docs/policies.md's table of them is what was measured.
 //! Skipped, saying so, when `../shared/reference` is absent or the build has no MuJoCo;
 //! never in CI.
 

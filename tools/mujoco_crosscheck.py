@@ -44,7 +44,7 @@ import numpy as np
 
 REPO_ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_THORARENA = REPO_ROOT / "target" / "release" / "thorarena"
-# The published reference artifacts (README, "Reference artifacts"): $THORARENA_REFERENCE,
+# The published reference artifacts (docs/policies.md, "Reference artifacts"): $THORARENA_REFERENCE,
 # else ../shared/reference beside the repository.
 REFERENCE_DIR = Path(
     os.environ.get("THORARENA_REFERENCE") or REPO_ROOT.parent / "shared" / "reference"

@@ -21,7 +21,7 @@ pub struct Args {
     pub out: PathBuf,
     /// Compare runs simulated by different physics engines (rapier, MuJoCo). Refused
     /// without it: under force the engines' scores differ by up to 30 FATS points on the
-    /// same policy (README, "Force response: rapier against MuJoCo"). With it, every run's
+    /// same policy (docs/engines.md, "Force response: rapier against MuJoCo"). With it, every run's
     /// label names its engine.
     #[arg(long)]
     pub mixed_engines: bool,

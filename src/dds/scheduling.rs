@@ -5,7 +5,7 @@
 //! kernel's fair scheduler: holosoma's inference package on 2 cores (ONNX Runtime's
 //! spinning thread pool, CycloneDDS's threads, Python) with one busy loop beside it made
 //! 6.1 % of the physics steps more than a step late at normal priority, 0.09 % under
-//! `SCHED_FIFO` (README, "Your deployment code, unchanged"). So `thorarena dds` asks for
+//! `SCHED_FIFO` (docs/deployment.md, "Your deployment code, unchanged"). So `thorarena dds` asks for
 //! `SCHED_FIFO` before its DDS participant starts its threads, which inherit it, as
 //! ros2_control's controller manager does for its control loop; refused (no root, no
 //! `RLIMIT_RTPRIO`), it runs at normal priority and says so. The bridge's loop sleeps

@@ -4,7 +4,7 @@
 //!
 //! Why the simulator builds them: a policy process in Python pays numpy's per-call cost
 //! for every term of an observation, which for TWIST2's 1432 floats was most of its
-//! per-step time (README, "Policies in other languages"). The same vector is built here
+//! per-step time (docs/performance.md, "Policy round trip"). The same vector is built here
 //! by the code the in-process policy uses ([`super::twist2::observation_into`]), once per
 //! environment, while the simulator holds the data anyway; the client only runs its
 //! network on a zero-copy view.

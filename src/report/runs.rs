@@ -189,11 +189,11 @@ pub fn label_runs(runs: &mut [Run]) {
 
 /// Why the commands that compare runs refuse to mix engines unless asked, for their
 /// messages.
-pub const MIXED_ENGINES_WHY: &str = "under force the engines' scores differ by up to 30 FATS points for the same policy (README, \"Force response: rapier against MuJoCo\")";
+pub const MIXED_ENGINES_WHY: &str = "under force the engines' scores differ by up to 30 FATS points for the same policy (docs/engines.md, \"Force response: rapier against MuJoCo\")";
 
 /// When the runs were simulated by more than one physics engine: the runs grouped by
 /// engine (`a, b: rapier; c: mujoco`); `None` when one engine ran them all. Under force the
-/// engines' scores differ (README, "Force response: rapier against MuJoCo"), so the
+/// engines' scores differ (docs/engines.md, "Force response: rapier against MuJoCo"), so the
 /// commands that compare runs refuse such a set unless asked (`--mixed-engines`).
 pub fn mixed_engines(runs: &[Run]) -> Option<String> {
     grouped(

@@ -121,7 +121,7 @@ impl RunHeader {
 
     /// The engine that simulated the run, its model and step, as every score names it:
     /// `rapier at 5 ms`, `mujoco (generated MJCF) at 5 ms`, `mujoco (g1.xml) at 1 ms`.
-    /// Under force the engines' scores differ (README, "Force response: rapier against
+    /// Under force the engines' scores differ (docs/engines.md, "Force response: rapier against
     /// MuJoCo"), so a score without its engine is not a result.
     pub fn engine_label(&self) -> String {
         let model = match &self.engine {

@@ -9,7 +9,7 @@
 // departs under a walking robot.
 //
 // Known differences, asserted at their measured values so that a change in either engine
-// is noticed (README, "Force response: rapier against MuJoCo"):
+// is noticed (docs/engines.md, "Force response: rapier against MuJoCo"):
 // - MuJoCo's friction is a soft constraint: held at 0.8·μ·m·g a block creeps (8.7 mm in
 //   1 s at μ 1); rapier's holds (< 1 mm).
 // - MuJoCo absorbs a touchdown over its contact time constant (20 ms by default): a block
@@ -130,7 +130,7 @@ fn sole_block_holds_below_the_friction_limit() {
         if ENGINE == "mujoco" && friction == 1.0 {
             assert!(
                 slide > 0.005,
-                "MuJoCo's soft friction no longer creeps ({slide:.4} m): update README and this test"
+                "MuJoCo's soft friction no longer creeps ({slide:.4} m): update docs/engines.md and this test"
             );
         }
     }
@@ -171,11 +171,11 @@ fn sole_block_touchdown_is_absorbed_as_each_engine_absorbs_it() {
     match ENGINE {
         "rapier" => assert!(
             deepest < 0.0005 && loaded_steps <= 3,
-            "rapier's contact is no longer rigid at touchdown: update README and this test"
+            "rapier's contact is no longer rigid at touchdown: update docs/engines.md and this test"
         ),
         _ => assert!(
             (0.002..0.006).contains(&deepest) && loaded_steps >= 4,
-            "MuJoCo's touchdown changed: update README and this test"
+            "MuJoCo's touchdown changed: update docs/engines.md and this test"
         ),
     }
 }

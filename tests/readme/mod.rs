@@ -1,18 +1,44 @@
-//! README's figure tables (`<!-- figures: NAME -->` … `<!-- /figures -->`), read by the
-//! tests that re-derive them.
+//! The documentation's figure tables (`<!-- figures: NAME -->` … `<!-- /figures -->`, in
+//! README.md or a page of `docs/`), read by the tests that re-derive them.
 #![allow(dead_code)]
 
 use std::path::Path;
 
-/// The rows of README's table `name`: cells per row, header and separator dropped.
+/// README.md and every page of `docs/`, each with its text.
+fn documents() -> Vec<(String, String)> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("README.md")];
+    let mut pages: Vec<_> = std::fs::read_dir(root.join("docs"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    pages.sort();
+    files.extend(pages);
+    files
+        .into_iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(&f).unwrap();
+            (f.display().to_string(), text)
+        })
+        .collect()
+}
+
+/// The rows of the documentation's table `name`: cells per row, header and separator
+/// dropped. It must stand in exactly one document.
 pub fn readme_table(name: &str) -> Vec<Vec<String>> {
-    let readme =
-        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
     let open = format!("<!-- figures: {name} -->");
-    let body = readme
-        .split_once(&open)
-        .unwrap_or_else(|| panic!("README has no {open}"))
-        .1;
+    let holding: Vec<(String, String)> = documents()
+        .into_iter()
+        .filter(|(_, text)| text.contains(&open))
+        .collect();
+    assert_eq!(
+        holding.len(),
+        1,
+        "{open} must stand in exactly one of README.md and docs/*.md: {:?}",
+        holding.iter().map(|(f, _)| f).collect::<Vec<_>>()
+    );
+    let body = holding[0].1.split_once(&open).unwrap().1;
     let body = body.split_once("<!-- /figures -->").unwrap().0;
     body.lines()
         .filter(|l| l.starts_with('|'))
@@ -36,6 +62,6 @@ pub fn assert_readme_table(name: &str, measured: &[Vec<String>]) {
     assert_eq!(
         readme_table(name),
         measured,
-        "README's table `{name}` is not what was measured (rows printed above)"
+        "the documentation's table `{name}` is not what was measured (rows printed above)"
     );
 }

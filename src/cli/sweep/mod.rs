@@ -139,7 +139,7 @@ pub struct CollectArgs {
     pub partial: bool,
     /// Put cells simulated by different physics engines into one table and one set of
     /// curves (an `[[engine]]` axis). Refused without it: under force the engines' scores
-    /// differ (README, "Force response: rapier against MuJoCo").
+    /// differ (docs/engines.md, "Force response: rapier against MuJoCo").
     #[arg(long)]
     pub mixed_engines: bool,
 }

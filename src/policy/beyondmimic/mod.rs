@@ -89,7 +89,7 @@ impl JointOrderFrom {
 /// many others share its call (records are the same for any `--envs` and `--workers`;
 /// `tests/batched_inference.rs`). Eight: wbc-mjlab's tracker costs 167 µs per call of one
 /// row and 30 µs per row in calls of eight (`thorarena bench inference`), which takes a
-/// rapier run from 1.21 to 1.08 of its physics floor (README, "Measured"). Any count from
+/// rapier run from 1.21 to 1.08 of its physics floor (docs/performance.md, "Measured"). Any count from
 /// 2 to 16 gives the same records here (tract runs one kernel for all of them); one row
 /// runs another and rounds differently (~1e-6). That rounding once looked like a cost:
 /// holosoma's FastSAC dance on MuJoCo dances all 135 s at one row and falls at 29.6 s at
