@@ -12,7 +12,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// Environment variable naming the published reference artifacts (see README,
+/// Environment variable naming the published reference artifacts (see docs/policies.md,
 /// "Reference artifacts"); default `../shared/reference` beside the checkout.
 pub const REFERENCE_ENV: &str = "THORARENA_REFERENCE";
 
