@@ -8,9 +8,7 @@ use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
-use thorarena::evaluation::EpisodeRecord;
-use thorarena::results::{RunDir, RunHeader};
-use thorarena::sweep::{DoneRecord, Plan, TaskDir};
+use thorarena::sweep::{finish_with_shard_runs, write_large_spec, Plan, TaskDir};
 
 /// Arguments of `bench sweep`.
 #[derive(Debug, clap::Args)]
@@ -178,21 +176,7 @@ fn plan_at_scale(
     sample: &Path,
     shards: &[PathBuf],
 ) -> anyhow::Result<()> {
-    let settings = (tasks / (2 * shards.len())).max(1);
-    let coefficients: Vec<String> = (0..settings)
-        .map(|i| format!("\"{}\"", 0.001 * i as f64))
-        .collect();
-    let spec = scratch.join("large.toml");
-    std::fs::create_dir_all(scratch)?;
-    std::fs::write(
-        &spec,
-        format!(
-            "datasets = [{:?}]\nsettings = [{}]\nshards = {}\n[[policy]]\npolicy = \"balance\"\n[[policy]]\npolicy = \"hold\"\n",
-            sample.display().to_string(),
-            coefficients.join(", "),
-            shards.len()
-        ),
-    )?;
+    let spec = write_large_spec(scratch, sample, tasks, shards.len())?;
     let dir = scratch.join("large");
     let t = Instant::now();
     run_ok(
@@ -204,46 +188,7 @@ fn plan_at_scale(
     )?;
     let plan_s = t.elapsed().as_secs_f64();
     let plan = Plan::load(&dir)?;
-    let sources: Vec<(RunHeader, Vec<EpisodeRecord>)> = shards
-        .iter()
-        .map(|run| -> anyhow::Result<_> {
-            let run = RunDir::new(run);
-            let header = run.read_header()?;
-            let records = run.read_log(&header)?.records;
-            Ok((header, records))
-        })
-        .collect::<anyhow::Result<_>>()?;
-    let mut episodes = 0;
-    for task in &plan.tasks {
-        let cell = &plan.cells[task.cell];
-        let (source, records) = &sources[task.shard.0];
-        let setting = thorarena::evaluation::Setting::parse(&cell.setting).context("a setting")?;
-        let mut header = source.clone();
-        header.policy = cell.policy.policy.clone();
-        header.settings = vec![setting.clone()];
-        let tdir = TaskDir::of(&dir, task.index);
-        let run = RunDir::new(tdir.run_dir());
-        run.start(&header, false)?;
-        let mut appender = run.appender()?;
-        for r in records {
-            appender.append(&EpisodeRecord {
-                setting: setting.name.clone(),
-                coefficient: setting.coefficient,
-                policy: header.policy.clone(),
-                ..r.clone()
-            })?;
-        }
-        appender.flush()?;
-        tdir.write_done(&DoneRecord {
-            task: task.index,
-            episodes: records.len(),
-            wall_s: 0.0,
-        })?;
-        let source = RunDir::new(&shards[task.shard.0]);
-        std::fs::copy(source.summary_file(), run.summary_file())?;
-        std::fs::copy(source.tables_file(), run.tables_file())?;
-        episodes += records.len();
-    }
+    let episodes = finish_with_shard_runs(&dir, shards)?;
     // With every task done, each run is read and checked: status's worst case.
     let t = Instant::now();
     run_ok(Command::new(exe).args(["sweep", "status"]).arg(&dir))?;

@@ -32,10 +32,8 @@ impl LaunchedPolicy {
         log: &Path,
     ) -> Result<Self, String> {
         let line = policy_command_line(&process.command, session).map_err(|e| format!("{e:#}"))?;
-        if let Some(dir) = log.parent() {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        }
-        let out = std::fs::File::create(log).map_err(|e| format!("{}: {e}", log.display()))?;
+        let out =
+            thorarena::sweep::create_log(log).map_err(|e| format!("{}: {e}", log.display()))?;
         let err = out
             .try_clone()
             .map_err(|e| format!("{}: {e}", log.display()))?;

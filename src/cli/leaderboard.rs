@@ -5,15 +5,16 @@
 //! clip policies on their own clips under pushes in a table and a report of their own
 //! (`single-clip.html`, …).
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use std::path::PathBuf;
 use std::time::Instant;
 use thorarena::benchmark::{EvalObserver, Starting};
 use thorarena::evaluation::EvalSpec;
 use thorarena::evaluation::{EngineChoice, EpisodeRecord};
 use thorarena::leaderboard::{
-    leaderboard_table, load_policy_file, pairs_table, run_leaderboard, run_pairs, write_pair_files,
-    CompliancePair, LeaderboardObserver, LeaderboardRequest, OwnClip, PairOptions, PolicyProcess,
+    leaderboard_table, load_policy_file, pairs_table, run_leaderboard, run_pairs,
+    write_leaderboard_page, write_pair_files, CompliancePair, LeaderboardObserver,
+    LeaderboardRequest, OwnClip, PairOptions, PolicyProcess,
 };
 use thorarena::motion::synth::{write_synthetic, SynthOptions, TASKS};
 use thorarena::motion::Dataset;
@@ -182,17 +183,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             written[1].display()
         );
     }
-    let md_path = args.out.join("leaderboard.md");
-    let text = format!(
-        "# Leaderboard\n\nDataset `{}`, settings {}; one `eval` run per row in `{}`. Command: `thorarena {}`. Wall time of this invocation: {:.0} s.\n\n{table}",
-        dataset.display(),
-        args.settings.join(", "),
-        args.out.join("runs").display(),
-        std::env::args().skip(1).collect::<Vec<_>>().join(" "),
-        started.elapsed().as_secs_f64()
-    );
-    thorarena::atomic_file::write(&md_path, &text)
-        .with_context(|| format!("writing {}", md_path.display()))?;
+    let md_path = write_leaderboard_page(
+        &args.out,
+        &dataset,
+        &args.settings,
+        &std::env::args().skip(1).collect::<Vec<_>>().join(" "),
+        started.elapsed().as_secs_f64(),
+        &table,
+    )?;
     print!("{table}");
     let script = bundle.script(Page::Report)?;
     for (own_clip, page) in [(false, "report.html"), (true, "single-clip.html")] {

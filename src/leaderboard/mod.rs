@@ -557,6 +557,27 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
     out
 }
 
+/// Writes `out/leaderboard.md`: what was run (dataset, settings, where the runs are, the
+/// command and its wall time) and the tables; returns its path.
+pub fn write_leaderboard_page(
+    out: &Path,
+    dataset: &Path,
+    settings: &[String],
+    command: &str,
+    wall_s: f64,
+    tables: &str,
+) -> std::io::Result<PathBuf> {
+    let path = out.join("leaderboard.md");
+    let text = format!(
+        "# Leaderboard\n\nDataset `{}`, settings {}; one `eval` run per row in `{}`. Command: `thorarena {command}`. Wall time of this invocation: {wall_s:.0} s.\n\n{tables}",
+        dataset.display(),
+        settings.join(", "),
+        out.join("runs").display(),
+    );
+    crate::atomic_file::write(&path, text)?;
+    Ok(path)
+}
+
 /// A policy argument as a table names it: `family (file stem)` for a network
 /// (`twist2 (twist2_1017_25k)`), the argument itself otherwise.
 pub fn policy_label(policy: &str) -> String {

@@ -25,6 +25,7 @@ mod check;
 mod k8s;
 mod plan;
 mod results_csv;
+mod scale_fill;
 mod slurm;
 mod spec;
 mod status;
@@ -40,11 +41,14 @@ pub use plan::{
     PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
 };
 pub use results_csv::{results_csv, results_rows, ResultsRow, RESULTS_CSV_FILE};
+pub use scale_fill::{finish_with_shard_runs, write_large_spec, ScaleFillError};
 pub use slurm::{sbatch_script, shell_quote, slurm_logs_dir, slurm_script_path, SbatchRequest};
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
 pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_FILE};
-pub use text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
+pub use text::{
+    create_log, log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
+};
 pub use verify::{check_task_run, RunProblem};
 
 use std::path::PathBuf;

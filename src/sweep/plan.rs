@@ -300,6 +300,34 @@ impl Plan {
         crate::motion::sha256_hex(&json)
     }
 
+    /// Writes this plan into sweep directory `dir` (its `tasks/` and `plan.json`, whole or
+    /// not at all), or finds it there already: `Ok(false)` then. A directory holding
+    /// another plan is refused, saying what differs: tasks may be running under its
+    /// numbering.
+    pub fn place(&self, dir: &Path) -> Result<bool, SweepError> {
+        let path = dir.join(PLAN_FILE);
+        if path.exists() {
+            let existing = Self::load(dir)?;
+            return match diff_plans(&existing, self) {
+                None => Ok(false),
+                Some(change) => Err(SweepError::Invalid {
+                    path: dir.to_path_buf(),
+                    message: format!(
+                        "holds another plan ({change}); tasks may be running under its numbering, so it is not replaced: plan into a new directory"
+                    ),
+                }),
+            };
+        }
+        let tasks = dir.join("tasks");
+        std::fs::create_dir_all(&tasks).map_err(|source| SweepError::Io {
+            path: tasks,
+            source,
+        })?;
+        let json = serde_json::to_string(self).expect("a plan serializes");
+        super::write_atomic(&path, json.as_bytes())?;
+        Ok(true)
+    }
+
     /// Reads `DIR/plan.json`, refusing another format version.
     pub fn load(dir: &Path) -> Result<Self, SweepError> {
         let path = dir.join(PLAN_FILE);

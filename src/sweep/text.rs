@@ -38,6 +38,16 @@ pub fn truncated(s: &str, max: usize) -> String {
     format!("{}…", &s[..end])
 }
 
+/// Creates (or empties) the log file of a process a run starts — a task's policy, a
+/// leaderboard's policy process — its directory first; [`log_tail`] quotes it back when
+/// the process fails.
+pub fn create_log(path: &std::path::Path) -> std::io::Result<std::fs::File> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)?;
+    }
+    std::fs::File::create(path)
+}
+
 /// The last `n` non-empty lines of a log file, each printable and at most
 /// [`LOG_LINE_MAX_BYTES`], together at most [`LOG_TAIL_MAX_BYTES`]; only the file's last
 /// 64 KiB are read, however large it is. A line rewritten with `\r` (a progress bar)

@@ -4,7 +4,7 @@ use super::PlanArgs;
 use anyhow::{bail, Context};
 use clap::Parser;
 use std::path::Path;
-use thorarena::sweep::{diff_plans, write_atomic, DatasetInfo, Plan, SweepSpec, Task, PLAN_FILE};
+use thorarena::sweep::{DatasetInfo, Plan, SweepSpec, Task};
 pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
     let spec_path = std::fs::canonicalize(&args.spec)
         .with_context(|| format!("reading the sweep spec {}", args.spec.display()))?;
@@ -28,32 +28,19 @@ pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
     let plan = Plan::expand(&spec, &spec_path, &datasets)?;
     validate(&plan)?;
 
-    let plan_path = args.out.join(PLAN_FILE);
-    if plan_path.exists() {
-        let existing = Plan::load(&args.out)?;
-        match diff_plans(&existing, &plan) {
-            None => {
-                println!(
-                    "{} already holds this plan: nothing to do ({})",
-                    args.out.display(),
-                    plan_summary(&plan)
-                );
-                return Ok(());
-            }
-            Some(change) => bail!(
-                "{} holds another plan ({change}); tasks may be running under its numbering, so it is not replaced: plan into a new directory",
-                args.out.display()
-            ),
-        }
+    if plan.place(&args.out)? {
+        println!(
+            "planned {} into {}",
+            plan_summary(&plan),
+            args.out.display()
+        );
+    } else {
+        println!(
+            "{} already holds this plan: nothing to do ({})",
+            args.out.display(),
+            plan_summary(&plan)
+        );
     }
-    std::fs::create_dir_all(args.out.join("tasks"))
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    write_atomic(&plan_path, serde_json::to_string(&plan)?.as_bytes())?;
-    println!(
-        "planned {} into {}",
-        plan_summary(&plan),
-        args.out.display()
-    );
     Ok(())
 }
 
