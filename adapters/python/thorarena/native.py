@@ -3,10 +3,10 @@
 
 Why a second transport: after the network call the interpreter's own code and data are
 cold in the caches, and each of the dozen iceoryx2 binding calls and the Python wait logic
-of `client.IceoryxSession` costs microseconds there (docs/performance.md, "Measured"). Here a step is
-two foreign calls — `thorarena_next_step` (wait as the Rust client waits, receive, check
-the header, loan and zero the answer) and `thorarena_send` (send, notify) — and the views
-over shared memory are the same numpy arrays as the pure-Python session's.
+of `client.IceoryxSession` costs microseconds there (docs/performance.md, "Measured").
+Here a step is two foreign calls — `thorarena_next_step` (wait as the Rust client waits,
+receive, check the header, loan and zero the answer) and `thorarena_send` (send, notify) —
+and the views over shared memory are the same numpy arrays as the pure-Python session's.
 
 The library is not part of the Python package: build it with `cargo build --release -p
 thorarena-ipc` and point `THORARENA_IPC_LIB` at it, or install the package from a checkout
