@@ -7,11 +7,10 @@
 //! the first (wall-time ratio, and whether every record is the same).
 
 use super::choices::EngineArg;
-use super::launched::LaunchedPolicy;
 use std::path::PathBuf;
 use std::time::Duration;
 use thorarena::evaluation::{EvalRequest, EvalSpec};
-use thorarena::leaderboard::PolicyProcess;
+use thorarena::leaderboard::{LaunchedPolicy, PolicyProcess};
 use thorarena::perf::{physics_floor, time_run, RunTiming};
 use thorarena::policy::Policy;
 use thorarena::registry::{self, PolicyChoice};
@@ -169,8 +168,10 @@ fn start_policy(args: &Args, spec: &EvalSpec, depth: usize) -> anyhow::Result<(S
     };
     let session = format!("bench-eval-{}-{depth}", std::process::id());
     let log = std::env::temp_dir().join(format!("thorarena-{session}.log"));
-    let launched =
-        LaunchedPolicy::start(&process, &session, spec, &log).map_err(anyhow::Error::msg)?;
+    let launched = LaunchedPolicy::start(&process, &session, spec, &log, &mut |note| {
+        eprintln!("{note}")
+    })
+    .map_err(anyhow::Error::msg)?;
     Ok((format!("`{command}`"), Timed::Process(Box::new(launched))))
 }
 

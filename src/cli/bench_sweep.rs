@@ -36,9 +36,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/sweeps/sample.toml"))
     });
     let exe = std::env::current_exe()?;
-    let scratch =
-        std::env::temp_dir().join(format!("thorarena-bench-sweep-{}", std::process::id()));
-    let _cleanup = RemoveOnDrop(scratch.clone());
+    let scratch_dir = thorarena::perf::ScratchDir::new("bench-sweep");
+    let scratch = scratch_dir.path();
     let mut ratios = Vec::new();
     for round in 0..args.repeats {
         let dir = scratch.join(format!("sweep-{round}"));
@@ -108,7 +107,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
         plan_at_scale(
             &exe,
-            &scratch,
+            scratch,
             args.plan_tasks,
             &plan.cells[0].dataset,
             &shards,
@@ -209,13 +208,4 @@ fn run_ok(cmd: &mut Command) -> anyhow::Result<()> {
         bail!("{cmd:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
     }
     Ok(())
-}
-
-/// Removes the scratch directory however the benchmark ends.
-struct RemoveOnDrop(PathBuf);
-
-impl Drop for RemoveOnDrop {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }

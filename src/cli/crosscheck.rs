@@ -3,7 +3,8 @@
 //! score on each engine and their differences, means with a bootstrap 95 % confidence
 //! interval. Both runs are ordinary run directories (`<out>/rapier`, `<out>/mujoco`).
 
-use super::eval::{check_out, evaluate, load_spec, FirstSeconds, RunArgs};
+use super::eval::{check_out, load_spec, RunArgs};
+use super::eval_run::{evaluate, FirstSeconds};
 use super::policy_arg::make_policy;
 use anyhow::{bail, Context};
 use std::path::PathBuf;

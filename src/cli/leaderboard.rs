@@ -5,7 +5,6 @@
 //! clip policies on their own clips under pushes in a table and a report of their own
 //! (`single-clip.html`, …).
 
-use anyhow::bail;
 use std::path::PathBuf;
 use std::time::Instant;
 use thorarena::benchmark::{EvalObserver, Starting};
@@ -16,8 +15,6 @@ use thorarena::leaderboard::{
     write_leaderboard_page, write_pair_files, CompliancePair, LeaderboardObserver,
     LeaderboardRequest, OwnClip, PairOptions, PolicyProcess,
 };
-use thorarena::motion::synth::{write_synthetic, SynthOptions, TASKS};
-use thorarena::motion::Dataset;
 use thorarena::policy::Policy;
 use thorarena::report::{
     label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, Page,
@@ -108,7 +105,9 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let dataset = match &args.dataset {
         Some(d) => d.clone(),
         None if args.policies.is_empty() && args.policy_file.is_none() => PathBuf::new(),
-        None => synthetic(args)?,
+        None => thorarena::leaderboard::synthetic_dataset(&args.out, args.per_task, &mut |n| {
+            eprintln!("{n}")
+        })?,
     };
     let engines: Vec<EngineChoice> = if args.engines.is_empty() {
         if cfg!(feature = "mujoco") {
@@ -227,35 +226,6 @@ fn parse_clip(text: &str) -> Result<OwnClip, String> {
     OwnClip::parse(text).ok_or_else(|| format!("`{text}`: give POLICY@DATASET"))
 }
 
-/// OUT/synthetic: generated with --per-task sequences per task, or reused when it holds
-/// exactly that many.
-fn synthetic(args: &Args) -> anyhow::Result<PathBuf> {
-    let dir = args.out.join("synthetic");
-    let robot = thorarena::registry::robot("g1_29dof")?;
-    let want = args.per_task * TASKS.len();
-    if dir.join("manifest.json").exists() {
-        let have = Dataset::open(&dir, &robot)?.len();
-        if have != want {
-            bail!(
-                "{} holds {have} sequences, not {want} (--per-task {}): remove it, or pass that --per-task",
-                dir.display(),
-                args.per_task
-            );
-        }
-        return Ok(dir);
-    }
-    let opts = SynthOptions {
-        per_task: args.per_task,
-        ..SynthOptions::default()
-    };
-    eprintln!(
-        "generating the synthetic dataset into {} ({want} sequences)",
-        dir.display()
-    );
-    write_synthetic(&dir, &robot, &opts, false, |_, _| {})?;
-    Ok(dir)
-}
-
 /// One line per run, and one per tenth of its episodes.
 #[derive(Default)]
 struct Progress {
@@ -288,8 +258,12 @@ impl LeaderboardObserver for Progress {
             process.command,
             log.display()
         );
-        Ok(Box::new(super::launched::LaunchedPolicy::start(
-            process, session, spec, &log,
+        Ok(Box::new(thorarena::leaderboard::LaunchedPolicy::start(
+            process,
+            session,
+            spec,
+            &log,
+            &mut |note| eprintln!("{note}"),
         )?))
     }
 }

@@ -12,7 +12,7 @@ mod data;
 mod data_synth;
 mod dds;
 mod eval;
-mod launched;
+mod eval_run;
 mod leaderboard;
 mod logging;
 mod merge;

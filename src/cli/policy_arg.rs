@@ -5,11 +5,10 @@ use super::choices::{LatencyModeArg, MissRuleArg};
 use anyhow::{bail, Context};
 use std::time::Duration;
 use thorarena::evaluation::{parse_budget, Budget, PolicyIoRules};
-use thorarena::policy::{Policy, RemoteConfig, RemotePolicy};
+use thorarena::policy::{Policy, RemotePolicy, SessionOptions};
 use thorarena::profile::Profile;
 use thorarena::registry::PolicyChoice;
 use thorarena::robot::RobotModel;
-use thorarena_ipc::{SimConfig, WaitPolicy};
 
 /// Options of a policy's answers (all policies) and of the session (remote ones).
 #[derive(Debug, Clone, clap::Args)]
@@ -68,14 +67,25 @@ pub enum OnPolicyFailure {
 }
 
 impl PolicyIoArgs {
-    /// What the command line gives when none of these options is passed.
-    pub fn defaults() -> Self {
-        #[derive(clap::Parser)]
-        struct Only {
-            #[command(flatten)]
-            io: PolicyIoArgs,
+    /// How a policy process is served, checked.
+    pub fn session_options(&self) -> anyhow::Result<SessionOptions> {
+        if !(self.connect_timeout.is_finite() && self.connect_timeout >= 0.0) {
+            bail!("--connect-timeout must be >= 0 s");
         }
-        <Only as clap::Parser>::parse_from(["thorarena"]).io
+        Ok(SessionOptions {
+            budget: self.budget.0,
+            spin: Duration::from_micros(self.spin_us),
+            connect_timeout: (self.connect_timeout > 0.0)
+                .then(|| Duration::try_from_secs_f64(self.connect_timeout))
+                .transpose()
+                .map_err(|_| {
+                    anyhow::anyhow!(
+                        "--connect-timeout {} s: too long to wait (give seconds that fit a duration, or 0 to wait forever)",
+                        self.connect_timeout
+                    )
+                })?,
+            reconnect: self.on_policy_failure == OnPolicyFailure::Wait,
+        })
     }
 
     /// The rules recorded in `run.json` (checked with the rest of the evaluation by
@@ -120,7 +130,7 @@ pub fn make_policy_vetted(
     }
 }
 
-/// Serves `session` and waits for a policy process.
+/// Serves `session` and waits for a policy process, saying so on stderr.
 pub fn connect_remote(
     session: &str,
     robot: &RobotModel,
@@ -129,56 +139,14 @@ pub fn connect_remote(
     envs: usize,
     vet: &mut dyn FnMut(&str) -> Result<(), String>,
 ) -> anyhow::Result<RemotePolicy> {
-    if !(io.connect_timeout.is_finite() && io.connect_timeout >= 0.0) {
-        bail!("--connect-timeout must be >= 0 s");
-    }
-    let config = RemoteConfig {
-        session: SimConfig {
-            session: session.to_string(),
-            n_envs: envs,
-            joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
-            control_dt_s: profile.control_dt_s,
-            action_offset_rad: profile.action_offset_rad.clone(),
-            action_scale: profile.action_scale.clone(),
-            budget: io.budget.0,
-            wait: WaitPolicy {
-                spin: Duration::from_micros(io.spin_us),
-                ..WaitPolicy::default()
-            },
-            inputs: thorarena::policy::inputs::offers(robot.joints.len()),
-        },
-        connect_timeout: (io.connect_timeout > 0.0)
-            .then(|| Duration::try_from_secs_f64(io.connect_timeout))
-            .transpose()
-            .map_err(|_| {
-                anyhow::anyhow!(
-                    "--connect-timeout {} s: too long to wait (give seconds that fit a duration, or 0 to wait forever)",
-                    io.connect_timeout
-                )
-            })?,
-        reconnect: io.on_policy_failure == OnPolicyFailure::Wait,
-    };
-    eprintln!(
-        "serving session `{session}` ({envs} environment slots, budget {}): waiting for a policy to connect…",
-        io.budget
-            .0
-            .map_or("none (lock-step)".to_string(), |b| format!("{b:?}"))
-    );
-    // The name a policy process declares becomes part of paths: a name the run cannot use
-    // is refused in the handshake, so the policy hears why.
-    let mut vet_name = |info: &thorarena_ipc::PolicyInfo| {
-        thorarena::names::check_name("policy name", &info.name).map_err(|e| e.to_string())?;
-        vet(&info.name)
-    };
-    let remote = RemotePolicy::connect(config, &mut vet_name, &mut |m| {
-        eprintln!("refused a policy: {m}")
-    })
-    .with_context(|| format!("serving session `{session}`"))?;
-    eprintln!(
-        "policy `{}` (pid {}) connected, reference offsets {:?} s",
-        remote.name(),
-        remote.policy_pid().unwrap_or(0),
-        remote.reference_offsets_s()
-    );
-    Ok(remote)
+    RemotePolicy::serve(
+        session,
+        robot,
+        profile,
+        &io.session_options()?,
+        envs,
+        vet,
+        &mut |note| eprintln!("{note}"),
+    )
+    .with_context(|| format!("serving session `{session}`"))
 }

@@ -1,7 +1,8 @@
 //! `thorarena serve`: the benchmark as a service for interactive work — serve a session,
 //! evaluate whichever policy process connects, write its results, wait for the next one.
 
-use super::eval::{evaluate, load_spec, RunArgs};
+use super::eval::{load_spec, RunArgs};
+use super::eval_run::evaluate;
 use super::policy_arg::connect_remote;
 use std::path::PathBuf;
 use thorarena::policy::Policy;

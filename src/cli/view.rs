@@ -2,7 +2,6 @@
 //! self-contained HTML page — the robot's collision shapes, the reference as a ghost,
 //! the replayed hand forces as arrows, a timeline, and the keypoint error under it.
 
-use anyhow::Context;
 use std::path::PathBuf;
 use thorarena::report::{load_trace, trace_context, view_html, view_scene, Page, WebBundle};
 
@@ -38,12 +37,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let context = trace_context(&args.trace);
     let scene = view_scene(&robot, &trace, &args.trace, &context)?;
     let html = view_html(&scene, &bundle.script(Page::View)?);
-    if let Some(parent) = args.out.parent().filter(|p| !p.as_os_str().is_empty()) {
-        std::fs::create_dir_all(parent)
-            .with_context(|| format!("creating {}", parent.display()))?;
-    }
-    thorarena::atomic_file::write(&args.out, html)
-        .with_context(|| format!("writing {}", args.out.display()))?;
+    thorarena::report::write_page(&args.out, &html)?;
     eprintln!(
         "wrote {} ({} steps{})",
         args.out.display(),

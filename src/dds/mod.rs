@@ -12,6 +12,7 @@ pub mod interface;
 pub mod motion_switcher;
 pub mod remote;
 pub mod scheduling;
+pub mod session;
 pub mod transport;
 pub mod unitree_go;
 pub mod unitree_hg;

@@ -19,8 +19,10 @@ use crate::results::{RunDir, Summary};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+mod launched;
 mod pairs;
 
+pub use launched::LaunchedPolicy;
 pub use pairs::{
     pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember, PairOptions,
     PairResult,
@@ -82,6 +84,14 @@ pub enum LeaderboardError {
         out: PathBuf,
         /// What it holds.
         why: &'static str,
+    },
+    /// The board's synthetic dataset could not be opened or made.
+    #[error("{}: {why}", .dir.display())]
+    Synthetic {
+        /// Its directory.
+        dir: PathBuf,
+        /// Why.
+        why: String,
     },
     /// A policy file is unreadable or invalid.
     #[error("{path}: {message}")]
@@ -613,4 +623,42 @@ fn minutes(s: f64) -> String {
     } else {
         format!("{} min {:02.0} s", (s / 60.0).floor(), s % 60.0)
     }
+}
+
+/// The board's synthetic dataset in `out`/synthetic: generated with `per_task` sequences
+/// per task (`note` hears that it is), or reused when it holds exactly that many.
+pub fn synthetic_dataset(
+    out: &Path,
+    per_task: usize,
+    note: &mut dyn FnMut(&str),
+) -> Result<PathBuf, LeaderboardError> {
+    use crate::motion::synth::{write_synthetic, SynthOptions, TASKS};
+    let dir = out.join("synthetic");
+    let failed = |why: String| LeaderboardError::Synthetic {
+        dir: dir.clone(),
+        why,
+    };
+    let robot = crate::registry::robot("g1_29dof").map_err(|e| failed(e.to_string()))?;
+    let want = per_task * TASKS.len();
+    if dir.join(crate::motion::MANIFEST).exists() {
+        let have = crate::motion::Dataset::open(&dir, &robot)
+            .map_err(|e| failed(e.to_string()))?
+            .len();
+        if have != want {
+            return Err(failed(format!(
+                "holds {have} sequences, not {want} (--per-task {per_task}): remove it, or pass that --per-task"
+            )));
+        }
+        return Ok(dir);
+    }
+    note(&format!(
+        "generating the synthetic dataset into {} ({want} sequences)",
+        dir.display()
+    ));
+    let opts = SynthOptions {
+        per_task,
+        ..SynthOptions::default()
+    };
+    write_synthetic(&dir, &robot, &opts, false, |_, _| {}).map_err(|e| failed(e.to_string()))?;
+    Ok(dir)
 }

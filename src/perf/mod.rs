@@ -8,6 +8,7 @@ mod full_run;
 mod machine;
 mod physics_step;
 mod round_trip;
+mod scratch;
 mod socket;
 
 pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
@@ -18,6 +19,7 @@ pub use round_trip::{
     adapter_round_trips, echo_round_trips, fill_echo_observations, standing_observation,
     AdapterTiming,
 };
+pub use scratch::ScratchDir;
 pub use socket::{answer_socket_echo, socket_round_trips};
 
 use std::path::PathBuf;

@@ -22,6 +22,19 @@ pub struct RemoteConfig {
     pub reconnect: bool,
 }
 
+/// How a run serves its policy process, beyond what the robot and the profile fix.
+#[derive(Debug, Clone)]
+pub struct SessionOptions {
+    /// Latency budget per control step (`None`: lock-step).
+    pub budget: Option<Duration>,
+    /// Busy-poll this long for the actions before blocking.
+    pub spin: Duration,
+    /// How long to wait for a policy to connect (`None`: forever).
+    pub connect_timeout: Option<Duration>,
+    /// After a policy failure, wait for a new policy process instead of ending the run.
+    pub reconnect: bool,
+}
+
 /// Why serving a session failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RemoteError {
@@ -65,6 +78,62 @@ pub struct RemotePolicy {
 }
 
 impl RemotePolicy {
+    /// Serves session `session` for `robot` under `profile`'s action mapping, `envs`
+    /// environment slots wide, and waits for a policy process: one whose declared name is
+    /// not usable in paths, or that `vet` refuses, is told why and the wait goes on.
+    /// `note` hears what a user watching the run should know (waiting, refusals, who
+    /// connected).
+    pub fn serve(
+        session: &str,
+        robot: &crate::robot::RobotModel,
+        profile: &crate::profile::Profile,
+        options: &SessionOptions,
+        envs: usize,
+        vet: &mut dyn FnMut(&str) -> Result<(), String>,
+        note: &mut dyn FnMut(&str),
+    ) -> Result<Self, RemoteError> {
+        let config = RemoteConfig {
+            session: SimConfig {
+                session: session.to_string(),
+                n_envs: envs,
+                joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
+                control_dt_s: profile.control_dt_s,
+                action_offset_rad: profile.action_offset_rad.clone(),
+                action_scale: profile.action_scale.clone(),
+                budget: options.budget,
+                wait: thorarena_ipc::WaitPolicy {
+                    spin: options.spin,
+                    ..thorarena_ipc::WaitPolicy::default()
+                },
+                inputs: super::inputs::offers(robot.joints.len()),
+            },
+            connect_timeout: options.connect_timeout,
+            reconnect: options.reconnect,
+        };
+        note(&format!(
+            "serving session `{session}` ({envs} environment slots, budget {}): waiting for a policy to connect…",
+            options
+                .budget
+                .map_or("none (lock-step)".to_string(), |b| format!("{b:?}"))
+        ));
+        // The name a policy process declares becomes part of paths: a name the run cannot
+        // use is refused in the handshake, so the policy hears why.
+        let mut vet_name = |info: &PolicyInfo| {
+            crate::names::check_name("policy name", &info.name).map_err(|e| e.to_string())?;
+            vet(&info.name)
+        };
+        let remote = Self::connect(config, &mut vet_name, &mut |m| {
+            note(&format!("refused a policy: {m}"))
+        })?;
+        note(&format!(
+            "policy `{}` (pid {}) connected, reference offsets {:?} s",
+            remote.name(),
+            remote.policy_pid().unwrap_or(0),
+            remote.reference_offsets_s()
+        ));
+        Ok(remote)
+    }
+
     /// Creates the session and waits for a policy to connect; refused handshakes (wrong
     /// protocol version, joint count or order, or a policy `vet` refuses: the run's own
     /// conditions on its name) are passed to `on_refused`, told to the policy, and the

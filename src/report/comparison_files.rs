@@ -127,3 +127,46 @@ fn write(path: &Path, text: &str) -> Result<(), ReportError> {
         source,
     })
 }
+
+/// Writes a self-contained page to `path`, creating its directory.
+pub fn write_page(path: &Path, html: &str) -> Result<(), ReportError> {
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        create_dir(parent)?;
+    }
+    write(path, html)
+}
+
+/// Where a sweep's report went.
+#[derive(Debug, Clone)]
+pub struct WrittenSweepReport {
+    /// `report.html`.
+    pub page: PathBuf,
+    /// `report-figures/`.
+    pub figures_dir: PathBuf,
+    /// How many SVG figures it holds.
+    pub figures: usize,
+}
+
+/// Writes a sweep's comparison of its cells' `runs` to `dir`/`report.html`, with its
+/// `charts` (the sweep's axes) and every figure as SVG in `dir`/`report-figures/`.
+pub fn write_sweep_report(
+    dir: &Path,
+    runs: &[Run],
+    charts: &[super::SweepChart],
+    title: &str,
+    script: &str,
+) -> Result<WrittenSweepReport, ReportError> {
+    let page = dir.join("report.html");
+    write(
+        &page,
+        &super::html::sweep_report_html(runs, charts, title, script),
+    )?;
+    let figures_dir = dir.join("report-figures");
+    let figures = svg_figures(&report_figures(runs, charts));
+    write_figures(&figures_dir, &figures)?;
+    Ok(WrittenSweepReport {
+        page,
+        figures_dir,
+        figures: figures.len(),
+    })
+}

@@ -26,7 +26,8 @@ mod sweep_figures;
 mod tables;
 
 pub use comparison_files::{
-    write_comparison_report, write_figures, ComparisonFiles, WrittenReport,
+    write_comparison_report, write_figures, write_page, write_sweep_report, ComparisonFiles,
+    WrittenReport, WrittenSweepReport,
 };
 pub use crosscheck_tables::crosscheck_tables;
 pub use figures::{

@@ -30,6 +30,9 @@ pub enum OutputRefused {
         /// `a run` or `a dataset`.
         what: &'static str,
     },
+    /// A run's directory holds a dataset (refused even with `--overwrite`).
+    #[error("--out {} holds a dataset: a run is never written over one; choose another --out", .0.display())]
+    RunOverDataset(PathBuf),
     /// An output file names a directory.
     #[error("--out {} is a directory: give a file name", .0.display())]
     FileIsDirectory(PathBuf),
@@ -125,6 +128,21 @@ pub fn check_dir(out: &Path, overwrite: bool, inputs: &[PathBuf]) -> Result<(), 
         }
     }
     Ok(())
+}
+
+/// Refuses a run directory `out` that holds a dataset (always: a run never replaces
+/// one), that is, lies in or holds the run's `dataset`, or that holds a run (unless
+/// `overwrite`).
+pub fn check_run_dir(
+    out: &Path,
+    overwrite: bool,
+    dataset: Option<&Path>,
+) -> Result<(), OutputRefused> {
+    if out.join(MANIFEST).is_file() {
+        return Err(OutputRefused::RunOverDataset(out.to_path_buf()));
+    }
+    let inputs: Vec<PathBuf> = dataset.into_iter().map(Path::to_path_buf).collect();
+    check_dir(out, overwrite, &inputs)
 }
 
 /// Refuses output file `out` when it exists inside one of `inputs` (always), or inside a

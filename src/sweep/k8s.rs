@@ -81,3 +81,11 @@ fn sha_hex(bytes: &[u8]) -> String {
         .map(|b| format!("{b:02x}"))
         .collect()
 }
+
+/// Writes `manifest` ([`k8s_manifest`]'s, for sweep `dir`) to [`k8s_manifest_path`];
+/// returns its path.
+pub fn write_k8s_manifest(dir: &Path, manifest: &str) -> Result<PathBuf, super::SweepError> {
+    let path = k8s_manifest_path(dir);
+    super::task_dir::write_atomic_in_new_dir(&path, manifest.as_bytes(), None)?;
+    Ok(path)
+}

@@ -24,6 +24,7 @@ mod cells;
 mod check;
 mod k8s;
 mod plan;
+pub mod process_group;
 mod results_csv;
 mod scale_fill;
 mod slurm;
@@ -35,14 +36,17 @@ mod verify;
 
 pub use array::compact_ranges;
 pub use cells::{CellFaults, CellLatency, CellResult};
-pub use k8s::{k8s_manifest, k8s_manifest_path, K8sRequest};
+pub use k8s::{k8s_manifest, k8s_manifest_path, write_k8s_manifest, K8sRequest};
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
     PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
 };
-pub use results_csv::{results_csv, results_rows, ResultsRow, RESULTS_CSV_FILE};
+pub use results_csv::{results_csv, results_rows, write_results_csv, ResultsRow, RESULTS_CSV_FILE};
 pub use scale_fill::{finish_with_shard_runs, write_large_spec, ScaleFillError};
-pub use slurm::{sbatch_script, shell_quote, slurm_logs_dir, slurm_script_path, SbatchRequest};
+pub use slurm::{
+    sbatch_script, shell_quote, slurm_logs_dir, slurm_script_path, write_sbatch_script,
+    SbatchRequest,
+};
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
 pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_FILE};

@@ -133,3 +133,14 @@ pub fn results_csv(plan: &Plan, results: &[Option<CellResult>]) -> String {
     }
     String::from_utf8(w.into_inner().expect("in memory")).expect("UTF-8")
 }
+
+/// Writes [`results_csv`] to `dir`/[`RESULTS_CSV_FILE`]; returns its path.
+pub fn write_results_csv(
+    dir: &std::path::Path,
+    plan: &Plan,
+    results: &[Option<CellResult>],
+) -> Result<std::path::PathBuf, super::SweepError> {
+    let path = dir.join(RESULTS_CSV_FILE);
+    super::write_atomic(&path, results_csv(plan, results).as_bytes())?;
+    Ok(path)
+}

@@ -132,3 +132,11 @@ fn sbatch_path(dir: &str) -> Result<String, SweepError> {
     }
     Ok(dir.replace('%', "%%"))
 }
+
+/// Writes `script` ([`sbatch_script`]'s, for sweep `dir`) to [`slurm_script_path`],
+/// creating the logs directory it names; returns the script's path.
+pub fn write_sbatch_script(dir: &Path, script: &str) -> Result<PathBuf, SweepError> {
+    let path = slurm_script_path(dir);
+    super::task_dir::write_atomic_in_new_dir(&path, script.as_bytes(), Some(&slurm_logs_dir(dir)))?;
+    Ok(path)
+}

@@ -245,3 +245,19 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SweepError> {
     }
     Ok(())
 }
+
+/// [`write_atomic`], creating `path`'s directory (and `also`, a directory the file names,
+/// such as the logs of a job script) first.
+pub fn write_atomic_in_new_dir(
+    path: &Path,
+    bytes: &[u8],
+    also: Option<&Path>,
+) -> Result<(), SweepError> {
+    for dir in path.parent().into_iter().chain(also) {
+        std::fs::create_dir_all(dir).map_err(|source| SweepError::Io {
+            path: dir.to_path_buf(),
+            source,
+        })?;
+    }
+    write_atomic(path, bytes)
+}

@@ -5,10 +5,7 @@ use super::{K8sArgs, SlurmArgs};
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use thorarena::sweep::{
-    compact_ranges, k8s_manifest, k8s_manifest_path, slurm_logs_dir, slurm_script_path, K8sRequest,
-    Plan,
-};
+use thorarena::sweep::{compact_ranges, k8s_manifest, K8sRequest, Plan};
 pub(super) fn absolute(p: &Path) -> anyhow::Result<PathBuf> {
     std::fs::canonicalize(p).with_context(|| format!("{} does not exist", p.display()))
 }
@@ -44,11 +41,7 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
         partition: args.partition.as_deref(),
         time: args.time.as_deref(),
     })?;
-    let logs = slurm_logs_dir(&dir);
-    std::fs::create_dir_all(&logs).with_context(|| format!("creating {}", logs.display()))?;
-    let script = slurm_script_path(&dir);
-    thorarena::atomic_file::write(&script, &s)
-        .with_context(|| format!("writing {}", script.display()))?;
+    let script = thorarena::sweep::write_sbatch_script(&dir, &s)?;
     println!(
         "wrote {} ({} tasks: --array={array})",
         script.display(),
@@ -111,11 +104,7 @@ pub(super) fn k8s(args: &K8sArgs) -> anyhow::Result<()> {
             cpus_per_task: args.cpus_per_task,
         },
     );
-    let path = k8s_manifest_path(&dir);
-    let kdir = path.parent().expect("the manifest is in a directory");
-    std::fs::create_dir_all(kdir).with_context(|| format!("creating {}", kdir.display()))?;
-    thorarena::atomic_file::write(&path, y)
-        .with_context(|| format!("writing {}", path.display()))?;
+    let path = thorarena::sweep::write_k8s_manifest(&dir, &y)?;
     println!(
         "wrote {} ({} tasks); run with: kubectl apply -f {}",
         path.display(),

@@ -124,24 +124,19 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
         thorarena::report::write_run_tables(out.path(), &result.summary)?;
         results.push(Some(result));
     }
-    let csv = thorarena::sweep::results_csv(&plan, &results);
-    let csv_path = args.dir.join(thorarena::sweep::RESULTS_CSV_FILE);
-    thorarena::atomic_file::write(&csv_path, csv)
-        .with_context(|| format!("writing {}", csv_path.display()))?;
+    let csv_path = thorarena::sweep::write_results_csv(&args.dir, &plan, &results)?;
     let cell_dirs: Vec<PathBuf> = results.iter().flatten().map(|r| r.dir.clone()).collect();
-    let report = args.dir.join("report.html");
     let mut runs = thorarena::report::load_runs(&cell_dirs)?;
     label_cells(&plan, &results, &mut runs);
     let charts = sweep_charts(&plan, &results);
     let script = thorarena::report::WebBundle::locate()?.script(thorarena::report::Page::Report)?;
-    let title = sweep_title(&plan);
-    let html = thorarena::report::sweep_report_html(&runs, &charts, &title, &script);
-    thorarena::atomic_file::write(&report, html)
-        .with_context(|| format!("writing {}", report.display()))?;
-    let figures_dir = args.dir.join("report-figures");
-    let figures =
-        thorarena::report::svg_figures(&thorarena::report::report_figures(&runs, &charts));
-    thorarena::report::write_figures(&figures_dir, &figures)?;
+    let report = thorarena::report::write_sweep_report(
+        &args.dir,
+        &runs,
+        &charts,
+        &sweep_title(&plan),
+        &script,
+    )?;
     eprintln!(
         "collected {} cells{}: {}, {} and {} SVG figures in {}",
         results.iter().flatten().count(),
@@ -151,9 +146,9 @@ pub(super) fn collect(args: &CollectArgs) -> anyhow::Result<()> {
             format!(" ({} partial)", unfinished.len())
         },
         csv_path.display(),
-        report.display(),
-        figures.len(),
-        figures_dir.display()
+        report.page.display(),
+        report.figures,
+        report.figures_dir.display()
     );
     Ok(())
 }

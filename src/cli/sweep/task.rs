@@ -4,13 +4,15 @@
 use super::verify::{check_task_run, RunProblem};
 use super::TaskArgs;
 use anyhow::{bail, Context};
-use std::os::unix::process::CommandExt;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 use thorarena::motion::Dataset;
 use thorarena::results::RunDir;
-use thorarena::sweep::{shell_quote, DoneRecord, Plan, Task, TaskDir, TaskLog, TaskState};
+use thorarena::sweep::process_group::{
+    die_with_parent, policy_command_line, shell_in_own_group, stop_group,
+};
+use thorarena::sweep::{DoneRecord, Plan, Task, TaskDir, TaskLog, TaskState};
 /// What became of one attempt at a task.
 #[derive(Debug)]
 pub(super) enum Outcome {
@@ -170,32 +172,9 @@ fn start_policy(
 ) -> anyhow::Result<Result<Child, String>> {
     let line = policy_command_line(command, session)?;
     let log = tdir.create_log(TaskLog::Policy)?;
-    let mut c = Command::new("sh");
-    c.args(["-c", &line])
-        .current_dir(&plan.workdir)
-        .stdin(Stdio::null())
-        .stdout(log.try_clone()?)
-        .stderr(log)
-        .process_group(0);
-    die_with_parent(&mut c);
-    Ok(c.spawn()
+    Ok(shell_in_own_group(&line, &plan.workdir, log)?
+        .spawn()
         .map_err(|e| format!("cannot start the policy command `{line}`: {e}")))
-}
-
-/// A policy command with its placeholders filled in as single shell words: the binary's
-/// path and the session are data, whatever characters they hold (`$(…)` in a directory
-/// name is not run).
-pub(in crate::cli) fn policy_command_line(command: &str, session: &str) -> anyhow::Result<String> {
-    let exe = std::env::current_exe()?;
-    let exe = exe.to_str().with_context(|| {
-        format!(
-            "{}: not UTF-8, which `{{thorarena}}` cannot name",
-            exe.display()
-        )
-    })?;
-    Ok(command
-        .replace("{session}", &shell_quote(session))
-        .replace("{thorarena}", &shell_quote(exe)))
 }
 
 /// How an evaluation ended.
@@ -230,37 +209,6 @@ pub(super) fn wait_eval(
         }
         std::thread::sleep(Duration::from_millis(20));
     }
-}
-
-/// A child that is killed when the thread that started it dies (a `sweep run` killed
-/// with SIGKILL leaves no evaluation writing behind it).
-pub(in crate::cli) fn die_with_parent(cmd: &mut Command) {
-    // SAFETY: prctl is async-signal-safe and touches only the calling (child) process.
-    unsafe {
-        cmd.pre_exec(|| {
-            if libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGKILL) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            Ok(())
-        });
-    }
-}
-
-/// Ends a launched policy's whole process group: SIGTERM, then SIGKILL after 2 s.
-pub(in crate::cli) fn stop_group(child: &mut Child) {
-    let pgid = child.id() as libc::pid_t;
-    // SAFETY: signalling a process group we created.
-    unsafe { libc::kill(-pgid, libc::SIGTERM) };
-    let deadline = Instant::now() + Duration::from_secs(2);
-    while Instant::now() < deadline {
-        if matches!(child.try_wait(), Ok(Some(_))) {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    // SAFETY: as above; the group may already be gone.
-    unsafe { libc::kill(-pgid, libc::SIGKILL) };
-    let _ = child.wait();
 }
 
 pub(super) fn cores() -> usize {
