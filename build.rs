@@ -55,14 +55,16 @@ fn collect(dir: &Path, files: &mut Vec<PathBuf>) {
 /// need no `LD_LIBRARY_PATH`. A missing variable is `mujoco-rs`'s error, which says what to
 /// set; ours adds how (README, "MuJoCo backend").
 fn mujoco_rpath() {
-    println!("cargo:rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
+    // Only a build with the feature depends on the variable: toggling it must not rebuild
+    // the plain one.
     if std::env::var_os("CARGO_FEATURE_MUJOCO").is_none() {
         return;
     }
+    println!("cargo:rerun-if-env-changed=MUJOCO_DYNAMIC_LINK_DIR");
     match std::env::var("MUJOCO_DYNAMIC_LINK_DIR") {
         Ok(dir) => println!("cargo:rustc-link-arg=-Wl,-rpath,{dir}"),
         Err(_) => println!(
-            "cargo:warning=the `mujoco` feature needs MUJOCO_DYNAMIC_LINK_DIR: `eval \"$(tools/mujoco-lib.sh)\"` sets it up from the PyPI wheel mujoco==3.17.0"
+            "cargo:warning=the `mujoco` feature needs MUJOCO_DYNAMIC_LINK_DIR (.cargo/config.toml sets it to target/mujoco-3.17.0/lib): run tools/mujoco-lib.sh once to put the library there"
         ),
     }
 }

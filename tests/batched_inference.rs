@@ -9,7 +9,7 @@
 //! skipped, saying so, when `../shared/reference` is absent.
 
 use std::sync::Arc;
-use thorarena::evaluation::{schedule, EpisodeRecord, PolicyIoRules, Setting, TerminationRule};
+use thorarena::evaluation::{schedule, EpisodeRecord};
 use thorarena::motion::Sequence;
 use thorarena::policy::beyondmimic::INFERENCE_BATCH;
 use thorarena::policy::{ActOutcome, BeyondMimicPolicy, Observation, Policy, Twist2Policy};
@@ -151,24 +151,15 @@ fn records(
     envs: usize,
     policy: &mut dyn Policy,
 ) -> Vec<EpisodeRecord> {
-    let plan = EvalPlan {
+    let spec = common::runner_spec(
         robot,
         profile,
-        keypoints: "default",
-        termination: TerminationRule::default(),
-        settings: vec![
-            Setting::parse("force").unwrap(),
-            Setting::parse("no-force").unwrap(),
-        ],
-        workers,
-        envs,
-        pipeline_depth: 1,
-        io: PolicyIoRules::default(),
-        trace: Vec::new(),
-        trace_first_s: None,
-        engine: Default::default(),
-    };
-    let jobs = schedule(seqs.len(), plan.settings.len(), None);
+        seqs,
+        &["force", "no-force"],
+        (workers, envs, 1),
+    );
+    let plan = EvalPlan::of(&spec, None);
+    let jobs = schedule(seqs.len(), spec.settings.len(), None);
     run_eval(&plan, seqs, &jobs, policy, &mut |_, _| {}).records
 }
 

@@ -166,3 +166,33 @@ fn fats_std_is_the_population_std_of_episode_scores_within_a_task() {
         "no high-force step anywhere: undefined, not zero"
     );
 }
+
+#[test]
+fn a_task_of_one_episode_has_no_fats_spread() {
+    let th = |_: &str| TH;
+    let eps = vec![
+        (
+            "a".to_string(),
+            "1".to_string(),
+            series(&[0.0; 4], &[0.0; 4], 4),
+        ),
+        (
+            "b".to_string(),
+            "1".to_string(),
+            series(&[0.0; 4], &[0.0; 4], 4),
+        ),
+        (
+            "b".to_string(),
+            "2".to_string(),
+            series(&[0.0; 2], &[0.0; 2], 4),
+        ),
+    ];
+    let (_, tasks, overall) = aggregate(&eps, &th);
+    assert!(
+        tasks[0].diagnostics.fats_std.is_nan(),
+        "one score: undefined, not 0"
+    );
+    assert!((tasks[1].diagnostics.fats_std - 25.0).abs() < 1e-12);
+    // The average over tasks is over those where it is defined.
+    assert!((overall.fats_std - 25.0).abs() < 1e-12);
+}

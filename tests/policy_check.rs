@@ -26,7 +26,8 @@ mod prereq;
 fn check(policy: &str, profile: &Path, tracking: &Sequence) -> SanityReport {
     let robot = common::g1();
     let profile = thorarena::profile::load_profile(profile, &robot).unwrap();
-    let PolicyChoice::InProcess(mut p) = registry::policy(policy, &robot, &profile).unwrap() else {
+    let arg = registry::PolicyArg::parse(policy).unwrap();
+    let PolicyChoice::InProcess(mut p) = arg.load(&robot, &profile).unwrap() else {
         panic!("{policy} does not run in process");
     };
     let report = check_policy(
@@ -250,7 +251,12 @@ fn a_published_network_runs_under_its_own_profile_whatever_its_file_is_called() 
     let renamed = dir.path().join("my_policy.onnx");
     std::fs::copy(&ppo, &renamed).unwrap();
     let policy = format!("beyondmimic:{}", renamed.display());
-    assert_eq!(registry::family_profile(&policy), "holosoma-ppo");
+    assert_eq!(
+        registry::PolicyArg::parse(&policy)
+            .unwrap()
+            .default_profile(),
+        "holosoma-ppo"
+    );
     let spec = thorarena::evaluation::EvalSpec::load(&thorarena::evaluation::EvalRequest {
         policy: policy.clone(),
         ..Default::default()
@@ -264,7 +270,9 @@ fn a_published_network_runs_under_its_own_profile_whatever_its_file_is_called() 
     let edited = dir.path().join("edited.onnx");
     std::fs::write(&edited, bytes).unwrap();
     assert_eq!(
-        registry::family_profile(&format!("beyondmimic:{}", edited.display())),
+        registry::PolicyArg::parse(&format!("beyondmimic:{}", edited.display()))
+            .unwrap()
+            .default_profile(),
         "beyondmimic"
     );
 }

@@ -163,7 +163,9 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
     other_data.dataset_sha256 = "cd".repeat(32);
     let mut other_rule = header("c");
     other_rule.termination.max_torso_tilt_error_rad = 0.5;
-    let mut other_profile = header("d");
+    // The same policy under another profile: what a profile changes is then the
+    // comparison's subject, unlike policies each on its own profile (next test).
+    let mut other_profile = header("a");
     other_profile.profile = "twist2".into();
     let mut shard = header("e");
     shard.shard = Some((0, 2));
@@ -174,15 +176,15 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
     };
     other_engine.physics_dt_s = 0.001;
     let cases = [
-        (other_engine, WarningKind::Physics),
-        (other_data, WarningKind::Dataset),
-        (other_rule, WarningKind::Termination),
-        (other_profile, WarningKind::Profile),
-        (shard, WarningKind::Partial),
+        ("f", other_engine, WarningKind::Physics),
+        ("b", other_data, WarningKind::Dataset),
+        ("c", other_rule, WarningKind::Termination),
+        ("d", other_profile, WarningKind::Profile),
+        ("e", shard, WarningKind::Partial),
     ];
     write_run(&dir.path().join("a"), &base, &standard_records(0.02), false);
-    for (h, kind) in cases {
-        let path = dir.path().join(&h.policy);
+    for (name, h, kind) in cases {
+        let path = dir.path().join(name);
         write_run(&path, &h, &standard_records(0.03), false);
         let runs = load_runs(&[dir.path().join("a"), path]).unwrap();
         let warnings = comparison_warnings(&runs);
@@ -195,6 +197,49 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
         assert!(html.contains("id=\"comparability-warnings\""));
         assert!(html.contains(&thorarena::report::escape(&warnings[0].message)));
     }
+}
+
+#[test]
+fn policies_each_on_its_own_profile_are_a_note_and_an_overridden_profile_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = header("a");
+    let mut own_profile = header("b");
+    own_profile.profile = "twist2".into();
+    own_profile.control_dt_s = 0.02;
+    write_run(&dir.path().join("a"), &base, &standard_records(0.02), false);
+    write_run(
+        &dir.path().join("b"),
+        &own_profile,
+        &standard_records(0.03),
+        false,
+    );
+    let runs = load_runs(&[dir.path().join("a"), dir.path().join("b")]).unwrap();
+    assert_eq!(comparison_warnings(&runs), []);
+    let notes = thorarena::report::comparison_notes(&runs);
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("by design") && n.contains("`twist2`")),
+        "{notes:?}"
+    );
+    // A run whose profile contradicted its family (--profile-mismatch-ok) is not one the
+    // comparison can take as by design.
+    let mut overridden = own_profile.clone();
+    overridden.profile_mismatch_ok = true;
+    write_run(
+        &dir.path().join("c"),
+        &overridden,
+        &standard_records(0.03),
+        false,
+    );
+    let runs = load_runs(&[dir.path().join("a"), dir.path().join("c")]).unwrap();
+    assert_eq!(
+        comparison_warnings(&runs)
+            .iter()
+            .map(|w| w.kind)
+            .collect::<Vec<_>>(),
+        [WarningKind::Profile]
+    );
 }
 
 #[test]

@@ -2,8 +2,8 @@
 //! any number of workers, slots and pipeline depths, the force and no-force settings differ only through the replay,
 //! and every record streams out.
 
+use thorarena::evaluation::schedule;
 use thorarena::evaluation::task_thresholds;
-use thorarena::evaluation::{schedule, PolicyIoRules, Setting, TerminationRule};
 use thorarena::motion::Sequence;
 use thorarena::policy::HoldPolicy;
 use thorarena::profile::{bundled_profile_path, load_profile};
@@ -11,7 +11,7 @@ use thorarena::results::summarize;
 use thorarena::runner::{run_eval, EvalPlan};
 
 mod common;
-use common::{g1, sample_sequence};
+use common::{g1, runner_spec, sample_sequence};
 
 fn sequences() -> Vec<Sequence> {
     let robot = g1();
@@ -49,25 +49,16 @@ fn results_are_identical_for_any_number_of_workers() {
         (2, 8, 2),
     ];
     for (workers, envs, pipeline_depth) in configurations {
-        let plan = EvalPlan {
-            robot: &robot,
-            profile: &profile,
-            keypoints: "default",
-            termination: TerminationRule::default(),
-            settings: vec![
-                Setting::parse("force").unwrap(),
-                Setting::parse("no-force").unwrap(),
-            ],
-            workers,
-            envs,
-            pipeline_depth,
-            io: PolicyIoRules::default(),
-            trace: Vec::new(),
-            trace_first_s: None,
-            engine: Default::default(),
-        };
+        let spec = runner_spec(
+            &robot,
+            &profile,
+            &seqs,
+            &["force", "no-force"],
+            (workers, envs, pipeline_depth),
+        );
+        let plan = EvalPlan::of(&spec, None);
         let mut streamed = 0;
-        let jobs = schedule(seqs.len(), plan.settings.len(), None);
+        let jobs = schedule(seqs.len(), spec.settings.len(), None);
         let records = run_eval(&plan, &seqs, &jobs, &mut HoldPolicy, &mut |_, _| {
             streamed += 1;
         })
@@ -92,25 +83,15 @@ fn force_and_no_force_differ_only_by_the_replay() {
     let robot = g1();
     let profile = load_profile(&bundled_profile_path("default"), &robot).unwrap();
     let seqs = sequences();
-    let plan = EvalPlan {
-        robot: &robot,
-        profile: &profile,
-        keypoints: "default",
-        termination: TerminationRule::default(),
-        settings: vec![
-            Setting::parse("force").unwrap(),
-            Setting::parse("no-force").unwrap(),
-            Setting::parse("0").unwrap(),
-        ],
-        workers: 2,
-        envs: 2,
-        pipeline_depth: 1,
-        io: PolicyIoRules::default(),
-        trace: Vec::new(),
-        trace_first_s: None,
-        engine: Default::default(),
-    };
-    let jobs = schedule(seqs.len(), plan.settings.len(), None);
+    let spec = runner_spec(
+        &robot,
+        &profile,
+        &seqs,
+        &["force", "no-force", "0"],
+        (2, 2, 1),
+    );
+    let plan = EvalPlan::of(&spec, None);
+    let jobs = schedule(seqs.len(), spec.settings.len(), None);
     let records = run_eval(&plan, &seqs, &jobs, &mut HoldPolicy, &mut |_, _| {}).records;
     let by = |setting: &str, id: &str| {
         records
@@ -163,20 +144,8 @@ fn the_balance_baseline_keeps_the_standing_sample_tasks_upright_without_force() 
         .filter(|s| ["clean_table", "liftup_water", "liftdown_water"].contains(&s.task.as_str()))
         .collect();
     assert_eq!(standing.len(), 6);
-    let plan = EvalPlan {
-        robot: &robot,
-        profile: &profile,
-        keypoints: "default",
-        termination: TerminationRule::default(),
-        settings: vec![Setting::parse("no-force").unwrap()],
-        workers: 2,
-        envs: 3,
-        pipeline_depth: 1,
-        io: PolicyIoRules::default(),
-        trace: Vec::new(),
-        trace_first_s: None,
-        engine: Default::default(),
-    };
+    let spec = runner_spec(&robot, &profile, &standing, &["no-force"], (2, 3, 1));
+    let plan = EvalPlan::of(&spec, None);
     let pose = profile.action_offset_rad.clone();
     let mut balance = BalancePolicy::new(&robot, pose.clone(), BalanceGains::default()).unwrap();
     let jobs = schedule(standing.len(), 1, None);

@@ -650,17 +650,15 @@ fn a_sweep_of_some_tasks_runs_and_records_only_those() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("cells/000000/run.json")).unwrap())
             .unwrap();
     assert_eq!(header["subset"]["sequences"][0], "pull_chair_000");
-    // results.csv: the dataset as the spec names it, FATS with its interval.
+    // results.csv: the dataset as the spec names it, FATS without an interval: each of
+    // the two tasks has one episode, so there is nothing to resample (an interval would
+    // be FATS to FATS, a precision nothing measured).
     let mut csv = csv::Reader::from_path(dir.join("results.csv")).unwrap();
     let head = csv.headers().unwrap().clone();
     let row = csv.records().next().unwrap().unwrap();
     let col = |name: &str| &row[head.iter().position(|h| h == name).unwrap()];
-    let (fats, lo, hi): (f64, f64, f64) = (
-        col("fats").parse().unwrap(),
-        col("fats_ci95_low").parse().unwrap(),
-        col("fats_ci95_high").parse().unwrap(),
-    );
-    assert!(lo <= fats && fats <= hi, "{fats} in [{lo}, {hi}]");
+    assert!(col("fats").parse::<f64>().unwrap() > 0.0);
+    assert_eq!((col("fats_ci95_low"), col("fats_ci95_high")), ("", ""));
     assert!(col("kp_error_mm").parse::<f64>().unwrap() > 1.0, "in mm");
     // A name the dataset does not hold fails at planning, not in every task.
     let bad = tmp.path().join("bad-spec");

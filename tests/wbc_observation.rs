@@ -272,12 +272,9 @@ fn a_residual_action_is_added_to_the_reference_and_recovered_from_the_last_step(
 
 #[test]
 fn wbc_mjlab_is_one_entry_of_the_registry_with_its_own_profile() {
-    let family = thorarena::registry::policy_family("wbc-mjlab:w.onnx").unwrap();
-    assert_eq!(family.profile, "wbc-mjlab");
-    assert_eq!(
-        thorarena::registry::family_profile("wbc-mjlab:w.onnx"),
-        "wbc-mjlab"
-    );
+    let arg = thorarena::registry::PolicyArg::parse("wbc-mjlab:w.onnx").unwrap();
+    assert_eq!(arg.family().profile, "wbc-mjlab");
+    assert_eq!(arg.default_profile(), "wbc-mjlab");
     let robot = g1();
     let profile = thorarena::registry::profile("wbc-mjlab", &robot).unwrap();
     let bm = profile.beyondmimic.as_ref().unwrap();
@@ -288,6 +285,6 @@ fn wbc_mjlab_is_one_entry_of_the_registry_with_its_own_profile() {
     assert!((profile.gains.effort_limit_nm[knee] - 0.98 * 131.0).abs() < 1e-9);
     // And the default profile is refused for it, saying why.
     let default = thorarena::registry::profile("default", &robot).unwrap();
-    let e = thorarena::registry::profile_fits("wbc-mjlab:w.onnx", &default).unwrap_err();
+    let e = arg.check_profile(&default).unwrap_err();
     assert!(e.contains("wbc-mjlab"), "{e}");
 }

@@ -149,9 +149,8 @@ impl Timed {
 
 fn start_policy(args: &Args, spec: &EvalSpec, depth: usize) -> anyhow::Result<(String, Timed)> {
     let Some(command) = &args.policy_command else {
-        let PolicyChoice::InProcess(policy) =
-            registry::policy(&args.policy, &spec.robot, &spec.profile)?
-        else {
+        let arg = registry::PolicyArg::parse(&args.policy)?;
+        let PolicyChoice::InProcess(policy) = arg.load(&spec.robot, &spec.profile)? else {
             anyhow::bail!(
                 "bench eval times a policy in process or one it starts (--policy-command): not `{}`",
                 args.policy

@@ -88,7 +88,10 @@ fn run_engine(
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    if args.policy.starts_with("ipc:") {
+    if thorarena::registry::PolicyArg::parse(&args.policy)?
+        .session()
+        .is_some()
+    {
         bail!("crosscheck runs the policy twice in process: use a built-in, twist2:, beyondmimic: or wbc-mjlab: policy");
     }
     if args.run.engine != super::choices::EngineArg::Rapier {

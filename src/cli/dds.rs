@@ -5,16 +5,16 @@
 
 use super::choices::EngineArg;
 use std::path::PathBuf;
-use thorarena::dds::remote::RemoteScript;
 use thorarena::dds::session::{run_dds_session, DdsSessionEvent, DdsSessionRequest};
+use thorarena::dds::wireless_remote::RemoteScript;
 use thorarena::evaluation::TerminationRule;
 
 /// Arguments of `dds`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Dataset directory.
-    #[arg(long, default_value = "data/sample")]
-    pub dataset: PathBuf,
+    /// Dataset directory [default: the bundled sample dataset, as for `eval`].
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
     /// The sequence of the episode, `TASK/SEQUENCE_ID`.
     #[arg(long)]
     pub sequence: String,

@@ -7,7 +7,7 @@ use std::time::Duration;
 use thorarena::evaluation::{parse_budget, Budget, PolicyIoRules};
 use thorarena::policy::{Policy, RemotePolicy, SessionOptions};
 use thorarena::profile::Profile;
-use thorarena::registry::PolicyChoice;
+use thorarena::registry::{PolicyArg, PolicyChoice};
 use thorarena::robot::RobotModel;
 
 /// Options of a policy's answers (all policies) and of the session (remote ones).
@@ -122,7 +122,8 @@ pub fn make_policy_vetted(
     envs: usize,
     vet: &mut dyn FnMut(&str) -> Result<(), String>,
 ) -> anyhow::Result<Box<dyn Policy>> {
-    match thorarena::registry::policy(spec, robot, profile)? {
+    let arg = PolicyArg::parse(spec)?;
+    match arg.load(robot, profile)? {
         PolicyChoice::InProcess(policy) => Ok(policy),
         PolicyChoice::Session(session) => Ok(Box::new(connect_remote(
             session, robot, profile, io, envs, vet,

@@ -76,10 +76,11 @@ pub(super) fn run(cmd: &PolicyCommand) -> anyhow::Result<()> {
 
 fn check(args: &Args) -> anyhow::Result<SanityReport> {
     let robot = registry::robot(&args.robot)?;
+    let policy_arg = registry::PolicyArg::parse(&args.policy)?;
     let profile_name = args
         .profile
         .clone()
-        .unwrap_or_else(|| registry::family_profile(&args.policy).to_string());
+        .unwrap_or_else(|| policy_arg.default_profile().to_string());
     let profile = registry::profile(&profile_name, &robot)?;
     let engine = match (args.engine, &args.mjcf) {
         (super::choices::EngineArg::Rapier, None) => Engine::Rapier,
@@ -102,8 +103,7 @@ fn check(args: &Args) -> anyhow::Result<SanityReport> {
         None => walking_sequence(&sequences, args.track_seconds)
             .with_context(|| format!("{} has no sequences", dataset_dir.display()))?,
     };
-    let PolicyChoice::InProcess(mut policy) = registry::policy(&args.policy, &robot, &profile)?
-    else {
+    let PolicyChoice::InProcess(mut policy) = policy_arg.load(&robot, &profile)? else {
         bail!("policy check runs a policy in process; `{}` is a policy process (check it by running its network in process, e.g. beyondmimic:FILE)", args.policy);
     };
     let options = SanityOptions {

@@ -29,7 +29,7 @@ pub struct BridgeOptions {
     /// Index of the torso body in the robot model (its IMU is `rt/secondary_imu`).
     pub torso_body: usize,
     /// Button presses on the robot's wireless remote, from the bridge's start.
-    pub remote: super::remote::RemoteScript,
+    pub remote: super::wireless_remote::RemoteScript,
     /// Start the episode when these buttons are held together (their bits; the first
     /// valid command after the press, if none came before) instead of at the first valid
     /// command. Until then the robot is held still at the reference's first frame, as on

@@ -10,12 +10,12 @@ pub mod cdr;
 pub mod crc;
 pub mod interface;
 pub mod motion_switcher;
-pub mod remote;
 pub mod scheduling;
 pub mod session;
 pub mod transport;
 pub mod unitree_go;
 pub mod unitree_hg;
+pub mod wireless_remote;
 pub mod zmq_clock;
 
 pub use transport::{DdsError, RobotEndpoints, MAX_DOMAIN};

@@ -5,8 +5,8 @@
 //! [`crate::benchmark::evaluate`] writes an in-process run.
 
 use super::bridge::{run_episode, BridgeOptions, BridgeProgress, RealTimeReport};
-use super::remote::RemoteScript;
 use super::scheduling::SchedulingError;
+use super::wireless_remote::RemoteScript;
 use super::RobotEndpoints;
 use crate::episode::{Episode, EpisodeSetup};
 use crate::evaluation::{task_thresholds, EvalRequest, EvalSpec, TerminationRule};
@@ -27,8 +27,8 @@ const STATE_PERIOD: Duration = Duration::from_millis(2);
 /// What a deployment episode is asked to be.
 #[derive(Debug, Clone)]
 pub struct DdsSessionRequest {
-    /// The dataset holding the sequence.
-    pub dataset: PathBuf,
+    /// The dataset holding the sequence (`None`: the bundled sample dataset).
+    pub dataset: Option<PathBuf>,
     /// `TASK/SEQUENCE_ID`.
     pub sequence: String,
     /// One setting, as `eval --settings` spells it.
@@ -131,7 +131,7 @@ pub enum DdsSessionError {
 fn start_button(req: &DdsSessionRequest) -> Result<Option<u16>, DdsSessionError> {
     let bits = match req.start_on.as_str() {
         "first-command" => return Ok(None),
-        name => match super::remote::chord_bits(name) {
+        name => match super::wireless_remote::chord_bits(name) {
             Some(bits) if req.remote.presses(bits) => bits,
             Some(_) => {
                 return Err(DdsSessionError::Setting(format!(
@@ -141,7 +141,7 @@ fn start_button(req: &DdsSessionRequest) -> Result<Option<u16>, DdsSessionError>
             None => {
                 return Err(DdsSessionError::Setting(format!(
                     "--start-on {name}: give first-command, a button ({}) or a chord (select+A)",
-                    super::remote::BUTTONS.join(", ")
+                    super::wireless_remote::BUTTONS.join(", ")
                 )))
             }
         },
@@ -189,7 +189,7 @@ pub fn run_dds_session(
     };
     let spec = EvalSpec::load(&EvalRequest {
         policy: req.name.clone(),
-        dataset: Some(req.dataset.clone()),
+        dataset: req.dataset.clone(),
         profile: Some(req.profile.clone()),
         settings: vec![req.setting.clone()],
         selection: SequenceSelection {
@@ -214,7 +214,7 @@ pub fn run_dds_session(
             spec.sequences.len()
         )));
     };
-    crate::results::check_run_dir(&req.out, req.overwrite, Some(&req.dataset))?;
+    crate::results::check_run_dir(&req.out, req.overwrite, Some(&spec.dataset))?;
     let run = RunDir::new(&req.out);
     run.check_writable()?;
     // The one writer of the run from now until its last file: a second bridge given the

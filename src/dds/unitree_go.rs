@@ -7,7 +7,7 @@
 use super::cdr::{Message, Visit};
 
 /// The remote's sticks (each axis in [-1, 1]) and buttons (the bits of
-/// [`super::remote::BUTTONS`]).
+/// [`super::wireless_remote::BUTTONS`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct WirelessController {
     /// Left stick, x.

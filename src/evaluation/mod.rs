@@ -8,19 +8,19 @@
 //! `runner` and `results` both point down at this module and never at each other, so a
 //! record can travel from the runner to the report without either knowing the other.
 
+mod episode_record;
 mod latency;
-mod record;
 mod rules;
-mod sanity;
+mod sanity_record;
 mod schedule;
 mod setting;
 mod spec;
 mod thresholds;
 
+pub use episode_record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
 pub use latency::{LatencyRecorder, LatencySummary};
-pub use record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
 pub use rules::{parse_budget, Budget, LatencyMode, MissRule, PolicyIoRules, TerminationRule};
-pub use sanity::SanityRecord;
+pub use sanity_record::SanityRecord;
 pub use schedule::{reference_steps, schedule};
 pub use setting::Setting;
 pub use spec::{

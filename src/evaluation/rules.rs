@@ -16,6 +16,30 @@ pub struct TerminationRule {
     pub max_torso_tilt_error_rad: f64,
 }
 
+impl TerminationRule {
+    /// Why a run under this rule holds no benchmark scores, if it does not: FATS and
+    /// survival are defined with the benchmark's termination, and a looser one lets a
+    /// robot that fell (lying on its back) count as surviving and score.
+    pub fn not_the_benchmarks(&self) -> Option<String> {
+        let benchmark = Self::default();
+        if *self == benchmark {
+            return None;
+        }
+        let looser = self.max_torso_height_error_m > benchmark.max_torso_height_error_m
+            || self.max_torso_tilt_error_rad > benchmark.max_torso_tilt_error_rad;
+        Some(format!(
+            "termination is not the benchmark's (torso height error > {} m or tilt error > {} rad){}: these are not benchmark scores",
+            benchmark.max_torso_height_error_m,
+            benchmark.max_torso_tilt_error_rad,
+            if looser {
+                ", and looser: a robot that fell can count as surviving and score"
+            } else {
+                ""
+            }
+        ))
+    }
+}
+
 impl Default for TerminationRule {
     fn default() -> Self {
         Self {
@@ -109,4 +133,32 @@ pub fn parse_budget(s: &str) -> Result<Budget, String> {
     Duration::try_from_secs_f64(secs)
         .map(|d| Budget(Some(d)))
         .map_err(|_| format!("`{s}`: too long for a budget (give one that fits a duration)"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::TerminationRule;
+
+    #[test]
+    fn only_the_benchmarks_termination_gives_benchmark_scores() {
+        assert_eq!(TerminationRule::default().not_the_benchmarks(), None);
+        let opened = TerminationRule {
+            max_torso_height_error_m: 100.0,
+            max_torso_tilt_error_rad: 100.0,
+        };
+        let why = opened.not_the_benchmarks().unwrap();
+        assert!(
+            why.contains("not benchmark scores") && why.contains("surviving"),
+            "{why}"
+        );
+        let stricter = TerminationRule {
+            max_torso_height_error_m: 0.1,
+            ..TerminationRule::default()
+        };
+        let why = stricter.not_the_benchmarks().unwrap();
+        assert!(
+            why.contains("not benchmark scores") && !why.contains("surviving"),
+            "{why}"
+        );
+    }
 }

@@ -7,7 +7,7 @@ use super::{PolicyIoRules, Setting, TerminationRule};
 use crate::motion::{DataError, Dataset, SelectionError, Sequence, SequenceSelection, Subset};
 use crate::physics::{make_physics, Engine, EngineError, PhysicsSettings};
 use crate::profile::Profile;
-use crate::registry::{self, RegistryError};
+use crate::registry::{self, PolicyArg, RegistryError};
 use crate::robot::RobotModel;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -163,6 +163,10 @@ fn invalid(message: impl Into<String>) -> SpecError {
 /// rules, and how it is spread over threads.
 #[derive(Debug, Clone)]
 pub struct EvalSpec {
+    /// The policy argument, parsed (`None`: a name that is no argument — a deployment
+    /// over DDS names its run so — which runs on the `default` profile, one slot per
+    /// worker).
+    pub policy: Option<PolicyArg>,
     /// The robot.
     pub robot: RobotModel,
     /// The dynamics profile (with the physics step asked for).
@@ -215,7 +219,9 @@ impl EvalSpec {
             .clone()
             .unwrap_or_else(|| crate::data_dir().join("sample"));
         let robot = registry::robot(&request.robot)?;
-        let (profile, profile_mismatch) = resolve_profile(request, &robot, &mut advice)?;
+        let policy = PolicyArg::parse(&request.policy).ok();
+        let (profile, profile_mismatch) =
+            resolve_profile(request, policy.as_ref(), &robot, &mut advice)?;
         let engine = check_engine(request, &robot, &profile)?;
         if robot.keypoint_set(&request.keypoints).is_none() {
             return Err(invalid(format!(
@@ -236,9 +242,11 @@ impl EvalSpec {
             &mut advice,
         )?;
         check_trace(&request.trace, &picked.sequences, &dataset)?;
-        let (workers, envs) = threads(request)?;
+        let slots_per_worker = policy.as_ref().map_or(1, PolicyArg::slots_per_worker);
+        let (workers, envs) = threads(request, slots_per_worker)?;
         check_pipeline(request.pipeline_depth, envs, &request.io)?;
         Ok(Self {
+            policy,
             profile_mismatch,
             unchecked: request.unchecked,
             dataset_sha256: picked.sha256,
@@ -287,18 +295,21 @@ fn names_sequence(name: &str, task: &str, sequence_id: &str) -> bool {
 /// physics step is the request's when it gives one. Also returns the mismatch.
 fn resolve_profile(
     request: &EvalRequest,
+    policy: Option<&PolicyArg>,
     robot: &RobotModel,
     advice: &mut Vec<Advice>,
 ) -> Result<(Profile, bool), SpecError> {
-    let profile_name = request
-        .profile
-        .clone()
-        .unwrap_or_else(|| registry::family_profile(&request.policy).to_string());
+    let profile_name = request.profile.clone().unwrap_or_else(|| {
+        policy
+            .map_or("default", PolicyArg::default_profile)
+            .to_string()
+    });
     let mut profile = registry::profile(&profile_name, robot).map_err(|e| match e {
         RegistryError::UnknownProfile { .. } => invalid(format!("--profile {profile_name}: {e}")),
         e => e.into(),
     })?;
-    let mismatch = match registry::profile_fits(&request.policy, &profile) {
+    let fits = policy.map_or(Ok(()), |p| p.check_profile(&profile));
+    let mismatch = match fits {
         Ok(()) => false,
         Err(why) if request.profile_mismatch_ok => {
             advice.push(Advice::Warning(format!(
@@ -400,9 +411,8 @@ fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Resu
 }
 
 /// Worker threads (default: every core) and environment slots (default: the policy
-/// family's slots per worker for each worker, `registry::slots_per_worker`), within their
-/// limits.
-fn threads(request: &EvalRequest) -> Result<(usize, usize), SpecError> {
+/// family's `slots_per_worker` for each worker), within their limits.
+fn threads(request: &EvalRequest, slots_per_worker: usize) -> Result<(usize, usize), SpecError> {
     let workers = match request.workers {
         Some(0) => return Err(invalid("--workers must be at least 1")),
         Some(n) if n > MAX_WORKERS => {
@@ -419,7 +429,7 @@ fn threads(request: &EvalRequest) -> Result<(usize, usize), SpecError> {
             )))
         }
         Some(n) => n,
-        None => (workers.max(1) * registry::slots_per_worker(&request.policy)).min(MAX_ENVS),
+        None => (workers.max(1) * slots_per_worker).min(MAX_ENVS),
     };
     Ok((workers, envs))
 }

@@ -288,13 +288,8 @@ impl Player {
 /// The run directory's name of `policy` on `engine`: the family and the network's file
 /// stem (`wbc-mjlab-wbc_g1_policy-rapier`), or the built-in's name.
 pub fn run_name(policy: &str, engine: EngineChoice) -> String {
-    let base = match registry::policy_file_stem(policy) {
-        Some((family, stem)) => match registry::policy_parameters(policy) {
-            Some(params) => format!("{family}-{stem}-{params}"),
-            None => format!("{family}-{stem}"),
-        },
-        None => policy.to_string(),
-    };
+    let base = registry::PolicyArg::parse(policy)
+        .map_or_else(|_| policy.to_string(), |arg| arg.dir_label());
     let clean: String = base
         .chars()
         .map(|c| {
@@ -476,9 +471,14 @@ fn run_one(
         source: Box::new(source),
     })?;
     let mut policy: Box<dyn Policy> = match player {
-        Player::Argument(a) => match registry::policy(a, &spec.robot, &spec.profile) {
-            Ok(PolicyChoice::InProcess(p)) => p,
-            Ok(PolicyChoice::Session(_)) => return Err(LeaderboardError::NotInProcess(a.clone())),
+        Player::Argument(a) => match registry::PolicyArg::parse(a).and_then(|arg| {
+            match arg.load(&spec.robot, &spec.profile)? {
+                PolicyChoice::InProcess(p) => Ok(Some(p)),
+                PolicyChoice::Session(_) => Ok(None),
+            }
+        }) {
+            Ok(Some(p)) => p,
+            Ok(None) => return Err(LeaderboardError::NotInProcess(a.clone())),
             Err(source) => {
                 return Err(LeaderboardError::Policy {
                     policy: a.clone(),
@@ -552,8 +552,9 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
                 Some(r) => {
                     let ci = r
                         .fats_ci95
-                        .map(|[lo, hi]| format!(" ({lo:.1}–{hi:.1})"))
-                        .unwrap_or_default();
+                        .map_or(" (n/a: one episode per task)".to_string(), |[lo, hi]| {
+                            format!(" ({lo:.1}–{hi:.1})")
+                        });
                     out.push_str(&format!(
                         " {:.1}{ci} | {:.3} | {:.1} |",
                         r.average.fats, r.average.survival, r.average.kp_mm
@@ -591,13 +592,7 @@ pub fn write_leaderboard_page(
 /// A policy argument as a table names it: `family (file stem)` for a network
 /// (`twist2 (twist2_1017_25k)`), the argument itself otherwise.
 pub fn policy_label(policy: &str) -> String {
-    match registry::policy_file_stem(policy) {
-        Some((family, stem)) => match registry::policy_parameters(policy) {
-            Some(params) => format!("{family} ({stem}, {params})"),
-            None => format!("{family} ({stem})"),
-        },
-        None => policy.to_string(),
-    }
+    registry::PolicyArg::parse(policy).map_or_else(|_| policy.to_string(), |arg| arg.table_label())
 }
 
 /// Text that stays one cell of a Markdown table and shows as text: `|` escaped, HTML's

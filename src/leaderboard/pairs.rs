@@ -51,8 +51,12 @@ impl CompliancePair {
 
     /// Its name in directories and tables: `<compliant stem>-vs-<baseline stem>`.
     pub fn name(&self) -> String {
-        let stem =
-            |p: &str| registry::policy_file_stem(p).map_or_else(|| p.to_string(), |(_, stem)| stem);
+        let stem = |p: &str| {
+            registry::PolicyArg::parse(p)
+                .ok()
+                .and_then(|arg| arg.file_stem())
+                .unwrap_or_else(|| p.to_string())
+        };
         let raw = format!("{}-vs-{}", stem(&self.compliant), stem(&self.baseline));
         raw.chars()
             .map(|c| {
@@ -307,15 +311,18 @@ pub fn run_pairs(
 /// no stiffness of its own, but the default it already runs at (its `compliant` row);
 /// nothing otherwise.
 fn sweep_of(pair: &CompliancePair, options: &PairOptions) -> Vec<String> {
-    let softmimic = registry::policy_family(&pair.compliant).is_some_and(|f| f.name == "softmimic");
-    if !softmimic || registry::policy_parameters(&pair.compliant).is_some() {
+    let Ok(compliant) = registry::PolicyArg::parse(&pair.compliant) else {
+        return Vec::new();
+    };
+    if compliant.family().name != "softmimic" || compliant.parameters().is_some() {
         return Vec::new();
     }
     options
         .stiffness_n_per_m
         .iter()
         .filter(|&&k| k != crate::policy::softmimic::DEFAULT_STIFFNESS.linear)
-        .map(|k| format!("{}@stiffness={k}", pair.compliant))
+        .filter_map(|k| compliant.with_parameters(&format!("stiffness={k}")).ok())
+        .map(|arg| arg.to_string())
         .collect()
 }
 

@@ -38,7 +38,7 @@ pub struct Diagnostics {
     /// Lower-body keypoint RMSE, mm.
     #[serde(deserialize_with = "nan_if_null")]
     pub lower_kp_mm: f64,
-    /// Population standard deviation of episode scores.
+    /// Population standard deviation of episode scores (NaN for a task of one episode).
     #[serde(deserialize_with = "nan_if_null")]
     pub fats_std: f64,
     /// Mean root drift, m.
@@ -154,12 +154,17 @@ pub fn aggregate(
                 power_overhead: mean_power(Regime::High) / mean_power(Regime::Low),
                 upper_kp_mm: 1e3 * upper.rmse(),
                 lower_kp_mm: 1e3 * lower.rmse(),
-                fats_std: (task_scores
-                    .iter()
-                    .map(|s| (s.score - fats).powi(2))
-                    .sum::<f64>()
-                    / n)
-                    .sqrt(),
+                // One episode has no spread to speak of: undefined (a dash, `n/a`), not 0.
+                fats_std: if task_scores.len() < 2 {
+                    f64::NAN
+                } else {
+                    (task_scores
+                        .iter()
+                        .map(|s| (s.score - fats).powi(2))
+                        .sum::<f64>()
+                        / n)
+                        .sqrt()
+                },
                 root_drift_m: drift / n,
             },
         });

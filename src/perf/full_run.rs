@@ -65,7 +65,7 @@ pub fn process_cpu_time() -> Duration {
 /// Runs every (sequence, setting) of `spec` with `policy`, recording nothing, and times it.
 pub fn time_run(spec: &EvalSpec, policy: &mut dyn Policy) -> RunTiming {
     let plan = EvalPlan::of(spec, None);
-    let jobs = schedule(spec.sequences.len(), plan.settings.len(), None);
+    let jobs = schedule(spec.sequences.len(), plan.spec.settings.len(), None);
     let substeps = (spec.profile.control_dt_s / spec.profile.physics_dt_s).round() as usize;
     let cpu0 = process_cpu_time();
     let t0 = Instant::now();

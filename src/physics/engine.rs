@@ -80,7 +80,7 @@ pub enum EngineError {
         source: std::io::Error,
     },
     /// This build has no MuJoCo.
-    #[error("this thorarena was built without MuJoCo: build it with `--features mujoco` against the libmujoco.so of the PyPI wheel mujoco==3.17.0 (docs/engines.md, \"MuJoCo backend\")")]
+    #[error("this thorarena was built without MuJoCo: run `tools/mujoco-lib.sh` once (it puts the libmujoco.so of the PyPI wheel mujoco==3.17.0 under target/), then `cargo build --release --features mujoco` (docs/engines.md, \"MuJoCo backend\")")]
     NotBuilt,
     /// MuJoCo refused the model.
     #[cfg(feature = "mujoco")]

@@ -1,8 +1,15 @@
 //! Every kind of policy a run can name, in one table: how it is spelled, what the user
-//! supplies, the profile it runs under when none is named, and where it runs.
-//! `thorarena policies` prints it; [`super::policy`] builds from it, and
-//! [`super::family_profile`] reads its profile column, so a new family is one entry here
-//! plus its builder.
+//! supplies, the profile it runs under when none is named and which profiles it accepts,
+//! how many environment slots a worker gives it, how it is built, and where it runs.
+//! `thorarena policies` prints it and [`super::PolicyArg`] reads every other column, so a
+//! new family is one entry here (with its builder and profile rule, beside it in
+//! `policies.rs`).
+
+use super::policies;
+use super::{PolicyArg, RegistryError};
+use crate::policy::Policy;
+use crate::profile::Profile;
+use crate::robot::RobotModel;
 
 /// Where a family's policy runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -13,8 +20,26 @@ pub enum Runs {
     OwnProcess,
 }
 
-/// One kind of policy.
+/// What a family's argument holds after `name:`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Target {
+    /// Nothing: the argument is the family's name (the built-ins).
+    Nothing,
+    /// A network file, optionally followed by `@KEY=VALUE,…` parameters.
+    File,
+    /// The session a policy process connects to.
+    Session,
+}
+
+/// Builds a family's policy in process from its parsed argument, for `robot` under
+/// `profile` (its default pose and action mapping).
+pub type Build = fn(&PolicyArg, &RobotModel, &Profile) -> Result<Box<dyn Policy>, RegistryError>;
+
+/// Whether a profile is one a family's policy runs under; `Err` says why not.
+pub type ProfileRule = fn(&Profile) -> Result<(), String>;
+
+/// One kind of policy.
+#[derive(Clone, Copy)]
 pub struct PolicyFamily {
     /// Its name: the whole argument of a built-in, the prefix before `:` otherwise.
     pub name: &'static str,
@@ -31,16 +56,39 @@ pub struct PolicyFamily {
     /// Environment slots per worker when a run names none: [`NETWORK_SLOTS_PER_WORKER`]
     /// for a network in process, else 1. Records do not depend on it.
     pub slots_per_worker: usize,
+    /// What its argument holds after `name:`.
+    pub target: Target,
+    /// How it is built in process (`None`: a policy process the caller serves).
+    pub build: Option<Build>,
+    /// The profiles it runs under.
+    pub profile_rule: ProfileRule,
+    /// A file to name when the argument lacks one (`twist2_1017_25k.onnx, TWIST2's
+    /// released checkpoint`), for the error message.
+    pub example: Option<&'static str>,
+}
+
+impl std::fmt::Debug for PolicyFamily {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PolicyFamily")
+            .field("name", &self.name)
+            .finish_non_exhaustive()
+    }
+}
+
+impl PartialEq for PolicyFamily {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
 }
 
 impl PolicyFamily {
     /// Whether policy argument `spec` names this family.
     pub fn names(&self, spec: &str) -> bool {
-        if self.spelling.contains(':') {
-            spec.strip_prefix(self.name)
-                .is_some_and(|rest| rest.starts_with(':'))
-        } else {
-            spec == self.name
+        match self.target {
+            Target::Nothing => spec == self.name,
+            Target::File | Target::Session => spec
+                .strip_prefix(self.name)
+                .is_some_and(|rest| rest.starts_with(':')),
         }
     }
 }
@@ -70,6 +118,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "default",
         slots_per_worker: 1,
         runs: Runs::InProcess,
+        target: Target::Nothing,
+        build: Some(policies::hold),
+        profile_rule: policies::any_profile,
+        example: None,
     },
     PolicyFamily {
         name: "replay",
@@ -79,6 +131,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "default",
         slots_per_worker: 1,
         runs: Runs::InProcess,
+        target: Target::Nothing,
+        build: Some(policies::replay),
+        profile_rule: policies::any_profile,
+        example: None,
     },
     PolicyFamily {
         name: "balance",
@@ -88,6 +144,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "default",
         slots_per_worker: 1,
         runs: Runs::InProcess,
+        target: Target::Nothing,
+        build: Some(policies::balance),
+        profile_rule: policies::any_profile,
+        example: None,
     },
     PolicyFamily {
         name: "twist2",
@@ -97,6 +157,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "twist2",
         slots_per_worker: NETWORK_SLOTS_PER_WORKER,
         runs: Runs::InProcess,
+        target: Target::File,
+        build: Some(policies::twist2),
+        profile_rule: policies::twist2_profile,
+        example: Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
     },
     PolicyFamily {
         name: "beyondmimic",
@@ -106,6 +170,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "beyondmimic",
         slots_per_worker: BEYONDMIMIC_SLOTS_PER_WORKER,
         runs: Runs::InProcess,
+        target: Target::File,
+        build: Some(policies::beyondmimic),
+        profile_rule: policies::beyondmimic_profile,
+        example: Some("policy.onnx, an mjlab or holosoma G1 export"),
     },
     PolicyFamily {
         name: "wbc-mjlab",
@@ -115,6 +183,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "wbc-mjlab",
         slots_per_worker: BEYONDMIMIC_SLOTS_PER_WORKER,
         runs: Runs::InProcess,
+        target: Target::File,
+        build: Some(policies::wbc_mjlab),
+        profile_rule: policies::wbc_mjlab_profile,
+        example: Some("wbc_g1_policy.onnx, wbc-mjlab's general G1 tracker"),
     },
     PolicyFamily {
         name: "falcon",
@@ -124,6 +196,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "falcon",
         slots_per_worker: NETWORK_SLOTS_PER_WORKER,
         runs: Runs::InProcess,
+        target: Target::File,
+        build: Some(policies::falcon),
+        profile_rule: policies::falcon_profile,
+        example: Some("g1_29dof_falcon.onnx, FALCON's released G1 network"),
     },
     PolicyFamily {
         name: "softmimic",
@@ -133,6 +209,10 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "softmimic",
         slots_per_worker: NETWORK_SLOTS_PER_WORKER,
         runs: Runs::InProcess,
+        target: Target::File,
+        build: Some(policies::softmimic),
+        profile_rule: policies::softmimic_profile,
+        example: Some("StaticStand-SoftMimic.onnx@stiffness=60, a SoftMimic network and its stiffness in N/m"),
     },
     PolicyFamily {
         name: "ipc",
@@ -142,47 +222,16 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile: "default",
         slots_per_worker: 1,
         runs: Runs::OwnProcess,
+        target: Target::Session,
+        build: None,
+        profile_rule: policies::any_profile,
+        example: None,
     },
 ];
 
 /// The family policy argument `spec` names, if any.
 pub fn policy_family(spec: &str) -> Option<&'static PolicyFamily> {
     POLICY_FAMILIES.iter().find(|f| f.names(spec))
-}
-
-/// The family and the file of a policy argument naming a network file
-/// (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`, …), so a sweep can resolve the path; a
-/// family's parameters (`softmimic:FILE.onnx@stiffness=200`) are not part of the file.
-pub fn policy_file(spec: &str) -> Option<(&'static PolicyFamily, &str)> {
-    let family = policy_family(spec).filter(|f| f.spelling.contains(":FILE"))?;
-    Some((family, split_parameters(&spec[family.name.len() + 1..]).0))
-}
-
-/// The parameters a policy argument names after its file (`stiffness=200` of
-/// `softmimic:FILE.onnx@stiffness=200`), if any.
-pub fn policy_parameters(spec: &str) -> Option<&str> {
-    let family = policy_family(spec).filter(|f| f.spelling.contains(":FILE"))?;
-    split_parameters(&spec[family.name.len() + 1..]).1
-}
-
-/// `FILE@KEY=VALUE,…` → (`FILE`, `Some("KEY=VALUE,…")`); a file with no `@` followed by a
-/// `KEY=` → (it, `None`).
-pub fn split_parameters(file_and_parameters: &str) -> (&str, Option<&str>) {
-    match file_and_parameters.rsplit_once('@') {
-        Some((file, params)) if params.contains('=') => (file, Some(params)),
-        _ => (file_and_parameters, None),
-    }
-}
-
-/// The family name and the network file's stem of a policy argument naming a network
-/// file (`twist2:dir/twist2_1017_25k.onnx` → `("twist2", "twist2_1017_25k")`): how
-/// labels and run directories name it.
-pub fn policy_file_stem(spec: &str) -> Option<(&'static str, String)> {
-    let (family, file) = policy_file(spec)?;
-    let stem = std::path::Path::new(file)
-        .file_stem()
-        .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned());
-    Some((family.name, stem))
 }
 
 #[cfg(test)]
@@ -206,17 +255,6 @@ mod tests {
             assert_eq!(policy_family(spec).map(|f| f.name), family, "{spec}");
             assert!(POLICY_FAMILIES.iter().filter(|f| f.names(spec)).count() <= 1);
         }
-    }
-
-    #[test]
-    fn parameters_are_not_part_of_the_file() {
-        let (_, file) = policy_file("softmimic:dir/a@b.onnx@stiffness=200").unwrap();
-        assert_eq!(file, "dir/a@b.onnx");
-        assert_eq!(policy_file("twist2:x@y.onnx").unwrap().1, "x@y.onnx");
-        assert_eq!(
-            policy_file_stem("softmimic:d/Pour-SoftMimic.onnx@stiffness=200"),
-            Some(("softmimic", "Pour-SoftMimic".to_string()))
-        );
     }
 
     #[test]

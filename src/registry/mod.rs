@@ -7,14 +7,15 @@
 mod families;
 mod networks;
 mod policies;
+mod policy_arg;
 mod suggest;
 
 pub use families::{
-    policy_family, policy_file, policy_file_stem, policy_parameters, split_parameters,
-    PolicyFamily, Runs, NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
+    Build, PolicyFamily, ProfileRule, Runs, Target, NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
 };
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
-pub use policies::{builtin_policy, ipc_session, policy, unknown_policy, PolicyChoice};
+pub use policies::{builtin_policy, PolicyChoice};
+pub use policy_arg::PolicyArg;
 pub use suggest::{closest, did_you_mean};
 
 use crate::profile::{bundled_profile_path, load_profile, Profile, ProfileError};
@@ -119,63 +120,4 @@ pub fn robot(name_or_dir: &str) -> Result<RobotModel, RegistryError> {
         name: name_or_dir.to_string(),
         source,
     })
-}
-
-/// Whether `profile` is one the family of policy argument `policy` was trained with:
-/// TWIST2 networks the `twist2` profile, BeyondMimic-style ones `beyondmimic` or a profile
-/// with a `[beyondmimic]` section (`holosoma-wbt`); the built-ins and policy processes
-/// any. The error says why not.
-pub fn profile_fits(policy: &str, profile: &Profile) -> Result<(), String> {
-    if policy.starts_with("twist2:") && profile.name != "twist2" {
-        return Err(format!(
-            "TWIST2 networks are trained for the `twist2` profile (its gains, action scale and 50 Hz); `{}` contradicts it",
-            profile.name
-        ));
-    }
-    if policy.starts_with("beyondmimic:")
-        && profile.name != "beyondmimic"
-        && profile.beyondmimic.is_none()
-    {
-        return Err(format!(
-            "BeyondMimic-style networks run on `beyondmimic` or a profile with a [beyondmimic] section (holosoma-wbt); `{}` is neither",
-            profile.name
-        ));
-    }
-    if policy.starts_with("falcon:") && profile.name != "falcon" {
-        return Err(format!(
-            "FALCON's network runs on the `falcon` profile (its gains, 0.25 action scale, default pose and 50 Hz); `{}` contradicts it",
-            profile.name
-        ));
-    }
-    if policy.starts_with("softmimic:") && profile.name != "softmimic" {
-        return Err(format!(
-            "SoftMimic's networks run on the `softmimic` profile (its gains, 0.5 action scale, default pose and 50 Hz); `{}` contradicts it",
-            profile.name
-        ));
-    }
-    if policy.starts_with("wbc-mjlab:") && profile.beyondmimic.is_none() {
-        return Err(format!(
-            "wbc-mjlab's network runs on the `wbc-mjlab` profile (its gains, residual action scale and torque cap) or another with a [beyondmimic] section; `{}` has none",
-            profile.name
-        ));
-    }
-    Ok(())
-}
-
-/// Environment slots per worker when a run of `policy` names none (its family's
-/// [`PolicyFamily::slots_per_worker`]; 1 for a policy process).
-pub fn slots_per_worker(policy: &str) -> usize {
-    policy_family(policy).map_or(1, |f| f.slots_per_worker)
-}
-
-/// The profile a policy was trained with, used by `eval`, sweeps, `policy check` and the
-/// leaderboard when no profile is named: a published network's own ([`KNOWN_NETWORKS`],
-/// by the file's content), else its family's (its entry in [`POLICY_FAMILIES`]: `twist2`
-/// for `twist2:`, `beyondmimic` for `beyondmimic:`, …), else `default` (the built-ins,
-/// policy processes, anything unknown).
-pub fn family_profile(policy: &str) -> &'static str {
-    if let Some(known) = policy_file(policy).and_then(|(_, file)| known_network(Path::new(file))) {
-        return known.profile;
-    }
-    policy_family(policy).map_or("default", |f| f.profile)
 }

@@ -1,79 +1,22 @@
-//! The policies a run can name (`--policy`, a sweep's `policy`): the built-in baselines,
-//! the published networks in process (`twist2:FILE`, `beyondmimic:FILE`,
-//! `wbc-mjlab:FILE`), and a policy
-//! process connecting to a session (`ipc:SESSION`).
+//! Each family's builder and profile rule, which its entry in
+//! [`super::POLICY_FAMILIES`] names: the built-in baselines, the published networks in
+//! process, and what a run holds a profile to for each.
 
-use super::{did_you_mean, RegistryError};
+use super::{PolicyArg, RegistryError};
 use crate::policy::{
     BalanceGains, BalancePolicy, BeyondMimicPolicy, FalconPolicy, HoldPolicy, Policy, ReplayPolicy,
     SoftMimicPolicy, Twist2Policy,
 };
 use crate::profile::Profile;
 use crate::robot::RobotModel;
-use std::path::Path;
 use std::sync::Arc;
 
-/// What a policy argument names.
+/// What a parsed argument is built into.
 pub enum PolicyChoice<'a> {
     /// A policy run in this process, loaded.
     InProcess(Box<dyn Policy>),
     /// A policy process that connects to this session (the caller serves it).
     Session(&'a str),
-}
-
-/// The session name of `ipc:<session>`, if the policy argument is one.
-pub fn ipc_session(policy: &str) -> Option<&str> {
-    policy.strip_prefix("ipc:")
-}
-
-/// Loads the policy `spec` names for `robot` under `profile` (its default pose and action
-/// mapping), or says which session a policy process should connect to.
-pub fn policy<'a>(
-    spec: &'a str,
-    robot: &RobotModel,
-    profile: &Profile,
-) -> Result<PolicyChoice<'a>, RegistryError> {
-    let default_pose = profile.action_offset_rad.clone();
-    if let Some(builtin) = builtin_policy(spec, robot, &default_pose) {
-        return Ok(PolicyChoice::InProcess(builtin?));
-    }
-    let policy: Box<dyn Policy> = match spec {
-        other if other.ends_with(':') => {
-            return Err(RegistryError::UnknownPolicy(unknown_policy(other)))
-        }
-        other => {
-            if let Some(path) = other.strip_prefix("twist2:") {
-                Box::new(Twist2Policy::load(Path::new(path), default_pose)?)
-            } else if let Some(path) = other.strip_prefix("beyondmimic:") {
-                Box::new(BeyondMimicPolicy::load(
-                    Path::new(path),
-                    Arc::new(robot.clone()),
-                    profile,
-                )?)
-            } else if let Some(path) = other.strip_prefix("wbc-mjlab:") {
-                Box::new(
-                    BeyondMimicPolicy::load(Path::new(path), Arc::new(robot.clone()), profile)?
-                        .named("wbc-mjlab"),
-                )
-            } else if let Some(path) = other.strip_prefix("falcon:") {
-                Box::new(FalconPolicy::load(Path::new(path), profile)?)
-            } else if let Some(rest) = other.strip_prefix("softmimic:") {
-                let (path, params) = super::split_parameters(rest);
-                let stiffness = crate::policy::softmimic::stiffness_from(params)?;
-                Box::new(SoftMimicPolicy::load(
-                    Path::new(path),
-                    Arc::new(robot.clone()),
-                    profile,
-                    stiffness,
-                )?)
-            } else if let Some(session) = ipc_session(other) {
-                return Ok(PolicyChoice::Session(session));
-            } else {
-                return Err(RegistryError::UnknownPolicy(unknown_policy(other)));
-            }
-        }
-    };
-    Ok(PolicyChoice::InProcess(policy))
 }
 
 /// The built-in policy `name` (`hold`, `replay`, `balance`) around `default_pose` (the
@@ -96,35 +39,145 @@ pub fn builtin_policy(
     }))
 }
 
-/// Why `spec` names no policy, with what it probably meant.
-pub fn unknown_policy(spec: &str) -> String {
-    let family = spec.trim_end_matches(':');
-    let example = match family {
-        "twist2" => Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
-        "beyondmimic" => Some("policy.onnx, an mjlab or holosoma G1 export"),
-        "wbc-mjlab" => Some("wbc_g1_policy.onnx, wbc-mjlab's general G1 tracker"),
-        "falcon" => Some("g1_29dof_falcon.onnx, FALCON's released G1 network"),
-        "softmimic" => Some(
-            "StaticStand-SoftMimic.onnx@stiffness=60, a SoftMimic network and its stiffness in N/m",
-        ),
-        _ => None,
-    };
-    if let Some(example) = example {
-        return format!("`--policy {spec}` needs the network's file: `{family}:FILE.onnx` (e.g. {family}:{example})");
+fn builtin(
+    arg: &PolicyArg,
+    robot: &RobotModel,
+    profile: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    builtin_policy(arg.family().name, robot, &profile.action_offset_rad)
+        .expect("the built-in families are the built-ins")
+}
+
+pub(super) fn hold(
+    a: &PolicyArg,
+    r: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    builtin(a, r, p)
+}
+
+pub(super) fn replay(
+    a: &PolicyArg,
+    r: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    builtin(a, r, p)
+}
+
+pub(super) fn balance(
+    a: &PolicyArg,
+    r: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    builtin(a, r, p)
+}
+
+/// The network file of a file family's argument (present: [`PolicyArg::parse`] refuses
+/// one without).
+fn file(arg: &PolicyArg) -> &std::path::Path {
+    arg.file().expect("a file family's argument names its file")
+}
+
+pub(super) fn twist2(
+    a: &PolicyArg,
+    _: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    Ok(Box::new(Twist2Policy::load(
+        file(a),
+        p.action_offset_rad.clone(),
+    )?))
+}
+
+pub(super) fn beyondmimic(
+    a: &PolicyArg,
+    r: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    Ok(Box::new(BeyondMimicPolicy::load(
+        file(a),
+        Arc::new(r.clone()),
+        p,
+    )?))
+}
+
+pub(super) fn wbc_mjlab(
+    a: &PolicyArg,
+    r: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    Ok(Box::new(
+        BeyondMimicPolicy::load(file(a), Arc::new(r.clone()), p)?.named("wbc-mjlab"),
+    ))
+}
+
+pub(super) fn falcon(
+    a: &PolicyArg,
+    _: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    Ok(Box::new(FalconPolicy::load(file(a), p)?))
+}
+
+pub(super) fn softmimic(
+    a: &PolicyArg,
+    r: &RobotModel,
+    p: &Profile,
+) -> Result<Box<dyn Policy>, RegistryError> {
+    let stiffness = crate::policy::softmimic::stiffness_from(a.parameters())?;
+    Ok(Box::new(SoftMimicPolicy::load(
+        file(a),
+        Arc::new(r.clone()),
+        p,
+        stiffness,
+    )?))
+}
+
+/// The built-ins and policy processes run under any profile.
+pub(super) fn any_profile(_: &Profile) -> Result<(), String> {
+    Ok(())
+}
+
+pub(super) fn twist2_profile(p: &Profile) -> Result<(), String> {
+    named(
+        p,
+        "twist2",
+        "TWIST2 networks are trained for the `twist2` profile (its gains, action scale and 50 Hz)",
+    )
+}
+
+pub(super) fn falcon_profile(p: &Profile) -> Result<(), String> {
+    named(p, "falcon", "FALCON's network runs on the `falcon` profile (its gains, 0.25 action scale, default pose and 50 Hz)")
+}
+
+pub(super) fn softmimic_profile(p: &Profile) -> Result<(), String> {
+    named(p, "softmimic", "SoftMimic's networks run on the `softmimic` profile (its gains, 0.5 action scale, default pose and 50 Hz)")
+}
+
+pub(super) fn beyondmimic_profile(p: &Profile) -> Result<(), String> {
+    if p.name == "beyondmimic" || p.beyondmimic.is_some() {
+        return Ok(());
     }
-    if family == "ipc" {
-        return "`--policy ipc` needs a session name: `ipc:NAME`, the name the policy process connects to".into();
+    Err(format!(
+        "BeyondMimic-style networks run on `beyondmimic` or a profile with a [beyondmimic] section (holosoma-wbt); `{}` is neither",
+        p.name
+    ))
+}
+
+pub(super) fn wbc_mjlab_profile(p: &Profile) -> Result<(), String> {
+    if p.beyondmimic.is_some() {
+        return Ok(());
     }
-    let names: Vec<String> = super::POLICY_FAMILIES
-        .iter()
-        .map(|f| {
-            if f.spelling.contains(':') {
-                format!("{}:", f.name)
-            } else {
-                f.name.to_string()
-            }
-        })
-        .collect();
-    let hint = did_you_mean(spec, names.iter().map(String::as_str));
-    format!("unknown policy `{spec}`{hint}: built-in hold, replay or balance; twist2:FILE.onnx; beyondmimic:FILE.onnx; wbc-mjlab:FILE.onnx; falcon:FILE.onnx; softmimic:FILE.onnx[@stiffness=N]; or ipc:SESSION for a policy process")
+    Err(format!(
+        "wbc-mjlab's network runs on the `wbc-mjlab` profile (its gains, residual action scale and torque cap) or another with a [beyondmimic] section; `{}` has none",
+        p.name
+    ))
+}
+
+/// `profile` must be `name`; `why` says what that profile holds.
+fn named(profile: &Profile, name: &str, why: &str) -> Result<(), String> {
+    if profile.name == name {
+        return Ok(());
+    }
+    Err(format!("{why}; `{}` contradicts it", profile.name))
 }

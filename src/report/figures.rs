@@ -341,14 +341,56 @@ pub fn report_figures(runs: &[Run], sweep: &[SweepChart]) -> ReportFigures {
         .enumerate()
         .flat_map(|(i, r)| r.episode_points(i))
         .collect();
-    ReportFigures {
+    let mut figures = ReportFigures {
         sweep: sweep.iter().map(|c| sweep_figure(c, &colors)).collect(),
         radars,
         scatter: scatter(runs, &settings, &episodes, &colors),
         regimes,
         latency: latency(runs, &colors),
         episodes,
+    };
+    // A figure copied into a paper keeps what it measured: engine and dataset.
+    if let Some(context) = measured_on(runs) {
+        for f in figures
+            .radars
+            .iter_mut()
+            .chain(figures.regimes.iter_mut())
+            .chain(figures.latency.iter_mut())
+            .chain(std::iter::once(&mut figures.scatter))
+        {
+            f.title = format!("{} — {context}", f.title);
+        }
     }
+    figures
+}
+
+/// The engines and datasets of `runs`, as a figure's title names them (`rapier,
+/// dataset synthetic`); `None` without runs.
+fn measured_on(runs: &[Run]) -> Option<String> {
+    let mut engines: Vec<String> = runs.iter().map(|r| r.header.engine_label()).collect();
+    let mut datasets: Vec<String> = runs
+        .iter()
+        .map(|r| dataset_name(&r.header.dataset))
+        .collect();
+    for list in [&mut engines, &mut datasets] {
+        list.sort();
+        list.dedup();
+    }
+    (!runs.is_empty()).then(|| {
+        format!(
+            "{}, dataset{} {}",
+            engines.join(" / "),
+            if datasets.len() > 1 { "s" } else { "" },
+            datasets.join(" / ")
+        )
+    })
+}
+
+/// The last part of a dataset's path (`/x/cache/sample` → `sample`).
+fn dataset_name(path: &str) -> String {
+    std::path::Path::new(path)
+        .file_name()
+        .map_or_else(|| path.to_string(), |n| n.to_string_lossy().into_owned())
 }
 
 /// Tracking against survival: colour per policy, marker per setting, hollow markers for a

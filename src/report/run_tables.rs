@@ -24,12 +24,16 @@ pub fn run_tables(summary: &Summary) -> String {
         ),
         None => String::new(),
     };
+    let termination_note = match header.termination.not_the_benchmarks() {
+        Some(why) => format!("\n\n**Warning — {why}.**"),
+        None => String::new(),
+    };
     let partial_note = match summary.coverage.sentence() {
         Some(s) => format!("\n\n**Warning — {s}.**\n\n{}", summary.coverage.markdown()),
         None => String::new(),
     };
     let title = format!(
-        "ThorArena {} — policy `{}`, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{subset_note}{shard_note}{partial_note}",
+        "ThorArena {} — policy `{}`, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{termination_note}{subset_note}{shard_note}{partial_note}",
         header.version,
         header.policy,
         header.profile,
@@ -50,8 +54,13 @@ pub fn run_tables(summary: &Summary) -> String {
         .iter()
         .filter_map(|(k, s)| Some((k.clone(), s.fats_ci95?)))
         .collect();
+    let no_interval = if intervals.len() < summary.settings.len() {
+        "\nNo 95 % interval where every task has one episode: there is nothing to resample (n/a).\n"
+    } else {
+        ""
+    };
     let mut tables = format!(
-        "{title}\n\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
+        "{title}\n\n## Task-level FATS\n\n{}{no_interval}\n## Diagnostics (averaged over tasks)\n\n{}",
         task_fats_table(&results, &intervals),
         diagnostics_table(&results)
     );

@@ -270,6 +270,13 @@ fn short_hash(hash: &str) -> &str {
 /// dataset content read from different paths.
 pub fn comparison_notes(runs: &[Run]) -> Vec<String> {
     let mut notes = Vec::new();
+    if profiles_by_design(runs) {
+        if let Some(groups) = grouped(runs.iter().map(|r| (r.label.as_str(), profile_of(r)))) {
+            notes.push(format!(
+                "each policy runs under the dynamics profile it was trained with (checked when it ran), so the profiles differ by design — {groups}"
+            ));
+        }
+    }
     let mut by_hash: Vec<(&str, Vec<(&str, &str)>)> = Vec::new();
     for r in runs {
         let h = r.header.dataset_sha256.as_str();
@@ -317,12 +324,9 @@ fn configuration_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
     flag(WarningKind::Dataset, "Datasets", &|r| {
         format!("sha256 {}", short_hash(&r.header.dataset_sha256))
     });
-    flag(WarningKind::Profile, "Dynamics profiles", &|r| {
-        format!(
-            "`{}` (control step {} s)",
-            r.header.profile, r.header.control_dt_s
-        )
-    });
+    if !profiles_by_design(runs) {
+        flag(WarningKind::Profile, "Dynamics profiles", &profile_of);
+    }
     flag(
         WarningKind::Physics,
         "Physics engines or steps",
@@ -353,6 +357,34 @@ fn configuration_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
         r.header.version.clone()
     });
     out
+}
+
+/// A run's profile as the comparison names it.
+fn profile_of(r: &Run) -> String {
+    format!(
+        "`{}` (control step {} s)",
+        r.header.profile, r.header.control_dt_s
+    )
+}
+
+/// Whether the runs' profiles differ only as their policies do: every run's profile was
+/// checked against its policy's family when it ran (none overrode the check), and no
+/// policy ran under two profiles. A leaderboard is such a comparison — each policy on
+/// the profile it was trained with — and its profiles are a note, not a warning.
+fn profiles_by_design(runs: &[Run]) -> bool {
+    let mut profile_of_policy: Vec<(&str, &str)> = Vec::new();
+    for r in runs {
+        if r.header.profile_mismatch_ok {
+            return false;
+        }
+        let (policy, profile) = (r.header.policy.as_str(), r.header.profile.as_str());
+        match profile_of_policy.iter().find(|(p, _)| *p == policy) {
+            Some((_, other)) if *other != profile => return false,
+            Some(_) => {}
+            None => profile_of_policy.push((policy, profile)),
+        }
+    }
+    true
 }
 
 /// The engine, its model and step of a run, as the physics warning compares them.

@@ -60,7 +60,7 @@ fn format_number(v: f64, decimals: usize, suffix: &str) -> String {
 }
 
 /// What the diagnostics table's numbers are, printed under it (and in README).
-pub const DIAGNOSTICS_NOTE: &str = "Each number is computed per task, then averaged over tasks. Per task: FATS and survival are means over its episodes; KP rows are the RMS of the keypoint error over its control steps (all its episodes pooled; low/high: steps of that force regime); ρ = low / high KP RMS; η = mean power in high-force steps over low-force steps; FATS Std is the population standard deviation of its episode scores.";
+pub const DIAGNOSTICS_NOTE: &str = "Each number is computed per task, then averaged over tasks. Per task: FATS and survival are means over its episodes; KP rows are the RMS of the keypoint error over its control steps (all its episodes pooled; low/high: steps of that force regime); ρ = low / high KP RMS; η = mean power in high-force steps over low-force steps; FATS Std is the population standard deviation of its episode scores (– where every task has one episode); – marks a number that is undefined.";
 
 /// Task-level FATS (mean episode score per task), one column per setting; under the
 /// average, its bootstrap 95 % interval where `intervals` has the setting.
@@ -328,6 +328,20 @@ impl NumberTable {
     }
 }
 
+/// Each setting's FATS interval of a run, `n/a` where every task has one episode.
+fn run_intervals(r: &Run) -> String {
+    let intervals =
+        crate::results::fats_intervals(&crate::results::episode_rows(&r.records, &r.thresholds));
+    r.settings()
+        .iter()
+        .map(|s| match intervals.get(s) {
+            Some([lo, hi]) => format!("{s} [{lo:.2}, {hi:.2}]"),
+            None => format!("{s} n/a (one episode per task)"),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The Markdown report of several runs (`thorarena report`'s `.md`): each run with what
 /// it measured, the notes and the comparability warnings, then the paper's two tables.
 pub fn comparison_markdown(
@@ -338,7 +352,7 @@ pub fn comparison_markdown(
     let mut md = String::from("# ThorArena report\n\n");
     for r in runs {
         md += &format!(
-            "- **{}**: `{}` — policy `{}`, profile `{}`, engine {}, dataset {} (sha256 {}), keypoints `{}`\n",
+            "- **{}**: `{}` — policy `{}`, profile `{}`, engine {}, dataset {} (sha256 {}), keypoints `{}`; {} episodes; FATS 95 % interval (bootstrap over episodes within tasks): {}\n",
             r.label,
             r.dir.display(),
             r.header.policy,
@@ -346,7 +360,9 @@ pub fn comparison_markdown(
             r.header.engine_label(),
             r.header.dataset,
             &r.header.dataset_sha256[..r.header.dataset_sha256.len().min(16)],
-            r.header.keypoints
+            r.header.keypoints,
+            r.records.len(),
+            run_intervals(r)
         );
     }
     for n in notes {

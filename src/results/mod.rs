@@ -29,7 +29,7 @@ mod episodes;
 mod header;
 mod merge;
 mod output_guard;
-mod record;
+mod record_check;
 mod run_dir;
 mod summary;
 

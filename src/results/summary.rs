@@ -106,6 +106,8 @@ pub fn summarize(
 
 /// Per setting, FATS's bootstrap 95 % interval: episode scores resampled within each task
 /// ([`BOOTSTRAP_RESAMPLES`] resamples, a fixed seed, so a run's interval is reproducible).
+/// A setting whose every task has one episode has no interval: resampling one score
+/// gives it back, and `81.9 (81.9–81.9)` would claim a precision nothing measured.
 pub fn fats_intervals(rows: &[EpisodeRow]) -> BTreeMap<String, [f64; 2]> {
     let mut by_setting: BTreeMap<&str, BTreeMap<&str, Vec<f64>>> = BTreeMap::new();
     for r in rows {
@@ -118,6 +120,7 @@ pub fn fats_intervals(rows: &[EpisodeRow]) -> BTreeMap<String, [f64; 2]> {
     }
     by_setting
         .into_iter()
+        .filter(|(_, tasks)| tasks.values().any(|scores| scores.len() > 1))
         .map(|(setting, tasks)| {
             let groups: Vec<Vec<f64>> = tasks.into_values().collect();
             let ci = stratified_mean_ci(&groups, BOOTSTRAP_RESAMPLES, 0);
@@ -193,4 +196,38 @@ pub fn sort_records(records: &mut [EpisodeRecord], header: &RunHeader) {
                 .unwrap_or(usize::MAX),
         )
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fats_intervals;
+    use crate::results::EpisodeRow;
+
+    fn row(task: &str, setting: &str, score: f64) -> EpisodeRow {
+        EpisodeRow {
+            task: task.into(),
+            sequence_id: format!("{task}-{score}"),
+            setting: setting.into(),
+            survival: 1.0,
+            kp_error_mean_mm: 10.0,
+            kp_error_rms_mm: 10.0,
+            score,
+            termination: String::new(),
+        }
+    }
+
+    #[test]
+    fn one_episode_per_task_has_no_interval() {
+        let rows = [
+            row("a", "one-each", 80.0),
+            row("b", "one-each", 90.0),
+            row("a", "two", 80.0),
+            row("a", "two", 84.0),
+            row("b", "two", 90.0),
+        ];
+        let intervals = fats_intervals(&rows);
+        assert!(!intervals.contains_key("one-each"), "{intervals:?}");
+        let [lo, hi] = intervals["two"];
+        assert!(lo < hi && lo <= 86.0 && 86.0 <= hi, "[{lo}, {hi}]");
+    }
 }

@@ -20,6 +20,7 @@
 
 use super::EvalPlan;
 use crate::episode::{Episode, EpisodeSetup, EpisodeTrace};
+use crate::evaluation::EvalSpec;
 use crate::evaluation::{EpisodeRecord, LatencyMode, MissRule, PolicyFault, Termination};
 use crate::evaluation::{LatencyRecorder, LatencySummary};
 use crate::motion::Sequence;
@@ -102,18 +103,19 @@ impl Shared<'_> {
 /// One episode setup per setting of the plan, for a policy wanting reference frames at
 /// `offsets` s ahead.
 fn episode_setups<'a>(plan: &EvalPlan<'a>, offsets: Vec<f64>) -> Vec<EpisodeSetup<'a>> {
-    let keypoints = plan
+    let spec: &'a EvalSpec = plan.spec;
+    let keypoints = spec
         .robot
-        .keypoint_set(plan.keypoints)
+        .keypoint_set(&spec.keypoints)
         .expect("keypoint set checked by the caller");
-    plan.settings
+    spec.settings
         .iter()
         .map(|setting| {
             EpisodeSetup::for_setting(
-                plan.robot,
-                plan.profile,
+                &spec.robot,
+                &spec.profile,
                 keypoints,
-                plan.termination,
+                spec.termination,
                 setting,
                 offsets.clone(),
             )
@@ -133,23 +135,23 @@ pub(super) fn answer_to_commands(
     commands: &mut [SlotCommand],
     index_of: impl Fn(usize) -> usize,
 ) {
-    let effect_delay_substeps = match plan.io.latency_mode {
+    let effect_delay_substeps = match plan.spec.io.latency_mode {
         LatencyMode::Ignore => 0,
         LatencyMode::Measured => {
-            (round_trip.as_secs_f64() / plan.profile.physics_dt_s).round() as usize
+            (round_trip.as_secs_f64() / plan.spec.profile.physics_dt_s).round() as usize
         }
     };
     for (obs, action) in observations.iter().zip(actions) {
         commands[index_of(obs.env)] = match outcome {
-            ActOutcome::Acted if action_is_usable(action, plan.io.max_abs_action) => {
+            ActOutcome::Acted if action_is_usable(action, plan.spec.io.max_abs_action) => {
                 SlotCommand::Act {
                     action: action.clone(),
                     effect_delay_substeps,
                     fault: None,
                 }
             }
-            ActOutcome::Acted => miss_rule(plan.io.miss_rule, PolicyFault::InvalidAction, obs),
-            ActOutcome::Missed => miss_rule(plan.io.miss_rule, PolicyFault::DeadlineMiss, obs),
+            ActOutcome::Acted => miss_rule(plan.spec.io.miss_rule, PolicyFault::InvalidAction, obs),
+            ActOutcome::Missed => miss_rule(plan.spec.io.miss_rule, PolicyFault::DeadlineMiss, obs),
             ActOutcome::Failed => SlotCommand::Terminate {
                 why: Termination::PolicyFailed,
                 fault: None,
@@ -158,7 +160,7 @@ pub(super) fn answer_to_commands(
     }
 }
 
-/// Runs the given jobs (from [`crate::evaluation::schedule`]) with one policy over `plan.envs` slots;
+/// Runs the given jobs (from [`crate::evaluation::schedule`]) with one policy over `plan.spec.envs` slots;
 /// `on_record` sees each finished episode as it ends (stream it, count it).
 pub fn run_eval(
     plan: &EvalPlan,
@@ -167,9 +169,9 @@ pub fn run_eval(
     policy: &mut dyn Policy,
     on_record: &mut dyn FnMut(&EpisodeRecord, Option<&EpisodeTrace>),
 ) -> RunOutcome {
-    let n_slots = plan.envs.max(1);
-    let n_workers = plan.workers.clamp(1, n_slots);
-    let n_joints = plan.robot.n_joints();
+    let n_slots = plan.spec.envs.max(1);
+    let n_workers = plan.spec.workers.clamp(1, n_slots);
+    let n_joints = plan.spec.robot.n_joints();
     let setups = episode_setups(plan, policy.reference_offsets_s());
     let shared = Shared {
         plan,
@@ -187,7 +189,7 @@ pub fn run_eval(
     let mut results: Vec<Option<EpisodeRecord>> = vec![None; jobs.len()];
     let mut latency = LatencyRecorder::default();
     let mut physics_wall_by_worker = vec![Duration::ZERO; n_workers];
-    let groups = slot_groups(n_slots, plan.pipeline_depth.max(1));
+    let groups = slot_groups(n_slots, plan.spec.pipeline_depth.max(1));
 
     std::thread::scope(|scope| {
         let (report_tx, report_rx) = mpsc::channel::<(usize, Vec<SlotReport>)>();
@@ -418,19 +420,19 @@ pub(super) struct WorkerSlots<'a> {
 
 impl<'a> WorkerSlots<'a> {
     pub(super) fn new(plan: &EvalPlan, slots: Vec<usize>) -> Self {
-        let robot = Arc::new(plan.robot.clone());
+        let robot = Arc::new(plan.spec.robot.clone());
         let settings = PhysicsSettings {
-            dt_s: plan.profile.physics_dt_s,
+            dt_s: plan.spec.profile.physics_dt_s,
             ..Default::default()
         };
         let physics = slots
             .iter()
             .map(|_| {
                 make_physics(
-                    &plan.engine,
+                    &plan.spec.engine,
                     robot.clone(),
                     settings.clone(),
-                    plan.profile.gains.clone(),
+                    plan.spec.profile.gains.clone(),
                 )
                 .expect("the engine was checked before the run (EvalPlan::engine)")
             })
@@ -498,6 +500,7 @@ impl<'a> WorkerSlots<'a> {
             let seq = &shared.sequences[q];
             let mut ep = Episode::start(&shared.setups[s], seq, self.physics[k].as_mut());
             if plan
+                .spec
                 .trace
                 .contains(&format!("{}/{}", seq.task, seq.sequence_id))
             {
@@ -530,7 +533,7 @@ impl<'a> WorkerSlots<'a> {
 fn finish(shared: &Shared, job: usize, mut ep: Episode) -> Finished {
     let (q, s) = shared.jobs[job];
     let seq = &shared.sequences[q];
-    let setting = &shared.plan.settings[s];
+    let setting = &shared.plan.spec.settings[s];
     let trace = ep.take_trace();
     let physics_wall = ep.physics_wall();
     Finished {

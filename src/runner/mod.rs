@@ -19,40 +19,17 @@ mod lockstep;
 
 pub use lockstep::{run_eval, RunOutcome};
 
-use crate::evaluation::{EvalSpec, PolicyIoRules, Setting, TerminationRule};
-use crate::profile::Profile;
-use crate::robot::RobotModel;
+use crate::evaluation::EvalSpec;
 
 /// What the runner needs of an evaluation ([`Self::of`] an [`EvalSpec`]).
 pub struct EvalPlan<'a> {
-    /// Robot.
-    pub robot: &'a RobotModel,
-    /// Dynamics profile.
-    pub profile: &'a Profile,
-    /// Keypoint set name.
-    pub keypoints: &'a str,
-    /// Termination rule.
-    pub termination: TerminationRule,
-    /// Settings to run.
-    pub settings: Vec<Setting>,
-    /// Worker threads stepping the physics of the environment slots.
-    pub workers: usize,
-    /// Environment slots stepped in lock-step (one batch per control step to the policy).
-    pub envs: usize,
-    /// Slot groups of the lock-step loop: 1, one batch of every slot per control step; 2,
-    /// the slots split in two halves, the workers stepping one while the policy answers
-    /// for the other (checked by [`EvalSpec`]; the free-running loop has no groups).
-    pub pipeline_depth: usize,
-    /// What a missed deadline or an unusable action does, and when actions take effect.
-    pub io: PolicyIoRules,
-    /// Record rollout traces of the sequences with these `task/sequence_id` names.
-    pub trace: Vec<String>,
+    /// The checked evaluation: robot, profile, keypoints, termination, settings, threads,
+    /// slots, pipeline, policy I/O rules, traces and engine (checked by its loader: a
+    /// physics can be made for it).
+    pub spec: &'a EvalSpec,
     /// Record the trace of every other episode too, over its first this many seconds
     /// (`crosscheck` compares the engines' joint angles there).
     pub trace_first_s: Option<f64>,
-    /// The physics engine (checked by the caller: [`crate::physics::make_physics`] must
-    /// succeed for it before the run).
-    pub engine: crate::physics::Engine,
 }
 
 impl<'a> EvalPlan<'a> {
@@ -60,18 +37,8 @@ impl<'a> EvalPlan<'a> {
     /// records its first seconds (what `crosscheck` compares).
     pub fn of(spec: &'a EvalSpec, trace_first_s: Option<f64>) -> Self {
         Self {
-            robot: &spec.robot,
-            profile: &spec.profile,
-            keypoints: &spec.keypoints,
-            termination: spec.termination,
-            settings: spec.settings.clone(),
-            workers: spec.workers,
-            envs: spec.envs,
-            pipeline_depth: spec.pipeline_depth,
-            io: spec.io,
-            trace: spec.trace.clone(),
+            spec,
             trace_first_s,
-            engine: spec.engine.clone(),
         }
     }
 }

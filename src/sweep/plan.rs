@@ -435,7 +435,7 @@ fn check_shards(spec: &SweepSpec, durations: &[Vec<f64>]) -> Result<(), String> 
 
 /// The policy `p` as planned: paths made absolute against `workdir`, a launched policy's
 /// `--policy` the session placeholder, the profile defaulting to the policy's own
-/// (`registry::family_profile`).
+/// (`registry::PolicyArg::default_profile`).
 fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
     let policy = p
         .resolved_policy(workdir)
@@ -444,9 +444,11 @@ fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
         name: p.label(),
         command: p.command.clone(),
         // The resolved path: a published network's own profile is found by content.
-        profile: p
-            .resolved_profile(workdir)
-            .unwrap_or_else(|| crate::registry::family_profile(&policy).to_string()),
+        profile: p.resolved_profile(workdir).unwrap_or_else(|| {
+            crate::registry::PolicyArg::parse(&policy)
+                .map_or("default", |arg| arg.default_profile())
+                .to_string()
+        }),
         policy,
         keypoints: p.keypoints.clone(),
         connect_timeout_s: p.connect_timeout_s,

@@ -88,7 +88,7 @@ pub struct PolicySpec {
     /// Shell command starting a policy process that joins session `{session}`;
     /// `{thorarena}` is this binary.
     pub command: Option<String>,
-    /// Dynamics profile [default: the policy family's, `thorarena::registry::family_profile`].
+    /// Dynamics profile [default: the policy's, `thorarena::registry::PolicyArg::default_profile`].
     #[serde(default)]
     pub profile: Option<String>,
     /// Keypoint set.
@@ -252,7 +252,8 @@ impl PolicySpec {
         let Some(policy) = &self.policy else {
             return Err("`parameters` vary a policy in process (`policy = …`); a `command` takes its own arguments".into());
         };
-        if crate::registry::policy_parameters(policy).is_some() {
+        let policy = crate::registry::PolicyArg::parse(policy).map_err(|e| e.to_string())?;
+        if policy.parameters().is_some() {
             return Err(format!(
                 "`{policy}` names its parameters already: give them in `parameters` or in the argument, not both"
             ));
@@ -278,17 +279,17 @@ impl PolicySpec {
                 })
                 .collect();
         }
-        Ok(combos
+        combos
             .into_iter()
             .map(|combo| {
                 let params: Vec<String> = combo.iter().map(|(k, v)| format!("{k}={v}")).collect();
-                PolicySpec {
-                    policy: Some(format!("{policy}@{}", params.join(","))),
+                Ok(PolicySpec {
+                    policy: Some(policy.with_parameters(&params.join(","))?.to_string()),
                     parameters: Default::default(),
                     ..self.clone()
-                }
+                })
             })
-            .collect())
+            .collect()
     }
 
     /// Whether the table says what to run: `policy` (not a session no one starts) or
@@ -310,7 +311,9 @@ impl PolicySpec {
             }
             // A session served by a process nobody starts: every run would wait on the
             // same name (and a sweep's planning, which tries each policy, with them).
-            (Some(p), None) if p.starts_with("ipc:") => {
+            (Some(p), None)
+                if crate::registry::PolicyArg::parse(p).is_ok_and(|a| a.session().is_some()) =>
+            {
                 return Err(format!(
                     "`policy = \"{p}\"` names a policy process no one starts: give `command` (with {{session}}) that starts it for each run"
                 ))
@@ -327,17 +330,11 @@ impl PolicySpec {
     /// directory); `None` for a `command`.
     pub fn resolved_policy(&self, workdir: &Path) -> Option<String> {
         let policy = self.policy.as_ref()?;
-        Some(match crate::registry::policy_file(policy) {
-            Some((family, file)) => {
-                let params = crate::registry::policy_parameters(policy)
-                    .map_or_else(String::new, |p| format!("@{p}"));
-                format!(
-                    "{}:{}{params}",
-                    family.name,
-                    resolve(workdir, file).display()
-                )
-            }
-            None => policy.clone(),
+        // An argument that names no policy stays as written: planning refuses it with
+        // the registry's message.
+        Some(match crate::registry::PolicyArg::parse(policy) {
+            Ok(arg) => arg.with_file_in(workdir).to_string(),
+            Err(_) => policy.clone(),
         })
     }
 
@@ -359,14 +356,9 @@ impl PolicySpec {
             return n.clone();
         }
         match (&self.policy, &self.command) {
-            (Some(p), _) => match crate::registry::policy_file_stem(p) {
-                Some((family, stem)) => {
-                    let params = crate::registry::policy_parameters(p)
-                        .map_or_else(String::new, |p| format!("@{p}"));
-                    format!("{family}:{stem}{params}")
-                }
-                None => p.clone(),
-            },
+            (Some(p), _) => {
+                crate::registry::PolicyArg::parse(p).map_or_else(|_| p.clone(), |arg| arg.label())
+            }
             (None, Some(c)) => c.split_whitespace().next().unwrap_or("command").to_string(),
             (None, None) => "policy".into(),
         }

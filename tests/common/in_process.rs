@@ -101,9 +101,12 @@ pub fn eval_on(
 /// policy refused by its sanity check, …).
 pub fn evaluate(request: &EvalRequest, out: &Path) -> Result<PathBuf, String> {
     let spec = EvalSpec::load(request).map_err(|e| e.to_string())?;
-    let PolicyChoice::InProcess(mut policy) =
-        thorarena::registry::policy(&request.policy, &spec.robot, &spec.profile)
-            .map_err(|e| e.to_string())?
+    let PolicyChoice::InProcess(mut policy) = spec
+        .policy
+        .as_ref()
+        .expect("a policy argument")
+        .load(&spec.robot, &spec.profile)
+        .map_err(|e| e.to_string())?
     else {
         panic!("{} is not an in-process policy", request.policy);
     };

@@ -53,3 +53,41 @@ pub fn sample_sequence(robot: &RobotModel, id: &str) -> Sequence {
         provenance: json!({"format": "test"}),
     }
 }
+
+/// A checked evaluation built in memory for the runner's own tests (their sequences are
+/// made, not read from a dataset): `settings` by name, the default keypoints,
+/// termination and policy I/O rules, rapier, no traces.
+#[allow(dead_code)]
+pub fn runner_spec(
+    robot: &RobotModel,
+    profile: &thorarena::profile::Profile,
+    sequences: &[Sequence],
+    settings: &[&str],
+    (workers, envs, pipeline_depth): (usize, usize, usize),
+) -> thorarena::evaluation::EvalSpec {
+    thorarena::evaluation::EvalSpec {
+        policy: None,
+        robot: robot.clone(),
+        profile: profile.clone(),
+        profile_mismatch: false,
+        unchecked: false,
+        engine: Default::default(),
+        dataset: "in-memory".into(),
+        dataset_sha256: String::new(),
+        sequences: sequences.to_vec(),
+        subset: None,
+        settings: settings
+            .iter()
+            .map(|s| thorarena::evaluation::Setting::parse(s).unwrap())
+            .collect(),
+        keypoints: "default".into(),
+        termination: Default::default(),
+        io: Default::default(),
+        shard: None,
+        trace: Vec::new(),
+        workers,
+        envs,
+        pipeline_depth,
+        advice: Vec::new(),
+    }
+}

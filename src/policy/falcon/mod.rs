@@ -204,8 +204,9 @@ impl Policy for FalconPolicy {
     }
 
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
-        self.last_inputs.clear();
-        for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+        // Kept for tests, in buffers reused from call to call (no allocation per step).
+        self.last_inputs.resize_with(observations.len(), Vec::new);
+        for (row, (obs, action)) in observations.iter().zip(actions.iter_mut()).enumerate() {
             if self.slots.len() <= obs.env {
                 self.slots.resize_with(obs.env + 1, Slot::default);
             }
@@ -221,7 +222,7 @@ impl Policy for FalconPolicy {
             slot.walking = Some(cmd.stand > 0.5);
             let frame = observation::frame(obs, &DEFAULT_POSE, &slot.last_raw, &cmd);
             slot.history.push_into(frame, starts, &mut self.input);
-            self.last_inputs.push(self.input.clone());
+            self.last_inputs[row].clone_from(&self.input);
             match self.plans.run_row(&self.plan, &self.input, "falcon") {
                 Some(out) => {
                     let slot = &mut self.slots[obs.env];

@@ -316,8 +316,9 @@ impl Policy for SoftMimicPolicy {
     }
 
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
-        self.last_inputs.clear();
-        for (obs, action) in observations.iter().zip(actions.iter_mut()) {
+        // Kept for tests, in buffers reused from call to call (no allocation per step).
+        self.last_inputs.resize_with(observations.len(), Vec::new);
+        for (row, (obs, action)) in observations.iter().zip(actions.iter_mut()).enumerate() {
             if self.slots.len() <= obs.env {
                 self.slots.resize_with(obs.env + 1, Slot::default);
             }
@@ -355,7 +356,7 @@ impl Policy for SoftMimicPolicy {
             );
             slot.history
                 .push_into(self.layout, frame, starts, &future, &mut self.input);
-            self.last_inputs.push(self.input.clone());
+            self.last_inputs[row].clone_from(&self.input);
             match self.plans.run_row(&self.plan, &self.input, "softmimic") {
                 Some(out) => {
                     let slot = &mut self.slots[obs.env];
