@@ -321,7 +321,8 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&never_pressed.stderr);
     assert!(
-        !never_pressed.status.success() && stderr.contains("--remote never presses A"),
+        !never_pressed.status.success()
+            && stderr.contains("--start-on: `A`: the remote script never presses it"),
         "{stderr}"
     );
     let no_such_interface = Command::new(BIN)
@@ -371,7 +372,7 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
                 "--start-timeout",
                 "60",
             ],
-            "after --start-timeout 60 s",
+            "after the start timeout of 60 s",
         ),
     ] {
         let o = Command::new(BIN)

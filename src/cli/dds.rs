@@ -5,7 +5,9 @@
 
 use super::choices::EngineArg;
 use std::path::PathBuf;
-use thorarena::dds::session::{run_dds_session, DdsSessionEvent, DdsSessionRequest};
+use thorarena::dds::session::{
+    run_dds_session, DdsSessionError, DdsSessionEvent, DdsSessionRequest, DdsSetting,
+};
 use thorarena::dds::wireless_remote::RemoteScript;
 use thorarena::evaluation::TerminationRule;
 
@@ -136,7 +138,19 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
     });
     bar.finish_and_clear();
-    let outcome = outcome?;
+    let outcome = outcome.map_err(|e| match e {
+        // The library names the request's field; here it is the flag the user typed.
+        DdsSessionError::Setting { setting, why } => anyhow::anyhow!(
+            "{}: {why}",
+            match setting {
+                DdsSetting::Sequence => "--sequence",
+                DdsSetting::StartTimeout => "--start-timeout",
+                DdsSetting::StartOn => "--start-on",
+                DdsSetting::RtPriority => "--rt-priority",
+            }
+        ),
+        e => e.into(),
+    })?;
     println!("{}", outcome.tables);
     if !outcome.realtime.kept_real_time {
         eprintln!("warning: the run did not keep real time (realtime.json)");

@@ -89,12 +89,30 @@ pub struct DdsSessionOutcome {
     pub realtime: RealTimeReport,
 }
 
+/// A field of [`DdsSessionRequest`] a refusal is about (the command line names its flag).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DdsSetting {
+    /// [`DdsSessionRequest::sequence`].
+    Sequence,
+    /// [`DdsSessionRequest::start_timeout_s`].
+    StartTimeout,
+    /// [`DdsSessionRequest::start_on`].
+    StartOn,
+    /// [`DdsSessionRequest::rt_priority`].
+    RtPriority,
+}
+
 /// Why a deployment episode did not run or was not scored.
 #[derive(Debug, thiserror::Error)]
 pub enum DdsSessionError {
-    /// A setting the session cannot run with.
-    #[error("{0}")]
-    Setting(String),
+    /// A setting the session cannot run with: which one, and why (naming its value).
+    #[error("{why}")]
+    Setting {
+        /// The request's field.
+        setting: DdsSetting,
+        /// What is wrong with it.
+        why: String,
+    },
     /// The evaluation the episode belongs to.
     #[error(transparent)]
     Spec(#[from] crate::evaluation::SpecError),
@@ -126,6 +144,10 @@ pub enum DdsSessionError {
     },
 }
 
+fn refused(setting: DdsSetting, why: String) -> DdsSessionError {
+    DdsSessionError::Setting { setting, why }
+}
+
 /// The button bits that start the episode (`None`: the first valid command), checked
 /// against the remote's script and the start timeout.
 fn start_button(req: &DdsSessionRequest) -> Result<Option<u16>, DdsSessionError> {
@@ -134,26 +156,33 @@ fn start_button(req: &DdsSessionRequest) -> Result<Option<u16>, DdsSessionError>
         name => match super::wireless_remote::chord_bits(name) {
             Some(bits) if req.remote.presses(bits) => bits,
             Some(_) => {
-                return Err(DdsSessionError::Setting(format!(
-                    "--start-on {name}: --remote never presses {name}"
-                )))
+                return Err(refused(
+                    DdsSetting::StartOn,
+                    format!("`{name}`: the remote script never presses it"),
+                ))
             }
             None => {
-                return Err(DdsSessionError::Setting(format!(
-                    "--start-on {name}: give first-command, a button ({}) or a chord (select+A)",
-                    super::wireless_remote::BUTTONS.join(", ")
-                )))
+                return Err(refused(
+                    DdsSetting::StartOn,
+                    format!(
+                        "`{name}`: give first-command, a button ({}) or a chord (select+A)",
+                        super::wireless_remote::BUTTONS.join(", ")
+                    ),
+                ))
             }
         },
     };
     if let Some(at) = req.remote.first_press(bits) {
         if at.as_secs_f64() >= req.start_timeout_s {
-            return Err(DdsSessionError::Setting(format!(
-                "--start-on {} presses at {:.1} s, after --start-timeout {} s: the bridge would give up first",
-                req.start_on,
-                at.as_secs_f64(),
-                req.start_timeout_s
-            )));
+            return Err(refused(
+                DdsSetting::StartOn,
+                format!(
+                    "`{}` is pressed at {:.1} s, after the start timeout of {} s: the bridge would give up first",
+                    req.start_on,
+                    at.as_secs_f64(),
+                    req.start_timeout_s
+                ),
+            ));
         }
     }
     Ok(Some(bits))
@@ -168,8 +197,9 @@ pub fn run_dds_session(
 ) -> Result<DdsSessionOutcome, DdsSessionError> {
     crate::names::check_name("policy name", &req.name)?;
     if !(req.start_timeout_s.is_finite() && req.start_timeout_s > 0.0) {
-        return Err(DdsSessionError::Setting(
-            "--start-timeout must be > 0 s".into(),
+        return Err(refused(
+            DdsSetting::StartTimeout,
+            format!("{} s: give more than 0 s", req.start_timeout_s),
         ));
     }
     let start_button = start_button(req)?;
@@ -182,10 +212,10 @@ pub fn run_dds_session(
         return Err(super::DdsError::Domain(req.domain).into());
     }
     let Some((task, _)) = req.sequence.split_once('/') else {
-        return Err(DdsSessionError::Setting(format!(
-            "--sequence {}: give TASK/SEQUENCE_ID",
-            req.sequence
-        )));
+        return Err(refused(
+            DdsSetting::Sequence,
+            format!("`{}`: give TASK/SEQUENCE_ID", req.sequence),
+        ));
     };
     let spec = EvalSpec::load(&EvalRequest {
         policy: req.name.clone(),
@@ -208,11 +238,14 @@ pub fn run_dds_session(
         on_event(DdsSessionEvent::Advice(advice.to_string()));
     }
     let [seq] = spec.sequences.as_slice() else {
-        return Err(DdsSessionError::Setting(format!(
-            "--sequence {} names {} sequences",
-            req.sequence,
-            spec.sequences.len()
-        )));
+        return Err(refused(
+            DdsSetting::Sequence,
+            format!(
+                "`{}` names {} sequences",
+                req.sequence,
+                spec.sequences.len()
+            ),
+        ));
     };
     crate::results::check_run_dir(&req.out, req.overwrite, Some(&spec.dataset))?;
     let run = RunDir::new(&req.out);
@@ -234,7 +267,7 @@ pub fn run_dds_session(
     let keypoints = spec
         .robot
         .keypoint_set(&spec.keypoints)
-        .ok_or_else(|| DdsSessionError::Setting(format!("keypoint set {:?}", spec.keypoints)))?;
+        .expect("the keypoint set was checked with the evaluation");
     let setup = EpisodeSetup::for_setting(
         &spec.robot,
         &spec.profile,
@@ -248,10 +281,10 @@ pub fn run_dds_session(
         match super::scheduling::enter_fifo(req.rt_priority) {
             Ok(_) => {}
             Err(e @ SchedulingError::OutOfRange { .. }) => {
-                return Err(DdsSessionError::Setting(format!("--rt-priority: {e}")))
+                return Err(refused(DdsSetting::RtPriority, e.to_string()))
             }
             Err(e @ SchedulingError::Refused { .. }) => on_event(DdsSessionEvent::Advice(format!(
-                "warning: {e}: running at normal priority, where the policy's process can delay physics steps (--rt-priority 0 asks for it)"
+                "warning: {e}: running at normal priority, where the policy's process can delay physics steps (priority 0 asks for it)"
             ))),
         }
     }

@@ -39,37 +39,14 @@ pub fn builtin_policy(
     }))
 }
 
-fn builtin(
+/// The builder of the built-in families (`hold`, `replay`, `balance`), by name.
+pub(super) fn builtin(
     arg: &PolicyArg,
     robot: &RobotModel,
     profile: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
     builtin_policy(arg.family().name, robot, &profile.action_offset_rad)
         .expect("the built-in families are the built-ins")
-}
-
-pub(super) fn hold(
-    a: &PolicyArg,
-    r: &RobotModel,
-    p: &Profile,
-) -> Result<Box<dyn Policy>, RegistryError> {
-    builtin(a, r, p)
-}
-
-pub(super) fn replay(
-    a: &PolicyArg,
-    r: &RobotModel,
-    p: &Profile,
-) -> Result<Box<dyn Policy>, RegistryError> {
-    builtin(a, r, p)
-}
-
-pub(super) fn balance(
-    a: &PolicyArg,
-    r: &RobotModel,
-    p: &Profile,
-) -> Result<Box<dyn Policy>, RegistryError> {
-    builtin(a, r, p)
 }
 
 /// The network file of a file family's argument (present: [`PolicyArg::parse`] refuses

@@ -91,3 +91,27 @@ pub fn runner_spec(
         advice: Vec::new(),
     }
 }
+
+/// This build's `thorarena` run in `cwd` with `args`, to its end.
+#[allow(dead_code)]
+pub fn run_bin(cwd: &std::path::Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .current_dir(cwd)
+        .args(args)
+        .output()
+        .expect("thorarena runs")
+}
+
+/// The error text of a command that must have failed plainly: it did fail, and not by a
+/// panic.
+#[allow(dead_code)]
+pub fn failure(o: &std::process::Output) -> String {
+    assert!(
+        !o.status.success(),
+        "expected an error; stdout: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let e = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!e.contains("panicked"), "a panic: {e}");
+    e
+}
