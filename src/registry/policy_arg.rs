@@ -129,7 +129,7 @@ impl PolicyArg {
     /// `family:stem[@parameters]` for a network (`twist2:twist2_1017_25k`), the argument
     /// itself otherwise: a sweep's label.
     pub fn label(&self) -> String {
-        self.stem_joined(":", "@", "")
+        self.stem_joined(":", "@")
     }
 
     /// `family (stem[, parameters])` for a network (`twist2 (twist2_1017_25k)`), the
@@ -145,17 +145,17 @@ impl PolicyArg {
     /// `family-stem[-parameters]` for a network (`wbc-mjlab-wbc_g1_policy`), the argument
     /// itself otherwise: the base of a run directory's name.
     pub fn dir_label(&self) -> String {
-        self.stem_joined("-", "-", "")
+        self.stem_joined("-", "-")
     }
 
-    fn stem_joined(&self, after_family: &str, before_params: &str, none: &str) -> String {
+    fn stem_joined(&self, after_family: &str, before_params: &str) -> String {
         match self.file_stem() {
             Some(stem) => format!(
                 "{}{after_family}{stem}{}",
                 self.family.name,
                 self.parameters
                     .as_ref()
-                    .map_or_else(|| none.to_string(), |p| format!("{before_params}{p}"))
+                    .map_or_else(String::new, |p| format!("{before_params}{p}"))
             ),
             None => self.spec.clone(),
         }
