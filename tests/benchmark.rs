@@ -364,28 +364,23 @@ fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
         .unwrap();
     let plan = Plan::expand(&spec, &spec_path, &[info]).unwrap();
     assert_eq!((plan.cells.len(), plan.tasks.len()), (2, 4));
-    // Each task as its `eval` runs it: the cell's setting, the task's shard.
-    let task_request = |t: &thorarena::sweep::Task| {
-        let cell = &plan.cells[t.cell];
-        EvalRequest {
-            dataset: Some(cell.dataset.clone()),
-            settings: vec![cell.setting.clone()],
-            shard: (t.shard.1 > 1).then_some(t.shard),
-            ..request()
-        }
-    };
     for t in &plan.tasks {
-        let request = task_request(t);
+        // The task's own evaluation, as its `eval` runs it.
+        let request = EvalRequest {
+            workers: request().workers,
+            ..t.request.clone()
+        };
+        assert_eq!(request.settings, [plan.cells[t.cell].setting.clone()]);
         let run = tmp.path().join(format!("task{}", t.index));
         run_into(&EvalSpec::load(&request).unwrap(), &run, false);
-        let records = check_task_run(&plan, t, &RunDir::new(&run), &request)
+        let records = check_task_run(&plan, t, &RunDir::new(&run))
             .unwrap()
             .expect("the task's own complete run counts");
         assert_eq!(records.len(), t.episodes);
         // Another task's run does not count for this one.
         let other = &plan.tasks[(t.index + 2) % plan.tasks.len()];
         assert!(
-            check_task_run(&plan, other, &RunDir::new(&run), &task_request(other))
+            check_task_run(&plan, other, &RunDir::new(&run))
                 .unwrap()
                 .is_err(),
             "task {}'s run counted for task {}",

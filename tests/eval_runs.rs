@@ -293,3 +293,58 @@ fn episodes_csv_rows_average_to_the_tables_fats_and_fats_has_an_interval() {
     );
     assert!(tables.contains("KP rows are the RMS"), "{tables}");
 }
+
+#[test]
+fn a_request_file_runs_the_evaluation_its_flags_would() {
+    let dir = tempfile::tempdir().unwrap();
+    let by_flags = dir.path().join("flags");
+    let o = eval(&by_flags, &["--workers", "1"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    // The same evaluation as a request: the library's type, serialized.
+    let request = thorarena::evaluation::EvalRequest {
+        policy: "hold".into(),
+        dataset: Some(SAMPLE.into()),
+        settings: vec!["force".into()],
+        ..Default::default()
+    };
+    let file = dir.path().join("request.json");
+    request.write(&file).unwrap();
+    let by_request = dir.path().join("request");
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_thorarena"))
+            .args(["eval", "--request", file.to_str().unwrap()])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&["--workers", "1", "--out", by_request.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(summary_settings(&by_request), summary_settings(&by_flags));
+    let header = |run: &Path| -> serde_json::Value {
+        let mut h: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+        h.as_object_mut().unwrap().remove("created");
+        h
+    };
+    assert_eq!(header(&by_request), header(&by_flags));
+
+    // A flag that describes the evaluation does not go with a request.
+    let o = run(&[
+        "--settings",
+        "no-force",
+        "--out",
+        by_request.to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && e.contains("--request"), "{e}");
+
+    // A request with a field no evaluation has is refused, naming the file and the field.
+    std::fs::write(&file, r#"{"policy": "hold", "setings": ["force"]}"#).unwrap();
+    let o = run(&["--out", dir.path().join("typo").to_str().unwrap()]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("request.json") && e.contains("setings"),
+        "{e}"
+    );
+}

@@ -436,18 +436,11 @@ physics_dt_s = 0.001
     assert_eq!(cells.len(), 2);
     assert_eq!(cells[0]["engine"]["name"], "rapier");
     assert_eq!(cells[1]["engine"]["name"], "mujoco@1ms");
-    let args = |t: usize| -> Vec<String> {
-        serde_json::from_value(plan["tasks"][t]["eval_args"].clone()).unwrap()
-    };
-    assert!(
-        !args(0).iter().any(|a| a.starts_with("--engine")),
-        "rapier cells keep eval's defaults"
-    );
-    let mj = args(1);
-    assert!(
-        mj.iter().any(|a| a == "--engine=mujoco") && mj.iter().any(|a| a == "--physics-dt=0.001"),
-        "{mj:?}"
-    );
+    let request = |t: usize| &plan["tasks"][t]["request"];
+    assert_eq!(request(0)["engine"], "rapier", "{}", request(0));
+    assert!(request(0)["physics_dt_s"].is_null(), "{}", request(0));
+    assert_eq!(request(1)["engine"], "mujoco", "{}", request(1));
+    assert_eq!(request(1)["physics_dt_s"], 0.001, "{}", request(1));
 
     // Collecting puts two engines' scores side by side only when asked.
     let o = run(&["sweep", "run", out.to_str().unwrap(), "--jobs", "2"]);

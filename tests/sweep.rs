@@ -524,6 +524,24 @@ fn bad_specs_and_sweep_directories_are_clear_errors_that_write_nothing() {
     .unwrap();
     let e = err(&thorarena(&["sweep", "status", &out_s]));
     assert!(e.contains("sweep format 99"), "{e}");
+
+    // A plan of format 3, whose tasks held `eval` arguments instead of a request: refused
+    // by every command, saying to plan again.
+    let mut old: serde_json::Value = serde_json::from_str(&text).unwrap();
+    old["format"] = serde_json::json!(3);
+    for t in old["tasks"].as_array_mut().unwrap() {
+        let request = t.as_object_mut().unwrap().remove("request").unwrap();
+        let policy = request["policy"].as_str().unwrap().to_string();
+        t["eval_args"] = serde_json::json!(["eval", format!("--policy={policy}")]);
+    }
+    std::fs::write(out.join("plan.json"), old.to_string()).unwrap();
+    for command in ["status", "run", "collect"] {
+        let e = err(&thorarena(&["sweep", command, &out_s]));
+        assert!(
+            e.contains("sweep format 3") && e.contains("plan the sweep again"),
+            "{command}: {e}"
+        );
+    }
 }
 
 #[test]
@@ -700,14 +718,8 @@ fn a_policy_marked_unchecked_is_planned_with_eval_unchecked() {
         .as_array()
         .unwrap()
         .iter()
-        .map(|t| {
-            t["eval_args"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .any(|a| a == "--unchecked")
-        })
+        .map(|t| t["request"]["unchecked"] == true)
         .collect();
-    // The first policy's task says --unchecked, the second's does not.
+    // The first policy's task asks for an unchecked run, the second's does not.
     assert_eq!(unchecked, [true, false], "{planned}");
 }

@@ -466,14 +466,11 @@ fn a_tampered_plan_is_an_error_naming_plan_json_never_a_panic() {
     type Edit = Box<dyn Fn(&mut serde_json::Value)>;
     let cases: Vec<(&str, Edit)> = vec![
         (
-            "another policy in eval_args",
+            "another policy in a task's request",
             Box::new(|v| {
-                let args = v["tasks"][1]["eval_args"].as_array_mut().unwrap();
-                for a in args.iter_mut() {
-                    if a.as_str().is_some_and(|s| s.contains("hold")) {
-                        *a = serde_json::json!(a.as_str().unwrap().replace("hold", "balance"));
-                    }
-                }
+                let policy = &mut v["tasks"][1]["request"]["policy"];
+                assert_eq!(policy, "hold", "the edit must change something");
+                *policy = serde_json::json!("balance");
             }),
         ),
         (

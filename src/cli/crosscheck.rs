@@ -3,7 +3,7 @@
 //! score on each engine and their differences, means with a bootstrap 95 % confidence
 //! interval. Both runs are ordinary run directories (`<out>/rapier`, `<out>/mujoco`).
 
-use super::eval::{check_out, load_spec, RunArgs};
+use super::eval::{load_spec, OutRules, RunArgs};
 use super::eval_run::{evaluate, FirstSeconds};
 use super::policy_arg::make_policy;
 use anyhow::{bail, Context};
@@ -65,7 +65,7 @@ fn run_engine(
         &args.policy,
         &spec.robot,
         &spec.profile,
-        &run_args.io,
+        &run_args.io.session_options(spec.io.budget_s)?,
         spec.envs,
     )?;
     let seconds = args.divergence_seconds;
@@ -80,7 +80,13 @@ fn run_engine(
         seconds,
         sink: &mut sink,
     };
-    evaluate(run_args, spec, policy.as_mut(), run.path(), Some(first))?;
+    evaluate(
+        run_args.resume,
+        spec,
+        policy.as_mut(),
+        run.path(),
+        Some(first),
+    )?;
     if let Some(e) = write_error {
         return Err(e.into());
     }
@@ -135,8 +141,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
     };
     let dirs = [out.join("rapier"), out.join("mujoco")];
-    for d in &dirs {
-        check_out(d, &args.run)?;
+    for (d, spec) in dirs.iter().zip([&rapier_ctx, &mujoco_ctx]) {
+        OutRules::of(&args.run, spec).check(d)?;
     }
     // Per engine, each episode's joint angles of the first seconds and the feet's
     // accumulated slip, kept on disk as episodes finish (a resume keeps them).

@@ -1,7 +1,6 @@
 //! One evaluation run from the terminal: its progress bar and first lines, its tables
 //! printed, and a policy failure turned into the exit status.
 
-use super::eval::RunArgs;
 use anyhow::bail;
 use std::path::Path;
 use thorarena::benchmark::{EvalObserver, EvalOptions, Starting};
@@ -78,7 +77,7 @@ impl EvalObserver for Progress<'_, '_> {
 /// Runs the benchmark for one connected policy into `out` and prints its tables; a run
 /// whose policy failed is an error (after its results are written).
 pub(super) fn evaluate(
-    args: &RunArgs,
+    resume: bool,
     spec: &EvalSpec,
     policy: &mut dyn Policy,
     out: &Path,
@@ -93,7 +92,7 @@ pub(super) fn evaluate(
         .expect("valid template"),
     );
     let options = EvalOptions {
-        resume: args.resume,
+        resume,
         trace_first_s: first_seconds.as_ref().map(|f| f.seconds),
     };
     let mut progress = Progress {
@@ -101,7 +100,7 @@ pub(super) fn evaluate(
         policy: policy.name().to_string(),
         spec,
         run: &run,
-        resume: args.resume,
+        resume,
         first_seconds,
     };
     let result = thorarena::benchmark::evaluate(spec, policy, &run, options, &mut progress);

@@ -21,6 +21,7 @@ mod policy_arg;
 mod policy_check;
 mod report_html;
 mod robot_info;
+mod run_args;
 mod serve;
 mod sim_trace;
 mod sweep;

@@ -67,13 +67,15 @@ pub enum OnPolicyFailure {
 }
 
 impl PolicyIoArgs {
-    /// How a policy process is served, checked.
-    pub fn session_options(&self) -> anyhow::Result<SessionOptions> {
+    /// How a policy process is served, checked, with the run's latency budget (s; its
+    /// checked [`PolicyIoRules::budget_s`], which a request file may give instead of
+    /// `--budget`).
+    pub fn session_options(&self, budget_s: Option<f64>) -> anyhow::Result<SessionOptions> {
         if !(self.connect_timeout.is_finite() && self.connect_timeout >= 0.0) {
             bail!("--connect-timeout must be >= 0 s");
         }
         Ok(SessionOptions {
-            budget: self.budget.0,
+            budget: budget_s.map(Duration::from_secs_f64),
             spin: Duration::from_micros(self.spin_us),
             connect_timeout: (self.connect_timeout > 0.0)
                 .then(|| Duration::try_from_secs_f64(self.connect_timeout))
@@ -106,10 +108,10 @@ pub fn make_policy(
     spec: &str,
     robot: &RobotModel,
     profile: &Profile,
-    io: &PolicyIoArgs,
+    session: &SessionOptions,
     envs: usize,
 ) -> anyhow::Result<Box<dyn Policy>> {
-    make_policy_vetted(spec, robot, profile, io, envs, &mut |_| Ok(()))
+    make_policy_vetted(spec, robot, profile, session, envs, &mut |_| Ok(()))
 }
 
 /// [`make_policy`], and a policy process (`ipc:`) must also pass `vet` in its handshake
@@ -118,15 +120,20 @@ pub fn make_policy_vetted(
     spec: &str,
     robot: &RobotModel,
     profile: &Profile,
-    io: &PolicyIoArgs,
+    session: &SessionOptions,
     envs: usize,
     vet: &mut dyn FnMut(&str) -> Result<(), String>,
 ) -> anyhow::Result<Box<dyn Policy>> {
     let arg = PolicyArg::parse(spec)?;
     match arg.load(robot, profile)? {
         PolicyChoice::InProcess(policy) => Ok(policy),
-        PolicyChoice::Session(session) => Ok(Box::new(connect_remote(
-            session, robot, profile, io, envs, vet,
+        PolicyChoice::Session(session_name) => Ok(Box::new(connect_remote(
+            session_name,
+            robot,
+            profile,
+            session,
+            envs,
+            vet,
         )?)),
     }
 }
@@ -136,18 +143,12 @@ pub fn connect_remote(
     session: &str,
     robot: &RobotModel,
     profile: &Profile,
-    io: &PolicyIoArgs,
+    options: &SessionOptions,
     envs: usize,
     vet: &mut dyn FnMut(&str) -> Result<(), String>,
 ) -> anyhow::Result<RemotePolicy> {
-    RemotePolicy::serve(
-        session,
-        robot,
-        profile,
-        &io.session_options()?,
-        envs,
-        vet,
-        &mut |note| eprintln!("{note}"),
-    )
+    RemotePolicy::serve(session, robot, profile, options, envs, vet, &mut |note| {
+        eprintln!("{note}")
+    })
     .with_context(|| format!("serving session `{session}`"))
 }

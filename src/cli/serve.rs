@@ -28,12 +28,13 @@ pub struct Args {
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let ctx = load_spec(&args.run, "")?;
+    let session = args.run.io.session_options(ctx.io.budget_s)?;
     for n in 1.. {
         let mut policy = connect_remote(
             &args.session,
             &ctx.robot,
             &ctx.profile,
-            &args.run.io,
+            &session,
             ctx.envs,
             &mut |_| Ok(()),
         )?;
@@ -45,7 +46,13 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             })
             .find(|dir| !dir.exists())
             .expect("some number is free");
-        let result = evaluate(&args.run, &ctx, &mut policy as &mut dyn Policy, &out, None);
+        let result = evaluate(
+            args.run.resume,
+            &ctx,
+            &mut policy as &mut dyn Policy,
+            &out,
+            None,
+        );
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {
             eprintln!("run {n} ended with an error: {e:#}");

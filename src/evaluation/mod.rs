@@ -3,13 +3,14 @@
 //! ([`TerminationRule`], [`PolicyIoRules`], [`Budget`]), the [`schedule`] of episodes, an
 //! episode's identity ([`EpisodeKey`]) and outcome ([`EpisodeRecord`], [`Termination`],
 //! [`PolicyFaults`]), the regime thresholds of a dataset's tasks, the policy's latency
-//! histogram — and [`EvalSpec`], one evaluation checked from plain values.
+//! histogram — and [`EvalRequest`], one evaluation as asked for, which [`EvalSpec`] checks.
 //!
 //! `runner` and `results` both point down at this module and never at each other, so a
 //! record can travel from the runner to the report without either knowing the other.
 
 mod episode_record;
 mod latency;
+mod request;
 mod rules;
 mod sanity_record;
 mod schedule;
@@ -19,12 +20,13 @@ mod thresholds;
 
 pub use episode_record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
 pub use latency::{LatencyRecorder, LatencySummary};
+pub use request::{EngineChoice, EvalRequest, RequestFileError};
 pub use rules::{parse_budget, Budget, LatencyMode, MissRule, PolicyIoRules, TerminationRule};
 pub use sanity_record::SanityRecord;
 pub use schedule::{reference_steps, schedule};
 pub use setting::Setting;
 pub use spec::{
-    parse_settings, Advice, EngineChoice, EvalRequest, EvalSpec, SpecError, DEFAULT_SETTINGS,
-    MAX_ENVS, MAX_PIPELINE_DEPTH, MAX_SUBSTEPS, MAX_WORKERS,
+    parse_settings, Advice, EvalSpec, SpecError, DEFAULT_SETTINGS, MAX_ENVS, MAX_PIPELINE_DEPTH,
+    MAX_SUBSTEPS, MAX_WORKERS,
 };
 pub use thresholds::task_thresholds;

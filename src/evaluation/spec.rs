@@ -3,8 +3,8 @@
 //! so a typo fails at once, and everything downstream — the run's header, the runner, a
 //! sweep's validation of its cells — reads this one shape.
 
-use super::{PolicyIoRules, Setting, TerminationRule};
-use crate::motion::{DataError, Dataset, SelectionError, Sequence, SequenceSelection, Subset};
+use super::{EngineChoice, EvalRequest, PolicyIoRules, Setting, TerminationRule};
+use crate::motion::{DataError, Dataset, SelectionError, Sequence, Subset};
 use crate::physics::{make_physics, Engine, EngineError, PhysicsSettings};
 use crate::profile::Profile;
 use crate::registry::{self, PolicyArg, RegistryError};
@@ -23,92 +23,6 @@ pub const MAX_PIPELINE_DEPTH: usize = 2;
 pub const MAX_SUBSTEPS: usize = 1000;
 /// Settings when none is given (on a dataset with force logs).
 pub const DEFAULT_SETTINGS: [&str; 2] = ["force", "no-force"];
-
-/// Which engine simulates the run, before its model is checked.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum EngineChoice {
-    /// rapier, built in.
-    #[default]
-    Rapier,
-    /// MuJoCo (a build with the `mujoco` feature).
-    Mujoco,
-}
-
-/// An evaluation as asked for, in plain values; every field is checked by
-/// [`EvalSpec::load`]. Names follow `eval`'s flags.
-#[derive(Debug, Clone)]
-pub struct EvalRequest {
-    /// The policy argument (`balance`, `twist2:FILE`, `ipc:SESSION`, …): its family picks
-    /// the profile when none is named.
-    pub policy: String,
-    /// Dataset directory (`None`: the bundled sample).
-    pub dataset: Option<PathBuf>,
-    /// Robot name or directory.
-    pub robot: String,
-    /// Profile name or `.toml` path (`None`: the policy family's).
-    pub profile: Option<String>,
-    /// Run under a profile the policy family was not trained with.
-    pub profile_mismatch_ok: bool,
-    /// Score the policy without its sanity check (recorded in `run.json`).
-    pub unchecked: bool,
-    /// Settings as spelled (empty: [`DEFAULT_SETTINGS`], or `no-force` alone on a dataset
-    /// without force logs).
-    pub settings: Vec<String>,
-    /// Run replay settings on a dataset without force logs.
-    pub replay_without_force_logs: bool,
-    /// Tasks and sequences to evaluate.
-    pub selection: SequenceSelection,
-    /// Worker threads (`None`: every core).
-    pub workers: Option<usize>,
-    /// Environment slots (`None`: one per worker).
-    pub envs: Option<usize>,
-    /// Slot groups in the pipeline (1: lock-step; 2: the workers step one half of the
-    /// slots while the policy answers for the other half). See [`MAX_PIPELINE_DEPTH`].
-    pub pipeline_depth: usize,
-    /// Keypoint set of the tracking error.
-    pub keypoints: String,
-    /// When an episode has failed.
-    pub termination: TerminationRule,
-    /// Sequences (`TASK/SEQUENCE_ID`) whose rollouts are written as traces.
-    pub trace: Vec<String>,
-    /// The engine.
-    pub engine: EngineChoice,
-    /// A user's MJCF for MuJoCo (`None`: generated from the robot model).
-    pub mjcf: Option<PathBuf>,
-    /// A physics step, s, instead of the profile's.
-    pub physics_dt_s: Option<f64>,
-    /// The rules of the policy's answers.
-    pub io: PolicyIoRules,
-    /// `(i, n)`: only shard i of n of the schedule.
-    pub shard: Option<(usize, usize)>,
-}
-
-impl Default for EvalRequest {
-    fn default() -> Self {
-        Self {
-            policy: "balance".into(),
-            dataset: None,
-            robot: "g1_29dof".into(),
-            profile: None,
-            profile_mismatch_ok: false,
-            unchecked: false,
-            settings: Vec::new(),
-            replay_without_force_logs: false,
-            selection: SequenceSelection::default(),
-            workers: None,
-            envs: None,
-            pipeline_depth: 1,
-            keypoints: "default".into(),
-            termination: TerminationRule::default(),
-            trace: Vec::new(),
-            engine: EngineChoice::Rapier,
-            mjcf: None,
-            physics_dt_s: None,
-            io: PolicyIoRules::default(),
-            shard: None,
-        }
-    }
-}
 
 /// Something the caller should tell the user about a valid spec.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -1,6 +1,7 @@
 //! What ThorArena costs, measured: one physics step per engine, the whole episode loop on
-//! one core, a whole evaluation on every worker against its physics floor, and the policy round trip over shared memory next to a Unix-socket baseline
-//! moving the same bytes. Each function returns figures; `thorarena bench …` prints them
+//! one core, a whole evaluation on every worker against its physics floor, the policy
+//! round trip over shared memory next to a Unix-socket baseline moving the same bytes, and
+//! a sweep run as tasks next to the same episodes run directly. Each function returns figures; `thorarena bench …` prints them
 //! with the ratio to the baseline measured in the same run.
 
 mod episode_loop;
@@ -10,6 +11,7 @@ mod physics_step;
 mod round_trip;
 mod scratch;
 mod socket;
+mod sweep_cost;
 
 pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
 pub use full_run::{physics_floor, process_cpu_time, process_group_cpu_time, time_run, RunTiming};
@@ -21,6 +23,7 @@ pub use round_trip::{
 };
 pub use scratch::ScratchDir;
 pub use socket::{answer_socket_echo, socket_round_trips};
+pub use sweep_cost::{time_sweep_at_scale, time_sweep_round, SweepRoundTiming, SweepScaleTiming};
 
 use std::path::PathBuf;
 
@@ -50,6 +53,25 @@ pub enum PerfError {
         /// What the transport said.
         outcome: String,
     },
+    /// A command of this binary that the measurement runs failed.
+    #[error("{what} failed:\n{message}")]
+    Failed {
+        /// The command.
+        what: String,
+        /// Its standard error.
+        message: String,
+    },
+    /// The measurement cannot be taken with what it was given.
+    #[error("{0}")]
+    Precondition(String),
+    /// A step the measurement relies on failed.
+    #[error("{what}: {source}")]
+    Other {
+        /// What was being done.
+        what: String,
+        /// The cause.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// The Python MuJoCo baseline failed or wrote something unreadable.
     #[error("{}: {message}", script.display())]
     Baseline {
@@ -61,6 +83,16 @@ pub enum PerfError {
 }
 
 impl PerfError {
+    fn other<E: std::error::Error + Send + Sync + 'static>(
+        what: impl Into<String>,
+    ) -> impl FnOnce(E) -> Self {
+        let what = what.into();
+        move |source| PerfError::Other {
+            what,
+            source: Box::new(source),
+        }
+    }
+
     fn io(what: impl Into<String>) -> impl FnOnce(std::io::Error) -> Self {
         let what = what.into();
         move |source| PerfError::Io { what, source }

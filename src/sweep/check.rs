@@ -5,7 +5,7 @@
 //! and every task's `eval` arguments exactly those its cell gives — so an edited argument
 //! cannot run another policy under the cell's label.
 
-use super::plan::{eval_args, shard_episodes, Plan};
+use super::plan::{shard_episodes, task_request, Plan};
 
 impl Plan {
     /// The first inconsistency of the plan, as a sentence naming the task or cell.
@@ -73,9 +73,9 @@ impl Plan {
                     t.episodes, t.cell
                 ));
             }
-            if t.eval_args != eval_args(&self.robot, cell, t.shard) {
+            if task_request(&self.robot, cell, t.shard).as_ref() != Ok(&t.request) {
                 return Err(format!(
-                    "task {i}: its eval arguments are not those of cell {} (policy `{}`, setting `{}`)",
+                    "task {i}: its evaluation is not that of cell {} (policy `{}`, setting `{}`)",
                     t.cell, cell.policy.name, cell.setting
                 ));
             }

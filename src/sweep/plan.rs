@@ -1,9 +1,10 @@
 //! The expanded plan: cells (one combination of the axes) and tasks (one shard of one
-//! cell, i.e. one `thorarena eval` invocation with its exact arguments), numbered
+//! cell, i.e. one evaluation, held as an [`EvalRequest`]), numbered
 //! 0..N-1 in a fixed order so that a task index means the same work on every node.
 
 use super::spec::{resolve, PolicySpec, SweepSpec};
 use super::SweepError;
+use crate::evaluation::{parse_budget, EvalRequest, PolicyIoRules};
 use crate::motion::{DataError, Dataset, SequenceSelection};
 use crate::robot::RobotModel;
 use serde::{Deserialize, Serialize};
@@ -14,10 +15,11 @@ pub const PLAN_FILE: &str = "plan.json";
 /// Version of the plan and task-record format; a sweep directory of another one is
 /// refused rather than misread. 2: the robot is recorded and eval arguments are
 /// `--flag=value` (a negative value is not read as a flag). 3: the plan is sealed.
-pub const PLAN_FORMAT: u32 = 3;
+/// 4: a task holds its evaluation as a serialized [`EvalRequest`], not `eval` arguments.
+pub const PLAN_FORMAT: u32 = 4;
 
-/// The `--policy` of a task whose policy is a launched process: the only argument in
-/// which [`Task::eval_argv`] fills in the session.
+/// The policy argument of a task whose policy is a launched process: the only value in
+/// which [`Task::request_for`] fills in the session.
 pub const SESSION_POLICY: &str = "ipc:{session}";
 
 /// A sweep's plan, written to `DIR/plan.json` by `sweep plan`.
@@ -141,27 +143,21 @@ pub struct Task {
     pub shard: (usize, usize),
     /// Episodes this task runs.
     pub episodes: usize,
-    /// Arguments of `thorarena` (from `eval` on), without `--out`, `--resume` and
-    /// `--workers`, each option as `--flag=value`; `--policy=ipc:{session}` stands for
-    /// the session of a launched policy.
-    pub eval_args: Vec<String>,
+    /// The evaluation the task runs, as `eval` would build it from its flags — without
+    /// workers (the node's) or a run directory (the task's); a launched policy's session
+    /// is [`SESSION_POLICY`] until [`Task::request_for`] fills it in.
+    pub request: EvalRequest,
 }
 
 impl Task {
-    /// The task's `thorarena` arguments with `session` filled in — in `--policy` only, so
-    /// a dataset or profile path spelled with `{session}` stays that path.
-    pub fn eval_argv(&self, session: &str) -> Vec<String> {
-        let planned = format!("--policy={SESSION_POLICY}");
-        self.eval_args
-            .iter()
-            .map(|a| {
-                if *a == planned {
-                    format!("--policy=ipc:{session}")
-                } else {
-                    a.clone()
-                }
-            })
-            .collect()
+    /// The task's evaluation with a launched policy's `session` filled in (the policy
+    /// argument only: a dataset or profile path spelled with `{session}` stays that path).
+    pub fn request_for(&self, session: &str) -> EvalRequest {
+        let mut request = self.request.clone();
+        if request.policy == SESSION_POLICY {
+            request.policy = format!("ipc:{session}");
+        }
+        request
     }
 }
 
@@ -267,7 +263,12 @@ impl Plan {
                                 episodes: durations_s.len(),
                                 simulated_s: durations_s.iter().sum(),
                             };
-                            push_shards(&mut tasks, &spec.robot, &cell);
+                            push_shards(&mut tasks, &spec.robot, &cell).map_err(|m| {
+                                invalid(format!(
+                                    "cell {} (policy `{}`): {m}",
+                                    cell.index, policy.name
+                                ))
+                            })?;
                             cells.push(cell);
                         }
                     }
@@ -456,8 +457,9 @@ fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
     }
 }
 
-/// Appends the tasks of `cell`, one per shard, numbered on from those in `tasks`.
-fn push_shards(tasks: &mut Vec<Task>, robot: &str, cell: &Cell) {
+/// Appends the tasks of `cell`, one per shard, numbered on from those in `tasks`; `Err`
+/// says which of the cell's values no evaluation takes.
+fn push_shards(tasks: &mut Vec<Task>, robot: &str, cell: &Cell) -> Result<(), String> {
     for i in 0..cell.shards {
         let shard = (i, cell.shards);
         tasks.push(Task {
@@ -465,9 +467,10 @@ fn push_shards(tasks: &mut Vec<Task>, robot: &str, cell: &Cell) {
             cell: cell.index,
             shard,
             episodes: shard_episodes(cell.episodes, shard),
-            eval_args: eval_args(robot, cell, shard),
+            request: task_request(robot, cell, shard)?,
         });
     }
+    Ok(())
 }
 
 /// Episodes of shard `(i, n)` of `episodes` (one setting): the jobs `j` with
@@ -480,49 +483,55 @@ pub(super) fn shard_episodes(episodes: usize, (i, n): (usize, usize)) -> usize {
     }
 }
 
-/// The `thorarena` arguments of one shard of `cell`. Every option is one `--flag=value`
-/// argument, so a value starting with `-` (a negative coefficient, a typo'd budget) is
-/// read as that option's value and `eval` reports what is wrong with it.
-pub(super) fn eval_args(robot: &str, cell: &Cell, shard: (usize, usize)) -> Vec<String> {
-    let mut a = vec!["eval".to_string()];
-    let mut opt = |flag: &str, value: &str| a.push(format!("--{flag}={value}"));
-    opt("robot", robot);
-    opt("dataset", &cell.dataset.display().to_string());
-    opt("policy", &cell.policy.policy);
-    opt("profile", &cell.policy.profile);
-    opt("keypoints", &cell.policy.keypoints);
-    opt("settings", &cell.setting);
-    if !cell.selection.tasks.is_empty() {
-        opt("tasks", &cell.selection.tasks.join(","));
+/// The evaluation of one shard of `cell`: the cell's values in an [`EvalRequest`], each
+/// one `eval` would otherwise take as a flag; `Err` names a latency rule or engine that
+/// is none of the spellings `eval` takes.
+pub(super) fn task_request(
+    robot: &str,
+    cell: &Cell,
+    shard: (usize, usize),
+) -> Result<EvalRequest, String> {
+    let latency = &cell.latency;
+    let budget = parse_budget(&latency.budget)
+        .map_err(|e| format!("latency rule `{}`: budget: {e}", latency.name))?;
+    fn spelled<T: serde::de::DeserializeOwned>(value: &str) -> Option<T> {
+        serde_json::from_value(serde_json::Value::String(value.to_string())).ok()
     }
-    if !cell.selection.sequences.is_empty() {
-        opt("sequences", &cell.selection.sequences.join(","));
-    }
-    opt("budget", &cell.latency.budget);
-    opt("latency-mode", &cell.latency.mode);
-    opt("miss-rule", &cell.latency.miss_rule);
-    if cell.engine != EngineAxis::default() {
-        opt("engine", &cell.engine.engine);
-        if let Some(m) = &cell.engine.mjcf {
-            opt("mjcf", &m.display().to_string());
-        }
-        if let Some(dt) = cell.engine.physics_dt_s {
-            opt("physics-dt", &dt.to_string());
-        }
-    }
-    if shard.1 > 1 {
-        opt("shard", &format!("{}/{}", shard.0, shard.1));
-    }
-    if cell.policy.command.is_some() {
-        opt(
-            "connect-timeout",
-            &cell.policy.connect_timeout_s.to_string(),
-        );
-    }
-    if cell.policy.unchecked {
-        a.push("--unchecked".into());
-    }
-    a
+    let not_taken = |what: &str, value: &str| {
+        format!(
+            "latency rule `{}`: {what} `{value}` is none of those an evaluation takes",
+            latency.name
+        )
+    };
+    let engine = spelled(&cell.engine.engine).ok_or_else(|| {
+        format!(
+            "engine `{}`: `{}` is not rapier or mujoco",
+            cell.engine.name, cell.engine.engine
+        )
+    })?;
+    Ok(EvalRequest {
+        policy: cell.policy.policy.clone(),
+        dataset: Some(cell.dataset.clone()),
+        robot: robot.to_string(),
+        profile: Some(cell.policy.profile.clone()),
+        unchecked: cell.policy.unchecked,
+        settings: vec![cell.setting.clone()],
+        selection: cell.selection.clone(),
+        keypoints: cell.policy.keypoints.clone(),
+        engine,
+        mjcf: cell.engine.mjcf.clone(),
+        physics_dt_s: cell.engine.physics_dt_s,
+        io: PolicyIoRules {
+            miss_rule: spelled(&latency.miss_rule)
+                .ok_or_else(|| not_taken("miss rule", &latency.miss_rule))?,
+            latency_mode: spelled(&latency.mode)
+                .ok_or_else(|| not_taken("latency mode", &latency.mode))?,
+            budget_s: budget.0.map(|b| b.as_secs_f64()),
+            ..PolicyIoRules::default()
+        },
+        shard: (shard.1 > 1).then_some(shard),
+        ..EvalRequest::default()
+    })
 }
 
 /// The first difference between an existing plan and a new one, for a refusal that says
@@ -562,7 +571,7 @@ pub fn diff_plans(old: &Plan, new: &Plan) -> Option<String> {
         }
     }
     if old.tasks != new.tasks {
-        return Some("the tasks' eval arguments differ".into());
+        return Some("the tasks' evaluations differ".into());
     }
     None
 }

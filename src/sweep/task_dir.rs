@@ -8,6 +8,7 @@ use super::plan::Plan;
 use super::status::{DoneRecord, FailedRecord, TaskState};
 use super::text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
 use super::SweepError;
+use crate::evaluation::EvalRequest;
 use std::fs::File;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -20,6 +21,9 @@ pub const FAILED_FILE: &str = "failed.json";
 const LOCK_FILE: &str = "lock";
 /// The task's run directory (what `eval --out` gets).
 const RUN_DIR: &str = "run";
+/// The evaluation an attempt hands its `eval` process (`eval --request`): the plan's
+/// request with the attempt's session filled in.
+const REQUEST_FILE: &str = "request.json";
 
 /// Largest task record read, bytes: a written one is far smaller (its log tail is capped
 /// at [`LOG_TAIL_MAX_BYTES`]).
@@ -130,6 +134,15 @@ impl TaskDir {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(self.io(path)(e)),
             _ => Ok(()),
         }
+    }
+
+    /// Writes the evaluation this attempt runs, `request.json`, atomically; returns its
+    /// path for `eval --request`.
+    pub fn write_request(&self, request: &EvalRequest) -> Result<PathBuf, SweepError> {
+        let path = self.dir.join(REQUEST_FILE);
+        let json = serde_json::to_string_pretty(request).expect("an EvalRequest serialises");
+        write_atomic(&path, json.as_bytes())?;
+        Ok(path)
     }
 
     /// Records that the task is done: `done.json`, atomically, last.

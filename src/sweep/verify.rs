@@ -20,16 +20,15 @@ pub enum RunProblem {
     NotThisTask(String),
 }
 
-/// The run's records when `run` is complete and is task `task`'s, whose `eval` arguments
-/// are `request`; `Err` when it cannot be read at all (naming the file).
+/// The run's records when `run` is complete and is task `task`'s; `Err` when it cannot
+/// be read at all (naming the file).
 pub fn check_task_run(
     plan: &Plan,
     task: &Task,
     run: &RunDir,
-    request: &EvalRequest,
 ) -> Result<Result<Vec<EpisodeRecord>, RunProblem>, ResultsError> {
     let header = run.read_header()?;
-    if let Some(problem) = header_problem(plan, task, &header, request) {
+    if let Some(problem) = header_problem(plan, task, &header, &task.request) {
         return Ok(Err(RunProblem::NotThisTask(format!(
             "{}: not task {}'s run: {problem}",
             run.header_file().display(),

@@ -1,10 +1,11 @@
-//! `sweep plan`: a spec expanded, validated with `eval`'s own parser and loader, written.
+//! `sweep plan`: a spec expanded, each cell's evaluation loaded as `eval` loads it, written.
 
 use super::PlanArgs;
 use anyhow::{bail, Context};
-use clap::Parser;
 use std::path::Path;
-use thorarena::sweep::{DatasetInfo, Plan, SweepSpec, Task};
+use thorarena::evaluation::EvalSpec;
+use thorarena::registry::PolicyArg;
+use thorarena::sweep::{DatasetInfo, Plan, SweepSpec};
 pub(super) fn plan(args: &PlanArgs) -> anyhow::Result<()> {
     let spec_path = std::fs::canonicalize(&args.spec)
         .with_context(|| format!("reading the sweep spec {}", args.spec.display()))?;
@@ -56,16 +57,15 @@ pub(super) fn plan_summary(plan: &Plan) -> String {
     )
 }
 
-/// Checks every cell's evaluation before anything is written: its arguments parse as
-/// `eval`'s, its profile and keypoint set exist for the robot, its setting parses, and
-/// each network file loads.
+/// Checks every cell's evaluation before anything is written: its request loads as
+/// `eval` loads one (profile and keypoint set exist for the robot, the setting parses,
+/// the dataset and selection are usable), and each network file loads.
 pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
     use std::collections::HashSet;
     let mut checked: HashSet<String> = HashSet::new();
     for task in plan.tasks.iter().filter(|t| t.shard.0 == 0) {
         let cell = &plan.cells[task.cell];
-        let args = eval_cli(task, "plan-check")
-            .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
+        let in_cell = || format!("cell {} (policy `{}`)", cell.index, cell.policy.name);
         if thorarena::evaluation::Setting::parse(&cell.setting).is_none() {
             bail!(
                 "cell {}: setting `{}` is not force, no-force, a number or push:<N>",
@@ -86,31 +86,13 @@ pub(super) fn validate(plan: &Plan) -> anyhow::Result<()> {
         if !checked.insert(key) {
             continue;
         }
-        let ctx = crate::cli::eval::load_spec(&args.run, &cell.policy.policy)
-            .with_context(|| format!("cell {} (policy `{}`)", cell.index, cell.policy.name))?;
-        if cell.policy.command.is_none() && checked.insert(format!("policy|{}", cell.policy.policy))
-        {
-            crate::cli::policy_arg::make_policy(
-                &cell.policy.policy,
-                &ctx.robot,
-                &ctx.profile,
-                &args.run.io,
-                1,
-            )
-            .with_context(|| format!("policy `{}`", cell.policy.name))?;
+        let request = task.request_for("plan-check");
+        let spec = EvalSpec::load(&request).with_context(in_cell)?;
+        if cell.policy.command.is_none() && checked.insert(format!("policy|{}", request.policy)) {
+            let arg = PolicyArg::parse(&request.policy).with_context(in_cell)?;
+            arg.load(&spec.robot, &spec.profile)
+                .with_context(|| format!("policy `{}`", cell.policy.name))?;
         }
     }
     Ok(())
-}
-
-/// A task's `eval` arguments as `eval` parses them (`session` fills `{session}`).
-pub(super) fn eval_cli(task: &Task, session: &str) -> anyhow::Result<crate::cli::eval::Args> {
-    let argv = std::iter::once("thorarena".to_string()).chain(task.eval_argv(session));
-    match crate::cli::Cli::try_parse_from(argv) {
-        Ok(crate::cli::Cli {
-            command: crate::cli::Command::Eval(a),
-        }) => Ok(a),
-        Ok(_) => bail!("not an eval command"),
-        Err(e) => bail!("{}", e.render().to_string().trim()),
-    }
 }

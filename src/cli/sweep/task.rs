@@ -81,7 +81,7 @@ pub(super) fn run_task(
 
     let session = format!("sweep-{index}-{}", std::process::id());
     let run_dir = tdir.run_dir();
-    let mut eval_cmd = eval_command(task, &session, &run_dir, workers, &tdir)?;
+    let mut eval_cmd = eval_command(plan, task, &session, workers, &tdir)?;
     let mut policy: Option<Child> = None;
     if let Some(command) = &cell.policy.command {
         match start_policy(plan, command, &session, &tdir)? {
@@ -139,22 +139,31 @@ pub(super) fn run_task(
     Ok(Outcome::Done)
 }
 
-/// The task's `eval` process: the plan's arguments into `run_dir`, resuming, its output
-/// in `eval.log`, dying with this process.
+/// The task's `eval` process: the plan's request (this attempt's session filled in, in
+/// the task's `request.json`) into the task's run, resuming, its output in `eval.log`,
+/// dying with this process.
 fn eval_command(
+    plan: &Plan,
     task: &Task,
     session: &str,
-    run_dir: &Path,
     workers: usize,
     tdir: &TaskDir,
 ) -> anyhow::Result<Command> {
+    let request = tdir.write_request(&task.request_for(session))?;
     let eval_log = tdir.create_log(TaskLog::Eval)?;
     let mut eval_cmd = Command::new(std::env::current_exe()?);
     eval_cmd
-        .args(task.eval_argv(session))
+        .arg("eval")
+        .arg("--request")
+        .arg(request)
         .arg("--out")
-        .arg(run_dir)
-        .args(["--resume", "--workers", &workers.to_string()])
+        .arg(tdir.run_dir())
+        .args(["--resume", "--workers", &workers.to_string()]);
+    if plan.cells[task.cell].policy.command.is_some() {
+        let timeout = plan.cells[task.cell].policy.connect_timeout_s;
+        eval_cmd.arg(format!("--connect-timeout={timeout}"));
+    }
+    eval_cmd
         .stdin(Stdio::null())
         .stdout(eval_log.try_clone()?)
         .stderr(eval_log);

@@ -1,12 +1,10 @@
-//! A task's run checked against its plan entry ([`thorarena::sweep::check_task_run`]),
-//! with the task's `eval` arguments parsed as `eval` parses them.
+//! A task's run checked against its plan entry ([`thorarena::sweep::check_task_run`]).
 //!
 //! `done.json` says a run was complete when its task finished; the run directory can
 //! change after that (edited, replaced, cut short by hand). So every command that counts
 //! a task done — `status`, `collect`, and `run`/`task` deciding whether to skip it —
 //! checks the run itself, here.
 
-use super::plan::eval_cli;
 use std::path::Path;
 use thorarena::evaluation::EpisodeRecord;
 use thorarena::results::RunDir;
@@ -19,13 +17,10 @@ pub(super) fn check_task_run(
     task: &Task,
     run: &Path,
 ) -> anyhow::Result<Result<Vec<EpisodeRecord>, RunProblem>> {
-    let args = eval_cli(task, "check")?;
-    let request = args.run.request(&args.policy);
     Ok(thorarena::sweep::check_task_run(
         plan,
         task,
         &RunDir::new(run),
-        &request,
     )?)
 }
 

@@ -1,0 +1,171 @@
+//! The arguments that describe one evaluation, shared by `eval`, `serve` and
+//! `crosscheck`, and the [`EvalRequest`] they make.
+
+use super::policy_arg::PolicyIoArgs;
+use std::path::PathBuf;
+use thorarena::evaluation::{EvalRequest, TerminationRule};
+use thorarena::motion::SequenceSelection;
+
+/// The flags a request file replaces (clap's ids: the field names).
+pub(super) const REQUEST_CONFLICTS: [&str; 24] = [
+    "policy",
+    "dataset",
+    "profile",
+    "profile_mismatch_ok",
+    "unchecked",
+    "settings",
+    "replay_without_force_logs",
+    "tasks",
+    "sequences",
+    "keypoints",
+    "shard",
+    "max_torso_height_error",
+    "max_torso_tilt_error",
+    "trace",
+    "robot",
+    "engine",
+    "mjcf",
+    "physics_dt",
+    "envs",
+    "pipeline_depth",
+    "budget",
+    "miss_rule",
+    "latency_mode",
+    "max_abs_action",
+];
+
+/// What an evaluation needs besides the policy and where results go (shared with `serve`).
+#[derive(Debug, Clone, clap::Args)]
+pub struct RunArgs {
+    /// Dataset directory (canonical format) [default: the bundled data/sample].
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Dynamics profile (a name under data/profiles or a .toml path) [default: the one the
+    /// policy family was trained with: `twist2` for twist2:, `beyondmimic` for
+    /// beyondmimic:, `wbc-mjlab` for wbc-mjlab:, else `default`; `thorarena policies`
+    /// lists them]. One that contradicts the family is an error.
+    #[arg(long)]
+    pub profile: Option<String>,
+    /// Run a policy under a profile its family was not trained with (recorded in
+    /// run.json): a TWIST2 network on the default profile scores 2 instead of 86.
+    #[arg(long)]
+    pub profile_mismatch_ok: bool,
+    /// Score a network policy without its sanity check (recorded in run.json). Without
+    /// it, a policy run in process (twist2:, beyondmimic:, wbc-mjlab:) is first checked as
+    /// `thorarena policy check` does, on the walk of the dataset evaluated (a single-clip
+    /// policy: its clip), and refused if it fails.
+    #[arg(long)]
+    pub unchecked: bool,
+    /// Settings, comma separated: `force`, `no-force`, a replay coefficient, or
+    /// `push:<N>` (no replay; a constant world +x push of N newtons on each hand, ramped
+    /// in over 1 s — the sensitivity probe of SOURCES.md, TWIST2 in MuJoCo), or `push:<N>@<deg>` with the
+    /// push turned by deg from the reference's initial heading (`push:20@90`: from the
+    /// robot's right).
+    /// [default: force,no-force; no-force alone on a dataset without force logs].
+    #[arg(long, value_delimiter = ',')]
+    pub settings: Vec<String>,
+    /// Run replay settings (`force`, a coefficient) on a dataset whose sequences have no
+    /// force logs: they replay zero forces, i.e. run as `no-force` under another name.
+    #[arg(long)]
+    pub replay_without_force_logs: bool,
+    /// Evaluate only these tasks, comma separated (default: every task). The run records
+    /// the selection, and its tables say they cover part of the dataset.
+    #[arg(long, value_delimiter = ',')]
+    pub tasks: Vec<String>,
+    /// Evaluate only these sequences, comma separated, each `SEQUENCE_ID` or
+    /// `TASK/SEQUENCE_ID` (default: every sequence; with --tasks, those of both).
+    #[arg(long, value_delimiter = ',')]
+    pub sequences: Vec<String>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub workers: Option<usize>,
+    /// Keypoint set of the tracking error.
+    #[arg(long, default_value = "default")]
+    pub keypoints: String,
+    /// Continue the run in `--out`: keep its finished episodes, run the rest.
+    #[arg(long, conflicts_with = "overwrite")]
+    pub resume: bool,
+    /// Replace a run already in `--out` (without it, an existing run is refused).
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Run only shard I of N of the schedule (`I/N`, 0-based); merge shards with `thorarena merge`.
+    #[arg(long, value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
+    /// Termination: torso height off its reference by more than this, m.
+    #[arg(long, default_value_t = TerminationRule::default().max_torso_height_error_m)]
+    pub max_torso_height_error: f64,
+    /// Termination: torso tilt off its reference by more than this, rad.
+    #[arg(long, default_value_t = TerminationRule::default().max_torso_tilt_error_rad)]
+    pub max_torso_tilt_error: f64,
+    /// Write a rollout trace (per control step: root, joints, targets, hand forces,
+    /// robot and reference keypoints) of these sequences, as `TASK/SEQUENCE_ID`, to
+    /// `<out>/traces/`.
+    #[arg(long, value_delimiter = ',')]
+    pub trace: Vec<String>,
+    /// Robot.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+    /// Physics engine: `rapier` (built in), or `mujoco` (a build with the `mujoco`
+    /// feature) on the MJCF given by --mjcf.
+    #[arg(long, value_enum, default_value = "rapier")]
+    pub engine: super::choices::EngineArg,
+    /// A user's MJCF of the robot for `--engine mujoco`, joints and bodies named as in the
+    /// robot model (e.g. TWIST2's `g1/g1_sim2sim_29dof.xml` of the reference artifacts);
+    /// without it, MuJoCo simulates an MJCF generated from the robot model
+    /// (`thorarena robot mjcf` prints it).
+    #[arg(long)]
+    pub mjcf: Option<PathBuf>,
+    /// Physics step, s, instead of the profile's (a whole fraction of its control step).
+    #[arg(long)]
+    pub physics_dt: Option<f64>,
+    /// Policy I/O: slots, latency budget, miss rule, latency mode, session options.
+    #[command(flatten)]
+    pub io: PolicyIoArgs,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/4")?;
+    let (i, n): (usize, usize) = (
+        i.parse().map_err(|_| "I is not a number")?,
+        n.parse().map_err(|_| "N is not a number")?,
+    );
+    if n == 0 || i >= n {
+        return Err(format!("shard {i}/{n}: need 0 <= I < N"));
+    }
+    Ok((i, n))
+}
+
+impl RunArgs {
+    /// The evaluation these arguments ask for, with policy argument `policy` (whose
+    /// family picks the profile when none is named).
+    pub fn request(&self, policy: &str) -> EvalRequest {
+        EvalRequest {
+            policy: policy.to_string(),
+            dataset: self.dataset.clone(),
+            robot: self.robot.clone(),
+            profile: self.profile.clone(),
+            profile_mismatch_ok: self.profile_mismatch_ok,
+            unchecked: self.unchecked,
+            settings: self.settings.clone(),
+            replay_without_force_logs: self.replay_without_force_logs,
+            selection: SequenceSelection {
+                tasks: self.tasks.clone(),
+                sequences: self.sequences.clone(),
+            },
+            workers: self.workers,
+            envs: self.io.envs,
+            pipeline_depth: self.io.pipeline_depth,
+            keypoints: self.keypoints.clone(),
+            termination: TerminationRule {
+                max_torso_height_error_m: self.max_torso_height_error,
+                max_torso_tilt_error_rad: self.max_torso_tilt_error,
+            },
+            trace: self.trace.clone(),
+            engine: self.engine.into(),
+            mjcf: self.mjcf.clone(),
+            physics_dt_s: self.physics_dt,
+            io: self.io.rules(),
+            shard: self.shard,
+        }
+    }
+}
