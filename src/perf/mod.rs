@@ -6,6 +6,7 @@
 
 mod episode_loop;
 mod full_run;
+mod ipc_clients;
 mod machine;
 mod physics_step;
 mod round_trip;
@@ -15,6 +16,10 @@ mod sweep_cost;
 
 pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
 pub use full_run::{physics_floor, process_cpu_time, process_group_cpu_time, time_run, RunTiming};
+pub use ipc_clients::{
+    adapter_round_trip, ipc_library, shm_round_trips, AdapterRow, Builder, IpcClients, Measured,
+    NetworkTiming,
+};
 pub use machine::Machine;
 pub use physics_step::{python_mujoco_step, time_physics_steps, PythonMujocoTiming, StepTiming};
 pub use round_trip::{

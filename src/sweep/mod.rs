@@ -19,11 +19,13 @@
 //! ```
 
 mod array;
+mod attempt;
 mod axes;
 mod cells;
 mod check;
 mod k8s;
 mod plan;
+mod pool;
 pub mod process_group;
 mod results_csv;
 mod scale_fill;
@@ -35,12 +37,14 @@ mod text;
 mod verify;
 
 pub use array::compact_ranges;
+pub use attempt::{run_task, Outcome};
 pub use cells::{CellFaults, CellLatency, CellResult};
 pub use k8s::{k8s_manifest, k8s_manifest_path, write_k8s_manifest, K8sRequest};
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
     PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
 };
+pub use pool::{run_pool, Pool, PoolProgress, TaskResult};
 pub use results_csv::{results_csv, results_rows, write_results_csv, ResultsRow, RESULTS_CSV_FILE};
 pub use scale_fill::{finish_with_shard_runs, write_large_spec, ScaleFillError};
 pub use slurm::{
@@ -53,7 +57,7 @@ pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_F
 pub use text::{
     create_log, log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
 };
-pub use verify::{check_task_run, RunProblem};
+pub use verify::{check_task_run, CheckedCensus, RunProblem};
 
 use std::path::PathBuf;
 
@@ -102,4 +106,36 @@ pub enum SweepError {
         /// What is wrong.
         message: String,
     },
+    /// A task index beyond the plan.
+    #[error("task {index}: the plan has tasks 0..{tasks}")]
+    NoTask {
+        /// The index asked for.
+        index: usize,
+        /// Tasks in the plan.
+        tasks: usize,
+    },
+    /// A task's process could not be started or waited for.
+    #[error("{what}: {source}")]
+    Process {
+        /// What was being done.
+        what: String,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A policy command cannot be made into a shell line.
+    #[error(transparent)]
+    CommandLine(#[from] process_group::CommandLineError),
+    /// The plan's robot does not resolve.
+    #[error(transparent)]
+    Robot(#[from] crate::registry::RegistryError),
+    /// A task's run cannot be read or flushed.
+    #[error(transparent)]
+    Results(#[from] crate::results::ResultsError),
+}
+
+impl SweepError {
+    fn process(what: &str) -> impl FnOnce(std::io::Error) -> Self {
+        let what = what.to_string();
+        move |source| Self::Process { what, source }
+    }
 }

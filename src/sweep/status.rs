@@ -50,6 +50,7 @@ pub fn task_state(dir: &Path, index: usize) -> Result<TaskState, SweepError> {
 
 /// Tasks by state: (done, failed with reasons, started, not started). A record's
 /// task is the directory it lies in (`task_state` refuses one claiming another).
+#[derive(Debug)]
 pub struct Census {
     /// Tasks whose `done.json` is there.
     pub done: Vec<usize>,

@@ -6,7 +6,7 @@
 //! its hash, settings, shard, engine, rules) and it holds every planned episode, none
 //! cut short by a policy failure.
 
-use super::{Plan, Task, SESSION_POLICY};
+use super::{census, Census, Plan, SweepError, Task, TaskDir, SESSION_POLICY};
 use crate::evaluation::{EpisodeRecord, EvalRequest, Setting};
 use crate::results::{Coverage, ResultsError, RunDir, RunHeader};
 
@@ -119,5 +119,61 @@ fn header_problem(
         )
     } else {
         None
+    }
+}
+
+impl RunProblem {
+    /// Why the run does not count, in one line.
+    pub fn why(&self) -> &str {
+        match self {
+            Self::Incomplete(why) | Self::NotThisTask(why) => why,
+        }
+    }
+}
+
+/// The tasks by state as [`census`] reads them, except that a task counts as done only
+/// when its run does: those whose `done.json` is there but whose run does not count are
+/// in `not_counted`, with why, and among the not-done tasks. `done.json` says a run was
+/// complete when its task finished; the run directory can change after that (edited,
+/// replaced, cut short by hand), so every command that counts a task done — `status`,
+/// `collect`, and `run`/`task` deciding whether to skip it — checks the run itself.
+#[derive(Debug)]
+pub struct CheckedCensus {
+    /// The directories' census, `done` holding only the tasks whose run counts.
+    pub census: Census,
+    /// Tasks marked done whose run does not count, with why, in task order (a run that
+    /// cannot be read is `Incomplete`: `eval --resume` says what is wrong with it).
+    pub not_counted: Vec<(usize, RunProblem)>,
+}
+
+impl CheckedCensus {
+    /// Every task of `plan` in sweep directory `dir`, each done task's run checked. A run
+    /// that cannot be read at all does not count (the reason names the file): a command
+    /// that only reports — `status` — never stops at it.
+    pub fn of(dir: &std::path::Path, plan: &Plan) -> Result<Self, SweepError> {
+        let mut census = census(dir, plan)?;
+        let mut not_counted = Vec::new();
+        census.done.retain(|&i| {
+            let run = RunDir::new(TaskDir::of(dir, i).run_dir());
+            let problem = match check_task_run(plan, &plan.tasks[i], &run) {
+                Ok(Ok(_)) => return true,
+                Ok(Err(problem)) => problem,
+                Err(e) => RunProblem::Incomplete(format!("its run cannot be read: {e}")),
+            };
+            not_counted.push((i, problem));
+            false
+        });
+        Ok(Self {
+            census,
+            not_counted,
+        })
+    }
+
+    /// The tasks to run: failed, started, not started, and marked done without counting.
+    pub fn not_done(&self) -> Vec<usize> {
+        let mut v = self.census.not_done();
+        v.extend(self.not_counted.iter().map(|(i, _)| *i));
+        v.sort_unstable();
+        v
     }
 }

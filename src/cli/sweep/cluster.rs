@@ -1,10 +1,10 @@
 //! `sweep slurm` and `sweep k8s`: job scripts and manifests for the cluster engines.
 
-use super::verify::CheckedCensus;
 use super::{K8sArgs, SlurmArgs};
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use thorarena::sweep::CheckedCensus;
 use thorarena::sweep::{compact_ranges, k8s_manifest, K8sRequest, Plan};
 pub(super) fn absolute(p: &Path) -> anyhow::Result<PathBuf> {
     std::fs::canonicalize(p).with_context(|| format!("{} does not exist", p.display()))

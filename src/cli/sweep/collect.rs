@@ -1,7 +1,6 @@
 //! `sweep collect`: shards merged into cells, `results.csv`, and the report with the
 //! sweep's curves.
 
-use super::verify::{CheckedCensus, RunProblem};
 use super::CollectArgs;
 use anyhow::{bail, Context};
 use std::collections::{BTreeMap, HashSet};
@@ -10,6 +9,7 @@ use thorarena::motion::{Dataset, Sequence};
 use thorarena::report::{label_cells, sweep_charts, sweep_title};
 use thorarena::results::RunDir;
 use thorarena::sweep::{compact_ranges, CellResult, Plan, Task, TaskDir};
+use thorarena::sweep::{CheckedCensus, RunProblem};
 
 /// Each dataset of the plan, loaded, after checking it is the one planned: scores are
 /// computed against the references as they are now, so they must be the ones the runs

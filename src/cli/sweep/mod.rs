@@ -162,8 +162,7 @@ mod collect;
 mod plan;
 mod pool;
 mod status;
-pub(super) mod task;
-mod verify;
+mod task;
 
 use cluster::{k8s, slurm};
 use collect::collect;

@@ -1,15 +1,12 @@
-//! `sweep run`: the local pool, N tasks at a time, with progress over the sweep.
+//! `sweep run`: the local pool ([`thorarena::sweep::run_pool`]), N tasks at a time, with
+//! a progress bar over the sweep.
 
-use super::task::{cores, run_task, Outcome};
-use super::verify::CheckedCensus;
+use super::task::cores;
 use super::RunArgs;
 use anyhow::bail;
-use std::collections::VecDeque;
-use std::path::Path;
-use std::sync::{Arc, Mutex};
-use std::time::Duration;
-use thorarena::results::RunDir;
-use thorarena::sweep::{printable, Plan, TaskDir};
+use std::sync::Arc;
+use thorarena::sweep::{printable, run_pool, CheckedCensus, Outcome, Plan, Pool};
+
 pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
     let plan = Arc::new(Plan::load(&args.dir)?);
     let jobs = match args.jobs {
@@ -26,7 +23,7 @@ pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
         .iter()
         .map(|&i| plan.tasks[i].episodes)
         .sum();
-    let pending: VecDeque<usize> = checked.not_done().into();
+    let pending = checked.not_done();
     let to_run = pending.len();
     eprintln!(
         "sweep {}: {} of {} tasks to run, {jobs} at a time, {workers} worker(s) each",
@@ -34,30 +31,6 @@ pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
         to_run,
         plan.tasks.len()
     );
-    let queue = Arc::new(Mutex::new(pending));
-    let running: Arc<Mutex<Vec<usize>>> = Arc::new(Mutex::new(Vec::new()));
-    let results: Arc<Mutex<Vec<TaskResult>>> = Arc::new(Mutex::new(Vec::new()));
-    let handles: Vec<_> = (0..jobs.min(to_run.max(1)))
-        .map(|_| {
-            let (queue, running, results, plan) = (
-                queue.clone(),
-                running.clone(),
-                results.clone(),
-                plan.clone(),
-            );
-            let dir = args.dir.clone();
-            std::thread::spawn(move || loop {
-                let Some(i) = queue.lock().expect("queue").pop_front() else {
-                    return;
-                };
-                running.lock().expect("running").push(i);
-                let r = run_task(&dir, &plan, i, workers).map_err(|e| format!("{e:#}"));
-                running.lock().expect("running").retain(|&x| x != i);
-                results.lock().expect("results").push((i, r));
-            })
-        })
-        .collect();
-
     let bar = indicatif::ProgressBar::new(plan.episodes() as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template(
@@ -65,37 +38,22 @@ pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
         )
         .expect("valid template"),
     );
-    loop {
-        let finished = handles.iter().all(|h| h.is_finished());
-        let (mut episodes, mut failed, mut tasks_done) = (done_episodes, 0usize, 0usize);
-        for (i, r) in results.lock().expect("results").iter() {
-            match r {
-                Ok(Outcome::Done | Outcome::AlreadyDone) => {
-                    episodes += plan.tasks[*i].episodes;
-                    tasks_done += 1;
-                }
-                _ => failed += 1,
-            }
-        }
-        for &i in running.lock().expect("running").iter() {
-            episodes +=
-                count_lines(&RunDir::new(TaskDir::of(&args.dir, i).run_dir()).episodes_file());
-        }
-        bar.set_position(episodes as u64);
+    let exe = std::env::current_exe()?;
+    let pool = Pool {
+        exe: &exe,
+        dir: &args.dir,
+        plan: plan.clone(),
+        jobs,
+        workers,
+    };
+    let results = run_pool(&pool, pending, done_episodes, &mut |p| {
+        bar.set_position(p.episodes as u64);
         bar.set_message(format!(
-            "tasks: {tasks_done}/{to_run} done, {failed} failed"
+            "tasks: {}/{to_run} done, {} failed",
+            p.tasks_done, p.failed
         ));
-        if finished {
-            break;
-        }
-        std::thread::sleep(Duration::from_millis(250));
-    }
+    });
     bar.finish_and_clear();
-    for h in handles {
-        h.join()
-            .map_err(|_| anyhow::anyhow!("a task thread panicked"))?;
-    }
-    let results = results.lock().expect("results");
     let failures: Vec<String> = results
         .iter()
         .filter_map(|(i, r)| match r {
@@ -121,13 +79,4 @@ pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-/// A task index and how its attempt ended (an error is the sweep's, not the task's).
-pub(super) type TaskResult = (usize, Result<Outcome, String>);
-
-pub(super) fn count_lines(path: &Path) -> usize {
-    std::fs::read(path)
-        .map(|b| b.iter().filter(|&&c| c == b'\n').count())
-        .unwrap_or(0)
 }

@@ -1,8 +1,8 @@
 //! `sweep status`: tasks by state (done only when the run counts), failure reasons, the
 //! not-done set.
 
-use super::verify::{problem_text, CheckedCensus};
 use super::StatusArgs;
+use thorarena::sweep::CheckedCensus;
 use thorarena::sweep::{
     compact_ranges, printable, truncated, Plan, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
 };
@@ -56,7 +56,7 @@ pub(super) fn status(args: &StatusArgs) -> anyhow::Result<()> {
             cell.index,
             printable(&cell.policy.name),
             printable(&cell.setting),
-            truncated(&printable(problem_text(problem)), LOG_LINE_MAX_BYTES)
+            truncated(&printable(problem.why()), LOG_LINE_MAX_BYTES)
         );
     }
     for (i, f) in &c.failed {

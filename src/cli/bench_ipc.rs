@@ -13,14 +13,15 @@
 //! (spin, then block), so the comparison separates what waiting costs from what copying
 //! costs.
 
-mod clients;
-
 use anyhow::{bail, Context};
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Duration;
 use thorarena::evaluation::LatencySummary;
-use thorarena::perf::{answer_socket_echo, socket_round_trips};
+use thorarena::perf::{
+    adapter_round_trip, answer_socket_echo, ipc_library, shm_round_trips, socket_round_trips,
+    Builder, IpcClients, Measured,
+};
 use thorarena::robot::RobotModel;
 use thorarena_ipc::Layout;
 
@@ -134,19 +135,34 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     let robot = thorarena::registry::robot("g1_29dof")?;
+    let clients = IpcClients {
+        exe: std::env::current_exe()?,
+        python: args.python.clone(),
+        cpp_echo: args.cpp_echo.clone(),
+        onnx: args.onnx.clone(),
+        spin_us: args.spin_us,
+        warmup: args.warmup,
+        steps: args.steps,
+        adapter_steps: args.adapter_steps,
+    };
     let echoes: Vec<&String> = args.clients.iter().filter(|c| *c != "twist2").collect();
     if !echoes.is_empty() {
-        echo_table(args, &robot, &echoes)?;
+        echo_table(args, &clients, &robot, &echoes)?;
     }
     if twist2 {
-        adapter_table(args, &robot)?;
+        adapter_table(args, &clients, &robot)?;
     }
     Ok(())
 }
 
 /// The echo policies' round trips against the socket baselines, one row per client and
 /// environment count.
-fn echo_table(args: &Args, robot: &RobotModel, clients: &[&String]) -> anyhow::Result<()> {
+fn echo_table(
+    args: &Args,
+    c: &IpcClients,
+    robot: &RobotModel,
+    clients: &[&String],
+) -> anyhow::Result<()> {
     let n_joints = robot.n_joints();
     println!(
         "round trip, observation published → actions received, {} timed steps after {} warm-up; spin {} µs then block; µs",
@@ -170,8 +186,14 @@ fn echo_table(args: &Args, robot: &RobotModel, clients: &[&String]) -> anyhow::R
         let spinning =
             socket_baseline(args, layout, spin).context("the spinning Unix-socket baseline")?;
         for client in clients {
-            let Some(row) = clients::shm_round_trips(args, robot, client, layout)? else {
-                continue;
+            let row = match shm_round_trips(c, robot, client, layout, &mut refused)
+                .with_context(|| format!("the {client} echo"))?
+            {
+                Measured::Taken(row) => row,
+                Measured::Skipped(why) => {
+                    eprintln!("skipping {why}");
+                    continue;
+                }
             };
             println!(
                 "| {client} | {envs} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} / {:.1} | {:.1} / {:.1} | {:.1}× / {:.1}× |",
@@ -196,27 +218,17 @@ fn echo_table(args: &Args, robot: &RobotModel, clients: &[&String]) -> anyhow::R
     Ok(())
 }
 
-/// The network's own time, as the adapter's `--time-network` prints it (µs).
-#[derive(Debug, serde::Deserialize)]
-struct NetworkTiming {
-    count: usize,
-    p50: f64,
-    p90: f64,
-    /// Every call, in step order.
-    each: Vec<f64>,
-}
-
 /// The Python TWIST2 adapter's round trips against its network's time in the same run,
 /// with the observation built by the simulator (the adapter's default) and by the adapter
 /// in numpy, one row each per environment count.
-fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
+fn adapter_table(args: &Args, c: &IpcClients, robot: &RobotModel) -> anyhow::Result<()> {
     println!(
         "\nPython TWIST2 adapter (ONNX Runtime, 1 thread), standing observations: {} timed steps after {} warm-up; spin {} µs then block; the network call timed inside the adapter over the same steps; µs",
         args.adapter_steps, args.warmup, args.spin_us
     );
     println!("| envs | observation built by | round trip p50 | p90 | p99 | simulator's build p50 | prepared while waiting p50 | network p50 | network p90 | overhead p50 | overhead p90 | answers noticed polling % |");
     println!("|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let ipc_lib = clients::ipc_library(args);
+    let ipc_lib = ipc_library(args.ipc_lib.as_deref(), &c.exe);
     if ipc_lib.is_none() {
         eprintln!("skipping the C ABI client's rows: no libthorarena_ipc.so beside this binary (cargo build --release -p thorarena-ipc, or --ipc-lib)");
     }
@@ -231,22 +243,17 @@ fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
     for &envs in &args.envs {
         for &built_by in &rows {
             let lib = ipc_lib.as_deref();
-            let Some((timing, net)) =
-                clients::adapter_round_trip(args, robot, envs, built_by, lib)?
-            else {
-                return Ok(());
+            let row = match adapter_round_trip(c, robot, envs, built_by, lib, &mut refused)
+                .context("the Python TWIST2 adapter")?
+            {
+                Measured::Taken(row) => row,
+                Measured::Skipped(why) => {
+                    eprintln!("skipping {why}");
+                    return Ok(());
+                }
             };
-            let (rt, build) = (timing.round_trip, timing.input_build);
-            // Per step: its round trip and build less its own network call.
-            let timed = &net.each[args.warmup..];
-            let mut overhead: Vec<f64> = timing
-                .per_step_us
-                .iter()
-                .zip(timed)
-                .map(|(total, network)| total - network)
-                .collect();
-            overhead.sort_by(f64::total_cmp);
-            let at = |p: f64| overhead[((overhead.len() - 1) as f64 * p).round() as usize];
+            let (timing, net) = (&row.timing, &row.network);
+            let (rt, build) = (&timing.round_trip, &timing.input_build);
             let noticed = timing.noticed;
             let polling = (noticed.spinning + noticed.in_window) as f64;
             println!(
@@ -259,8 +266,8 @@ fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
                 timing.input_prepare.p50_us,
                 net.p50,
                 net.p90,
-                at(0.5),
-                at(0.9),
+                row.overhead_at(0.5),
+                row.overhead_at(0.9),
                 100.0 * polling / noticed.total().max(1) as f64
             );
         }
@@ -270,25 +277,7 @@ fn adapter_table(args: &Args, robot: &RobotModel) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Who builds TWIST2's observation in a measured row, and over which transport the
-/// adapter's session runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Builder {
-    /// The simulator, into the batch's policy-input block (`Hello::input` "twist2"); the
-    /// session over iceoryx2's Python binding.
-    Simulator,
-    /// As `Simulator`, the session over the C ABI through ctypes (`--transport native`).
-    SimulatorNative,
-    /// The adapter, in numpy (`--observation python`), over the Python binding.
-    Adapter,
-}
-
-impl Builder {
-    fn label(self) -> &'static str {
-        match self {
-            Self::Simulator => "simulator (Rust)",
-            Self::SimulatorNative => "simulator (Rust), C ABI client",
-            Self::Adapter => "adapter (numpy)",
-        }
-    }
+/// A session's refusal of a connecting client, said on stderr.
+fn refused(message: &str) {
+    eprintln!("refused: {message}");
 }
