@@ -37,7 +37,7 @@ pub enum BenchmarkError {
     #[error("the sanity check could not run: {0}")]
     Sanity(#[from] SanityError),
     /// The policy failed its sanity check: it is refused, its report says why.
-    #[error("{policy} failed its sanity check before the run ({}), so its scores would not say how it tracks under force:\n{}\nCheck the policy, its profile and its file (`thorarena policy check`), or pass --unchecked to score it anyway (recorded in run.json)", report.failed().join(", "), report.checks.iter().map(|c| format!("  {} {}: {}", if c.passed { "pass" } else { "FAIL" }, c.name, c.detail)).collect::<Vec<_>>().join("\n"))]
+    #[error("{policy} failed its sanity check before the run ({}), so its scores would not say how it tracks under force:\n{}\nCheck the policy, its profile and its file (`thorarena policy check`), or give `request.unchecked` to score it anyway (recorded in run.json)", report.failed().join(", "), report.checks.iter().map(|c| format!("  {} {}: {}", if c.passed { "pass" } else { "FAIL" }, c.name, c.detail)).collect::<Vec<_>>().join("\n"))]
     SanityFailed {
         /// The policy's name.
         policy: String,

@@ -22,6 +22,7 @@ pub mod motion;
 pub mod names;
 pub mod network_kernels;
 pub mod onnx_export;
+pub mod own_command;
 pub mod perf;
 pub mod physics;
 pub mod policy;

@@ -7,7 +7,8 @@ fn main() -> std::process::ExitCode {
     match cli::run() {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", chain_text(&e));
+            // The library names what a user set by its field; the terminal shows the flag.
+            eprintln!("error: {}", cli::flags::as_flags(&chain_text(&e)));
             std::process::ExitCode::FAILURE
         }
     }

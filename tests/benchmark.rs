@@ -308,7 +308,7 @@ fn a_spec_is_checked_before_anything_runs() {
                 workers: Some(0),
                 ..request()
             },
-            "--workers must be at least 1",
+            "`request.workers` must be at least 1",
         ),
         (
             EvalRequest {
@@ -329,7 +329,7 @@ fn a_spec_is_checked_before_anything_runs() {
                 trace: vec!["clean_table/nope".into()],
                 ..request()
             },
-            "--trace: no sequence `clean_table/nope`",
+            "`request.trace`: no sequence `clean_table/nope`",
         ),
     ] {
         let e = EvalSpec::load(&request).unwrap_err();

@@ -150,7 +150,7 @@ fn a_walk_with_two_teleported_leading_frames_is_refused_then_trimmed_to_the_clea
         "frame 0→1",
         "frame 1→2",
         "m/s",
-        "--trim-glitches",
+        "`option.trim_glitches`",
         "drop 2 leading",
     ] {
         assert!(err.contains(needle), "`{needle}` missing from: {err}");
@@ -252,7 +252,7 @@ fn a_trailing_glitch_in_a_csv_is_trimmed_with_the_flag() {
     let o = import_csv(&[&motion], &out, false);
     let err = o.unwrap_err();
     assert!(
-        err.contains("--trim-glitches to drop 0 leading and 1 trailing"),
+        err.contains("`option.trim_glitches` to drop 0 leading and 1 trailing"),
         "{err}"
     );
     let o = import_csv(&[&motion], &out, true);
@@ -337,7 +337,7 @@ fn two_teleported_frames_before_a_walk_are_trimmed_to_the_same_episode() {
 
     let refused = import_pkl(&[&fixture], &dir.path().join("refused"), false);
     let refused = refused.unwrap_err();
-    assert!(refused.contains("--trim-glitches"), "{refused}");
+    assert!(refused.contains("`option.trim_glitches`"), "{refused}");
 
     let (clean, trimmed) = (dir.path().join("clean"), dir.path().join("trimmed"));
     let o = import_pkl(&[walk], &clean, false);

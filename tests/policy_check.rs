@@ -209,7 +209,7 @@ fn eval_records_the_check_in_run_json_and_refuses_a_network_failing_it() {
     assert!(
         e.contains("failed its sanity check")
             && e.contains("FAIL stand")
-            && e.contains("--unchecked"),
+            && e.contains("`request.unchecked`"),
         "{e}"
     );
     assert!(

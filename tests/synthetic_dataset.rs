@@ -324,6 +324,9 @@ fn an_existing_dataset_is_kept_unless_forced() {
     };
     assert!(run(false).is_ok());
     let again = run(false).unwrap_err();
-    assert!(again.to_string().contains("--force"), "{again}");
+    assert!(
+        again.to_string().contains("replaced only when asked to"),
+        "{again}"
+    );
     assert!(run(true).is_ok());
 }

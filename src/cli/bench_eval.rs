@@ -119,7 +119,7 @@ fn load_spec(args: &Args, pipeline_depth: usize) -> anyhow::Result<EvalSpec> {
         ..EvalRequest::default()
     })?;
     for advice in &spec.advice {
-        eprintln!("{advice}");
+        eprintln!("{}", super::flags::as_flags(&advice.to_string()));
     }
     Ok(spec)
 }

@@ -6,9 +6,11 @@
 use anyhow::{bail, Context};
 use std::io::Write;
 use std::time::Duration;
-use thorarena::policy::wire::WireAnswer;
-use thorarena::policy::Policy;
-use thorarena_ipc::{Next, PolicyClient, PolicyConfig, WaitPolicy};
+use thorarena::policy::client_process::{
+    run_client_process, ClientFaults, ClientObserver, MadePolicy,
+};
+use thorarena::registry::builtin_policy;
+use thorarena_ipc::{PolicyConfig, SessionInfo, WaitPolicy};
 
 /// Arguments of `client`.
 #[derive(Debug, clap::Args)]
@@ -81,103 +83,45 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             args.connect_timeout
         )
     })?;
-    let mut client = PolicyClient::connect(&config, timeout)
-        .with_context(|| format!("joining session `{}`", args.session))?;
-    let info = client.info().clone();
-    let offset = info.action_offset_rad.clone();
-    let mut policy: Option<Box<dyn Policy>> = match args.policy.as_str() {
-        "echo" => None,
-        name => match thorarena::registry::builtin_policy(name, &robot, &offset) {
-            Some(policy) => Some(policy?),
-            None => bail!("unknown policy `{name}` (balance, replay, hold, echo)"),
+    let faults = ClientFaults {
+        die_after_steps: args.die_after_steps,
+        delay: if args.delay_ms > 0.0 {
+            Duration::try_from_secs_f64(args.delay_ms / 1e3).unwrap_or(Duration::MAX)
+        } else {
+            Duration::ZERO
         },
+        delay_at_step: args.delay_at_step,
+        nan_at_step: args.nan_at_step,
+        bad_header_at_step: args.bad_header_at_step,
     };
-    println!("connected");
-    std::io::stdout().flush()?;
-    let n_refs = info.layout.n_refs;
-    let mut wire = WireAnswer::default();
-    let mut episodes = EpisodeContinuity::new(info.budget.is_some());
-    let mut steps = 0u64;
-    loop {
-        let mut step = match client.next_step(Some(Duration::from_secs(1)))? {
-            Next::Step(step) => step,
-            Next::End => break,
-            Next::Timeout => continue,
-        };
-        steps += 1;
-        if args.delay_ms > 0.0 && (args.delay_at_step == 0 || args.delay_at_step == steps) {
-            std::thread::sleep(
-                Duration::try_from_secs_f64(args.delay_ms / 1e3).unwrap_or(Duration::MAX),
-            );
+    let mut make = |info: &SessionInfo| -> MadePolicy {
+        match args.policy.as_str() {
+            "echo" => Ok(None),
+            name => match builtin_policy(name, &robot, &info.action_offset_rad) {
+                Some(policy) => policy.map(Some).map_err(|e| e.to_string()),
+                None => Err(format!(
+                    "unknown policy `{name}` (balance, replay, hold, echo)"
+                )),
+            },
         }
-        let mut broken = None;
-        step.answer(&mut |obs, out| {
-            broken = episodes.check(obs);
-            match policy.as_mut() {
-                // The echo: action = q.
-                None => {
-                    for i in (0..obs.n_envs()).filter(|&i| obs.env(i).is_active()) {
-                        out.env(i).copy_from_slice(obs.env(i).array("q"));
-                    }
-                }
-                Some(policy) => wire.answer(policy.as_mut(), obs, out, n_refs),
-            }
-            if args.nan_at_step == Some(steps) {
-                out.all().fill(f64::NAN);
-            }
-            if args.bad_header_at_step == Some(steps) {
-                out.header_bytes_mut()[..4].fill(0);
-            }
-        })?;
-        if let Some(why) = broken {
-            bail!("{why}");
-        }
-        step.send(&client)?;
-        if args.die_after_steps == Some(steps) {
-            eprintln!("--die-after-steps {steps}: killing myself");
-            // SAFETY: raising a signal on our own process has no memory-safety effect.
-            unsafe {
-                libc::raise(libc::SIGKILL);
-            }
-        }
-    }
+    };
+    let steps = run_client_process(&config, timeout, &mut make, &faults, &mut Terminal)
+        .with_context(|| format!("session `{}`", args.session))?;
     eprintln!("the run is over after {steps} steps");
     Ok(())
 }
 
-/// Which episode each slot runs, as this process saw it start: the simulator never hands
-/// a policy the middle of an episode it did not begin (after a reconnect, episodes cut
-/// short run again from their start), and this client holds it to that — in lock-step.
-/// Under a latency budget the simulator steps on without a late policy (the miss rule
-/// acts for it), so a slow policy may first see an episode at any step: that is a
-/// deadline missed, which the run scores, not a broken promise.
-struct EpisodeContinuity {
-    started: Vec<Option<u64>>,
-    under_budget: bool,
-}
+/// Says on the terminal what the process does: `connected` on stdout (scripts wait for
+/// it), a fault's suicide on stderr.
+struct Terminal;
 
-impl EpisodeContinuity {
-    fn new(under_budget: bool) -> Self {
-        Self {
-            started: Vec::new(),
-            under_budget,
-        }
+impl ClientObserver for Terminal {
+    fn connected(&mut self) {
+        println!("connected");
+        let _ = std::io::stdout().flush();
     }
 
-    /// Why `obs` breaks the rule, if it does.
-    fn check(&mut self, obs: &thorarena_ipc::ObsBatch) -> Option<String> {
-        self.started.resize(obs.n_envs(), None);
-        for i in (0..obs.n_envs()).filter(|&i| obs.env(i).is_active()) {
-            let header = obs.env(i).header();
-            if header.step == 0 || self.under_budget {
-                self.started[i] = Some(header.episode_id);
-            } else if self.started[i] != Some(header.episode_id) {
-                return Some(format!(
-                    "slot {i}: episode {} at step {}, but this process never saw it start (the simulator continued an episode begun with another policy)",
-                    header.episode_id, header.step
-                ));
-            }
-        }
-        None
+    fn dying(&mut self, steps: u64) {
+        eprintln!("--die-after-steps {steps}: killing myself");
     }
 }

@@ -268,6 +268,9 @@ fn info(args: &InfoArgs) -> anyhow::Result<()> {
     let robot = thorarena::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let seqs = ds.load_all()?;
-    print!("{}", thorarena::motion::describe(&ds, &seqs, &robot));
+    print!(
+        "{}",
+        super::flags::as_flags(&thorarena::motion::describe(&ds, &seqs, &robot))
+    );
     Ok(())
 }

@@ -1,9 +1,10 @@
 //! `thorarena data synth`: writes the synthetic six-task dataset.
 
 use super::data::SynthArgs;
+use super::flags::as_flags;
 use anyhow::bail;
 use thorarena::motion::describe;
-use thorarena::motion::synth::{write_synthetic, SynthOptions};
+use thorarena::motion::synth::{write_synthetic, SynthOptions, SynthWriteError};
 
 /// Most sequences per task `data synth` writes (a million sequences would be ~100 GB).
 const MAX_PER_TASK: usize = 100_000;
@@ -29,15 +30,19 @@ pub(super) fn run(args: &SynthArgs) -> anyhow::Result<()> {
         tasks: args.tasks.clone(),
     };
     let started = std::time::Instant::now();
-    let (ds, seqs) = write_synthetic(&args.out, &robot, &opts, args.force, |done, total| {
+    let written = write_synthetic(&args.out, &robot, &opts, args.force, |done, total| {
         if done % args.per_task.max(1) == 0 || done == total {
             eprintln!(
                 "synth: {done}/{total} sequences ({:.1} s)",
                 started.elapsed().as_secs_f64()
             );
         }
-    })?;
-    print!("{}", describe(&ds, &seqs, &robot));
+    });
+    let (ds, seqs) = match written {
+        Err(e @ SynthWriteError::Exists(_)) => bail!("{e}: pass --force"),
+        written => written?,
+    };
+    print!("{}", as_flags(&describe(&ds, &seqs, &robot)));
     eprintln!(
         "{}: {} sequences in {:.1} s",
         ds.dir.display(),

@@ -123,7 +123,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     );
     let outcome = run_dds_session(&request, &mut |event| match event {
         DdsSessionEvent::Advice(text) | DdsSessionEvent::Serving(text) => {
-            bar.suspend(|| eprintln!("{text}"))
+            bar.suspend(|| eprintln!("{}", super::flags::as_flags(&text)))
         }
         DdsSessionEvent::Progress {
             progress: p,

@@ -45,7 +45,7 @@ pub(super) fn load_spec(args: &RunArgs, policy: &str) -> anyhow::Result<EvalSpec
 fn load_request(request: &EvalRequest) -> anyhow::Result<EvalSpec> {
     let spec = EvalSpec::load(request)?;
     for advice in &spec.advice {
-        eprintln!("{advice}");
+        eprintln!("{}", super::flags::as_flags(&advice.to_string()));
     }
     Ok(spec)
 }

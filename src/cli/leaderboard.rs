@@ -11,15 +11,11 @@ use thorarena::benchmark::{EvalObserver, Starting};
 use thorarena::evaluation::EvalSpec;
 use thorarena::evaluation::{EngineChoice, EpisodeRecord};
 use thorarena::leaderboard::{
-    leaderboard_table, load_policy_file, pairs_table, run_leaderboard, run_pairs,
-    write_leaderboard_page, write_pair_files, CompliancePair, LeaderboardObserver,
-    LeaderboardRequest, OwnClip, PairOptions, PolicyProcess,
+    load_policy_file, run_leaderboard, run_pairs, write_leaderboard_outputs, CompliancePair,
+    LeaderboardObserver, LeaderboardRequest, OwnClip, PageHeader, PairOptions, PolicyProcess,
 };
 use thorarena::policy::Policy;
-use thorarena::report::{
-    label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, Page,
-    WebBundle,
-};
+use thorarena::report::{Page, WebBundle};
 
 /// Arguments of `leaderboard`.
 #[derive(Debug, clap::Args)]
@@ -106,7 +102,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         Some(d) => d.clone(),
         None if args.policies.is_empty() && args.policy_file.is_none() => PathBuf::new(),
         None => thorarena::leaderboard::synthetic_dataset(&args.out, args.per_task, &mut |n| {
-            eprintln!("{n}")
+            eprintln!("{}", super::flags::as_flags(n))
         })?,
     };
     let engines: Vec<EngineChoice> = if args.engines.is_empty() {
@@ -156,62 +152,25 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         },
         &mut Progress::default(),
     )?;
-    let general: Vec<_> = entries.iter().filter(|e| !e.own_clip).collect();
-    let own: Vec<_> = entries.iter().filter(|e| e.own_clip).collect();
-    let mut table = String::new();
-    if !general.is_empty() {
-        table.push_str(&leaderboard_table(&general));
-    }
-    if !own.is_empty() {
-        if !table.is_empty() {
-            table.push('\n');
-        }
-        table.push_str("Single-clip policies, each on its own clip:\n\n");
-        table.push_str(&leaderboard_table(&own));
-    }
-    if !pairs.is_empty() {
-        if !table.is_empty() {
-            table.push('\n');
-        }
-        table.push_str("Compliant and stiff pairs, each on its own clip:\n\n");
-        table.push_str(&pairs_table(&pairs));
-        let written = write_pair_files(&args.out, &pairs)?;
-        eprintln!(
-            "wrote {} and {}",
-            written[0].display(),
-            written[1].display()
-        );
-    }
-    let md_path = write_leaderboard_page(
-        &args.out,
-        &dataset,
-        &args.settings,
-        &std::env::args().skip(1).collect::<Vec<_>>().join(" "),
-        started.elapsed().as_secs_f64(),
-        &table,
-    )?;
-    print!("{table}");
+    let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
+    let header = PageHeader {
+        dataset: &dataset,
+        settings: &args.settings,
+        command: &command,
+        wall_s: started.elapsed().as_secs_f64(),
+    };
     let script = bundle.script(Page::Report)?;
-    for (own_clip, page) in [(false, "report.html"), (true, "single-clip.html")] {
-        let dirs: Vec<PathBuf> = entries
-            .iter()
-            .filter(|e| e.own_clip == own_clip)
-            .map(|e| e.run.clone())
-            .collect();
-        if dirs.is_empty() {
-            continue;
-        }
-        let mut runs = load_runs(&dirs)?;
-        if mixed_engines(&runs).is_some() {
-            label_engines(&mut runs);
-        }
-        let files = ComparisonFiles::beside(&args.out.join(page));
-        let written = write_comparison_report(&runs, &files, &script, true, &dirs)?;
-        super::report_html::tell_written(&written, &files);
+    let written = write_leaderboard_outputs(&args.out, &entries, &pairs, &header, &script)?;
+    if let Some([md, csv]) = &written.pair_files {
+        eprintln!("wrote {} and {}", md.display(), csv.display());
+    }
+    print!("{}", written.tables);
+    for (report, files) in &written.reports {
+        super::report_html::tell_written(report, files);
     }
     eprintln!(
         "wrote {} ({:.0} s in all)",
-        md_path.display(),
+        written.page.display(),
         started.elapsed().as_secs_f64()
     );
     Ok(())

@@ -13,6 +13,7 @@ mod data_synth;
 mod dds;
 mod eval;
 mod eval_run;
+pub(crate) mod flags;
 mod leaderboard;
 mod logging;
 mod merge;

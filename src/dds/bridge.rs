@@ -468,7 +468,7 @@ impl RobotIo {
         for writer in endpoints.other_robots() {
             if self.other_robots.insert(writer.clone()) {
                 log::warn!(
-                    "another robot publishes rt/lowstate on this DDS domain (writer {writer}): the deployment may read its states; give each bridge its own --domain"
+                    "another robot publishes rt/lowstate on this DDS domain (writer {writer}): the deployment may read its states; give each bridge its own `option.domain`"
                 );
             }
         }

@@ -12,7 +12,7 @@ pub enum InterfaceError {
     #[error("listing the network interfaces: {0}")]
     List(std::io::Error),
     /// An address that is not one of this machine's interfaces.
-    #[error("--address {address}: {why}")]
+    #[error("`option.address` {address}: {why}")]
     NotLocal {
         /// The address given.
         address: std::net::IpAddr,
@@ -36,7 +36,7 @@ pub fn check_local_address(address: std::net::IpAddr) -> Result<(), InterfaceErr
     if address.is_unspecified() {
         return Err(InterfaceError::NotLocal {
             address,
-            why: "it means every interface; give one interface's address (127.0.0.1 keeps DDS on this machine), or --interface NAME".into(),
+            why: "it means every interface; give one interface's address (127.0.0.1 keeps DDS on this machine), or `option.interface` NAME".into(),
         });
     }
     match address {
@@ -60,7 +60,7 @@ pub fn check_local_address(address: std::net::IpAddr) -> Result<(), InterfaceErr
         std::net::IpAddr::V6(v6) if v6.is_loopback() => Ok(()),
         std::net::IpAddr::V6(_) => Err(InterfaceError::NotLocal {
             address,
-            why: "give an IPv4 address, or --interface NAME".into(),
+            why: "give an IPv4 address, or `option.interface` NAME".into(),
         }),
     }
 }

@@ -32,7 +32,7 @@ impl SanityRecord {
             Self::Passed { tracking_reference } => {
                 format!("passed (tracking {tracking_reference})")
             }
-            Self::Unchecked => "not run (--unchecked)".into(),
+            Self::Unchecked => "not run (unchecked)".into(),
             Self::Exempt { why } => format!("exempt: {why}"),
         }
     }

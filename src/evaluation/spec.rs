@@ -45,7 +45,8 @@ impl std::fmt::Display for Advice {
 /// Why a request is not an evaluation that can run.
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
-    /// A value out of its domain; the message names it as `eval` spells it.
+    /// A value out of its domain; the message names the request's field in backticks
+    /// (`request.envs`, `request.io.budget_s`) — a command line shows its flag there.
     #[error("{0}")]
     Invalid(String),
     /// The robot or profile named does not resolve.
@@ -57,11 +58,11 @@ pub enum SpecError {
     /// The dataset cannot be read.
     #[error(transparent)]
     Data(#[from] DataError),
-    /// `--tasks` / `--sequences` select nothing usable.
-    #[error("{flags} in {dataset}")]
+    /// `selection` chooses nothing usable.
+    #[error("{spelled} in {dataset}")]
     Selection {
-        /// The selection's flags as spelled.
-        flags: String,
+        /// The selection as given.
+        spelled: String,
         /// The dataset.
         dataset: PathBuf,
         /// Why.
@@ -219,7 +220,9 @@ fn resolve_profile(
             .to_string()
     });
     let mut profile = registry::profile(&profile_name, robot).map_err(|e| match e {
-        RegistryError::UnknownProfile { .. } => invalid(format!("--profile {profile_name}: {e}")),
+        RegistryError::UnknownProfile { .. } => {
+            invalid(format!("`request.profile` {profile_name}: {e}"))
+        }
         e => e.into(),
     })?;
     let fits = policy.map_or(Ok(()), |p| p.check_profile(&profile));
@@ -227,11 +230,11 @@ fn resolve_profile(
         Ok(()) => false,
         Err(why) if request.profile_mismatch_ok => {
             advice.push(Advice::Warning(format!(
-                "{why} (--profile-mismatch-ok: run anyway, recorded in run.json)"
+                "{why} (`request.profile_mismatch_ok`: run anyway, recorded in run.json)"
             )));
             true
         }
-        Err(why) => return Err(invalid(format!("{why}: leave out --profile to use the family's, or pass --profile-mismatch-ok to run it anyway"))),
+        Err(why) => return Err(invalid(format!("{why}: leave out `request.profile` to use the family's, or give `request.profile_mismatch_ok` to run it anyway"))),
     };
     if let Some(dt) = request.physics_dt_s {
         set_physics_dt(&mut profile, dt)?;
@@ -250,7 +253,7 @@ fn check_engine(
         (EngineChoice::Rapier, None) => Engine::Rapier,
         (EngineChoice::Rapier, Some(_)) => {
             return Err(invalid(
-                "--mjcf is for --engine mujoco (rapier simulates the robot model itself)",
+                "`request.mjcf` is for `request.engine` mujoco (rapier simulates the robot model itself)",
             ))
         }
         (EngineChoice::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
@@ -294,7 +297,7 @@ fn pick_sequences(
     let sequences = selection
         .pick(all, |q| (&q.task, &q.sequence_id))
         .map_err(|source| SpecError::Selection {
-            flags: selection.flags(),
+            spelled: selection.spelled(),
             dataset: dataset.to_path_buf(),
             source,
         })?;
@@ -316,7 +319,7 @@ fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Resu
             .any(|q| names_sequence(name, &q.task, &q.sequence_id))
         {
             return Err(invalid(format!(
-                "--trace: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",
+                "`request.trace`: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",
                 dataset.display()
             )));
         }
@@ -328,18 +331,18 @@ fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Resu
 /// family's `slots_per_worker` for each worker), within their limits.
 fn threads(request: &EvalRequest, slots_per_worker: usize) -> Result<(usize, usize), SpecError> {
     let workers = match request.workers {
-        Some(0) => return Err(invalid("--workers must be at least 1")),
+        Some(0) => return Err(invalid("`request.workers` must be at least 1")),
         Some(n) if n > MAX_WORKERS => {
-            return Err(invalid(format!("--workers {n}: at most {MAX_WORKERS} threads (each one simulates its own environment slots)")))
+            return Err(invalid(format!("`request.workers` {n}: at most {MAX_WORKERS} threads (each one simulates its own environment slots)")))
         }
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
     let envs = match request.envs {
-        Some(0) => return Err(invalid("--envs must be at least 1")),
+        Some(0) => return Err(invalid("`request.envs` must be at least 1")),
         Some(n) if n > MAX_ENVS => {
             return Err(invalid(format!(
-                "--envs {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)"
+                "`request.envs` {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)"
             )))
         }
         Some(n) => n,
@@ -355,7 +358,7 @@ fn threads(request: &EvalRequest, slots_per_worker: usize) -> Result<(usize, usi
 fn check_pipeline(depth: usize, envs: usize, io: &PolicyIoRules) -> Result<(), SpecError> {
     if !(1..=MAX_PIPELINE_DEPTH).contains(&depth) {
         return Err(invalid(format!(
-            "--pipeline-depth {depth}: 1 (lock-step) or {MAX_PIPELINE_DEPTH} (the physics of one half of the slots overlaps the policy's answer for the other)"
+            "`request.pipeline_depth` {depth}: 1 (lock-step) or {MAX_PIPELINE_DEPTH} (the physics of one half of the slots overlaps the policy's answer for the other)"
         )));
     }
     if depth == 1 {
@@ -363,17 +366,17 @@ fn check_pipeline(depth: usize, envs: usize, io: &PolicyIoRules) -> Result<(), S
     }
     if envs < depth {
         return Err(invalid(format!(
-            "--pipeline-depth {depth} needs at least {depth} environment slots (--envs {envs})"
+            "`request.pipeline_depth` {depth} needs at least {depth} environment slots (`request.envs` {envs})"
         )));
     }
     if let Some(b) = io.budget_s {
         return Err(invalid(format!(
-            "--pipeline-depth {depth} with --budget {b}s: overlapped with physics, the policy's round trip is not what it would be alone, so a deadline would judge the run, not the policy (use --pipeline-depth 1)"
+            "`request.pipeline_depth` {depth} with `request.io.budget_s` {b}s: overlapped with physics, the policy's round trip is not what it would be alone, so a deadline would judge the run, not the policy (use `request.pipeline_depth` 1)"
         )));
     }
     if io.latency_mode == crate::evaluation::LatencyMode::Measured {
         return Err(invalid(format!(
-            "--pipeline-depth {depth} with --latency-mode measured: overlapped with physics, the measured latency is not the policy's alone (use --pipeline-depth 1)"
+            "`request.pipeline_depth` {depth} with `request.io.latency_mode` measured: overlapped with physics, the measured latency is not the policy's alone (use `request.pipeline_depth` 1)"
         )));
     }
     Ok(())
@@ -384,13 +387,13 @@ fn set_physics_dt(profile: &mut Profile, dt: f64) -> Result<(), SpecError> {
     let ratio = profile.control_dt_s / dt;
     if !(dt.is_finite() && dt > 0.0) || (ratio - ratio.round()).abs() > 1e-6 || ratio < 0.5 {
         return Err(invalid(format!(
-            "--physics-dt {dt}: must be > 0 and divide the profile's control step {} s",
+            "`request.physics_dt_s` {dt}: must be > 0 and divide the profile's control step {} s",
             profile.control_dt_s
         )));
     }
     if ratio.round() > MAX_SUBSTEPS as f64 {
         return Err(invalid(format!(
-            "--physics-dt {dt}: {} physics steps per control step of {} s; at most {MAX_SUBSTEPS} (a step of {} s)",
+            "`request.physics_dt_s` {dt}: {} physics steps per control step of {} s; at most {MAX_SUBSTEPS} (a step of {} s)",
             ratio.round(),
             profile.control_dt_s,
             profile.control_dt_s / MAX_SUBSTEPS as f64
@@ -414,7 +417,7 @@ pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
         .map(|s| {
             Setting::parse(s).ok_or_else(|| {
                 invalid(format!(
-                    "--settings: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
+                    "`request.settings`: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
                     Setting::MAX_COEFFICIENT,
                     Setting::MAX_PUSH_N
                 ))
@@ -430,12 +433,12 @@ pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
             let (first, second) = (&spelled[j], &spelled[i]);
             if first == second || settings[j].name == a.name {
                 return Err(invalid(format!(
-                    "--settings lists `{}` twice: every episode would run and count twice",
+                    "`request.settings` lists `{}` twice: every episode would run and count twice",
                     a.name
                 )));
             }
             return Err(invalid(format!(
-                "--settings lists `{first}` and `{second}`, which are the same load on the robot: every episode would run and count twice under two names"
+                "`request.settings` lists `{first}` and `{second}`, which are the same load on the robot: every episode would run and count twice under two names"
             )));
         }
     }
@@ -444,8 +447,14 @@ pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
 
 fn check_termination(rule: &TerminationRule) -> Result<(), SpecError> {
     for (flag, v) in [
-        ("--max-torso-height-error", rule.max_torso_height_error_m),
-        ("--max-torso-tilt-error", rule.max_torso_tilt_error_rad),
+        (
+            "`request.termination.max_torso_height_error_m`",
+            rule.max_torso_height_error_m,
+        ),
+        (
+            "`request.termination.max_torso_tilt_error_rad`",
+            rule.max_torso_tilt_error_rad,
+        ),
     ] {
         if !(v.is_finite() && v > 0.0) {
             return Err(invalid(format!("{flag} must be > 0, got {v}")));
@@ -457,7 +466,7 @@ fn check_termination(rule: &TerminationRule) -> Result<(), SpecError> {
 fn check_io(io: &PolicyIoRules) -> Result<(), SpecError> {
     if !(io.max_abs_action.is_finite() && io.max_abs_action > 0.0) {
         return Err(invalid(format!(
-            "--max-abs-action must be > 0, got {}",
+            "`request.io.max_abs_action` must be > 0, got {}",
             io.max_abs_action
         )));
     }
@@ -487,7 +496,7 @@ fn fit_settings_to_force_logs(
     }
     if logged == 0 && defaulted {
         advice.push(Advice::Note(format!(
-            "no sequence evaluated from {} has force logs (imported without --forces): running `no-force` only (--settings force,... with --replay-without-force-logs to replay zeros anyway)",
+            "no sequence evaluated from {} has force logs (imported without its forces): running `no-force` only (`request.settings` force,... with `request.replay_without_force_logs` to replay zeros anyway)",
             dataset.display()
         )));
         return Ok(settings
@@ -497,7 +506,7 @@ fn fit_settings_to_force_logs(
     }
     if logged == 0 && !replay_anyway {
         return Err(invalid(format!(
-            "--settings {}: replays recorded hand forces, but no sequence evaluated from {} has force logs (imported without --forces), so it would run as `no-force` under another name; use no-force or push:<N>, or --replay-without-force-logs to run it anyway",
+            "`request.settings` {}: replays recorded hand forces, but no sequence evaluated from {} has force logs (imported without its forces), so it would run as `no-force` under another name; use no-force or push:<N>, or `request.replay_without_force_logs` to run it anyway",
             replaying.join(","),
             dataset.display()
         )));

@@ -20,9 +20,13 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 mod launched;
+mod outputs;
 mod pairs;
 
 pub use launched::LaunchedPolicy;
+pub use outputs::{
+    leaderboard_tables, write_leaderboard_outputs, LeaderboardOutputs, OutputsError, PageHeader,
+};
 pub use pairs::{
     pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember, PairOptions,
     PairResult,
@@ -51,7 +55,7 @@ pub enum LeaderboardError {
     },
     /// A policy argument naming a session (`ipc:`): a policy process joins the leaderboard
     /// as a [`PolicyProcess`], started by the leaderboard for each run.
-    #[error("{0} names a session no one starts: give the policy process as a command that joins {{session}} (`leaderboard --policy-file`, [[policy]] command = …)")]
+    #[error("{0} names a session no one starts: give the policy process as a command that joins {{session}} (a policy file's [[policy]] command = …)")]
     NotInProcess(String),
     /// A policy process could not be started or did not connect.
     #[error("{policy} on {engine}: {why}")]
@@ -78,7 +82,7 @@ pub enum LeaderboardError {
     #[error("{0}")]
     Names(String),
     /// `--out` holds something a leaderboard must not write over.
-    #[error("--out {}: {why}; choose another --out", .out.display())]
+    #[error("`option.out` {}: {why}; choose another `option.out`", .out.display())]
     Out {
         /// The directory.
         out: PathBuf,
@@ -184,11 +188,11 @@ pub fn load_policy_file(
         let at = |m: &str| invalid(format!("[[policy]] #{}: {m}", i + 1));
         p.check().map_err(|m| at(&m))?;
         if p.unchecked {
-            return Err(at("`unchecked` is the leaderboard's --unchecked here"));
+            return Err(at("a policy file does not say whether a policy is checked: the leaderboard's `option.unchecked` does"));
         }
         match (p.resolved_policy(&workdir), &p.command) {
             (Some(_), _) if p.name.is_some() || p.profile.is_some() => {
-                return Err(at("an in-process policy runs under its own family's profile and name: drop `name` and `profile`"));
+                return Err(at("an in-process policy runs under its own family's profile and name: drop its `name =` and `profile =` keys"));
             }
             (Some(argument), _) => arguments.push(argument),
             (None, Some(command)) => processes.push(PolicyProcess {
@@ -314,7 +318,7 @@ fn check_names(
     for (i, e) in engines.iter().enumerate() {
         if engines[..i].contains(e) {
             return Err(LeaderboardError::Names(format!(
-                "--engines names {} twice",
+                "`option.engines` names {} twice",
                 engine_name(*e)
             )));
         }
@@ -641,7 +645,7 @@ pub fn synthetic_dataset(
             .len();
         if have != want {
             return Err(failed(format!(
-                "holds {have} sequences, not {want} (--per-task {per_task}): remove it, or pass that --per-task"
+                "holds {have} sequences, not {want} (`option.per_task` {per_task}): remove it, or give that `option.per_task`"
             )));
         }
         return Ok(dir);

@@ -178,7 +178,7 @@ fn one_sequence_dataset(
             return Err(data_error(
                 pair,
                 format!(
-                    "{} holds another clip than this invocation makes (another --pair-seconds or dataset?): remove {} to start the pair anew",
+                    "{} holds another clip than this invocation makes (another `option.pair_seconds` or dataset?): remove {} to start the pair anew",
                     dir.display(),
                     dir.parent().unwrap_or(dir).display()
                 ),

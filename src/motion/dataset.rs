@@ -103,7 +103,7 @@ impl Dataset {
                 &path,
                 "robot",
                 format!(
-                    "`{}`, but the robot evaluated is `{}` (retarget the motions, or pass --robot {})",
+                    "`{}`, but the robot evaluated is `{}` (retarget the motions, or evaluate them on robot {})",
                     manifest.robot, robot.name, manifest.robot
                 ),
             ));

@@ -79,11 +79,11 @@ pub fn describe(ds: &Dataset, seqs: &[Sequence], robot: &RobotModel) -> String {
     if logged < seqs.len() {
         let _ = writeln!(
             s,
-            "{} of {} sequences have no force logs (imported without --forces; their forces are zero){}",
+            "{} of {} sequences have no force logs (imported without force logs; their forces are zero){}",
             seqs.len() - logged,
             seqs.len(),
             if logged == 0 {
-                ": `eval` runs them under no-force only, unless --replay-without-force-logs"
+                ": `eval` runs them under no-force only, unless `request.replay_without_force_logs`"
             } else {
                 ": under a replay setting they run as if no-force"
             }

@@ -102,16 +102,16 @@ impl SequenceSelection {
         Ok(kept)
     }
 
-    /// `--tasks a,b --sequences x` as a user would type it back; empty for everything.
-    pub fn flags(&self) -> String {
+    /// `tasks a,b; sequences x`, the selection's fields as given; empty for everything.
+    pub fn spelled(&self) -> String {
         let mut parts = Vec::new();
         if !self.tasks.is_empty() {
-            parts.push(format!("--tasks {}", self.tasks.join(",")));
+            parts.push(format!("tasks {}", self.tasks.join(",")));
         }
         if !self.sequences.is_empty() {
-            parts.push(format!("--sequences {}", self.sequences.join(",")));
+            parts.push(format!("sequences {}", self.sequences.join(",")));
         }
-        parts.join(" ")
+        parts.join("; ")
     }
 }
 
@@ -193,12 +193,12 @@ pub struct Subset {
 }
 
 impl Subset {
-    /// "2 of 12 sequences (--tasks push_chair)".
+    /// "2 of the dataset's 12 sequences (tasks push_chair)".
     pub fn describe(&self, planned: usize) -> String {
         format!(
             "{planned} of the dataset's {} sequences ({})",
             self.dataset_sequences,
-            self.selection.flags()
+            self.selection.spelled()
         )
     }
 }

@@ -274,8 +274,7 @@ fn spawn_echo(c: &IpcClients, client: &str, session: &str) -> Result<Measured<Ch
     let mut cmd = match client {
         "rust" => {
             let mut cmd = Command::new(&c.exe);
-            cmd.args(["client", "--policy", "echo", "--session", session])
-                .args(["--spin-us", &spin]);
+            cmd.args(crate::own_command::echo_client(session, c.spin_us));
             cmd
         }
         "cpp" => {

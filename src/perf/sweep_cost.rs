@@ -5,6 +5,7 @@
 
 use super::PerfError;
 use crate::evaluation::EvalRequest;
+use crate::own_command;
 use crate::sweep::{finish_with_shard_runs, write_large_spec, Plan, TaskDir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -58,13 +59,7 @@ pub fn time_sweep_round(
     jobs: usize,
 ) -> Result<SweepRoundTiming, PerfError> {
     let dir = scratch.join(format!("sweep-{round}"));
-    run_ok(
-        Command::new(exe)
-            .args(["sweep", "plan"])
-            .arg(spec)
-            .arg("--out")
-            .arg(&dir),
-    )?;
+    run_ok(Command::new(exe).args(own_command::sweep_plan(spec, &dir)))?;
     let plan = Plan::load(&dir).map_err(PerfError::other("loading the plan"))?;
     let evals_dir = scratch.join(format!("eval-{round}"));
     let mut baseline = Vec::new();
@@ -74,21 +69,16 @@ pub fn time_sweep_round(
             .write(&file)
             .map_err(PerfError::io(format!("writing {}", file.display())))?;
         let mut eval = Command::new(exe);
-        eval.arg("eval")
-            .arg("--request")
-            .arg(&file)
-            .args(["--workers", &jobs.to_string(), "--out"])
-            .arg(evals_dir.join(i.to_string()));
+        eval.args(own_command::eval_once(
+            &file,
+            &evals_dir.join(i.to_string()),
+            jobs,
+        ));
         baseline.push(eval);
     }
     let time_sweep = || -> Result<f64, PerfError> {
         let t = Instant::now();
-        run_ok(
-            Command::new(exe)
-                .args(["sweep", "run"])
-                .arg(&dir)
-                .args(["--jobs", &jobs.to_string()]),
-        )?;
+        run_ok(Command::new(exe).args(own_command::sweep_run(&dir, jobs)))?;
         Ok(t.elapsed().as_secs_f64())
     };
     let mut time_evals = || -> Result<f64, PerfError> {
@@ -173,22 +163,16 @@ pub fn time_sweep_at_scale(
         .map_err(PerfError::other("writing the large spec"))?;
     let dir = scratch.join("large");
     let t = Instant::now();
-    run_ok(
-        Command::new(exe)
-            .args(["sweep", "plan"])
-            .arg(&spec)
-            .arg("--out")
-            .arg(&dir),
-    )?;
+    run_ok(Command::new(exe).args(own_command::sweep_plan(&spec, &dir)))?;
     let plan_s = t.elapsed().as_secs_f64();
     let plan = Plan::load(&dir).map_err(PerfError::other("loading the large plan"))?;
     let episodes = finish_with_shard_runs(&dir, &shards)
         .map_err(PerfError::other("finishing the large sweep's tasks"))?;
     let t = Instant::now();
-    run_ok(Command::new(exe).args(["sweep", "status"]).arg(&dir))?;
+    run_ok(Command::new(exe).args(own_command::sweep_step("status", &dir)))?;
     let status_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    run_ok(Command::new(exe).args(["sweep", "collect"]).arg(&dir))?;
+    run_ok(Command::new(exe).args(own_command::sweep_step("collect", &dir)))?;
     let collect_s = t.elapsed().as_secs_f64();
     Ok(SweepScaleTiming {
         tasks: plan.tasks.len(),

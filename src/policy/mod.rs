@@ -5,6 +5,7 @@
 mod batch_plans;
 pub mod beyondmimic;
 mod builtin;
+pub mod client_process;
 pub mod falcon;
 pub mod inputs;
 mod remote;

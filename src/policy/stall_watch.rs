@@ -74,7 +74,7 @@ fn watch(shared: &Shared, name: &str) {
         };
         if waited >= next {
             log::warn!(
-                "policy `{name}` has not answered for {:.0} s; its process is alive, and lock-step waits as long as it lives (`--budget` bounds each step; stop the policy or this run to end it)",
+                "policy `{name}` has not answered for {:.0} s; its process is alive, and lock-step waits as long as it lives (a latency budget bounds each step; stop the policy or this run to end it)",
                 waited.as_secs_f64()
             );
             reported_for = Some((since, next));

@@ -166,7 +166,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         name: "beyondmimic",
         spelling: "beyondmimic:FILE.onnx",
         what: "a BeyondMimic-style tracker exported by mjlab, whole_body_tracking or holosoma",
-        supplies: "the network file; for a file naming no observation terms, a profile that does (holosoma: --profile holosoma-wbt)",
+        supplies: "the network file; for a file naming no observation terms, a profile that does (holosoma: the profile holosoma-wbt)",
         profile: "beyondmimic",
         slots_per_worker: BEYONDMIMIC_SLOTS_PER_WORKER,
         runs: Runs::InProcess,

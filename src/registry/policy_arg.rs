@@ -216,10 +216,10 @@ fn unknown_policy(spec: &str) -> String {
     if let Some(f) = POLICY_FAMILIES.iter().find(|f| f.name == name) {
         match (f.target, f.example) {
             (Target::File, Some(example)) => {
-                return format!("`--policy {spec}` needs the network's file: `{name}:FILE.onnx` (e.g. {name}:{example})")
+                return format!("`{spec}` needs the network's file: `{name}:FILE.onnx` (e.g. {name}:{example})")
             }
             (Target::Session, _) => {
-                return format!("`--policy {spec}` needs a session name: `{name}:NAME`, the name the policy process connects to")
+                return format!("`{spec}` needs a session name: `{name}:NAME`, the name the policy process connects to")
             }
             _ => {}
         }

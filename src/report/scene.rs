@@ -255,7 +255,7 @@ pub fn view_scene(
         .find(|(_, s)| s.q.len() != n || s.reference_q.as_ref().is_some_and(|q| q.len() != n))
     {
         return Err(bad(format!(
-            "step {k} has {} joint angles, robot {} has {n} (use --robot)",
+            "step {k} has {} joint angles, robot {} has {n} (a trace of another robot?)",
             s.q.len(),
             robot.name
         )));

@@ -21,7 +21,7 @@ pub enum MergeError {
         first: PathBuf,
     },
     /// A shard whose last record was cut short.
-    #[error("{run}: episodes.jsonl ends in a line cut short (the shard was killed mid-write); `thorarena eval --resume` it first")]
+    #[error("{run}: episodes.jsonl ends in a line cut short (the shard was killed mid-write); resume it (`option.resume`) first")]
     TornShard {
         /// The shard.
         run: PathBuf,

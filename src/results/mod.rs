@@ -85,7 +85,7 @@ pub enum ResultsError {
         source: serde_json::Error,
     },
     /// A file written by another version of ThorArena's results format.
-    #[error("{path} is results version {found}; this ThorArena reads version {RESULTS_VERSION} (run the evaluation again with this version, e.g. with --overwrite)")]
+    #[error("{path} is results version {found}; this ThorArena reads version {RESULTS_VERSION} (run the evaluation again with this version, e.g. with `option.overwrite`)")]
     Version {
         /// The file.
         path: PathBuf,
@@ -93,7 +93,7 @@ pub enum ResultsError {
         found: u64,
     },
     /// Another process is writing this run directory (it holds the directory's lock).
-    #[error("{} is being written by another thorarena process{}: two writers would interleave their records and lose the run; wait for it, or choose another --out", .path.display(), .holder.map(|p| format!(" (pid {p})")).unwrap_or_default())]
+    #[error("{} is being written by another thorarena process{}: two writers would interleave their records and lose the run; wait for it, or choose another `option.out`", .path.display(), .holder.map(|p| format!(" (pid {p})")).unwrap_or_default())]
     Busy {
         /// The run directory.
         path: PathBuf,

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum OutputRefused {
     /// The output directory is, lies in or holds an input.
-    #[error("--out {} would write over this command's input {}: choose another --out", .out.display(), .input.display())]
+    #[error("`option.out` {} would write over this command's input {}: choose another `option.out`", .out.display(), .input.display())]
     OverInput {
         /// The output.
         out: PathBuf,
@@ -23,7 +23,7 @@ pub enum OutputRefused {
         input: PathBuf,
     },
     /// The output directory holds a run or a dataset.
-    #[error("{} already holds {what}: choose another --out, or pass --overwrite to replace it", .out.display())]
+    #[error("{} already holds {what}: choose another `option.out`, or give `option.overwrite` to replace it", .out.display())]
     Holds {
         /// The output.
         out: PathBuf,
@@ -31,13 +31,13 @@ pub enum OutputRefused {
         what: &'static str,
     },
     /// A run's directory holds a dataset (refused even with `--overwrite`).
-    #[error("--out {} holds a dataset: a run is never written over one; choose another --out", .0.display())]
+    #[error("`option.out` {} holds a dataset: a run is never written over one; choose another `option.out`", .0.display())]
     RunOverDataset(PathBuf),
     /// An output file names a directory.
-    #[error("--out {} is a directory: give a file name", .0.display())]
+    #[error("`option.out` {} is a directory: give a file name", .0.display())]
     FileIsDirectory(PathBuf),
     /// An output file is an input or one of an input run's files.
-    #[error("--out {} is part of this command's input {}: choose another --out", .out.display(), .input.display())]
+    #[error("`option.out` {} is part of this command's input {}: choose another `option.out`", .out.display(), .input.display())]
     PartOfInput {
         /// The output.
         out: PathBuf,
@@ -45,7 +45,7 @@ pub enum OutputRefused {
         input: PathBuf,
     },
     /// An output file lies in a run or a dataset.
-    #[error("--out {} is a file of {what} ({}): choose another --out, or pass --overwrite to replace it", .out.display(), .holder.display())]
+    #[error("`option.out` {} is a file of {what} ({}): choose another `option.out`, or give `option.overwrite` to replace it", .out.display(), .holder.display())]
     FileOf {
         /// The output.
         out: PathBuf,
@@ -58,7 +58,7 @@ pub enum OutputRefused {
     #[error("{} is in the way of the figures directory: it is not a directory", .0.display())]
     FilesDirIsFile(PathBuf),
     /// The figures directory is, lies in or holds an input.
-    #[error("the figures directory {} would write over this command's input {}: choose another --out", .dir.display(), .input.display())]
+    #[error("the figures directory {} would write over this command's input {}: choose another `option.out`", .dir.display(), .input.display())]
     FilesDirOverInput {
         /// The directory.
         dir: PathBuf,
@@ -66,7 +66,7 @@ pub enum OutputRefused {
         input: PathBuf,
     },
     /// The figures directory holds a run or a dataset.
-    #[error("the figures directory {} already holds {what}: choose another --out, or pass --overwrite to write into it", .dir.display())]
+    #[error("the figures directory {} already holds {what}: choose another `option.out`, or give `option.overwrite` to write into it", .dir.display())]
     FilesDirHolds {
         /// The directory.
         dir: PathBuf,

@@ -8,6 +8,7 @@ use super::process_group::{die_with_parent, policy_command_line, shell_in_own_gr
 use super::verify::{check_task_run, RunProblem};
 use super::{DoneRecord, Plan, SweepError, Task, TaskDir, TaskLog, TaskState};
 use crate::motion::Dataset;
+use crate::own_command;
 use crate::results::RunDir;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
@@ -160,18 +161,15 @@ fn eval_command(
     let request = tdir.write_request(&task.request_for(session))?;
     let eval_log = tdir.create_log(TaskLog::Eval)?;
     let log_path = tdir.log_file(TaskLog::Eval);
-    let mut eval_cmd = Command::new(exe);
-    eval_cmd
-        .arg("eval")
-        .arg("--request")
-        .arg(request)
-        .arg("--out")
-        .arg(tdir.run_dir())
-        .args(["--resume", "--workers", &workers.to_string()]);
     let policy = &plan.cells[task.cell].policy;
-    if policy.command.is_some() {
-        eval_cmd.arg(format!("--connect-timeout={}", policy.connect_timeout_s));
-    }
+    let connect_timeout_s = policy.command.is_some().then_some(policy.connect_timeout_s);
+    let mut eval_cmd = Command::new(exe);
+    eval_cmd.args(own_command::eval_of_request(
+        &request,
+        &tdir.run_dir(),
+        workers,
+        connect_timeout_s,
+    ));
     let stdout = eval_log.try_clone().map_err(|source| SweepError::Io {
         path: log_path,
         source,

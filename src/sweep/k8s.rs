@@ -50,9 +50,9 @@ pub fn k8s_manifest(plan: &Plan, r: &K8sRequest) -> String {
     y += "  template:\n    spec:\n      restartPolicy: Never\n      containers:\n";
     y += "        - name: task\n";
     y += &format!("          image: {}\n", yaml_str(r.image));
-    let command: Vec<String> = ["thorarena", "sweep", "task", &mount, "--workers", &cpus]
-        .iter()
-        .map(|w| yaml_str(w))
+    let command: Vec<String> = std::iter::once("thorarena".to_string())
+        .chain(crate::own_command::sweep_task(&mount, Some(&cpus)))
+        .map(|w| yaml_str(&w))
         .collect();
     y += &format!("          command: [{}]\n", command.join(", "));
     y += &format!(

@@ -91,7 +91,7 @@ pub enum SweepError {
     /// A value cannot be written into a job script as the literal it is.
     #[error("{what} `{}`: {why}", printable(.value))]
     Unquotable {
-        /// Which value (`--partition`, the sweep directory, …).
+        /// Which value (`option.partition`, the sweep directory, …).
         what: String,
         /// The value.
         value: String,

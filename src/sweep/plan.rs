@@ -408,7 +408,7 @@ fn selected_durations(
             });
             if let Some(setting) = replaying {
                 return Err(format!(
-                    "setting `{setting}` replays recorded hand forces, but no sequence of dataset `{spelled}` has force logs (imported without --forces): it would run as no-force under another name; use no-force or push:<N>"
+                    "setting `{setting}` replays recorded hand forces, but no sequence of dataset `{spelled}` has force logs (imported without force logs): it would run as no-force under another name; use no-force or push:<N>"
                 ));
             }
         }

@@ -102,7 +102,7 @@ impl ImportObserver for () {}
 #[derive(Debug, thiserror::Error)]
 pub enum BatchError {
     /// Force logs given for more than one input.
-    #[error("--forces pairs one left and one right log with one motion; import motions with forces one at a time")]
+    #[error("`option.forces` pairs one left and one right log with one motion; import motions with forces one at a time")]
     ForcesForSeveral,
     /// An input path has no file name to take the sequence id from.
     #[error("{}: no file name", .0.display())]
@@ -160,7 +160,8 @@ pub fn import_batch(
         ]),
         None => None,
     };
-    check_name("--task", &batch.task).map_err(|rule| BatchError::BadName { input: None, rule })?;
+    check_name("`option.task`", &batch.task)
+        .map_err(|rule| BatchError::BadName { input: None, rule })?;
     let mut writer = DatasetWriter::append(out, robot)?;
     let ids = sequence_ids(batch, &writer, out)?;
     let mut seqs = Vec::with_capacity(batch.inputs.len());

@@ -251,7 +251,7 @@ fn root_quaternions(
                 return Err(bad_field(
                     source,
                     "root orientation",
-                    format!("frame {k}: quaternion norm {n:.6} (pass --renormalize-quaternions to repair)"),
+                    format!("frame {k}: quaternion norm {n:.6} (give `option.renormalize_quaternions` to repair)"),
                 ));
             }
             renormalized += 1;
@@ -306,7 +306,7 @@ fn sensor_forces(
                 source,
                 if side == LEFT { "left force log" } else { "right force log" },
                 format!(
-                    "covers {} of the motion's {} frames: the log spans {} and the motion, offset by {} s, {}; check --force-offset (the log's time = the motion's + the offset)",
+                    "covers {} of the motion's {} frames: the log spans {} and the motion, offset by {} s, {}; check `option.force_offset` (the log's time = the motion's + the offset)",
                     times.len() - outside,
                     times.len(),
                     span(&logs[side].time_s),
@@ -402,7 +402,7 @@ mod tests {
             "frame 0→1",
             "frame 1→2",
             "m/s",
-            "--trim-glitches",
+            "`option.trim_glitches`",
             "2 leading",
         ] {
             assert!(err.contains(needle), "`{needle}` missing from: {err}");
@@ -428,7 +428,7 @@ mod tests {
         raw.root_pos[44] = [0.0, 3.0, 0.8];
         let err = import(raw.clone(), false).unwrap_err().to_string();
         assert!(
-            err.contains("frame 43→44") && err.contains("--trim-glitches"),
+            err.contains("frame 43→44") && err.contains("`option.trim_glitches`"),
             "{err}"
         );
         let seq = import(raw.clone(), true).unwrap();
@@ -448,7 +448,7 @@ mod tests {
             "frame 21→22",
             "frame 22→23",
             "inside the motion",
-            "--trim-glitches does not repair",
+            "`option.trim_glitches` does not repair",
             "not imported even with it",
         ] {
             assert!(msg.contains(needle), "`{needle}` missing from: {msg}");

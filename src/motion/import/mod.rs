@@ -132,7 +132,7 @@ fn glitch_advice(scan: &crate::motion::GlitchScan, trim_requested: bool) -> Stri
         let at: Vec<String> = scan.interior.iter().map(|j| j.frame.to_string()).collect();
         return format!(
             "the jump(s) at frame {} lie inside the motion (more than {} s from either end), \
-             which --trim-glitches does not repair: it only drops leading and trailing \
+             which `option.trim_glitches` does not repair: it only drops leading and trailing \
              glitch frames{}",
             at.join(", "),
             crate::motion::EDGE_GLITCH_WINDOW_S,
@@ -151,7 +151,7 @@ fn glitch_advice(scan: &crate::motion::GlitchScan, trim_requested: bool) -> Stri
         );
     }
     format!(
-        "these are teleoperation glitches at the {}; pass --trim-glitches to drop {} leading \
+        "these are teleoperation glitches at the {}; give `option.trim_glitches` to drop {} leading \
          and {} trailing frame(s)",
         match (scan.leading_frames > 0, scan.trailing_frames > 0) {
             (true, true) => "start and the end",

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum SynthWriteError {
     /// The directory holds a dataset and replacing it was not asked for.
-    #[error("{} already holds a dataset; pass --force to replace it", .0.display())]
+    #[error("{} already holds a dataset; it is replaced only when asked to", .0.display())]
     Exists(PathBuf),
     /// The old dataset's manifest lists a file outside its directory.
     #[error("{}: refusing to delete `{file}` outside the dataset", .manifest.display())]

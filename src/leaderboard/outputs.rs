@@ -1,0 +1,132 @@
+//! What a leaderboard invocation leaves besides its runs: its tables — the general
+//! policies, the single-clip ones, the compliant and stiff pairs, each group under its
+//! heading — in `leaderboard.md`, the pairs' own files, and a comparison report over each
+//! group of runs (`report.html` over the general policies', `single-clip.html` over the
+//! single-clip ones, engines labelled when they differ).
+
+use super::pairs::{pairs_table, write_pair_files, PairResult};
+use super::{leaderboard_table, write_leaderboard_page, Entry};
+use crate::report::{
+    label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, ReportError,
+    WrittenReport,
+};
+use std::path::{Path, PathBuf};
+
+/// What `leaderboard.md` says of the invocation beside its tables.
+#[derive(Debug, Clone)]
+pub struct PageHeader<'a> {
+    /// The dataset of the general policies.
+    pub dataset: &'a Path,
+    /// Their settings.
+    pub settings: &'a [String],
+    /// The command's arguments, as typed.
+    pub command: &'a str,
+    /// Wall time of the invocation so far, s.
+    pub wall_s: f64,
+}
+
+/// The files written, for the caller to tell.
+#[derive(Debug)]
+pub struct LeaderboardOutputs {
+    /// The tables, as in `leaderboard.md`.
+    pub tables: String,
+    /// `leaderboard.md`.
+    pub page: PathBuf,
+    /// `pairs.md` and `pairs.csv`, when there are pairs.
+    pub pair_files: Option<[PathBuf; 2]>,
+    /// Each comparison report written, and where.
+    pub reports: Vec<(WrittenReport, ComparisonFiles)>,
+}
+
+/// Why the leaderboard's own files could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputsError {
+    /// `leaderboard.md` or a pair file.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A comparison report.
+    #[error(transparent)]
+    Report(#[from] ReportError),
+}
+
+/// The tables of `entries` and `pairs`, each group under its heading.
+pub fn leaderboard_tables(entries: &[Entry], pairs: &[PairResult]) -> String {
+    let general: Vec<&Entry> = entries.iter().filter(|e| !e.own_clip).collect();
+    let own: Vec<&Entry> = entries.iter().filter(|e| e.own_clip).collect();
+    let mut parts = Vec::new();
+    if !general.is_empty() {
+        parts.push(leaderboard_table(&general));
+    }
+    if !own.is_empty() {
+        parts.push(format!(
+            "Single-clip policies, each on its own clip:\n\n{}",
+            leaderboard_table(&own)
+        ));
+    }
+    if !pairs.is_empty() {
+        parts.push(format!(
+            "Compliant and stiff pairs, each on its own clip:\n\n{}",
+            pairs_table(pairs)
+        ));
+    }
+    parts.join("\n")
+}
+
+/// Writes the tables, the pairs' files and the reports into `out`; `script` is the
+/// reports' front end.
+pub fn write_leaderboard_outputs(
+    out: &Path,
+    entries: &[Entry],
+    pairs: &[PairResult],
+    header: &PageHeader,
+    script: &str,
+) -> Result<LeaderboardOutputs, OutputsError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| OutputsError::Io { path, source }
+    };
+    let tables = leaderboard_tables(entries, pairs);
+    let pair_files = if pairs.is_empty() {
+        None
+    } else {
+        Some(write_pair_files(out, pairs).map_err(io(out))?)
+    };
+    let page = write_leaderboard_page(
+        out,
+        header.dataset,
+        header.settings,
+        header.command,
+        header.wall_s,
+        &tables,
+    )
+    .map_err(io(out))?;
+    let mut reports = Vec::new();
+    for (own_clip, name) in [(false, "report.html"), (true, "single-clip.html")] {
+        let dirs: Vec<PathBuf> = entries
+            .iter()
+            .filter(|e| e.own_clip == own_clip)
+            .map(|e| e.run.clone())
+            .collect();
+        if dirs.is_empty() {
+            continue;
+        }
+        let mut runs = load_runs(&dirs)?;
+        if mixed_engines(&runs).is_some() {
+            label_engines(&mut runs);
+        }
+        let files = ComparisonFiles::beside(&out.join(name));
+        let written = write_comparison_report(&runs, &files, script, true, &dirs)?;
+        reports.push((written, files));
+    }
+    Ok(LeaderboardOutputs {
+        tables,
+        page,
+        pair_files,
+        reports,
+    })
+}
