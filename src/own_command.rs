@@ -7,7 +7,7 @@
 use std::ffi::OsString;
 use std::path::Path;
 
-/// `eval --request REQUEST --out OUT --resume --workers N`, and for a launched policy
+/// `eval --request REQUEST --out OUT --workers N --resume`, and for a launched policy
 /// the seconds it has to connect: the evaluation a sweep task's attempt runs.
 pub fn eval_of_request(
     request: &Path,
@@ -15,9 +15,8 @@ pub fn eval_of_request(
     workers: usize,
     connect_timeout_s: Option<f64>,
 ) -> Vec<OsString> {
-    let mut words: Vec<OsString> = vec!["eval".into(), "--request".into(), request.into()];
-    words.extend(["--out".into(), out.into(), "--resume".into()]);
-    words.extend(["--workers".into(), workers.to_string().into()]);
+    let mut words = eval_once(request, out, workers);
+    words.push("--resume".into());
     if let Some(s) = connect_timeout_s {
         words.push(format!("--connect-timeout={s}").into());
     }

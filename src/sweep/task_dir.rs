@@ -140,8 +140,7 @@ impl TaskDir {
     /// path for `eval --request`.
     pub fn write_request(&self, request: &EvalRequest) -> Result<PathBuf, SweepError> {
         let path = self.dir.join(REQUEST_FILE);
-        let json = serde_json::to_string_pretty(request).expect("an EvalRequest serialises");
-        write_atomic(&path, json.as_bytes())?;
+        request.write(&path).map_err(self.io(path.clone()))?;
         Ok(path)
     }
 

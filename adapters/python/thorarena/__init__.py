@@ -16,20 +16,22 @@ over the loaned response. The wire protocol is crate `thorarena-ipc` of this rep
 
 from .client import (
     IceoryxSession,
+    Session,
+    SessionInfo,
+    connect,
+    process_alive,
+)
+from .errors import (
     LayoutMismatch,
     NoSession,
     PrivateRootError,
-    Session,
-    SessionInfo,
     SessionRefused,
     SimulatorGone,
     ThorArenaError,
     Timeout,
     TransportError,
-    connect,
-    private_root,
-    process_alive,
 )
+from .private_root import private_root
 from .protocol import (
     COMMAND_END,
     COMMAND_STEP,

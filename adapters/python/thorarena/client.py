@@ -12,10 +12,8 @@ notifies `action_ready`.
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
 import os
-import stat as stat_module
 import time
 from collections import deque
 from collections.abc import Iterator, Sequence
@@ -25,6 +23,16 @@ from typing import Any
 import iceoryx2 as iox2
 import numpy as np
 
+from .errors import (
+    LayoutMismatch,
+    NoSession,
+    SessionRefused,
+    SimulatorGone,
+    ThorArenaError,
+    Timeout,
+    TransportError,
+)
+from .private_root import make_shm_files_private, private_root
 from .protocol import (
     ACTION_HEADER_BYTES,
     BATCH_HEADER_WORDS,
@@ -52,49 +60,6 @@ LIVENESS_EVERY_S = 0.002
 """While blocked on `obs_ready`, how often the simulator's liveness is checked."""
 NODE_CHECK_EVERY_S = 0.010
 """How often the simulator's iceoryx2 node is looked up at most (a directory listing)."""
-
-
-class ThorArenaError(Exception):
-    """Base of every error of this package."""
-
-
-class NoSession(ThorArenaError):
-    """No ThorArena run serves the session."""
-
-    def __init__(self, session: str) -> None:
-        super().__init__(
-            f"no ThorArena run serves session {session!r} (start `thorarena eval --policy "
-            f"ipc:{session}` or `thorarena serve --session {session}` first)"
-        )
-        self.session = session
-
-
-class SessionRefused(ThorArenaError):
-    """The simulator refused the handshake; `status` says why as a code, `message` in words."""
-
-    def __init__(self, status: Status | int, message: str) -> None:
-        with contextlib.suppress(ValueError):
-            status = Status(status)
-        name = status.name if isinstance(status, Status) else str(status)
-        super().__init__(f"session refused ({name}): {message}")
-        self.status = status
-        self.message = message
-
-
-class SimulatorGone(ThorArenaError):
-    """The simulator's process died or left the session."""
-
-
-class Timeout(ThorArenaError):
-    """Nothing arrived within the timeout."""
-
-
-class LayoutMismatch(ThorArenaError):
-    """A received batch does not match the session's layout."""
-
-
-class TransportError(ThorArenaError):
-    """iceoryx2 failed; the message names the operation and carries its error."""
 
 
 def process_alive(pid: int) -> bool:
@@ -542,83 +507,6 @@ class IceoryxSession(Session):
         self._node = None
 
 
-ROOT_ENV = "THORARENA_IPC_ROOT"
-"""Overrides this user's iceoryx2 root directory (as for the simulator)."""
-
-
-class PrivateRootError(ThorArenaError):
-    """This user's iceoryx2 directory, or a file in /dev/shm with this user's prefix,
-    cannot be trusted; the message names it and says what to do."""
-
-
-def private_root() -> tuple[str, str]:
-    """This user's iceoryx2 root directory and file prefix, the same as the simulator's
-    (`ipc/src/session/private_root.rs`): `$THORARENA_IPC_ROOT`, else
-    `/tmp/thorarena-iceoryx2-<uid>`, made 0700 when missing and refused when it is a
-    link, not a directory, another user's or writable by others; files `iox2_ta<uid>_*`,
-    none of them another user's."""
-    uid = os.geteuid()
-    root = os.environ.get(ROOT_ENV) or f"/tmp/thorarena-iceoryx2-{uid}"
-    prefix = f"iox2_ta{uid}_"
-
-    def refuse(path: str, problem: str) -> PrivateRootError:
-        return PrivateRootError(f"iceoryx2 files: {path}: {problem}")
-
-    if not os.path.isabs(root):
-        raise refuse(root, f"{ROOT_ENV} must be an absolute path")
-    with contextlib.suppress(FileExistsError):
-        os.mkdir(root, 0o700)
-    st = os.lstat(root)
-    if stat_module.S_ISLNK(st.st_mode):
-        raise refuse(
-            root,
-            "it is a symbolic link (it could lead into another user's directory): remove it",
-        )
-    if not stat_module.S_ISDIR(st.st_mode):
-        raise refuse(root, "it is not a directory: remove it")
-    if st.st_uid != uid:
-        raise refuse(
-            root,
-            f"it belongs to uid {st.st_uid}, not to you (uid {uid}): another user made it; "
-            f"remove it, or set {ROOT_ENV} to a directory of yours",
-        )
-    if st.st_mode & 0o022:
-        raise refuse(
-            root, f"others may write to it (mode {st.st_mode & 0o7777:o}): `chmod 700` it"
-        )
-    for path, st in _own_shm_files(prefix):
-        if st.st_uid != uid:
-            raise refuse(
-                path,
-                f"it carries your session files' prefix but belongs to uid {st.st_uid}: "
-                "another user planted it; remove it (as root, or ask its owner)",
-            )
-    return root, prefix
-
-
-def _own_shm_files(prefix: str) -> list[tuple[str, os.stat_result]]:
-    try:
-        names = os.listdir("/dev/shm")
-    except OSError:
-        return []
-    found = []
-    for name in names:
-        if name.startswith(prefix):
-            path = os.path.join("/dev/shm", name)
-            with contextlib.suppress(OSError):
-                found.append((path, os.lstat(path)))
-    return found
-
-
-def _make_shm_files_private(prefix: str) -> None:
-    """iceoryx2 makes its management segment world-writable: this user's only."""
-    uid = os.geteuid()
-    for path, st in _own_shm_files(prefix):
-        if st.st_uid == uid and stat_module.S_ISREG(st.st_mode) and st.st_mode & 0o077:
-            with contextlib.suppress(OSError):
-                os.chmod(path, 0o600)
-
-
 def _create_node(session: str) -> Any:
     iox2.set_log_level_from_env_or(iox2.LogLevel.Error)
     root, prefix = private_root()
@@ -640,7 +528,7 @@ def _create_node(session: str) -> Any:
             f"/dev/shm/{prefix}* and try again)",
             e,
         ) from e
-    _make_shm_files_private(prefix)
+    make_shm_files_private(prefix)
     node.try_cleanup_dead_nodes()
     return node
 

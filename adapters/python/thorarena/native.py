@@ -23,11 +23,10 @@ from typing import Any
 
 import numpy as np
 
-from .client import (
+from .client import Session, SessionInfo
+from .errors import (
     LayoutMismatch,
     NoSession,
-    Session,
-    SessionInfo,
     SessionRefused,
     SimulatorGone,
     ThorArenaError,
