@@ -3,14 +3,10 @@
 //! (same policy in process and out of process gives the same episodes, bit for bit), and
 //! the echo policy of the latency benchmark.
 
-use anyhow::{bail, Context};
 use std::io::Write;
 use std::time::Duration;
-use thorarena::policy::client_process::{
-    run_client_process, ClientFaults, ClientObserver, MadePolicy,
-};
-use thorarena::registry::builtin_policy;
-use thorarena_ipc::{PolicyConfig, SessionInfo, WaitPolicy};
+use thorarena::policy::client_process::{ClientFaults, ClientObserver};
+use thorarena::registry::{run_named_client, ClientRequest};
 
 /// Arguments of `client`.
 #[derive(Debug, clap::Args)]
@@ -59,60 +55,28 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let robot = thorarena::registry::robot(&args.robot)?;
-    let joint_names: Vec<String> = robot.joints.iter().map(|j| j.name.clone()).collect();
-    let mut config = PolicyConfig::new(
-        &args.session,
-        args.name.as_deref().unwrap_or(&args.policy),
-        joint_names,
-        vec![0.0],
-    );
-    if let Some(pid) = args.announce_pid {
-        config.announced_pid = pid;
-    }
-    config.wait = WaitPolicy {
-        spin: Duration::from_micros(args.spin_us),
-        ..WaitPolicy::default()
-    };
-    if !(args.connect_timeout.is_finite() && args.connect_timeout > 0.0) {
-        bail!("--connect-timeout must be > 0 s");
-    }
-    let timeout = Duration::try_from_secs_f64(args.connect_timeout).map_err(|_| {
-        anyhow::anyhow!(
-            "--connect-timeout {} s: too long to wait (give seconds that fit a duration)",
-            args.connect_timeout
-        )
-    })?;
-    let faults = ClientFaults {
-        die_after_steps: args.die_after_steps,
-        delay: if args.delay_ms > 0.0 {
-            Duration::try_from_secs_f64(args.delay_ms / 1e3).unwrap_or(Duration::MAX)
-        } else {
-            Duration::ZERO
+    let request = ClientRequest {
+        session: args.session.clone(),
+        policy: args.policy.clone(),
+        name: args.name.clone(),
+        robot: args.robot.clone(),
+        connect_timeout_s: args.connect_timeout,
+        spin_us: args.spin_us,
+        announced_pid: args.announce_pid,
+        faults: ClientFaults {
+            die_after_steps: args.die_after_steps,
+            delay: Duration::try_from_secs_f64(args.delay_ms.max(0.0) / 1e3)
+                .unwrap_or(Duration::MAX),
+            delay_at_step: args.delay_at_step,
+            nan_at_step: args.nan_at_step,
+            bad_header_at_step: args.bad_header_at_step,
         },
-        delay_at_step: args.delay_at_step,
-        nan_at_step: args.nan_at_step,
-        bad_header_at_step: args.bad_header_at_step,
     };
-    let mut make = |info: &SessionInfo| -> MadePolicy {
-        match args.policy.as_str() {
-            "echo" => Ok(None),
-            name => match builtin_policy(name, &robot, &info.action_offset_rad) {
-                Some(policy) => policy.map(Some).map_err(|e| e.to_string()),
-                None => Err(format!(
-                    "unknown policy `{name}` (balance, replay, hold, echo)"
-                )),
-            },
-        }
-    };
-    let steps = run_client_process(&config, timeout, &mut make, &faults, &mut Terminal)
-        .with_context(|| format!("session `{}`", args.session))?;
+    let steps = run_named_client(&request, &mut Terminal)?;
     eprintln!("the run is over after {steps} steps");
     Ok(())
 }
 
-/// Says on the terminal what the process does: `connected` on stdout (scripts wait for
-/// it), a fault's suicide on stderr.
 struct Terminal;
 
 impl ClientObserver for Terminal {

@@ -1,8 +1,9 @@
 //! `thorarena data …`: import motion files, describe a dataset.
 
 use std::path::{Path, PathBuf};
+use thorarena::motion::import::news::{converted_lines, imported_line};
 use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
-use thorarena::motion::{Dataset, GroundCheck, Sequence, TrimmedGlitches};
+use thorarena::motion::{Dataset, GroundCheck, Sequence};
 use thorarena::robot::RobotModel;
 
 /// `thorarena data …`
@@ -168,15 +169,7 @@ fn source_format(args: &ImportArgs, robot: &RobotModel) -> anyhow::Result<Source
         Format::LafanCsv => SourceFormat::LafanCsv { fps: args.fps },
         Format::SoftmimicCsv => SourceFormat::SoftMimicCsv { fps: args.fps },
         Format::OnnxMotion => {
-            let profile = thorarena::registry::profile(&args.profile, robot)?;
-            SourceFormat::OnnxMotion {
-                anchor_body: profile
-                    .beyondmimic
-                    .as_ref()
-                    .map_or("torso_link", |b| b.anchor_body.as_str())
-                    .to_string(),
-                control_dt_s: profile.control_dt_s,
-            }
+            SourceFormat::onnx_motion_under(&thorarena::registry::profile(&args.profile, robot)?)
         }
     })
 }
@@ -190,33 +183,13 @@ impl ImportObserver for ImportProgress {
     }
 
     fn converted(&mut self, _input: &Path, seq: &Sequence, ground: Option<&GroundCheck>) {
-        if let Some(trim) = TrimmedGlitches::in_provenance(&seq.provenance) {
-            eprintln!("  trimmed glitch frames: {}", trim.summary());
-        }
-        if let Some(g) = ground {
-            eprintln!(
-                "  ground check: median lowest sole point {:+.1} mm, lowest {:+.1} mm",
-                1e3 * g.offset_m,
-                1e3 * g.min_m
-            );
+        for line in converted_lines(seq, ground) {
+            eprintln!("  {line}");
         }
     }
 
     fn imported(&mut self, input: &Path, seq: &Sequence) {
-        eprintln!(
-            "imported {} → {}/{} ({} frames at {} fps, {:.1} s{})",
-            input.display(),
-            seq.task,
-            seq.sequence_id,
-            seq.n_frames(),
-            fps_text(seq.fps),
-            seq.duration_s(),
-            if seq.forces_recorded {
-                ", with force logs"
-            } else {
-                ", no force logs"
-            }
-        );
+        eprintln!("{}", imported_line(input, seq));
     }
 }
 
@@ -234,26 +207,14 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
         ground_correct: args.ground_correct,
     };
     let ds = import_batch(&args.out, &robot, &batch, &mut ImportProgress)?;
-    eprintln!(
-        "{}: {}",
-        ds.dir.display(),
-        thorarena::motion::plural(ds.len(), "sequence")
-    );
+    let sequences = thorarena::motion::plural(ds.len(), "sequence");
+    eprintln!("{}: {sequences}", ds.dir.display());
     Ok(())
 }
 
-/// A frame rate as people write it: `30`, `29.97`, `59.94`.
-fn fps_text(fps: f64) -> String {
-    let text = format!("{fps:.2}");
-    text.trim_end_matches('0').trim_end_matches('.').to_string()
-}
-
 fn export(args: &ExportArgs) -> anyhow::Result<()> {
-    thorarena::results::check_dir(
-        &args.out,
-        args.overwrite,
-        std::slice::from_ref(&args.dataset),
-    )?;
+    let dataset = std::slice::from_ref(&args.dataset);
+    thorarena::results::check_dir(&args.out, args.overwrite, dataset)?;
     let robot = thorarena::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let ExportFormat::Npz = args.format;
@@ -267,10 +228,7 @@ fn export(args: &ExportArgs) -> anyhow::Result<()> {
 fn info(args: &InfoArgs) -> anyhow::Result<()> {
     let robot = thorarena::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
-    let seqs = ds.load_all()?;
-    print!(
-        "{}",
-        super::flags::as_flags(&thorarena::motion::describe(&ds, &seqs, &robot))
-    );
+    let text = thorarena::motion::describe(&ds, &ds.load_all()?, &robot);
+    print!("{}", super::flags::as_flags(&text));
     Ok(())
 }

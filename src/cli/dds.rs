@@ -5,9 +5,7 @@
 
 use super::choices::EngineArg;
 use std::path::PathBuf;
-use thorarena::dds::session::{
-    run_dds_session, DdsSessionError, DdsSessionEvent, DdsSessionRequest, DdsSetting,
-};
+use thorarena::dds::session::{run_dds_session, DdsSessionEvent, DdsSessionRequest};
 use thorarena::dds::wireless_remote::RemoteScript;
 use thorarena::evaluation::TerminationRule;
 
@@ -138,29 +136,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         }
     });
     bar.finish_and_clear();
-    let outcome = outcome.map_err(|e| match e {
-        // The library names the request's field; here it is the flag the user typed.
-        DdsSessionError::Setting { setting, why } => anyhow::anyhow!(
-            "{}: {why}",
-            match setting {
-                DdsSetting::Sequence => "--sequence",
-                DdsSetting::StartTimeout => "--start-timeout",
-                DdsSetting::StartOn => "--start-on",
-                DdsSetting::RtPriority => "--rt-priority",
-            }
-        ),
-        e => e.into(),
-    })?;
+    let outcome = outcome?;
     println!("{}", outcome.tables);
-    if !outcome.realtime.kept_real_time {
-        eprintln!("warning: the run did not keep real time (realtime.json)");
-    }
-    let stream = &outcome.realtime.command_stream;
-    if !stream.healthy {
-        eprintln!(
-            "warning: the command stream broke: {} (realtime.json)",
-            stream.problems.join("; ")
-        );
+    for warning in outcome.warnings() {
+        eprintln!("warning: {warning}");
     }
     eprintln!("results in {}", args.out.display());
     Ok(())

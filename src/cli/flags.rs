@@ -1,70 +1,98 @@
 //! The library names what a user set by its field in backticks — a field of the
 //! evaluation's request as `request.envs`, `request.io.budget_s`, another option of a
 //! command as `option.out` — which a request file or a library caller reads as it is; on
-//! the terminal those names become the flags that set them. This table is the one place
-//! the two meet, and the prefixes keep it from touching anything else in backticks (a
-//! sweep spec's keys, a user's values).
+//! the terminal those names become the flags that set them. The flags are named after
+//! the fields (the last part, without its unit suffix, dashed: `request.physics_dt_s` is
+//! `--physics-dt`), so no table has to follow each new option; a `request.` name is only
+//! written as a flag when `EvalRequest` has that field, which keeps file names such as
+//! `request.json` and anything else in backticks (a sweep spec's keys, a user's values)
+//! as they are.
 
-/// A field as the library's messages name it, and the flag that sets it.
-const FIELD_FLAGS: [(&str, &str); 36] = [
-    ("request.profile", "--profile"),
-    ("request.profile_mismatch_ok", "--profile-mismatch-ok"),
-    ("request.unchecked", "--unchecked"),
-    ("request.settings", "--settings"),
-    (
-        "request.replay_without_force_logs",
-        "--replay-without-force-logs",
-    ),
-    ("request.workers", "--workers"),
-    ("request.envs", "--envs"),
-    ("request.pipeline_depth", "--pipeline-depth"),
-    ("request.trace", "--trace"),
-    ("request.engine", "--engine"),
-    ("request.mjcf", "--mjcf"),
-    ("request.physics_dt_s", "--physics-dt"),
-    ("request.io.budget_s", "--budget"),
-    ("request.io.latency_mode", "--latency-mode"),
-    ("request.io.max_abs_action", "--max-abs-action"),
-    (
-        "request.termination.max_torso_height_error_m",
-        "--max-torso-height-error",
-    ),
-    (
-        "request.termination.max_torso_tilt_error_rad",
-        "--max-torso-tilt-error",
-    ),
-    ("option.out", "--out"),
-    ("option.overwrite", "--overwrite"),
-    ("option.resume", "--resume"),
-    ("option.unchecked", "--unchecked"),
-    ("option.forces", "--forces"),
-    ("option.task", "--task"),
-    ("option.trim_glitches", "--trim-glitches"),
-    (
-        "option.renormalize_quaternions",
-        "--renormalize-quaternions",
-    ),
-    ("option.force_offset", "--force-offset"),
-    ("option.address", "--address"),
-    ("option.interface", "--interface"),
-    ("option.domain", "--domain"),
-    ("option.engines", "--engines"),
-    ("option.per_task", "--per-task"),
-    ("option.pair_seconds", "--pair-seconds"),
-    ("option.thorarena", "--thorarena"),
-    ("option.array", "--array"),
-    ("option.partition", "--partition"),
-    ("option.time", "--time"),
-];
+use std::sync::OnceLock;
+use thorarena::evaluation::EvalRequest;
+
+/// Unit suffixes of field names that their flags leave out.
+const UNIT_SUFFIXES: [&str; 3] = ["_s", "_m", "_rad"];
 
 /// `text` with every field the library names in backticks written as its flag.
 pub(crate) fn as_flags(text: &str) -> String {
-    let mut text = text.to_string();
-    for (field, flag) in FIELD_FLAGS {
-        let quoted = format!("`{field}`");
-        if text.contains(&quoted) {
-            text = text.replace(&quoted, flag);
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(open) = rest.find('`') {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 1..];
+        let quoted = after
+            .find('`')
+            .map(|close| (&after[..close], &after[close + 1..]));
+        match quoted.and_then(|(name, tail)| Some((flag_of(name)?, tail))) {
+            Some((flag, tail)) => {
+                out.push_str(&flag);
+                rest = tail;
+            }
+            // Not a field: the backtick stays, and the search goes on after it.
+            None => {
+                out.push('`');
+                rest = after;
+            }
         }
     }
-    text
+    out.push_str(rest);
+    out
+}
+
+/// The flag of field `name` (`option.per_task` → `--per-task`), if it names one.
+fn flag_of(name: &str) -> Option<String> {
+    let path = match name.strip_prefix("request.") {
+        Some(path) if is_request_field(path) => path,
+        Some(_) => return None,
+        None => name.strip_prefix("option.")?,
+    };
+    let field = path.rsplit('.').next()?;
+    if field.is_empty() || !field.bytes().all(|b| b.is_ascii_lowercase() || b == b'_') {
+        return None;
+    }
+    let field = UNIT_SUFFIXES
+        .iter()
+        .find_map(|unit| field.strip_suffix(unit))
+        .unwrap_or(field);
+    Some(format!("--{}", field.replace('_', "-")))
+}
+
+/// Whether `path` (`io.budget_s`) is a field of an evaluation request as a request file
+/// holds it.
+fn is_request_field(path: &str) -> bool {
+    static FIELDS: OnceLock<serde_json::Value> = OnceLock::new();
+    let fields = FIELDS.get_or_init(|| {
+        serde_json::to_value(EvalRequest::default()).expect("an EvalRequest serialises")
+    });
+    path.split('.')
+        .try_fold(fields, |value, key| value.get(key))
+        .is_some()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::as_flags;
+
+    #[test]
+    fn fields_become_flags_and_nothing_else_changes() {
+        for (text, shown) in [
+            ("`request.io.budget_s` 2ms", "--budget 2ms"),
+            (
+                "`request.termination.max_torso_tilt_error_rad`",
+                "--max-torso-tilt-error",
+            ),
+            (
+                "a `request.json` and `option.per_task`",
+                "a `request.json` and --per-task",
+            ),
+            (
+                "`request.nonsense` `option.Out`",
+                "`request.nonsense` `option.Out`",
+            ),
+            ("a stray ` and `sweep run`", "a stray ` and `sweep run`"),
+        ] {
+            assert_eq!(as_flags(text), shown, "{text}");
+        }
+    }
 }

@@ -8,14 +8,10 @@
 use std::path::PathBuf;
 use std::time::Instant;
 use thorarena::benchmark::{EvalObserver, Starting};
-use thorarena::evaluation::EvalSpec;
-use thorarena::evaluation::{EngineChoice, EpisodeRecord};
+use thorarena::evaluation::EpisodeRecord;
 use thorarena::leaderboard::{
-    load_policy_file, run_leaderboard, run_pairs, write_leaderboard_outputs, CompliancePair,
-    LeaderboardObserver, LeaderboardRequest, OwnClip, PageHeader, PairOptions, PolicyProcess,
+    run_leaderboard_job, CompliancePair, LeaderboardJob, LeaderboardObserver, OwnClip, PairOptions,
 };
-use thorarena::policy::Policy;
-use thorarena::report::{Page, WebBundle};
 
 /// Arguments of `leaderboard`.
 #[derive(Debug, clap::Args)]
@@ -97,70 +93,31 @@ pub struct Args {
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let started = Instant::now();
-    let bundle = WebBundle::locate()?;
-    let dataset = match &args.dataset {
-        Some(d) => d.clone(),
-        None if args.policies.is_empty() && args.policy_file.is_none() => PathBuf::new(),
-        None => thorarena::leaderboard::synthetic_dataset(&args.out, args.per_task, &mut |n| {
-            eprintln!("{}", super::flags::as_flags(n))
-        })?,
-    };
-    let engines: Vec<EngineChoice> = if args.engines.is_empty() {
-        if cfg!(feature = "mujoco") {
-            vec![EngineChoice::Rapier, EngineChoice::Mujoco]
-        } else {
-            vec![EngineChoice::Rapier]
-        }
-    } else {
-        args.engines.iter().map(|&e| e.into()).collect()
-    };
-    let (mut policies, processes) = match &args.policy_file {
-        Some(file) => load_policy_file(file)?,
-        None => Default::default(),
-    };
-    policies.splice(0..0, args.policies.iter().cloned());
-    let request = LeaderboardRequest {
-        policies,
-        processes,
+    let job = LeaderboardJob {
+        policies: args.policies.clone(),
+        policy_file: args.policy_file.clone(),
         clips: args.clips.clone(),
         clip_settings: args.clip_settings.clone(),
-        engines,
-        dataset: dataset.clone(),
-        settings: args.settings.clone(),
-        out: args.out.clone(),
-        unchecked: args.unchecked,
-    };
-    let entries = if request.policies.is_empty()
-        && request.processes.is_empty()
-        && request.clips.is_empty()
-    {
-        Vec::new()
-    } else {
-        run_leaderboard(&request, &mut Progress::default())?
-    };
-    let pairs = run_pairs(
-        &args.pairs,
-        &PairOptions {
+        pairs: args.pairs.clone(),
+        pair_options: PairOptions {
             stiffness_n_per_m: args.pair_stiffness.clone(),
             seconds: args.pair_seconds,
             push_n: args.pair_pushes.clone(),
             push_headings_deg: args.pair_headings.clone(),
             force_task: args.pair_force_task.clone(),
-            engines: request.engines.clone(),
+            engines: Vec::new(),
             out: args.out.clone(),
             unchecked: args.unchecked,
         },
-        &mut Progress::default(),
-    )?;
-    let command = std::env::args().skip(1).collect::<Vec<_>>().join(" ");
-    let header = PageHeader {
-        dataset: &dataset,
-        settings: &args.settings,
-        command: &command,
-        wall_s: started.elapsed().as_secs_f64(),
+        engines: args.engines.iter().map(|&e| e.into()).collect(),
+        dataset: args.dataset.clone(),
+        per_task: args.per_task,
+        settings: args.settings.clone(),
+        out: args.out.clone(),
+        unchecked: args.unchecked,
+        command: std::env::args().skip(1).collect::<Vec<_>>().join(" "),
     };
-    let script = bundle.script(Page::Report)?;
-    let written = write_leaderboard_outputs(&args.out, &entries, &pairs, &header, &script)?;
+    let written = run_leaderboard_job(&job, &mut Progress::default())?;
     if let Some([md, csv]) = &written.pair_files {
         eprintln!("wrote {} and {}", md.display(), csv.display());
     }
@@ -168,11 +125,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     for (report, files) in &written.reports {
         super::report_html::tell_written(report, files);
     }
-    eprintln!(
-        "wrote {} ({:.0} s in all)",
-        written.page.display(),
-        started.elapsed().as_secs_f64()
-    );
+    let wall_s = started.elapsed().as_secs_f64();
+    eprintln!("wrote {} ({wall_s:.0} s in all)", written.page.display());
     Ok(())
 }
 
@@ -201,29 +155,8 @@ impl LeaderboardObserver for Progress {
         self
     }
 
-    fn policy_process(
-        &mut self,
-        process: &PolicyProcess,
-        session: &str,
-        spec: &EvalSpec,
-        run: &std::path::Path,
-    ) -> Result<Box<dyn Policy>, String> {
-        let name = run
-            .file_name()
-            .map_or("run".into(), |n| n.to_string_lossy());
-        let log = run.with_file_name(format!("{name}.policy.log"));
-        eprintln!(
-            "  starting `{}` (its output: {})",
-            process.command,
-            log.display()
-        );
-        Ok(Box::new(thorarena::leaderboard::LaunchedPolicy::start(
-            process,
-            session,
-            spec,
-            &log,
-            &mut |note| eprintln!("{note}"),
-        )?))
+    fn note(&mut self, text: &str) {
+        eprintln!("{}", super::flags::as_flags(text));
     }
 }
 

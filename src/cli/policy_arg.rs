@@ -2,13 +2,8 @@
 //! baseline, or `ipc:<session>` for a policy process connecting over shared memory.
 
 use super::choices::{LatencyModeArg, MissRuleArg};
-use anyhow::{bail, Context};
-use std::time::Duration;
 use thorarena::evaluation::{parse_budget, Budget, PolicyIoRules};
-use thorarena::policy::{Policy, RemotePolicy, SessionOptions};
-use thorarena::profile::Profile;
-use thorarena::registry::{PolicyArg, PolicyChoice};
-use thorarena::robot::RobotModel;
+use thorarena::policy::{SessionOptions, SessionOptionsError};
 
 /// Options of a policy's answers (all policies) and of the session (remote ones).
 #[derive(Debug, Clone, clap::Args)]
@@ -70,24 +65,16 @@ impl PolicyIoArgs {
     /// How a policy process is served, checked, with the run's latency budget (s; its
     /// checked [`PolicyIoRules::budget_s`], which a request file may give instead of
     /// `--budget`).
-    pub fn session_options(&self, budget_s: Option<f64>) -> anyhow::Result<SessionOptions> {
-        if !(self.connect_timeout.is_finite() && self.connect_timeout >= 0.0) {
-            bail!("--connect-timeout must be >= 0 s");
-        }
-        Ok(SessionOptions {
-            budget: budget_s.map(Duration::from_secs_f64),
-            spin: Duration::from_micros(self.spin_us),
-            connect_timeout: (self.connect_timeout > 0.0)
-                .then(|| Duration::try_from_secs_f64(self.connect_timeout))
-                .transpose()
-                .map_err(|_| {
-                    anyhow::anyhow!(
-                        "--connect-timeout {} s: too long to wait (give seconds that fit a duration, or 0 to wait forever)",
-                        self.connect_timeout
-                    )
-                })?,
-            reconnect: self.on_policy_failure == OnPolicyFailure::Wait,
-        })
+    pub fn session_options(
+        &self,
+        budget_s: Option<f64>,
+    ) -> Result<SessionOptions, SessionOptionsError> {
+        SessionOptions::checked(
+            budget_s,
+            self.spin_us,
+            self.connect_timeout,
+            self.on_policy_failure == OnPolicyFailure::Wait,
+        )
     }
 
     /// The rules recorded in `run.json` (checked with the rest of the evaluation by
@@ -100,55 +87,4 @@ impl PolicyIoArgs {
             budget_s: self.budget.0.map(|b| b.as_secs_f64()),
         }
     }
-}
-
-/// Builds the policy named by `--policy`; for `ipc:<session>` creates the session and
-/// waits for a policy process to connect.
-pub fn make_policy(
-    spec: &str,
-    robot: &RobotModel,
-    profile: &Profile,
-    session: &SessionOptions,
-    envs: usize,
-) -> anyhow::Result<Box<dyn Policy>> {
-    make_policy_vetted(spec, robot, profile, session, envs, &mut |_| Ok(()))
-}
-
-/// [`make_policy`], and a policy process (`ipc:`) must also pass `vet` in its handshake
-/// (besides a usable name): what the run requires of it, told to it if it fails.
-pub fn make_policy_vetted(
-    spec: &str,
-    robot: &RobotModel,
-    profile: &Profile,
-    session: &SessionOptions,
-    envs: usize,
-    vet: &mut dyn FnMut(&str) -> Result<(), String>,
-) -> anyhow::Result<Box<dyn Policy>> {
-    let arg = PolicyArg::parse(spec)?;
-    match arg.load(robot, profile)? {
-        PolicyChoice::InProcess(policy) => Ok(policy),
-        PolicyChoice::Session(session_name) => Ok(Box::new(connect_remote(
-            session_name,
-            robot,
-            profile,
-            session,
-            envs,
-            vet,
-        )?)),
-    }
-}
-
-/// Serves `session` and waits for a policy process, saying so on stderr.
-pub fn connect_remote(
-    session: &str,
-    robot: &RobotModel,
-    profile: &Profile,
-    options: &SessionOptions,
-    envs: usize,
-    vet: &mut dyn FnMut(&str) -> Result<(), String>,
-) -> anyhow::Result<RemotePolicy> {
-    RemotePolicy::serve(session, robot, profile, options, envs, vet, &mut |note| {
-        eprintln!("{note}")
-    })
-    .with_context(|| format!("serving session `{session}`"))
 }

@@ -2,12 +2,8 @@
 //! (`thorarena::sanity`), printed check by check with its numbers; a failed check makes
 //! the command fail, naming it.
 
-use anyhow::{bail, Context};
 use std::path::PathBuf;
-use thorarena::motion::Dataset;
-use thorarena::physics::Engine;
-use thorarena::registry::{self, PolicyChoice};
-use thorarena::sanity::{check_policy, walking_sequence, SanityOptions, SanityReport};
+use thorarena::benchmark::{check_named_policy, PolicyCheckRequest};
 
 /// `thorarena policy …`
 #[derive(Debug, clap::Subcommand)]
@@ -58,83 +54,28 @@ pub struct Args {
 
 pub(super) fn run(cmd: &PolicyCommand) -> anyhow::Result<()> {
     let PolicyCommand::Check(args) = cmd;
-    let report = check(args)?;
+    let report = check_named_policy(&PolicyCheckRequest {
+        policy: args.policy.clone(),
+        profile: args.profile.clone(),
+        dataset: args.dataset.clone(),
+        sequence: args.sequence.clone(),
+        track_s: args.track_seconds,
+        max_kp_rms_mm: args.max_kp_error_mm,
+        robot: args.robot.clone(),
+        engine: args.engine.into(),
+        mjcf: args.mjcf.clone(),
+    })?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print(&report);
+        print!("{report}");
     }
     if !report.passed() {
-        bail!(
+        anyhow::bail!(
             "policy check failed ({}): under `{}` this policy is wired wrong, or cannot track at all; its scores would not say how it handles force",
             report.failed().join(", "),
             report.profile
         );
     }
     Ok(())
-}
-
-fn check(args: &Args) -> anyhow::Result<SanityReport> {
-    let robot = registry::robot(&args.robot)?;
-    let policy_arg = registry::PolicyArg::parse(&args.policy)?;
-    let profile_name = args
-        .profile
-        .clone()
-        .unwrap_or_else(|| policy_arg.default_profile().to_string());
-    let profile = registry::profile(&profile_name, &robot)?;
-    let engine = match (args.engine, &args.mjcf) {
-        (super::choices::EngineArg::Rapier, None) => Engine::Rapier,
-        (super::choices::EngineArg::Rapier, Some(_)) => {
-            bail!("--mjcf is for --engine mujoco")
-        }
-        (super::choices::EngineArg::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
-    };
-    let dataset_dir = args
-        .dataset
-        .clone()
-        .unwrap_or_else(|| thorarena::data_dir().join("sample"));
-    let dataset = Dataset::open(&dataset_dir, &robot)?;
-    let sequences = dataset.load_all()?;
-    let index = match &args.sequence {
-        Some(id) => sequences
-            .iter()
-            .position(|s| &s.sequence_id == id)
-            .with_context(|| format!("{} has no sequence `{id}`", dataset_dir.display()))?,
-        None => walking_sequence(&sequences, args.track_seconds)
-            .with_context(|| format!("{} has no sequences", dataset_dir.display()))?,
-    };
-    let PolicyChoice::InProcess(mut policy) = policy_arg.load(&robot, &profile)? else {
-        bail!("policy check runs a policy in process; `{}` is a policy process (check it by running its network in process, e.g. beyondmimic:FILE)", args.policy);
-    };
-    let options = SanityOptions {
-        track_s: args.track_seconds,
-        max_kp_rms_mm: args.max_kp_error_mm,
-        engine,
-        announce: true,
-        ..SanityOptions::default()
-    };
-    Ok(check_policy(
-        policy.as_mut(),
-        &robot,
-        &profile,
-        &sequences[index],
-        &options,
-    )?)
-}
-
-fn print(report: &SanityReport) {
-    println!(
-        "policy check: {} under profile `{}` on {}, tracking {}",
-        report.policy, report.profile, report.engine, report.tracking_reference
-    );
-    for fact in &report.facts {
-        println!("  {fact}");
-    }
-    for c in &report.checks {
-        let mark = if c.passed { "pass" } else { "FAIL" };
-        println!("  {mark} {:<12} {}", c.name, c.detail);
-    }
-    if report.passed() {
-        println!("passed: every check holds, its scores can count");
-    }
 }

@@ -33,13 +33,8 @@ pub struct Args {
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     // The bundle first: a missing bundle directory should fail before any file is written.
     let bundle = WebBundle::locate()?;
-    for stale in bundle.stale_sources() {
-        eprintln!(
-            "warning: {} is newer than the bundle in {}; rebuild it with `npm run build --prefix web -- --outdir={}`",
-            stale.display(),
-            bundle.describe(),
-            bundle.describe()
-        );
+    for warning in bundle.stale_warnings() {
+        eprintln!("{warning}");
     }
     let mut runs = load_runs(&args.runs)?;
     if let Some(groups) = mixed_engines(&runs) {

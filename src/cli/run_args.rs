@@ -3,7 +3,7 @@
 
 use super::policy_arg::PolicyIoArgs;
 use std::path::PathBuf;
-use thorarena::evaluation::{EvalRequest, TerminationRule};
+use thorarena::evaluation::{parse_shard, EvalRequest, TerminationRule};
 use thorarena::motion::SequenceSelection;
 
 /// The flags a request file replaces (clap's ids: the field names).
@@ -121,18 +121,6 @@ pub struct RunArgs {
     /// Policy I/O: slots, latency budget, miss rule, latency mode, session options.
     #[command(flatten)]
     pub io: PolicyIoArgs,
-}
-
-fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/4")?;
-    let (i, n): (usize, usize) = (
-        i.parse().map_err(|_| "I is not a number")?,
-        n.parse().map_err(|_| "N is not a number")?,
-    );
-    if n == 0 || i >= n {
-        return Err(format!("shard {i}/{n}: need 0 <= I < N"));
-    }
-    Ok((i, n))
 }
 
 impl RunArgs {

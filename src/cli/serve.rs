@@ -3,9 +3,9 @@
 
 use super::eval::{load_spec, RunArgs};
 use super::eval_run::evaluate;
-use super::policy_arg::connect_remote;
 use std::path::PathBuf;
 use thorarena::policy::Policy;
+use thorarena::registry::{serve_session, PolicyTarget};
 
 /// Arguments of `serve`.
 #[derive(Debug, clap::Args)]
@@ -30,14 +30,15 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let ctx = load_spec(&args.run, "")?;
     let session = args.run.io.session_options(ctx.io.budget_s)?;
     for n in 1.. {
-        let mut policy = connect_remote(
-            &args.session,
-            &ctx.robot,
-            &ctx.profile,
-            &session,
-            ctx.envs,
-            &mut |_| Ok(()),
-        )?;
+        let target = PolicyTarget {
+            robot: &ctx.robot,
+            profile: &ctx.profile,
+            session: &session,
+            envs: ctx.envs,
+        };
+        let mut policy = serve_session(&args.session, &target, &mut |_| Ok(()), &mut |n| {
+            eprintln!("{n}")
+        })?;
         // Never overwrite an earlier run: take the first free number for this policy.
         let out = (n..)
             .map(|k| {
@@ -46,13 +47,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             })
             .find(|dir| !dir.exists())
             .expect("some number is free");
-        let result = evaluate(
-            args.run.resume,
-            &ctx,
-            &mut policy as &mut dyn Policy,
-            &out,
-            None,
-        );
+        let result = evaluate(args.run.resume, &ctx, &mut policy as &mut dyn Policy, &out);
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {
             eprintln!("run {n} ended with an error: {e:#}");

@@ -3,7 +3,7 @@
 //! the replayed hand forces as arrows, a timeline, and the keypoint error under it.
 
 use std::path::PathBuf;
-use thorarena::report::{load_trace, trace_context, view_html, view_scene, Page, WebBundle};
+use thorarena::report::{write_view, WebBundle};
 
 /// Arguments of `view`.
 #[derive(Debug, clap::Args)]
@@ -22,31 +22,21 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    thorarena::results::check_file(&args.out, args.overwrite, std::slice::from_ref(&args.trace))?;
     let bundle = WebBundle::locate()?;
-    for stale in bundle.stale_sources() {
-        eprintln!(
-            "warning: {} is newer than the bundle in {}; rebuild it with `npm run build --prefix web -- --outdir={}`",
-            stale.display(),
-            bundle.describe(),
-            bundle.describe()
-        );
+    for warning in bundle.stale_warnings() {
+        eprintln!("{warning}");
     }
     let robot = thorarena::registry::robot(&args.robot)?;
-    let trace = load_trace(&args.trace)?;
-    let context = trace_context(&args.trace);
-    let scene = view_scene(&robot, &trace, &args.trace, &context)?;
-    let html = view_html(&scene, &bundle.script(Page::View)?);
-    thorarena::report::write_page(&args.out, &html)?;
+    let written = write_view(&args.trace, &robot, &bundle, &args.out, args.overwrite)?;
+    let shown = if written.reference_ghost {
+        ", reference ghost"
+    } else {
+        "; the trace has no reference joints: the reference shows as keypoints"
+    };
     eprintln!(
-        "wrote {} ({} steps{})",
+        "wrote {} ({} steps{shown})",
         args.out.display(),
-        trace.len(),
-        if scene.reference_poses.is_some() {
-            ", reference ghost"
-        } else {
-            "; the trace has no reference joints: the reference shows as keypoints"
-        }
+        written.steps
     );
     Ok(())
 }

@@ -89,6 +89,25 @@ pub struct DdsSessionOutcome {
     pub realtime: RealTimeReport,
 }
 
+impl DdsSessionOutcome {
+    /// What went wrong in real time, one warning each: time not kept, a broken command
+    /// stream (both detailed in `realtime.json`).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut warnings = Vec::new();
+        if !self.realtime.kept_real_time {
+            warnings.push("the run did not keep real time (realtime.json)".to_string());
+        }
+        let stream = &self.realtime.command_stream;
+        if !stream.healthy {
+            warnings.push(format!(
+                "the command stream broke: {} (realtime.json)",
+                stream.problems.join("; ")
+            ));
+        }
+        warnings
+    }
+}
+
 /// A field of [`DdsSessionRequest`] a refusal is about (the command line names its flag).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DdsSetting {
@@ -102,11 +121,23 @@ pub enum DdsSetting {
     RtPriority,
 }
 
+impl DdsSetting {
+    /// The field as messages name it (`option.<field>`; the command line shows its flag).
+    pub fn field(self) -> &'static str {
+        match self {
+            Self::Sequence => "option.sequence",
+            Self::StartTimeout => "option.start_timeout",
+            Self::StartOn => "option.start_on",
+            Self::RtPriority => "option.rt_priority",
+        }
+    }
+}
+
 /// Why a deployment episode did not run or was not scored.
 #[derive(Debug, thiserror::Error)]
 pub enum DdsSessionError {
     /// A setting the session cannot run with: which one, and why (naming its value).
-    #[error("{why}")]
+    #[error("`{}`: {why}", setting.field())]
     Setting {
         /// The request's field.
         setting: DdsSetting,

@@ -20,7 +20,7 @@ mod thresholds;
 
 pub use episode_record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
 pub use latency::{LatencyRecorder, LatencySummary};
-pub use request::{EngineChoice, EvalRequest, RequestFileError};
+pub use request::{parse_shard, EngineChoice, EvalRequest, RequestFileError};
 pub use rules::{parse_budget, Budget, LatencyMode, MissRule, PolicyIoRules, TerminationRule};
 pub use sanity_record::SanityRecord;
 pub use schedule::{reference_steps, schedule};

@@ -140,3 +140,16 @@ impl EvalRequest {
         crate::atomic_file::write(path, json)
     }
 }
+
+/// A shard `I/N` as a user writes it (`0/4`: the first of four), checked: `0 <= I < N`.
+pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or("expected I/N, e.g. 0/4")?;
+    let (i, n): (usize, usize) = (
+        i.parse().map_err(|_| "I is not a number")?,
+        n.parse().map_err(|_| "N is not a number")?,
+    );
+    if n == 0 || i >= n {
+        return Err(format!("shard {i}/{n}: need 0 <= I < N"));
+    }
+    Ok((i, n))
+}

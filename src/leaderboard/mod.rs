@@ -8,7 +8,7 @@
 //! same `benchmark::evaluate`, the sanity check first), so a leaderboard row can be
 //! re-derived by one `eval`. A policy in its own process ([`PolicyProcess`], any
 //! language) is started and connected by the caller
-//! ([`LeaderboardObserver::policy_process`]) for each of its runs, then scored like the
+//! (`start_process`) for each of its runs, then scored like the
 //! others.
 
 use crate::benchmark::{evaluate, BenchmarkError, EvalObserver, EvalOptions};
@@ -19,10 +19,12 @@ use crate::results::{RunDir, Summary};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+mod job;
 mod launched;
 mod outputs;
 mod pairs;
 
+pub use job::{run_leaderboard_job, LeaderboardJob, LeaderboardJobError};
 pub use launched::LaunchedPolicy;
 pub use outputs::{
     leaderboard_tables, write_leaderboard_outputs, LeaderboardOutputs, OutputsError, PageHeader,
@@ -255,21 +257,36 @@ pub trait LeaderboardObserver {
     fn run_starting(&mut self, _index: usize, _total: usize, _policy: &str, _engine: &str) {}
     /// The observer of that run's evaluation.
     fn eval_observer(&mut self) -> &mut dyn EvalObserver;
-    /// Starts `process` on session `session` for a run of `spec` into `run`, and returns
-    /// it connected (it ends when the returned policy is dropped); `Err` says why not.
-    fn policy_process(
-        &mut self,
-        process: &PolicyProcess,
-        session: &str,
-        spec: &EvalSpec,
-        run: &Path,
-    ) -> Result<Box<dyn Policy>, String> {
-        let _ = (session, spec, run);
-        Err(format!(
-            "{}: this caller cannot start policy processes",
-            process.name
-        ))
-    }
+    /// What the runs' policy processes say (starting, their log, connection news).
+    fn note(&mut self, _text: &str) {}
+}
+
+/// Starts `process` on session `session` for a run of `spec` into `run`, its output to
+/// `<run>.policy.log` beside it, and returns it connected (it ends when the returned
+/// policy is dropped); `Err` says why not.
+fn start_process(
+    process: &PolicyProcess,
+    session: &str,
+    spec: &EvalSpec,
+    run: &Path,
+    observer: &mut dyn LeaderboardObserver,
+) -> Result<Box<dyn Policy>, String> {
+    let name = run
+        .file_name()
+        .map_or("run".into(), |n| n.to_string_lossy());
+    let log = run.with_file_name(format!("{name}.policy.log"));
+    observer.note(&format!(
+        "  starting `{}` (its output: {})",
+        process.command,
+        log.display()
+    ));
+    Ok(Box::new(LaunchedPolicy::start(
+        process,
+        session,
+        spec,
+        &log,
+        &mut |note| observer.note(note),
+    )?))
 }
 
 /// Who plays a leaderboard run: a policy argument (in process), or a policy process.
@@ -490,13 +507,13 @@ fn run_one(
                 })
             }
         },
-        Player::Process(p) => observer
-            .policy_process(p, &session, &spec, run)
-            .map_err(|why| LeaderboardError::Process {
+        Player::Process(p) => start_process(p, &session, &spec, run, observer).map_err(|why| {
+            LeaderboardError::Process {
                 policy: p.name.clone(),
                 engine: engine_name,
                 why,
-            })?,
+            }
+        })?,
     };
     let dir = RunDir::new(run);
     let options = EvalOptions {

@@ -22,7 +22,9 @@ pub use batch_plans::BatchPlans;
 pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use falcon::FalconPolicy;
-pub use remote::{RemoteConfig, RemoteError, RemotePolicy, SessionOptions, TransportStats};
+pub use remote::{
+    RemoteConfig, RemoteError, RemotePolicy, SessionOptions, SessionOptionsError, TransportStats,
+};
 pub use softmimic::SoftMimicPolicy;
 pub use twist2::Twist2Policy;
 

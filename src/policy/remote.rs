@@ -35,6 +35,43 @@ pub struct SessionOptions {
     pub reconnect: bool,
 }
 
+impl SessionOptions {
+    /// Options from what a user gives: the run's latency budget (s, checked with the
+    /// evaluation), the spin before blocking (µs), the connect timeout (s; 0 waits
+    /// forever) and whether a failed policy may be replaced by a reconnecting one.
+    pub fn checked(
+        budget_s: Option<f64>,
+        spin_us: u64,
+        connect_timeout_s: f64,
+        reconnect: bool,
+    ) -> Result<Self, SessionOptionsError> {
+        if !(connect_timeout_s.is_finite() && connect_timeout_s >= 0.0) {
+            return Err(SessionOptionsError::NegativeConnectTimeout);
+        }
+        let connect_timeout = (connect_timeout_s > 0.0)
+            .then(|| Duration::try_from_secs_f64(connect_timeout_s))
+            .transpose()
+            .map_err(|_| SessionOptionsError::ConnectTimeoutTooLong(connect_timeout_s))?;
+        Ok(Self {
+            budget: budget_s.map(Duration::from_secs_f64),
+            spin: Duration::from_micros(spin_us),
+            connect_timeout,
+            reconnect,
+        })
+    }
+}
+
+/// Why session options are unusable.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionOptionsError {
+    /// A negative or non-finite connect timeout.
+    #[error("`option.connect_timeout` must be >= 0 s")]
+    NegativeConnectTimeout,
+    /// A timeout no duration holds.
+    #[error("`option.connect_timeout` {0} s: too long to wait (give seconds that fit a duration, or 0 to wait forever)")]
+    ConnectTimeoutTooLong(f64),
+}
+
 /// Why serving a session failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RemoteError {

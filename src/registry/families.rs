@@ -234,6 +234,31 @@ pub fn policy_family(spec: &str) -> Option<&'static PolicyFamily> {
     POLICY_FAMILIES.iter().find(|f| f.names(spec))
 }
 
+/// Every family a run can name and every published network known by content, as the
+/// Markdown tables `thorarena policies` prints: what a user supplies for each, the
+/// profile it runs under when none is named, and where it runs.
+pub fn families_text() -> String {
+    let mut text = String::from(
+        "| `option.policy` | what it is | you supply | profile by default | runs |\n|---|---|---|---|---|\n",
+    );
+    for f in &POLICY_FAMILIES {
+        let runs = match f.runs {
+            Runs::InProcess => "in process",
+            Runs::OwnProcess => "its own process",
+        };
+        text += &format!(
+            "| `{}` | {} | {} | `{}` | {runs} |\n",
+            f.spelling, f.what, f.supplies, f.profile
+        );
+    }
+    text += "\nPublished networks known by content (SHA-256): each runs under its own profile when no `option.profile` is named, whatever the file is called.\n\n| file | profile | source |\n|---|---|---|\n";
+    for n in &super::KNOWN_NETWORKS {
+        text += &format!("| `{}` | `{}` | {} |\n", n.file, n.profile, n.source);
+    }
+    text += "\nProfiles: data/profiles/*.toml (or a .toml path with `option.profile`); `client` runs a built-in as a policy process.\n";
+    text
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,16 +4,21 @@
 //! matches nothing is an error listing what exists, with the nearest one when it looks
 //! like a typo ([`did_you_mean`]).
 
+mod client;
 mod families;
 mod networks;
+mod open;
 mod policies;
 mod policy_arg;
 mod suggest;
 
+pub use client::{run_named_client, ClientRequest, NamedClientError};
 pub use families::{
-    Build, PolicyFamily, ProfileRule, Runs, Target, NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
+    families_text, Build, PolicyFamily, ProfileRule, Runs, Target, NETWORK_SLOTS_PER_WORKER,
+    POLICY_FAMILIES,
 };
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
+pub use open::{open_policy, serve_session, OpenPolicyError, PolicyTarget};
 pub use policies::{builtin_policy, PolicyChoice};
 pub use policy_arg::PolicyArg;
 pub use suggest::{closest, did_you_mean};

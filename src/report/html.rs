@@ -106,6 +106,21 @@ impl WebBundle {
         }
     }
 
+    /// A warning per stale source ([`WebBundle::stale_sources`]), saying how to rebuild.
+    pub fn stale_warnings(&self) -> Vec<String> {
+        self.stale_sources()
+            .iter()
+            .map(|stale| {
+                format!(
+                    "warning: {} is newer than the bundle in {}; rebuild it with `npm run build --prefix web -- --outdir={}`",
+                    stale.display(),
+                    self.describe(),
+                    self.describe()
+                )
+            })
+            .collect()
+    }
+
     /// Front-end sources newer than a bundle directory (`web/src/*.js` next to it): the
     /// page would run old code, so the CLI warns. The compiled-in bundle is checked
     /// against its sources by `tests/web_bundle.rs` instead (file times say nothing

@@ -41,7 +41,8 @@ pub use runs::{
     mixed_engines, ComparisonWarning, EpisodePoint, Run, WarningKind, MIXED_ENGINES_WHY,
 };
 pub use scene::{
-    load_trace, trace_context, view_scene, BodyShapes, FeetView, ShapeView, TraceContext, ViewScene,
+    load_trace, trace_context, view_scene, write_view, BodyShapes, FeetView, ShapeView,
+    TraceContext, ViewScene, WrittenView,
 };
 pub use style::{jitter, PolicyColors, DASHES, MARKERS, PALETTE, SURVIVAL_JITTER};
 pub use svg::{figure_svg, svg_figures, SvgFigure};

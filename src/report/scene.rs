@@ -402,3 +402,34 @@ fn scene_info(
     }
     info
 }
+
+/// A written replay page.
+#[derive(Debug)]
+pub struct WrittenView {
+    /// Steps of the trace.
+    pub steps: usize,
+    /// Whether the reference shows as a ghost robot (else as keypoints: the trace has no
+    /// reference joints).
+    pub reference_ghost: bool,
+}
+
+/// Writes the replay page of trace `trace_path` for `robot` to `out` (never over the
+/// trace, nor, unless `overwrite`, over a run's or a dataset's file), with `bundle`'s
+/// script.
+pub fn write_view(
+    trace_path: &Path,
+    robot: &RobotModel,
+    bundle: &super::WebBundle,
+    out: &Path,
+    overwrite: bool,
+) -> Result<WrittenView, ReportError> {
+    crate::results::check_file(out, overwrite, &[trace_path.to_path_buf()])?;
+    let trace = load_trace(trace_path)?;
+    let scene = view_scene(robot, &trace, trace_path, &trace_context(trace_path))?;
+    let html = super::view_html(&scene, &bundle.script(super::Page::View)?);
+    super::write_page(out, &html)?;
+    Ok(WrittenView {
+        steps: trace.len(),
+        reference_ghost: scene.reference_poses.is_some(),
+    })
+}

@@ -31,6 +31,7 @@ mod merge;
 mod output_guard;
 mod record_check;
 mod run_dir;
+mod run_target;
 mod summary;
 
 pub use coverage::{CellCoverage, Coverage};
@@ -43,6 +44,7 @@ pub use run_dir::{
     RecordAppender, RunDir, RunLock, Started, CROSSCHECK_SERIES_FILE, LOCK_FILE, RUN_FILES,
     TRACES_DIR,
 };
+pub use run_target::{RunTarget, RunTargetError};
 pub use summary::{
     fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,
     SettingResults, SettingSummary, Summary,

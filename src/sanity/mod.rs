@@ -128,6 +128,29 @@ impl SanityReport {
     }
 }
 
+/// The report as `policy check` shows it: what ran, the policy's facts, one line per
+/// check with its numbers, and the verdict when every check holds.
+impl std::fmt::Display for SanityReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "policy check: {} under profile `{}` on {}, tracking {}",
+            self.policy, self.profile, self.engine, self.tracking_reference
+        )?;
+        for fact in &self.facts {
+            writeln!(f, "  {fact}")?;
+        }
+        for c in &self.checks {
+            let mark = if c.passed { "pass" } else { "FAIL" };
+            writeln!(f, "  {mark} {:<12} {}", c.name, c.detail)?;
+        }
+        if self.passed() {
+            writeln!(f, "passed: every check holds, its scores can count")?;
+        }
+        Ok(())
+    }
+}
+
 /// How one episode went.
 #[derive(Debug, Clone, Copy)]
 struct Run {

@@ -84,6 +84,22 @@ pub struct ImportBatch {
     pub ground_correct: bool,
 }
 
+impl SourceFormat {
+    /// The motion embedded in a tracking network that runs under `profile`: its control
+    /// step is the motion's frame step, and its `[beyondmimic]` anchor body (else the
+    /// torso) is the body whose pose the network outputs.
+    pub fn onnx_motion_under(profile: &crate::profile::Profile) -> Self {
+        Self::OnnxMotion {
+            anchor_body: profile
+                .beyondmimic
+                .as_ref()
+                .map_or("torso_link", |b| b.anchor_body.as_str())
+                .to_string(),
+            control_dt_s: profile.control_dt_s,
+        }
+    }
+}
+
 /// What an import reports while it works.
 pub trait ImportObserver {
     /// About to read `input`.

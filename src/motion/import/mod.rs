@@ -6,6 +6,7 @@ mod batch;
 pub mod canonical;
 pub mod force_csv;
 pub mod lafan_csv;
+pub mod news;
 pub mod npz;
 pub mod onnx_motion;
 mod pickle_depth;

@@ -5,6 +5,15 @@
 //! run they add up to. The commands (`eval`, `serve`, `merge`, `crosscheck`, a sweep's
 //! tasks) only parse, call these and print.
 
+mod engines_compared;
+mod named_check;
+
+pub use engines_compared::{
+    compare_engines, Compared, CrosscheckError, CrosscheckObserver, CrosscheckRequest,
+    MAX_BOOTSTRAP,
+};
+pub use named_check::{check_named_policy, PolicyCheckError, PolicyCheckRequest};
+
 use crate::episode::EpisodeTrace;
 use crate::evaluation::{task_thresholds, EpisodeRecord, EvalSpec, SanityRecord, Termination};
 use crate::motion::{DataError, Dataset};
@@ -44,6 +53,17 @@ pub enum BenchmarkError {
         /// The check's report.
         report: Box<SanityReport>,
     },
+    /// The policy failed mid-run: its finished episodes are written, the rest are not a
+    /// result.
+    #[error("the policy failed: {cut_short} episodes ended `policy_failed`, {not_run} did not run (finished ones are in {}; `option.resume` with a working policy runs both again)", .out.display())]
+    PolicyFailed {
+        /// Episodes the failure cut short.
+        cut_short: usize,
+        /// Episodes that never ran.
+        not_run: usize,
+        /// The run directory.
+        out: std::path::PathBuf,
+    },
 }
 
 /// How [`evaluate`] treats the run directory and what it records beyond the run.
@@ -66,6 +86,52 @@ pub struct Starting<'a> {
     pub started: &'a Started,
     /// Episodes to run now.
     pub to_run: usize,
+}
+
+impl Starting<'_> {
+    /// What a run says as it starts: a resume that found nothing to resume or dropped a
+    /// torn last line, what `policy` is evaluated on with how many slots and workers, and
+    /// how its sanity check went. `resume_asked`: the caller asked to resume; `slots`:
+    /// the run's environment slots and workers.
+    pub fn news(
+        &self,
+        policy: &str,
+        slots: (usize, usize),
+        run: &RunDir,
+        resume_asked: bool,
+    ) -> Vec<String> {
+        let mut news = Vec::new();
+        if resume_asked && !self.started.resumed {
+            news.push(format!(
+                "`option.resume`: nothing to resume in {}, starting afresh",
+                run.path().display()
+            ));
+        }
+        if self.started.torn_tail_dropped {
+            news.push(format!(
+                "`option.resume`: {} ended in a line cut short; it is dropped",
+                run.episodes_file().display()
+            ));
+        }
+        let header = self.header;
+        let part = header
+            .subset
+            .as_ref()
+            .map(|sub| format!(" (part of it: {})", sub.describe(header.sequences.len())))
+            .unwrap_or_default();
+        news.push(format!(
+            "evaluating `{policy}` on {}{part}: {} episodes to run ({} already done), {} environment slots on {} workers",
+            header.dataset,
+            self.to_run,
+            self.started.kept.len(),
+            slots.0,
+            slots.1
+        ));
+        if let Some(sanity) = &header.sanity {
+            news.push(format!("sanity check: {}", sanity.label()));
+        }
+        news
+    }
 }
 
 /// Hears an evaluation's progress (the library prints nothing; a command shows it).
@@ -100,6 +166,44 @@ impl Evaluated {
     /// `--resume` with a working policy runs the missing ones.
     pub fn policy_failed(&self) -> bool {
         self.cut_short > 0 || self.not_run > 0
+    }
+
+    /// `Err` when the policy failed ([`Evaluated::policy_failed`]): the exit status of a
+    /// command must say so too (sweeps and scripts go by it).
+    pub fn check_policy(&self, out: &std::path::Path) -> Result<(), BenchmarkError> {
+        if !self.policy_failed() {
+            return Ok(());
+        }
+        Err(BenchmarkError::PolicyFailed {
+            cut_short: self.cut_short,
+            not_run: self.not_run,
+            out: out.to_path_buf(),
+        })
+    }
+}
+
+impl Evaluated {
+    /// What a written run says after its tables: the files written, and where the traces
+    /// are and how to look at one.
+    pub fn written_news(&self, spec: &EvalSpec, run: &RunDir) -> Vec<String> {
+        let files: Vec<&str> = crate::results::RUN_FILES
+            .iter()
+            .filter(|f| **f != crate::results::TRACES_DIR)
+            .copied()
+            .collect();
+        let mut news = vec![format!(
+            "wrote {}/{{{}}}",
+            run.path().display(),
+            files.join(", ")
+        )];
+        if !spec.trace.is_empty() {
+            news.push(format!(
+                "traces of {} in {}/<task>-<sequence>-<setting>.json: look at one with `thorarena view FILE`",
+                spec.trace.join(", "),
+                run.traces_dir().display()
+            ));
+        }
+        news
     }
 }
 
