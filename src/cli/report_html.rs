@@ -55,22 +55,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
 /// What a comparison report wrote, on stderr: its warnings and notes, then its files and
 /// figures.
 pub(super) fn tell_written(written: &WrittenReport, files: &ComparisonFiles) {
-    for w in &written.warnings {
-        eprintln!("warning: {}", w.message);
+    for line in written.news(files) {
+        eprintln!("{line}");
     }
-    for n in &written.notes {
-        eprintln!("note: {n}");
-    }
-    eprintln!(
-        "wrote {}, and {} SVG figures in {}: {}",
-        written
-            .files
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(", "),
-        written.figures.len(),
-        files.figures_dir.display(),
-        written.figures.join(", ")
-    );
 }

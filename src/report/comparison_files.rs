@@ -57,6 +57,28 @@ pub struct WrittenReport {
     pub figures: Vec<String>,
 }
 
+impl WrittenReport {
+    /// What a command says after writing the report into `files`: each warning and note,
+    /// then the files and figures written.
+    pub fn news(&self, files: &ComparisonFiles) -> Vec<String> {
+        let mut news: Vec<String> = self
+            .warnings
+            .iter()
+            .map(|w| format!("warning: {}", w.message))
+            .collect();
+        news.extend(self.notes.iter().map(|n| format!("note: {n}")));
+        let written: Vec<String> = self.files.iter().map(|p| p.display().to_string()).collect();
+        news.push(format!(
+            "wrote {}, and {} SVG figures in {}: {}",
+            written.join(", "),
+            self.figures.len(),
+            files.figures_dir.display(),
+            self.figures.join(", ")
+        ));
+        news
+    }
+}
+
 /// Writes the comparison of `runs` (read from `inputs`) to `files`, the page carrying
 /// `script` (the front-end bundle's); nothing is written if any file would replace an
 /// input, or a run's or a dataset's file without `overwrite`.
