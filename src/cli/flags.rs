@@ -6,7 +6,7 @@
 //! sweep spec's keys, a user's values).
 
 /// A field as the library's messages name it, and the flag that sets it.
-const FIELD_FLAGS: [(&str, &str); 36] = [
+const FIELD_FLAGS: [(&str, &str); 47] = [
     ("request.profile", "--profile"),
     ("request.profile_mismatch_ok", "--profile-mismatch-ok"),
     ("request.unchecked", "--unchecked"),
@@ -55,6 +55,17 @@ const FIELD_FLAGS: [(&str, &str); 36] = [
     ("option.array", "--array"),
     ("option.partition", "--partition"),
     ("option.time", "--time"),
+    ("option.steps", "--steps"),
+    ("option.adapter_steps", "--adapter-steps"),
+    ("option.envs", "--envs"),
+    ("option.onnx", "--onnx"),
+    ("option.ipc_lib", "--ipc-lib"),
+    ("option.pipeline_depths", "--pipeline-depths"),
+    ("option.policy_command", "--policy-command"),
+    ("option.repeats", "--repeats"),
+    ("option.dt", "--dt"),
+    ("option.jobs", "--jobs"),
+    ("option.batches", "--batches"),
 ];
 
 /// `text` with every field the library names in backticks written as its flag.
