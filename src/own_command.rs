@@ -1,8 +1,8 @@
 //! The `thorarena` command lines the library runs, or writes for a cluster engine to run:
 //! a sweep task's `eval` of its request, the array task's `sweep task`, and the
-//! benchmarks' sweep steps and echo client. They are the binary's interface, spelled here
-//! once; the tests that run them (sweeps, real Slurm, the Kubernetes manifest, the
-//! benchmarks) keep them true to its parser.
+//! benchmarks' sweep steps, echo client and socket peer. They are the binary's interface,
+//! spelled here once; the tests that run them (sweeps, real Slurm, the Kubernetes manifest,
+//! the benchmarks) keep them true to its parser.
 
 use std::ffi::OsString;
 use std::path::Path;
@@ -82,4 +82,20 @@ pub fn echo_client(session: &str, spin_us: u64) -> Vec<String> {
     .map(String::from)
     .chain([spin_us.to_string()])
     .collect()
+}
+
+/// `bench socket-peer --envs N --joints J --refs R --spin-us S --socket`: the echo peer of
+/// `bench ipc`'s Unix-socket baseline, the socket's path to follow.
+pub fn socket_peer(n_envs: usize, n_joints: usize, n_refs: usize, spin_us: u128) -> Vec<String> {
+    let mut words: Vec<String> = ["bench", "socket-peer"].map(String::from).into();
+    for (flag, value) in [
+        ("--envs", n_envs.to_string()),
+        ("--joints", n_joints.to_string()),
+        ("--refs", n_refs.to_string()),
+        ("--spin-us", spin_us.to_string()),
+    ] {
+        words.extend([flag.to_string(), value]);
+    }
+    words.push("--socket".into());
+    words
 }

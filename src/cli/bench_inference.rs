@@ -1,10 +1,9 @@
 //! `thorarena bench inference`: one network's cost per environment against the batch size
-//! of a tract call (`policy::BatchPlans`), each batch size timed in the same run, with
-//! the ratio to batch one.
+//! of a tract call, each batch size timed in the same run, with the ratio to batch one
+//! (`thorarena::perf::InferenceBench`).
 
 use std::path::PathBuf;
-use std::time::Instant;
-use thorarena::policy::BatchPlans;
+use thorarena::perf::InferenceBench;
 
 /// Arguments of `bench inference`.
 #[derive(Debug, clap::Args)]
@@ -19,37 +18,14 @@ pub struct Args {
     pub envs: usize,
 }
 
+/// `bench inference`: the library times each batch size and hands over each row as it is
+/// measured.
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let model = thorarena::policy::load_onnx(&args.onnx)?;
-    let width = thorarena::onnx_export::fixed_width(model.input_fact(0)?).ok_or_else(|| {
-        anyhow::anyhow!(
-            "{}: the first input has no fixed width",
-            args.onnx.display()
-        )
-    })?;
-    let plans = BatchPlans::new(model, width)?;
-    println!("{}: input width {width}; µs per tract call and per environment, {} environments per batch size", args.onnx.display(), args.envs);
-    println!("| batch | µs per call | µs per environment | per environment ÷ batch one |");
-    println!("|---:|---:|---:|---:|");
-    let mut batch_one_us = None;
-    for &batch in &args.batches {
-        anyhow::ensure!(batch > 0, "--batches: a batch size must be at least 1");
-        let inputs: Vec<f32> = (0..batch * width)
-            .map(|i| ((i % 97) as f32 - 48.0) / 48.0)
-            .collect();
-        plans.run(&inputs, batch)?; // plan made and warmed before the clock
-        let calls = args.envs.div_ceil(batch);
-        let t0 = Instant::now();
-        for _ in 0..calls {
-            std::hint::black_box(plans.run(&inputs, batch)?);
-        }
-        let per_call = t0.elapsed().as_secs_f64() * 1e6 / calls as f64;
-        let per_env = per_call / batch as f64;
-        let one = *batch_one_us.get_or_insert(per_env);
-        println!(
-            "| {batch} | {per_call:.1} | {per_env:.1} | {:.2} |",
-            per_env / one
-        );
-    }
+    let bench = InferenceBench {
+        onnx: args.onnx.clone(),
+        batches: args.batches.clone(),
+        envs: args.envs,
+    };
+    bench.run(&mut super::bench_eval::print)?;
     Ok(())
 }

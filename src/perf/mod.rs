@@ -1,26 +1,41 @@
 //! What ThorArena costs, measured: one physics step per engine, the whole episode loop on
 //! one core, a whole evaluation on every worker against its physics floor, the policy
 //! round trip over shared memory next to a Unix-socket baseline moving the same bytes, and
-//! a sweep run as tasks next to the same episodes run directly. Each function returns figures; `thorarena bench …` prints them
-//! with the ratio to the baseline measured in the same run.
+//! a sweep run as tasks next to the same episodes run directly. Each function returns figures;
+//! each benchmark of `thorarena bench …` (`IpcBench`, `EvalBench`, …) checks what it was
+//! asked, runs its measurements and composes its lines with the ratio to the baseline
+//! measured in the same run, handing each to its caller as it is measured ([`BenchLine`]).
 
+mod bench_line;
 mod episode_loop;
+mod eval_bench;
 mod full_run;
+mod inference_bench;
+mod ipc_bench;
 mod ipc_clients;
+mod ipc_tables;
 mod machine;
+mod physics_bench;
 mod physics_step;
 mod round_trip;
 mod scratch;
 mod socket;
+mod sweep_bench;
 mod sweep_cost;
+mod timed_policy;
 
+pub use bench_line::BenchLine;
 pub use episode_loop::{time_episode_loop, EpisodeLoopTiming};
+pub use eval_bench::EvalBench;
 pub use full_run::{physics_floor, process_cpu_time, process_group_cpu_time, time_run, RunTiming};
+pub use inference_bench::InferenceBench;
+pub use ipc_bench::IpcBench;
 pub use ipc_clients::{
     adapter_round_trip, ipc_library, shm_round_trips, AdapterRow, Builder, IpcClients, Measured,
     NetworkTiming,
 };
 pub use machine::Machine;
+pub use physics_bench::PhysicsBench;
 pub use physics_step::{python_mujoco_step, time_physics_steps, PythonMujocoTiming, StepTiming};
 pub use round_trip::{
     adapter_round_trips, echo_round_trips, fill_echo_observations, standing_observation,
@@ -28,6 +43,7 @@ pub use round_trip::{
 };
 pub use scratch::ScratchDir;
 pub use socket::{answer_socket_echo, socket_round_trips};
+pub use sweep_bench::SweepBench;
 pub use sweep_cost::{time_sweep_at_scale, time_sweep_round, SweepRoundTiming, SweepScaleTiming};
 
 use std::path::PathBuf;
@@ -77,6 +93,22 @@ pub enum PerfError {
         /// The cause.
         source: Box<dyn std::error::Error + Send + Sync>,
     },
+    /// A robot or policy named did not resolve.
+    #[error(transparent)]
+    Registry(#[from] crate::registry::RegistryError),
+    /// The evaluation asked for cannot run.
+    #[error(transparent)]
+    Spec(#[from] crate::evaluation::SpecError),
+    /// A physics could not be made.
+    #[error(transparent)]
+    Engine(#[from] crate::physics::EngineError),
+    /// tract could not load, plan or run the network (its message and causes, joined).
+    #[error("{0}")]
+    Network(String),
+    /// A policy process could not be started or did not connect (the end of its log
+    /// quoted).
+    #[error("{0}")]
+    PolicyProcess(String),
     /// The Python MuJoCo baseline failed or wrote something unreadable.
     #[error("{}: {message}", script.display())]
     Baseline {
