@@ -6,22 +6,8 @@ use anyhow::bail;
 use thorarena::motion::describe;
 use thorarena::motion::synth::{write_synthetic, SynthOptions, SynthWriteError};
 
-/// Most sequences per task `data synth` writes (a million sequences would be ~100 GB).
-const MAX_PER_TASK: usize = 100_000;
-
 pub(super) fn run(args: &SynthArgs) -> anyhow::Result<()> {
-    if !(1..=MAX_PER_TASK).contains(&args.per_task) {
-        bail!(
-            "--per-task {}: give 1 to {MAX_PER_TASK} sequences per task",
-            args.per_task
-        );
-    }
-    if thorarena::results::RunDir::new(&args.out).holds_run() {
-        bail!(
-            "--out {} holds a run: a dataset is never written over one; choose another --out",
-            args.out.display()
-        );
-    }
+    thorarena::results::check_dataset_dir(&args.out)?;
     let robot = thorarena::registry::robot(&args.robot)?;
     let opts = SynthOptions {
         per_task: args.per_task,

@@ -50,20 +50,6 @@ fn load_request(request: &EvalRequest) -> anyhow::Result<EvalSpec> {
     Ok(spec)
 }
 
-/// Where a run of `spec` goes under `args`' `--resume` and `--overwrite`.
-pub(super) fn run_target<'a>(
-    args: &RunArgs,
-    out: Option<PathBuf>,
-    spec: &'a EvalSpec,
-) -> RunTarget<'a> {
-    RunTarget {
-        out,
-        resume: args.resume,
-        overwrite: args.overwrite,
-        spec,
-    }
-}
-
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let request = match &args.request {
         Some(path) => {
@@ -74,7 +60,12 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         None => args.run.request(&args.policy),
     };
     let spec = load_request(&request)?;
-    let target = run_target(&args.run, args.out.clone(), &spec);
+    let target = RunTarget {
+        out: args.out.clone(),
+        resume: args.run.resume,
+        overwrite: args.run.overwrite,
+        spec: &spec,
+    };
     // An unusable --out is found before a policy process is made to connect.
     target.check_given()?;
     let session = args.run.io.session_options(spec.io.budget_s)?;

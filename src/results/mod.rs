@@ -39,7 +39,9 @@ pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_C
 pub use episodes::{write_record, EpisodeLog};
 pub use header::{read_header, write_header, PlannedSequence, RunHeader};
 pub use merge::{read_shards, MergeError, Shards};
-pub use output_guard::{check_dir, check_file, check_files_dir, check_run_dir, OutputRefused};
+pub use output_guard::{
+    check_dataset_dir, check_dir, check_file, check_files_dir, check_run_dir, OutputRefused,
+};
 pub use run_dir::{
     RecordAppender, RunDir, RunLock, Started, CROSSCHECK_SERIES_FILE, LOCK_FILE, RUN_FILES,
     TRACES_DIR,

@@ -33,6 +33,9 @@ pub enum OutputRefused {
     /// A run's directory holds a dataset (refused even with `--overwrite`).
     #[error("`option.out` {} holds a dataset: a run is never written over one; choose another `option.out`", .0.display())]
     RunOverDataset(PathBuf),
+    /// A dataset would be written into a run directory.
+    #[error("`option.out` {} holds a run: a dataset is never written over one; choose another `option.out`", .0.display())]
+    DatasetOverRun(PathBuf),
     /// An output file names a directory.
     #[error("`option.out` {} is a directory: give a file name", .0.display())]
     FileIsDirectory(PathBuf),
@@ -224,6 +227,14 @@ pub fn check_files_dir(
     }
     for f in files {
         check_file(&dir.join(f), overwrite, inputs)?;
+    }
+    Ok(())
+}
+
+/// Refuses to write a dataset into `out` when it holds a run.
+pub fn check_dataset_dir(out: &Path) -> Result<(), OutputRefused> {
+    if RunDir::new(out).holds_run() {
+        return Err(OutputRefused::DatasetOverRun(out.to_path_buf()));
     }
     Ok(())
 }

@@ -9,6 +9,9 @@ use std::path::{Path, PathBuf};
 /// Why the synthetic dataset was not written.
 #[derive(Debug, thiserror::Error)]
 pub enum SynthWriteError {
+    /// A number of sequences per task that is none, or more than anyone needs.
+    #[error("`option.per_task` {0}: give 1 to {MAX_PER_TASK} sequences per task")]
+    PerTask(usize),
     /// The directory holds a dataset and replacing it was not asked for.
     #[error("{} already holds a dataset; it is replaced only when asked to", .0.display())]
     Exists(PathBuf),
@@ -28,6 +31,10 @@ pub enum SynthWriteError {
     Data(#[from] DataError),
 }
 
+/// The most sequences per task a synthetic dataset holds (the paper has 60; a million
+/// sequences would be ~100 GB).
+pub const MAX_PER_TASK: usize = 100_000;
+
 /// Generates the sequences `opts` asks for and writes them as a dataset in `out`
 /// (`replace`: an existing dataset there is removed first); returns the dataset and the
 /// sequences.
@@ -38,6 +45,9 @@ pub fn write_synthetic(
     replace: bool,
     progress: impl FnMut(usize, usize),
 ) -> Result<(Dataset, Vec<Sequence>), SynthWriteError> {
+    if !(1..=MAX_PER_TASK).contains(&opts.per_task) {
+        return Err(SynthWriteError::PerTask(opts.per_task));
+    }
     if out.join(MANIFEST).exists() {
         if !replace {
             return Err(SynthWriteError::Exists(out.to_path_buf()));
