@@ -6,7 +6,7 @@
 //! sweep spec's keys, a user's values).
 
 /// A field as the library's messages name it, and the flag that sets it.
-const FIELD_FLAGS: [(&str, &str); 36] = [
+const FIELD_FLAGS: [(&str, &str); 44] = [
     ("request.profile", "--profile"),
     ("request.profile_mismatch_ok", "--profile-mismatch-ok"),
     ("request.unchecked", "--unchecked"),
@@ -55,6 +55,14 @@ const FIELD_FLAGS: [(&str, &str); 36] = [
     ("option.array", "--array"),
     ("option.partition", "--partition"),
     ("option.time", "--time"),
+    ("option.cpus_per_task", "--cpus-per-task"),
+    ("option.max_parallel", "--max-parallel"),
+    ("option.parallelism", "--parallelism"),
+    ("option.jobs", "--jobs"),
+    ("option.workers", "--workers"),
+    ("option.index", "--index"),
+    ("option.partial", "--partial"),
+    ("option.mixed_engines", "--mixed-engines"),
 ];
 
 /// `text` with every field the library names in backticks written as its flag.
