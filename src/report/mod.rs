@@ -22,6 +22,7 @@ mod runs;
 mod scene;
 mod style;
 mod svg;
+mod sweep_collect;
 mod sweep_figures;
 mod tables;
 
@@ -46,6 +47,7 @@ pub use scene::{
 };
 pub use style::{jitter, PolicyColors, DASHES, MARKERS, PALETTE, SURVIVAL_JITTER};
 pub use svg::{figure_svg, svg_figures, SvgFigure};
+pub use sweep_collect::{collect_sweep, CollectError, CollectedSweep, SweepCollect};
 pub use sweep_figures::{budget_ms, label_cells, sweep_charts, sweep_title};
 pub use tables::{
     all_tasks, columns, comparison_markdown, diagnostics_multi_table, diagnostics_table,

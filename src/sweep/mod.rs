@@ -5,6 +5,12 @@
 //! *what has run*, so any engine that can start `thorarena sweep task DIR --index I` —
 //! the local pool, a Slurm job array, a Kubernetes Indexed Job — can execute a sweep.
 //!
+//! Each `thorarena sweep` command is one call here — [`plan_sweep`], [`run_sweep`],
+//! [`run_engine_task`], [`SweepStatus`], [`slurm_array`], [`write_k8s_job`] — and
+//! `collect`, whose last product is a report, is `report::collect_sweep` over
+//! [`planned_sequences`] and [`CountedTasks`]; the command line only parses, calls and
+//! prints what they return or tell.
+//!
 //! Layout of a sweep directory:
 //!
 //! ```text
@@ -23,8 +29,14 @@ mod attempt;
 mod axes;
 mod cells;
 mod check;
+mod cluster;
+mod counted_tasks;
+mod engine_task;
 mod k8s;
+mod local_run;
 mod plan;
+mod planned_datasets;
+mod planning;
 mod pool;
 pub mod process_group;
 mod results_csv;
@@ -32,6 +44,7 @@ mod scale_fill;
 mod slurm;
 mod spec;
 mod status;
+mod status_report;
 mod task_dir;
 mod text;
 mod verify;
@@ -39,11 +52,17 @@ mod verify;
 pub use array::compact_ranges;
 pub use attempt::{run_task, Outcome};
 pub use cells::{CellFaults, CellLatency, CellResult};
+pub use cluster::{slurm_array, write_k8s_job, K8sJob, SlurmArray, WrittenK8sJob};
+pub use counted_tasks::CountedTasks;
+pub use engine_task::{available_cores, run_engine_task, EngineTask, TaskEnded};
 pub use k8s::{k8s_manifest, k8s_manifest_path, write_k8s_manifest, K8sRequest};
+pub use local_run::{run_sweep, LocalRun, RunFinished, RunObserver, RunProgress, RunStarting};
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
     PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
 };
+pub use planned_datasets::{changed_datasets, planned_sequences};
+pub use planning::{check_cells_load, plan_sweep, PlannedSweep};
 pub use pool::{run_pool, Pool, PoolProgress, TaskResult};
 pub use results_csv::{results_csv, results_rows, write_results_csv, ResultsRow, RESULTS_CSV_FILE};
 pub use scale_fill::{finish_with_shard_runs, write_large_spec, ScaleFillError};
@@ -53,15 +72,17 @@ pub use slurm::{
 };
 pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
+pub use status_report::SweepStatus;
 pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_FILE};
 pub use text::{
     create_log, log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
 };
 pub use verify::{check_task_run, CheckedCensus, RunProblem};
 
+use crate::motion::DataError;
 use std::path::PathBuf;
 
-/// Errors of sweep specs, plans and task records.
+/// Errors of sweep specs, plans, task records, and of the commands over them.
 #[derive(Debug, thiserror::Error)]
 pub enum SweepError {
     /// A file could not be read or written.
@@ -131,6 +152,210 @@ pub enum SweepError {
     /// A task's run cannot be read or flushed.
     #[error(transparent)]
     Results(#[from] crate::results::ResultsError),
+    /// A planned dataset cannot be loaded.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// An option that counts something is 0.
+    #[error("`{option}` must be at least 1")]
+    Zero {
+        /// The option, as the library names it (`option.jobs`).
+        option: &'static str,
+    },
+    /// A path given does not exist (or cannot be made absolute).
+    #[error("{} does not exist: {source}", .path.display())]
+    Missing {
+        /// The path as given.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+
+    // Planning (`sweep plan`): the spec's own names are quoted, they are its keys.
+    /// The spec file cannot be found.
+    #[error("reading the sweep spec {}: {source}", .path.display())]
+    SpecMissing {
+        /// The spec as given.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// The spec's robot does not resolve.
+    #[error("`robot` of the sweep spec: {0}")]
+    SpecRobot(#[source] crate::registry::RegistryError),
+    /// A dataset of the spec does not exist.
+    #[error("`datasets`: {name} (relative to {}) does not exist: {source}", .base.display())]
+    DatasetMissing {
+        /// The dataset as the spec writes it.
+        name: String,
+        /// The spec's directory.
+        base: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// A dataset of the spec cannot be read.
+    #[error("`datasets`: {name}: {source}")]
+    DatasetUnreadable {
+        /// The dataset as the spec writes it.
+        name: String,
+        /// The cause.
+        source: DataError,
+    },
+    /// A dataset of the spec holds no sequence.
+    #[error("`datasets`: {name} holds no sequence")]
+    DatasetEmpty {
+        /// The dataset as the spec writes it.
+        name: String,
+    },
+    /// A cell's setting does not parse.
+    #[error("cell {cell}: setting `{setting}` is not force, no-force, a number or push:<N>")]
+    CellSetting {
+        /// The cell.
+        cell: usize,
+        /// Its setting.
+        setting: String,
+    },
+    /// A cell's evaluation is one `eval` refuses.
+    #[error("cell {cell} (policy `{policy}`): {source}")]
+    CellRequest {
+        /// The cell.
+        cell: usize,
+        /// Its policy's name.
+        policy: String,
+        /// Why `eval` refuses it (boxed: it is large, and rare).
+        source: Box<crate::evaluation::SpecError>,
+    },
+    /// A cell's policy argument does not parse.
+    #[error("cell {cell} (policy `{policy}`): {source}")]
+    CellPolicy {
+        /// The cell.
+        cell: usize,
+        /// Its policy's name.
+        policy: String,
+        /// Why (boxed: it is large, and rare).
+        source: Box<crate::registry::RegistryError>,
+    },
+    /// A policy's network does not load.
+    #[error("policy `{policy}`: {source}")]
+    PolicyLoad {
+        /// The policy's name.
+        policy: String,
+        /// Why (boxed: it is large, and rare).
+        source: Box<crate::registry::RegistryError>,
+    },
+
+    // Running and collecting.
+    /// A dataset differs from the one planned: its runs would be scored against other
+    /// references.
+    #[error(
+        "dataset {} changed since the sweep was planned (content hash {planned} then, {now} now): its runs would be scored against other references; restore it, or plan a new sweep",
+        .dataset.display()
+    )]
+    DatasetChanged {
+        /// The dataset directory.
+        dataset: PathBuf,
+        /// The start of its hash as planned.
+        planned: String,
+        /// The start of its hash now.
+        now: String,
+    },
+    /// A planned dataset cannot be opened.
+    #[error("dataset of cell {cell}: {source}")]
+    CellDataset {
+        /// The first cell planning it.
+        cell: usize,
+        /// Why.
+        source: DataError,
+    },
+    /// No task index was given and the environment names none.
+    #[error("no task index: give `option.index` I, or run under a Slurm array (SLURM_ARRAY_TASK_ID) or a Kubernetes Indexed Job (JOB_COMPLETION_INDEX)")]
+    NoTaskIndex,
+    /// A cluster engine's variable holds no number.
+    #[error("${var} = `{value}` is not a task index: {source}")]
+    BadEnvIndex {
+        /// The variable.
+        var: &'static str,
+        /// Its value.
+        value: String,
+        /// The parser's complaint.
+        source: std::num::ParseIntError,
+    },
+    /// A task's attempt failed; its `failed.json` says why.
+    #[error("task {index} failed: {reason} (details: {})", .details.display())]
+    TaskFailed {
+        /// The task.
+        index: usize,
+        /// Why, in one line.
+        reason: String,
+        /// Its `failed.json`.
+        details: PathBuf,
+    },
+    /// Tasks of `sweep run` failed.
+    #[error("{failed} task(s) failed; `thorarena sweep status {}` shows why, `sweep run` again retries them", .dir.display())]
+    TasksFailed {
+        /// How many.
+        failed: usize,
+        /// The sweep directory.
+        dir: PathBuf,
+    },
+    /// A task marked done holds another configuration's run.
+    #[error("{why}; a run that is not the cell's is never scored under its label: remove {} and run the task again", .run_dir.display())]
+    NotThisTask {
+        /// What differs.
+        why: String,
+        /// The task's run directory.
+        run_dir: PathBuf,
+    },
+    /// `collect` of a sweep with unfinished cells, not asked to collect partially.
+    #[error(
+        "{unfinished} of {cells} cells are unfinished (cells {unfinished_cells}; tasks not done: {not_done}{not_counted}): run them (`sweep run` resumes them), or collect with `option.partial`"
+    )]
+    Unfinished {
+        /// Cells unfinished.
+        unfinished: usize,
+        /// Cells planned.
+        cells: usize,
+        /// The unfinished cells as ranges.
+        unfinished_cells: String,
+        /// The tasks not done as ranges.
+        not_done: String,
+        /// `; task I: why` for each task marked done whose run does not count.
+        not_counted: String,
+    },
+
+    // Handing the sweep to Slurm.
+    /// `sbatch` could not be started.
+    #[error("running sbatch (is Slurm's client installed and configured?): {0}")]
+    SbatchNotRun(#[source] std::io::Error),
+    /// `sbatch` exited with an error.
+    #[error("{command}: {status}; {failed} task(s) failed, {not_done} not done (`thorarena sweep status {}`)", .dir.display())]
+    SbatchFailed {
+        /// The command, without the script.
+        command: String,
+        /// How it exited.
+        status: std::process::ExitStatus,
+        /// Tasks failed then.
+        failed: usize,
+        /// Tasks not done then.
+        not_done: usize,
+        /// The sweep directory.
+        dir: PathBuf,
+    },
+    /// The array has finished, and tasks are not done.
+    #[error("the array finished with {not_done} task(s) not done: {ranges}")]
+    ArrayNotDone {
+        /// How many.
+        not_done: usize,
+        /// Which, as ranges.
+        ranges: String,
+    },
+}
+
+/// `n`, refused as [`SweepError::Zero`] naming `option` when it is 0.
+fn at_least_one(n: usize, option: &'static str) -> Result<usize, SweepError> {
+    if n == 0 {
+        return Err(SweepError::Zero { option });
+    }
+    Ok(n)
 }
 
 impl SweepError {
