@@ -176,7 +176,7 @@ fn a_run_resumed_after_a_kill_ends_as_the_uninterrupted_run() {
     )
     .unwrap_err();
     match e {
-        BenchmarkError::Results(ResultsError::OtherConfiguration { differences, .. }) => {
+        BenchmarkError::ResumedOther(ResultsError::OtherConfiguration { differences, .. }) => {
             assert_eq!(differences, ["settings"])
         }
         e => panic!("not the resume refusal: {e}"),

@@ -6,7 +6,7 @@
 
 use super::{evaluate, BenchmarkError, EvalObserver, EvalOptions, Evaluated, Starting};
 use crate::episode::EpisodeTrace;
-use crate::evaluation::{EpisodeRecord, EvalRequest, EvalSpec, SpecError};
+use crate::evaluation::{EngineChoice, EpisodeRecord, EvalRequest, EvalSpec, SpecError};
 use crate::names::{check_name, NameError};
 use crate::policy::SessionOptions;
 use crate::registry::{open_policy, OpenPolicyError, PolicyArg, PolicyTarget, RegistryError};
@@ -37,6 +37,27 @@ pub struct CrosscheckRequest {
     pub bootstrap: usize,
     /// Seconds from each episode's start over which the joint angles are compared.
     pub divergence_s: f64,
+}
+
+impl CrosscheckRequest {
+    /// The two runs of `request`: rapier on the robot model (an `mjcf` is MuJoCo's), and
+    /// MuJoCo with its own physics step when `mujoco_physics_dt_s` gives one.
+    pub fn engine_requests(
+        request: &EvalRequest,
+        mujoco_physics_dt_s: Option<f64>,
+    ) -> [EvalRequest; 2] {
+        let rapier = EvalRequest {
+            engine: EngineChoice::Rapier,
+            mjcf: None,
+            ..request.clone()
+        };
+        let mujoco = EvalRequest {
+            engine: EngineChoice::Mujoco,
+            physics_dt_s: mujoco_physics_dt_s.or(request.physics_dt_s),
+            ..request.clone()
+        };
+        [rapier, mujoco]
+    }
 }
 
 /// Why a crosscheck could not run.

@@ -32,6 +32,9 @@ pub enum BenchmarkError {
     /// The run directory could not be read or written.
     #[error(transparent)]
     Results(#[from] ResultsError),
+    /// A run resumed under another configuration than the one it was started with.
+    #[error("`option.resume`: {0}; use another `option.out`, or `option.overwrite`")]
+    ResumedOther(ResultsError),
     /// The dataset of a run could not be read.
     #[error(transparent)]
     Data(#[from] DataError),
@@ -265,7 +268,10 @@ pub fn evaluate(
         .map(|(name, value)| (name.to_string(), value))
         .collect();
     header.sanity = Some(sanity(spec, policy)?);
-    let started = run.start(&header, options.resume)?;
+    let started = run.start(&header, options.resume).map_err(|e| match e {
+        e @ ResultsError::OtherConfiguration { .. } => BenchmarkError::ResumedOther(e),
+        e => e.into(),
+    })?;
     let finished: HashSet<_> = started.kept.iter().map(EpisodeRecord::key).collect();
     let jobs: Vec<(usize, usize)> = header
         .planned_jobs()

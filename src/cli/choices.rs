@@ -3,6 +3,7 @@
 //! variant by variant of the same name.
 
 use thorarena::evaluation::{EngineChoice, LatencyMode, MissRule};
+use thorarena::physics::PdForm;
 use thorarena::scenario::Scenario;
 
 /// A value enum for `--flag` and its conversion into the library's enum of the same
@@ -64,5 +65,15 @@ choice! {
         Rapier,
         /// MuJoCo on the MJCF given by --mjcf (a build with the `mujoco` feature).
         Mujoco,
+    }
+}
+
+choice! {
+    /// `sim trace --pd`.
+    PdFormArg => PdForm {
+        /// Explicit clamped kp torque, kd as implicit joint damping.
+        Hybrid,
+        /// Explicit clamped PD torque.
+        Explicit,
     }
 }

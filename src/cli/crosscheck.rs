@@ -12,7 +12,7 @@ use thorarena::benchmark::{
     compare_engines, CrosscheckObserver, CrosscheckRequest, EvalObserver, Evaluated,
 };
 use thorarena::evaluation::EvalSpec;
-use thorarena::report::crosscheck_tables;
+use thorarena::report::crosscheck_report;
 use thorarena::results::RunDir;
 
 /// Arguments of `crosscheck`.
@@ -47,11 +47,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.run.engine != EngineArg::Rapier {
         anyhow::bail!("crosscheck runs both engines: leave out --engine");
     }
-    let mut rapier = args.run.request(&args.policy);
-    rapier.mjcf = None;
-    let mut mujoco = args.run.request(&args.policy);
-    mujoco.engine = EngineArg::Mujoco.into();
-    mujoco.physics_dt_s = args.mujoco_physics_dt.or(mujoco.physics_dt_s);
+    let [rapier, mujoco] =
+        CrosscheckRequest::engine_requests(&args.run.request(&args.policy), args.mujoco_physics_dt);
     let request = CrosscheckRequest {
         rapier,
         mujoco,
@@ -66,15 +63,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         progress: None,
     };
     let compared = compare_engines(&request, &mut terminal)?;
-    let (check, seconds) = (&compared.check, args.divergence_seconds);
-    println!("{}", crosscheck_tables("setting", &check.settings, seconds));
-    if check.push_levels.len() < check.settings.len() {
-        println!("Per push force, over its directions:\n");
-        println!(
-            "{}",
-            crosscheck_tables("push per hand", &check.push_levels, seconds)
-        );
-    }
+    println!(
+        "{}",
+        crosscheck_report(&compared.check, args.divergence_seconds)
+    );
     let [json, csv] = &compared.files;
     eprintln!("wrote {} and {}", json.display(), csv.display());
     Ok(())

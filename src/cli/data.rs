@@ -1,9 +1,10 @@
-//! `thorarena data …`: import motion files, describe a dataset.
+//! `thorarena data …`: import motion files, describe, export or synthesise a dataset.
 
-use std::path::{Path, PathBuf};
-use thorarena::motion::import::news::{converted_lines, imported_line};
-use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
-use thorarena::motion::{Dataset, GroundCheck, Sequence};
+use std::path::PathBuf;
+use thorarena::motion::import::news::ImportLines;
+use thorarena::motion::import::{import_batch, ImportBatch, SourceFormat};
+use thorarena::motion::synth::{write_synthetic, SynthOptions, SynthWriteError};
+use thorarena::motion::{describe, Dataset};
 use thorarena::robot::RobotModel;
 
 /// `thorarena data …`
@@ -155,7 +156,7 @@ pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
         DataCommand::Import(a) => import(a),
         DataCommand::Info(a) => info(a),
         DataCommand::Export(a) => export(a),
-        DataCommand::Synth(a) => super::data_synth::run(a),
+        DataCommand::Synth(a) => synth(a),
     }
 }
 
@@ -174,25 +175,6 @@ fn source_format(args: &ImportArgs, robot: &RobotModel) -> anyhow::Result<Source
     })
 }
 
-/// Prints what an import does, file by file.
-struct ImportProgress;
-
-impl ImportObserver for ImportProgress {
-    fn reading(&mut self, input: &Path) {
-        eprintln!("{}:", input.display());
-    }
-
-    fn converted(&mut self, _input: &Path, seq: &Sequence, ground: Option<&GroundCheck>) {
-        for line in converted_lines(seq, ground) {
-            eprintln!("  {line}");
-        }
-    }
-
-    fn imported(&mut self, input: &Path, seq: &Sequence) {
-        eprintln!("{}", imported_line(input, seq));
-    }
-}
-
 fn import(args: &ImportArgs) -> anyhow::Result<()> {
     let robot = thorarena::registry::robot(&args.robot)?;
     let batch = ImportBatch {
@@ -206,7 +188,13 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
         trim_glitches: args.trim_glitches,
         ground_correct: args.ground_correct,
     };
-    let ds = import_batch(&args.out, &robot, &batch, &mut ImportProgress)?;
+    let mut say = |line: &str| eprintln!("{line}");
+    let ds = import_batch(
+        &args.out,
+        &robot,
+        &batch,
+        &mut ImportLines { say: &mut say },
+    )?;
     let sequences = thorarena::motion::plural(ds.len(), "sequence");
     eprintln!("{}: {sequences}", ds.dir.display());
     Ok(())
@@ -228,7 +216,40 @@ fn export(args: &ExportArgs) -> anyhow::Result<()> {
 fn info(args: &InfoArgs) -> anyhow::Result<()> {
     let robot = thorarena::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
-    let text = thorarena::motion::describe(&ds, &ds.load_all()?, &robot);
+    let text = describe(&ds, &ds.load_all()?, &robot);
     print!("{}", super::flags::as_flags(&text));
+    Ok(())
+}
+
+/// `data synth`: the synthetic six-task dataset written, then described.
+fn synth(args: &SynthArgs) -> anyhow::Result<()> {
+    thorarena::results::check_dataset_dir(&args.out)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
+    let opts = SynthOptions {
+        per_task: args.per_task,
+        seed: args.seed,
+        fps: 50.0,
+        tasks: args.tasks.clone(),
+    };
+    let started = std::time::Instant::now();
+    let written = write_synthetic(&args.out, &robot, &opts, args.force, |done, total| {
+        if done % args.per_task.max(1) == 0 || done == total {
+            eprintln!(
+                "synth: {done}/{total} sequences ({:.1} s)",
+                started.elapsed().as_secs_f64()
+            );
+        }
+    });
+    let (ds, seqs) = match written {
+        Err(e @ SynthWriteError::Exists(_)) => anyhow::bail!("{e}: pass --force"),
+        written => written?,
+    };
+    print!("{}", super::flags::as_flags(&describe(&ds, &seqs, &robot)));
+    eprintln!(
+        "{}: {} sequences in {:.1} s",
+        ds.dir.display(),
+        ds.len(),
+        started.elapsed().as_secs_f64()
+    );
     Ok(())
 }

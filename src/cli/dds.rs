@@ -59,7 +59,7 @@ pub struct Args {
     /// `+`, e.g. `select+A@4s`; buttons R1 L1 start select R2 L2 F1 F2 A B X Y up right
     /// down left). Carried in `rt/lowstate`'s `wireless_remote` and on
     /// `rt/wirelesscontroller`.
-    #[arg(long, default_value = "", value_parser = parse_remote)]
+    #[arg(long, default_value = "")]
     pub remote: RemoteScript,
     /// When the episode (and the reference clock) starts: `first-command`, or a button or
     /// chord `--remote` presses (e.g. `A`: a deploy script's "run the policy";
@@ -143,8 +143,4 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     }
     eprintln!("results in {}", args.out.display());
     Ok(())
-}
-
-fn parse_remote(text: &str) -> Result<RemoteScript, String> {
-    RemoteScript::parse(text).map_err(|e| e.to_string())
 }

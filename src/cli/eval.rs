@@ -1,6 +1,10 @@
 //! `thorarena eval`: the benchmark — every sequence of a dataset with and without force,
 //! scored with FATS and the diagnostics; results streamed to a run directory that can be
 //! resumed after a crash, or sharded across machines and merged.
+//!
+//! `thorarena merge`: the shards of one evaluation combined into the single run they add
+//! up to — the same records, summary and tables as an unsharded run
+//! ([`thorarena::benchmark::merge`]).
 
 pub use super::run_args::RunArgs;
 use super::run_args::REQUEST_CONFLICTS;
@@ -8,7 +12,7 @@ use anyhow::Context;
 use std::path::PathBuf;
 use thorarena::evaluation::{EvalRequest, EvalSpec};
 use thorarena::registry::{open_policy, PolicyTarget};
-use thorarena::results::RunTarget;
+use thorarena::results::{RunDir, RunTarget};
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
@@ -36,13 +40,8 @@ pub struct Args {
     pub run: RunArgs,
 }
 
-/// The checked evaluation `args` ask for with `policy`; its advice is printed.
-pub(super) fn load_spec(args: &RunArgs, policy: &str) -> anyhow::Result<EvalSpec> {
-    load_request(&args.request(policy))
-}
-
 /// The checked evaluation of `request`; its advice is printed.
-fn load_request(request: &EvalRequest) -> anyhow::Result<EvalSpec> {
+pub(super) fn load_request(request: &EvalRequest) -> anyhow::Result<EvalSpec> {
     let spec = EvalSpec::load(request)?;
     for advice in &spec.advice {
         eprintln!("{}", super::flags::as_flags(&advice.to_string()));
@@ -86,4 +85,37 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     )?;
     let out = target.out_for(policy.name())?;
     super::eval_run::evaluate(args.run.resume, &spec, policy.as_mut(), &out)
+}
+
+/// Arguments of `merge`.
+#[derive(Debug, clap::Args)]
+pub struct MergeArgs {
+    /// Run directories (shards of the same evaluation).
+    #[arg(required = true)]
+    pub runs: Vec<PathBuf>,
+    /// Output run directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Robot.
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+    /// Replace a run already in `--out` (never one of the shards).
+    #[arg(long)]
+    pub overwrite: bool,
+}
+
+/// `merge`: the shards written as one run, its tables printed.
+pub(super) fn merge(args: &MergeArgs) -> anyhow::Result<()> {
+    thorarena::results::check_dir(&args.out, args.overwrite, &args.runs)?;
+    let robot = thorarena::registry::robot(&args.robot)?;
+    let shards: Vec<RunDir> = args.runs.iter().map(RunDir::new).collect();
+    let merged = thorarena::benchmark::merge(&shards, &RunDir::new(&args.out), &robot)?;
+    println!("{}", merged.tables);
+    eprintln!(
+        "merged {} runs, {} episodes → {}",
+        args.runs.len(),
+        merged.summary.episodes,
+        args.out.display()
+    );
+    Ok(())
 }

@@ -3,11 +3,11 @@
 
 use super::flags::as_flags;
 use std::path::Path;
-use thorarena::benchmark::{BenchmarkError, EvalObserver, EvalOptions, Evaluated, Starting};
+use thorarena::benchmark::{EvalObserver, EvalOptions, Evaluated, Starting};
 use thorarena::episode::EpisodeTrace;
 use thorarena::evaluation::{EpisodeRecord, EvalSpec};
 use thorarena::policy::Policy;
-use thorarena::results::{ResultsError, RunDir};
+use thorarena::results::RunDir;
 
 /// The progress of a run on the terminal: what it starts with, a bar over its episodes.
 pub(super) struct Progress {
@@ -41,7 +41,7 @@ impl Progress {
 
     /// Clears the bar.
     pub fn finish(&self) {
-        self.bar.finish_and_clear();
+        self.bar.finish_and_clear()
     }
 }
 
@@ -84,12 +84,7 @@ pub(super) fn evaluate(
     };
     let result = thorarena::benchmark::evaluate(spec, policy, &run, options, &mut progress);
     progress.finish();
-    let done = result.map_err(|e| match e {
-        BenchmarkError::Results(e @ ResultsError::OtherConfiguration { .. }) => {
-            anyhow::anyhow!("--resume: {e}; use another --out, or --overwrite")
-        }
-        e => e.into(),
-    })?;
+    let done = result?;
     print_evaluated(&done, spec, &run);
     Ok(done.check_policy(out)?)
 }

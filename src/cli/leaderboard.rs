@@ -7,10 +7,8 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
-use thorarena::benchmark::{EvalObserver, Starting};
-use thorarena::evaluation::EpisodeRecord;
 use thorarena::leaderboard::{
-    run_leaderboard_job, CompliancePair, LeaderboardJob, LeaderboardObserver, OwnClip, PairOptions,
+    run_leaderboard_job, CompliancePair, LeaderboardJob, OwnClip, PairOptions, ProgressLines,
 };
 
 /// Arguments of `leaderboard`.
@@ -31,7 +29,7 @@ pub struct Args {
     /// A single-clip policy on its own clip, `POLICY@DATASET` (e.g.
     /// `beyondmimic:fastsac_g1_29dof_dancing.onnx@dance`, the dance imported from the
     /// network); each runs under --clip-settings in a table of its own. Repeat for each.
-    #[arg(long = "clip", value_parser = parse_clip)]
+    #[arg(long = "clip")]
     pub clips: Vec<OwnClip>,
     /// A compliant policy and its stiff twin trained on the same clip, on that clip:
     /// `COMPLIANT vs BASELINE@DATASET` (a dataset of the clip alone, e.g.
@@ -39,7 +37,7 @@ pub struct Args {
     /// under no force, --pair-pushes from --pair-headings, and the hand forces of a synthetic
     /// --pair-force-task sequence replayed on the clip, the compliant one also at each
     /// --pair-stiffness. Tables in OUT/pairs.md, every cell in OUT/pairs.csv. Repeat for each.
-    #[arg(long = "pair", value_parser = parse_pair)]
+    #[arg(long = "pair")]
     pub pairs: Vec<CompliancePair>,
     /// The compliant member's stiffness sweep, N/m, comma separated (a softmimic network).
     #[arg(long, value_delimiter = ',', default_value = "30,60,150,300,600")]
@@ -117,7 +115,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         unchecked: args.unchecked,
         command: std::env::args().skip(1).collect::<Vec<_>>().join(" "),
     };
-    let written = run_leaderboard_job(&job, &mut Progress::default())?;
+    let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
+    let written = run_leaderboard_job(&job, &mut ProgressLines::new(&mut say))?;
     if let Some([md, csv]) = &written.pair_files {
         eprintln!("wrote {} and {}", md.display(), csv.display());
     }
@@ -128,57 +127,4 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let wall_s = started.elapsed().as_secs_f64();
     eprintln!("wrote {} ({wall_s:.0} s in all)", written.page.display());
     Ok(())
-}
-
-fn parse_pair(text: &str) -> Result<CompliancePair, String> {
-    CompliancePair::parse(text)
-        .ok_or_else(|| format!("`{text}`: give COMPLIANT vs BASELINE@DATASET"))
-}
-
-fn parse_clip(text: &str) -> Result<OwnClip, String> {
-    OwnClip::parse(text).ok_or_else(|| format!("`{text}`: give POLICY@DATASET"))
-}
-
-/// One line per run, and one per tenth of its episodes.
-#[derive(Default)]
-struct Progress {
-    to_run: usize,
-    done: usize,
-}
-
-impl LeaderboardObserver for Progress {
-    fn run_starting(&mut self, index: usize, total: usize, policy: &str, engine: &str) {
-        eprintln!("[{}/{total}] {policy} on {engine}", index + 1);
-    }
-
-    fn eval_observer(&mut self) -> &mut dyn EvalObserver {
-        self
-    }
-
-    fn note(&mut self, text: &str) {
-        eprintln!("{}", super::flags::as_flags(text));
-    }
-}
-
-impl EvalObserver for Progress {
-    fn starting(&mut self, s: &Starting) {
-        self.to_run = s.to_run;
-        self.done = 0;
-        if let Some(sanity) = &s.header.sanity {
-            eprintln!("  sanity check: {}", sanity.label());
-        }
-        eprintln!(
-            "  {} episodes to run ({} already done)",
-            s.to_run,
-            s.started.kept.len()
-        );
-    }
-
-    fn episode(&mut self, _: &EpisodeRecord, _: Option<&thorarena::episode::EpisodeTrace>) {
-        self.done += 1;
-        let step = (self.to_run / 10).max(1);
-        if self.done.is_multiple_of(step) || self.done == self.to_run {
-            eprintln!("  {}/{} episodes", self.done, self.to_run);
-        }
-    }
 }

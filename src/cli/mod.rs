@@ -1,32 +1,25 @@
 //! The `thorarena` command line: the argument tree and one module per subcommand.
 
 mod bench_eval;
-mod bench_inference;
 mod bench_ipc;
 mod bench_physics;
-mod bench_sweep;
 mod choices;
 mod client;
 mod crosscheck;
 mod data;
-mod data_synth;
 mod dds;
 mod eval;
 mod eval_run;
 pub(crate) mod flags;
 mod leaderboard;
 mod logging;
-mod merge;
-mod policies;
 mod policy_arg;
 mod policy_check;
 mod report_html;
-mod robot_info;
+mod robot;
 mod run_args;
 mod serve;
-mod sim_trace;
 mod sweep;
-mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -74,7 +67,7 @@ pub enum Command {
     #[command(subcommand)]
     Policy(policy_check::PolicyCommand),
     /// Merge the shards of one evaluation (`eval --shard I/N`) into one run.
-    Merge(merge::Args),
+    Merge(eval::MergeArgs),
     /// Run the same episodes on rapier and on MuJoCo and compare them (survival, keypoint
     /// error, FATS per setting and per push force, with bootstrap confidence intervals;
     /// joint-angle divergence over the first second).
@@ -85,7 +78,7 @@ pub enum Command {
     /// one eval run per (policy, engine), one table, the paper's tables and figures.
     Leaderboard(leaderboard::Args),
     /// Replay one episode's trace (`eval --trace`) in 3D in a self-contained HTML page.
-    View(view::Args),
+    View(report_html::ViewArgs),
     /// Inspect a robot model.
     #[command(subcommand)]
     Robot(RobotCommand),
@@ -108,16 +101,16 @@ pub enum Command {
 #[derive(Debug, Subcommand)]
 pub enum RobotCommand {
     /// Print joints (order, limits, effort, armature), bodies with masses, keypoints, hands.
-    Info(robot_info::Args),
+    Info(robot::Args),
     /// Print the robot as an MJCF: what `eval --engine mujoco` simulates without --mjcf.
-    Mjcf(robot_info::MjcfArgs),
+    Mjcf(robot::MjcfArgs),
 }
 
 /// `thorarena sim …`
 #[derive(Debug, Subcommand)]
 pub enum SimCommand {
     /// Run an open-loop scenario and print its inputs and trajectory as one JSON object.
-    Trace(sim_trace::Args),
+    Trace(robot::TraceArgs),
 }
 
 /// `thorarena bench …`
@@ -129,13 +122,13 @@ pub enum BenchCommand {
     /// the same run: simulated s per wall s, cores busy, run ÷ floor.
     Eval(bench_eval::Args),
     /// A network's cost per environment against the batch size of one tract call.
-    Inference(bench_inference::Args),
+    Inference(bench_physics::InferenceArgs),
     /// Policy round trip over shared memory (Rust, C++, Python echo policies) against a
     /// Unix-socket baseline moving the same bytes.
     Ipc(bench_ipc::Args),
     /// Sweep overhead: `sweep run` against `eval` on the same episodes, and planning a
     /// sweep of thousands of tasks.
-    Sweep(bench_sweep::Args),
+    Sweep(bench_eval::SweepArgs),
     /// The socket baseline's echo peer (started by `bench ipc`).
     #[command(hide = true)]
     SocketPeer(bench_ipc::PeerArgs),
@@ -151,24 +144,27 @@ pub fn run() -> anyhow::Result<()> {
         }
     }
     match cli.command {
-        Command::Robot(RobotCommand::Info(args)) => robot_info::run(&args),
-        Command::Robot(RobotCommand::Mjcf(args)) => robot_info::mjcf(&args),
-        Command::Sim(SimCommand::Trace(args)) => sim_trace::run(&args),
+        Command::Robot(RobotCommand::Info(args)) => robot::run(&args),
+        Command::Robot(RobotCommand::Mjcf(args)) => robot::mjcf(&args),
+        Command::Sim(SimCommand::Trace(args)) => robot::trace(&args),
         Command::Bench(BenchCommand::Physics(args)) => bench_physics::run(&args),
         Command::Bench(BenchCommand::Eval(args)) => bench_eval::run(&args),
-        Command::Bench(BenchCommand::Inference(args)) => bench_inference::run(&args),
+        Command::Bench(BenchCommand::Inference(args)) => bench_physics::inference(&args),
         Command::Bench(BenchCommand::Ipc(args)) => bench_ipc::run(&args),
-        Command::Bench(BenchCommand::Sweep(args)) => bench_sweep::run(&args),
+        Command::Bench(BenchCommand::Sweep(args)) => bench_eval::sweep(&args),
         Command::Bench(BenchCommand::SocketPeer(args)) => bench_ipc::run_peer(&args),
         Command::Data(cmd) => data::run(&cmd),
         Command::Eval(args) => eval::run(&args),
-        Command::Merge(args) => merge::run(&args),
-        Command::Policies => policies::run(),
+        Command::Merge(args) => eval::merge(&args),
+        Command::Policies => {
+            print!("{}", flags::as_flags(&thorarena::registry::families_text()));
+            Ok(())
+        }
         Command::Leaderboard(args) => leaderboard::run(&args),
         Command::Policy(cmd) => policy_check::run(&cmd),
         Command::Crosscheck(args) => crosscheck::run(&args),
         Command::Report(args) => report_html::run(&args),
-        Command::View(args) => view::run(&args),
+        Command::View(args) => report_html::view(&args),
         Command::Serve(args) => serve::run(&args),
         Command::Client(args) => client::run(&args),
         Command::Dds(args) => dds::run(&args),

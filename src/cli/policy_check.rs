@@ -70,12 +70,5 @@ pub(super) fn run(cmd: &PolicyCommand) -> anyhow::Result<()> {
     } else {
         print!("{report}");
     }
-    if !report.passed() {
-        anyhow::bail!(
-            "policy check failed ({}): under `{}` this policy is wired wrong, or cannot track at all; its scores would not say how it handles force",
-            report.failed().join(", "),
-            report.profile
-        );
-    }
-    Ok(())
+    Ok(report.verdict()?)
 }

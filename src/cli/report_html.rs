@@ -1,12 +1,16 @@
-//! `thorarena report`: one self-contained HTML page comparing runs (tables side by side,
-//! FATS radar, tracking vs survival, low- vs high-force error, policy round trips), with
-//! the tables also as Markdown and CSV next to it, and every figure as an SVG file in
-//! `<stem>-figures/`, for papers.
+//! The self-contained HTML pages. `thorarena report`: one page comparing runs (tables
+//! side by side, FATS radar, tracking vs survival, low- vs high-force error, policy round
+//! trips), with the tables also as Markdown and CSV next to it, and every figure as an SVG
+//! file in `<stem>-figures/`, for papers.
+//!
+//! `thorarena view`: one episode's rollout trace (`eval --trace`) as a 3D replay in a
+//! self-contained HTML page — the robot's collision shapes, the reference as a ghost,
+//! the replayed hand forces as arrows, a timeline, and the keypoint error under it.
 
 use std::path::PathBuf;
 use thorarena::report::{
-    label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, Page,
-    WebBundle, WrittenReport, MIXED_ENGINES_WHY,
+    label_engines, load_runs, mixed_engines, write_comparison_report, write_view, ComparisonFiles,
+    Page, WebBundle, WrittenReport, MIXED_ENGINES_WHY,
 };
 
 /// Arguments of `report`.
@@ -58,4 +62,41 @@ pub(super) fn tell_written(written: &WrittenReport, files: &ComparisonFiles) {
     for line in written.news(files) {
         eprintln!("{line}");
     }
+}
+
+/// Arguments of `view`.
+#[derive(Debug, clap::Args)]
+pub struct ViewArgs {
+    /// A trace file, `<run>/traces/<task>-<id>-<setting>.json`.
+    pub trace: PathBuf,
+    /// The HTML file to write.
+    #[arg(long, default_value = "view.html")]
+    pub out: PathBuf,
+    /// Robot the trace was recorded on (a bundled name or a robot directory).
+    #[arg(long, default_value = "g1_29dof")]
+    pub robot: String,
+    /// Replace a file of a run or a dataset with the page (never the trace shown).
+    #[arg(long)]
+    pub overwrite: bool,
+}
+
+/// `view`: the trace's replay page written.
+pub(super) fn view(args: &ViewArgs) -> anyhow::Result<()> {
+    let bundle = WebBundle::locate()?;
+    for warning in bundle.stale_warnings() {
+        eprintln!("{warning}");
+    }
+    let robot = thorarena::registry::robot(&args.robot)?;
+    let written = write_view(&args.trace, &robot, &bundle, &args.out, args.overwrite)?;
+    let shown = if written.reference_ghost {
+        ", reference ghost"
+    } else {
+        "; the trace has no reference joints: the reference shows as keypoints"
+    };
+    eprintln!(
+        "wrote {} ({} steps{shown})",
+        args.out.display(),
+        written.steps
+    );
+    Ok(())
 }

@@ -1,7 +1,7 @@
 //! `thorarena serve`: the benchmark as a service for interactive work — serve a session,
 //! evaluate whichever policy process connects, write its results, wait for the next one.
 
-use super::eval::{load_spec, RunArgs};
+use super::eval::{load_request, RunArgs};
 use super::eval_run::evaluate;
 use std::path::PathBuf;
 use thorarena::policy::Policy;
@@ -27,26 +27,19 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let ctx = load_spec(&args.run, "")?;
+    let ctx = load_request(&args.run.request(""))?;
     let session = args.run.io.session_options(ctx.io.budget_s)?;
+    let target = PolicyTarget {
+        robot: &ctx.robot,
+        profile: &ctx.profile,
+        session: &session,
+        envs: ctx.envs,
+    };
     for n in 1.. {
-        let target = PolicyTarget {
-            robot: &ctx.robot,
-            profile: &ctx.profile,
-            session: &session,
-            envs: ctx.envs,
-        };
-        let mut policy = serve_session(&args.session, &target, &mut |_| Ok(()), &mut |n| {
-            eprintln!("{n}")
-        })?;
-        // Never overwrite an earlier run: take the first free number for this policy.
-        let out = (n..)
-            .map(|k| {
-                args.out_root
-                    .join(format!("{}-{}-{k}", policy.name(), ctx.dataset_name()))
-            })
-            .find(|dir| !dir.exists())
-            .expect("some number is free");
+        let mut say = |note: &str| eprintln!("{note}");
+        let mut policy = serve_session(&args.session, &target, &mut |_| Ok(()), &mut say)?;
+        let stem = format!("{}-{}", policy.name(), ctx.dataset_name());
+        let out = thorarena::results::free_numbered_dir(&args.out_root, &stem, n);
         let result = evaluate(args.run.resume, &ctx, &mut policy as &mut dyn Policy, &out);
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {

@@ -56,6 +56,14 @@ pub struct RemoteScript {
     presses: Vec<(Duration, u16)>,
 }
 
+/// `BUTTON@SECONDS,…`, as a command line gives it ([`RemoteScript::parse`]).
+impl std::str::FromStr for RemoteScript {
+    type Err = RemoteError;
+
+    fn from_str(text: &str) -> Result<Self, RemoteError> {
+        Self::parse(text)
+    }
+}
 impl RemoteScript {
     /// `start@1s,A@2s,select+A@3s`: comma-separated presses, each a button (or a chord of
     /// buttons joined by `+`) and the time, s (the `s` is optional).

@@ -23,6 +23,7 @@ mod job;
 mod launched;
 mod outputs;
 mod pairs;
+mod progress_lines;
 
 pub use job::{run_leaderboard_job, LeaderboardJob, LeaderboardJobError};
 pub use launched::LaunchedPolicy;
@@ -33,6 +34,7 @@ pub use pairs::{
     pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember, PairOptions,
     PairResult,
 };
+pub use progress_lines::ProgressLines;
 
 /// Why the leaderboard could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -127,6 +129,15 @@ pub struct OwnClip {
     pub policy: String,
     /// The dataset holding its clip.
     pub dataset: PathBuf,
+}
+
+/// `POLICY@DATASET`, as a command line gives it.
+impl std::str::FromStr for OwnClip {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        Self::parse(text).ok_or_else(|| format!("`{text}`: give POLICY@DATASET"))
+    }
 }
 
 impl OwnClip {

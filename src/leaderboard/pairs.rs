@@ -36,6 +36,15 @@ pub struct CompliancePair {
     pub dataset: PathBuf,
 }
 
+/// `COMPLIANT vs BASELINE@DATASET`, as a command line gives it.
+impl std::str::FromStr for CompliancePair {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        Self::parse(text).ok_or_else(|| format!("`{text}`: give COMPLIANT vs BASELINE@DATASET"))
+    }
+}
+
 impl CompliancePair {
     /// `COMPLIANT vs BASELINE@DATASET` (the dataset after the last `@`).
     pub fn parse(text: &str) -> Option<Self> {

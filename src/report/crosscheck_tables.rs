@@ -70,3 +70,17 @@ pub fn crosscheck_tables(
     }
     table
 }
+
+/// A crosscheck's report as `thorarena crosscheck` prints it: the tables per setting, and
+/// per push force over its directions when the settings push from several directions.
+pub fn crosscheck_report(
+    check: &crate::results::crosscheck::Crosscheck,
+    divergence_s: f64,
+) -> String {
+    let mut text = crosscheck_tables("setting", &check.settings, divergence_s);
+    if check.push_levels.len() < check.settings.len() {
+        text += "\nPer push force, over its directions:\n\n";
+        text += &crosscheck_tables("push per hand", &check.push_levels, divergence_s);
+    }
+    text
+}

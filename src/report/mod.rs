@@ -30,7 +30,7 @@ pub use comparison_files::{
     write_comparison_report, write_figures, write_page, write_sweep_report, ComparisonFiles,
     WrittenReport, WrittenSweepReport,
 };
-pub use crosscheck_tables::crosscheck_tables;
+pub use crosscheck_tables::{crosscheck_report, crosscheck_tables};
 pub use figures::{
     report_figures, CurveSeries, Dataset, Figure, FigureKind, LegendEntry, ReportFigures, Swatch,
     SweepChart,

@@ -46,7 +46,7 @@ pub use run_dir::{
     RecordAppender, RunDir, RunLock, Started, CROSSCHECK_SERIES_FILE, LOCK_FILE, RUN_FILES,
     TRACES_DIR,
 };
-pub use run_target::{RunTarget, RunTargetError};
+pub use run_target::{free_numbered_dir, RunTarget, RunTargetError};
 pub use summary::{
     fats_intervals, read_summary, sort_records, summarize, write_results, PolicyIoReport,
     SettingResults, SettingSummary, Summary,

@@ -113,3 +113,12 @@ impl RunTarget<'_> {
         }
     }
 }
+
+/// The first `<root>/<stem>-<k>`, counting from `k = from`, that does not exist: a
+/// service's runs never replace one another.
+pub fn free_numbered_dir(root: &Path, stem: &str, from: usize) -> PathBuf {
+    (from..)
+        .map(|k| root.join(format!("{stem}-{k}")))
+        .find(|dir| !dir.exists())
+        .expect("some number is free")
+}

@@ -118,6 +118,18 @@ impl SanityReport {
         self.checks.iter().all(|c| c.passed)
     }
 
+    /// `Err` naming the failed checks when one failed: a command that ran the check
+    /// ends with it (after showing the report).
+    pub fn verdict(&self) -> Result<(), CheckFailed> {
+        if self.passed() {
+            return Ok(());
+        }
+        Err(CheckFailed {
+            failed: self.failed().join(", "),
+            profile: self.profile.clone(),
+        })
+    }
+
     /// The checks that failed, by name.
     pub fn failed(&self) -> Vec<&str> {
         self.checks
@@ -126,6 +138,16 @@ impl SanityReport {
             .map(|c| c.name.as_str())
             .collect()
     }
+}
+
+/// A sanity check that failed: the policy is wired wrong for its profile, or cannot track.
+#[derive(Debug, thiserror::Error)]
+#[error("policy check failed ({failed}): under `{profile}` this policy is wired wrong, or cannot track at all; its scores would not say how it handles force")]
+pub struct CheckFailed {
+    /// The failed checks, by name.
+    pub failed: String,
+    /// The profile it ran under.
+    pub profile: String,
 }
 
 /// The report as `policy check` shows it: what ran, the policy's facts, one line per

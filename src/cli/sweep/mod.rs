@@ -2,14 +2,17 @@
 //! one per process on a Slurm array or a Kubernetes Indexed Job), show its status, and
 //! collect the cells into one comparison.
 //!
-//! A task is one `thorarena eval` process with the plan's exact arguments and
-//! `--out DIR/tasks/<I>/run --resume`, so a sweep's episodes are those of separate `eval`
+//! A task is one `thorarena eval --request` process of the evaluation its plan holds,
+//! into `DIR/tasks/<I>/run`, resuming, so a sweep's episodes are those of separate `eval`
 //! runs bit for bit, a killed task resumes, and shards merge with `merge`'s rules. A task
 //! is marked done (`done.json`, atomic rename) only after its run holds every planned
 //! episode and is flushed to disk; an advisory lock on `tasks/<I>/lock`, held by the task
 //! and inherited by its eval process, keeps two copies of one task from running at once.
 
+use super::flags::as_flags;
 use std::path::PathBuf;
+use thorarena::report::{collect_sweep, SweepCollect};
+use thorarena::sweep::{run_engine_task, EngineTask, SweepStatus};
 
 /// `thorarena sweep …`
 #[derive(Debug, clap::Subcommand)]
@@ -147,26 +150,39 @@ pub struct CollectArgs {
 /// Runs a sweep subcommand.
 pub(super) fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
     match cmd {
-        SweepCommand::Plan(a) => plan(a),
-        SweepCommand::Run(a) => run_all(a),
-        SweepCommand::Task(a) => task(a),
-        SweepCommand::Status(a) => status(a),
-        SweepCommand::Slurm(a) => slurm(a),
-        SweepCommand::K8s(a) => k8s(a),
-        SweepCommand::Collect(a) => collect(a),
+        SweepCommand::Plan(a) => println!("{}", thorarena::sweep::plan_sweep(&a.spec, &a.out)?),
+        SweepCommand::Run(a) => pool::run_all(a)?,
+        SweepCommand::Task(a) => {
+            let task = EngineTask {
+                exe: &std::env::current_exe()?,
+                dir: &a.dir,
+                index: a.index,
+                workers: a.workers,
+            };
+            println!("{}", run_engine_task(&task)?);
+        }
+        SweepCommand::Status(a) => {
+            let status = SweepStatus::read(&a.dir)?;
+            // The task records quote policy output as it is; only the last line names a field.
+            print!("{status}");
+            println!("{}", as_flags(&status.not_done_line()));
+        }
+        SweepCommand::Slurm(a) => cluster::slurm(a)?,
+        SweepCommand::K8s(a) => cluster::k8s(a)?,
+        SweepCommand::Collect(a) => {
+            let request = SweepCollect {
+                dir: &a.dir,
+                partial: a.partial,
+                mixed_engines: a.mixed_engines,
+            };
+            eprintln!(
+                "{}",
+                collect_sweep(&request, &mut |note| eprintln!("{note}"))?
+            );
+        }
     }
+    Ok(())
 }
 
 mod cluster;
-mod collect;
-mod plan;
 mod pool;
-mod status;
-mod task;
-
-use cluster::{k8s, slurm};
-use collect::collect;
-use plan::plan;
-use pool::run_all;
-use status::status;
-use task::task;

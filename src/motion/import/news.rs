@@ -1,8 +1,32 @@
 //! What an import says while it works, as text for whoever shows it: per motion file the
 //! glitch frames trimmed and where its soles stood, then the sequence it became.
 
+use super::ImportObserver;
 use crate::motion::{GroundCheck, Sequence, TrimmedGlitches};
 use std::path::Path;
+
+/// An import's news as lines handed to `say`: each file's name, what its conversion
+/// found (indented), and the sequence it became.
+pub struct ImportLines<'a> {
+    /// Where the lines go.
+    pub say: &'a mut dyn FnMut(&str),
+}
+
+impl ImportObserver for ImportLines<'_> {
+    fn reading(&mut self, input: &Path) {
+        (self.say)(&format!("{}:", input.display()));
+    }
+
+    fn converted(&mut self, _input: &Path, seq: &Sequence, ground: Option<&GroundCheck>) {
+        for line in converted_lines(seq, ground) {
+            (self.say)(&format!("  {line}"));
+        }
+    }
+
+    fn imported(&mut self, input: &Path, seq: &Sequence) {
+        (self.say)(&imported_line(input, seq));
+    }
+}
 
 /// The lines about a converted motion: glitch frames trimmed, the ground check.
 pub fn converted_lines(seq: &Sequence, ground: Option<&GroundCheck>) -> Vec<String> {
