@@ -4,9 +4,8 @@
 //! checked before anything is written; what goes on is told line by line, since
 //! `sbatch --wait` can block for hours.
 
-use super::{at_least_one, CheckedCensus, K8sRequest, Plan, SbatchRequest, SweepError};
-use super::{compact_ranges, k8s_manifest, sbatch_script, write_k8s_manifest, write_sbatch_script};
-use std::fmt::{self, Display, Formatter};
+use super::{at_least_one, CheckedCensus, Plan, SbatchRequest, SweepError};
+use super::{compact_ranges, sbatch_script, write_sbatch_script};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -111,73 +110,8 @@ pub fn slurm_array(array: &SlurmArray, say: &mut dyn FnMut(&str)) -> Result<(), 
     Ok(())
 }
 
-/// A Kubernetes Indexed Job as asked for.
-#[derive(Debug, Clone)]
-pub struct K8sJob<'a> {
-    /// The sweep directory.
-    pub dir: &'a Path,
-    /// The container image with `thorarena` on its PATH.
-    pub image: &'a str,
-    /// The PersistentVolumeClaim holding the sweep directory and its datasets.
-    pub claim: &'a str,
-    /// The claim's sub-path to mount [default: the volume root].
-    pub sub_path: Option<&'a str>,
-    /// Pods at once [default: every task].
-    pub parallelism: Option<usize>,
-    /// CPUs per pod (its request and its evaluation's workers).
-    pub cpus_per_task: usize,
-}
-
-/// A written Kubernetes Indexed Job.
-#[derive(Debug, Clone)]
-pub struct WrittenK8sJob {
-    /// The manifest.
-    pub path: PathBuf,
-    /// Tasks it runs.
-    pub tasks: usize,
-}
-
-/// Writes the Indexed Job of `job`'s sweep.
-pub fn write_k8s_job(job: &K8sJob) -> Result<WrittenK8sJob, SweepError> {
-    let plan = Plan::load(job.dir)?;
-    let dir = absolute(job.dir)?;
-    at_least_one(job.cpus_per_task, "option.cpus_per_task")?;
-    let parallelism = at_least_one(
-        job.parallelism.unwrap_or(plan.tasks.len()),
-        "option.parallelism",
-    )?;
-    let manifest = k8s_manifest(
-        &plan,
-        &K8sRequest {
-            dir: &dir,
-            image: job.image,
-            claim: job.claim,
-            sub_path: job.sub_path,
-            parallelism,
-            cpus_per_task: job.cpus_per_task,
-        },
-    );
-    Ok(WrittenK8sJob {
-        path: write_k8s_manifest(&dir, &manifest)?,
-        tasks: plan.tasks.len(),
-    })
-}
-
-impl Display for WrittenK8sJob {
-    /// The line `sweep k8s` prints.
-    fn fmt(&self, f: &mut Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "wrote {} ({} tasks); run with: kubectl apply -f {}",
-            self.path.display(),
-            self.tasks,
-            self.path.display()
-        )
-    }
-}
-
 /// `path` absolute, as the nodes and pods name it; it must exist.
-fn absolute(path: &Path) -> Result<PathBuf, SweepError> {
+pub(super) fn absolute(path: &Path) -> Result<PathBuf, SweepError> {
     std::fs::canonicalize(path).map_err(|source| SweepError::Missing {
         path: path.to_path_buf(),
         source,

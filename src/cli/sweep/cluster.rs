@@ -3,7 +3,7 @@
 
 use super::super::flags::as_flags;
 use super::{K8sArgs, SlurmArgs};
-use thorarena::sweep::{slurm_array, write_k8s_job, K8sJob, SlurmArray};
+use thorarena::sweep::{slurm_array, write_k8s_job, K8sRequest, SlurmArray};
 
 pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
     let array = SlurmArray {
@@ -22,7 +22,7 @@ pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
 }
 
 pub(super) fn k8s(args: &K8sArgs) -> anyhow::Result<()> {
-    let written = write_k8s_job(&K8sJob {
+    let written = write_k8s_job(&K8sRequest {
         dir: &args.dir,
         image: &args.image,
         claim: &args.claim,
