@@ -8,12 +8,10 @@ use super::{evaluate, BenchmarkError, EvalObserver, EvalOptions, Evaluated, Star
 use crate::episode::EpisodeTrace;
 use crate::evaluation::{EngineChoice, EpisodeRecord, EvalRequest, EvalSpec, SpecError};
 use crate::names::{check_name, NameError};
-use crate::policy::SessionOptions;
-use crate::registry::{open_policy, OpenPolicyError, PolicyArg, PolicyTarget, RegistryError};
+use crate::registry::{PolicyArg, PolicyChoice, RegistryError};
 use crate::results::crosscheck::{compare_runs, write_crosscheck, Crosscheck, SeriesLog};
 use crate::results::{ResultsError, RunDir, RunTarget, RunTargetError, CROSSCHECK_SERIES_FILE};
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// The most bootstrap resamples a comparison takes (10⁶ already pins a 95 % interval's
 /// ends to a fraction of a per cent of its width).
@@ -97,9 +95,6 @@ pub enum CrosscheckError {
     /// The series or the comparison files could not be read or written.
     #[error(transparent)]
     Results(#[from] ResultsError),
-    /// The policy could not be made.
-    #[error(transparent)]
-    Open(#[from] OpenPolicyError),
     /// An engine's evaluation failed.
     #[error(transparent)]
     Benchmark(#[from] BenchmarkError),
@@ -180,7 +175,7 @@ pub fn compare_engines(
     }
     let mut series = Vec::new();
     for (spec, run) in [&rapier, &mujoco].into_iter().zip(&runs) {
-        series.push(run_engine(request, spec, run, observer)?);
+        series.push(run_engine(request, &policy, spec, run, observer)?);
     }
     let check = compare_runs(
         [&runs[0], &runs[1]],
@@ -207,6 +202,7 @@ pub fn compare_engines(
 /// One engine's evaluation into `run`, its series kept as episodes finish.
 fn run_engine(
     request: &CrosscheckRequest,
+    policy: &PolicyArg,
     spec: &EvalSpec,
     run: &RunDir,
     observer: &mut dyn CrosscheckObserver,
@@ -218,22 +214,10 @@ fn run_engine(
             run.crosscheck_series_file().display()
         ));
     }
-    // In process on both engines: nothing is served.
-    let session = SessionOptions {
-        budget: None,
-        spin: Duration::ZERO,
-        connect_timeout: None,
-        reconnect: false,
+    // Checked in process by `compare_engines`: each engine gets its own copy.
+    let PolicyChoice::InProcess(mut policy) = policy.load(&spec.robot, &spec.profile)? else {
+        return Err(CrosscheckError::PolicyProcess);
     };
-    let target = PolicyTarget {
-        robot: &spec.robot,
-        profile: &spec.profile,
-        session: &session,
-        envs: spec.envs,
-    };
-    let mut policy = open_policy(&request.rapier.policy, &target, &mut |_| Ok(()), &mut |n| {
-        observer.note(n)
-    })?;
     observer.engine_starting(spec, run, policy.name());
     let mut keeping = KeepingSeries {
         inner: observer.eval_observer(),

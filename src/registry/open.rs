@@ -1,6 +1,7 @@
 //! A policy argument made into a policy a run can step: built in process, or — for a
-//! session (`ipc:NAME`) — served and waited for until a policy process connects. The one
-//! place `eval`, `serve`, `crosscheck` and the sweeps' tasks turn a name into a policy.
+//! session (`ipc:NAME`) — served and waited for until a policy process connects: how
+//! `eval` (and so every sweep task) and `serve` reach their policy. Callers that run only
+//! in process (`crosscheck`, `policy check`, the leaderboard) load a `PolicyArg` directly.
 
 use super::{PolicyArg, PolicyChoice, RegistryError};
 use crate::policy::{Policy, RemoteError, RemotePolicy, SessionOptions};

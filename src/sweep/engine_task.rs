@@ -15,7 +15,7 @@ const K8S_INDEX_VAR: &str = "JOB_COMPLETION_INDEX";
 const SLURM_CPUS_VAR: &str = "SLURM_CPUS_PER_TASK";
 
 /// The cores this process may use (1 when that cannot be known).
-pub fn available_cores() -> usize {
+pub(super) fn available_cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 

@@ -54,7 +54,8 @@ pub use attempt::{run_task, Outcome};
 pub use cells::{CellFaults, CellLatency, CellResult};
 pub use cluster::{slurm_array, SlurmArray};
 pub use counted_tasks::CountedTasks;
-pub use engine_task::{available_cores, run_engine_task, EngineTask, TaskEnded};
+use engine_task::available_cores;
+pub use engine_task::{run_engine_task, EngineTask, TaskEnded};
 pub use k8s::{k8s_manifest_path, write_k8s_job, K8sRequest, WrittenK8sJob};
 pub use local_run::{run_sweep, LocalRun, RunFinished, RunObserver, RunProgress, RunStarting};
 pub use plan::{
