@@ -1,7 +1,7 @@
 //! Compiles the bundled data (`data/`: robots, dynamics profiles, the sample dataset) into
 //! the binary, so that an installed `thorarena` works without the checkout it was built
 //! from. Writes `$OUT_DIR/embedded_data.rs`: a sorted list of (path relative to `data/`,
-//! bytes) that `src/embedded_data.rs` extracts on first use.
+//! bytes) that `src/files/embedded_data.rs` extracts on first use.
 
 use std::fmt::Write;
 use std::path::{Path, PathBuf};

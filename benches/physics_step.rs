@@ -3,12 +3,12 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::sync::Arc;
-use thorarena::physics::{
+use thorarena::sim::physics::{
     standing_default_pose, standing_gains, Physics, PhysicsSettings, RapierPhysics,
 };
 
 fn physics_step(c: &mut Criterion) {
-    let model = Arc::new(thorarena::robot::load_bundled("g1_29dof").expect("bundled G1"));
+    let model = Arc::new(thorarena::sim::robot::load_bundled("g1_29dof").expect("bundled G1"));
     let mut physics = RapierPhysics::new(
         model.clone(),
         PhysicsSettings::default(),

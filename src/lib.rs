@@ -2,40 +2,26 @@
 //! demonstrations: a simulated Unitree G1 tracks a reference motion while recorded hand
 //! forces are replayed on its hands.
 //!
+//! The library is a handful of rooms, from the ground up: [`files`] (what touches the
+//! disk), [`sim`] (the robot, its physics and the motions it tracks), [`policy`] (what
+//! drives it, and the names that choose one), [`eval`] (one evaluation, scored and
+//! stored), [`report`] (results for people), [`campaign`] (many evaluations: sweeps, the
+//! leaderboard, the cost benchmarks) and [`dds`] (the robot's own DDS interface).
+//!
 //! ```
-//! use thorarena::robot;
+//! use thorarena::sim::robot;
 //! let g1 = robot::load_bundled("g1_29dof").unwrap();
 //! assert_eq!(g1.n_joints(), 29);
 //! ```
 #![warn(missing_docs)]
 
-pub mod atomic_file;
-pub mod benchmark;
+pub mod campaign;
 pub mod dds;
-pub mod embedded_data;
-pub mod episode;
-pub mod evaluation;
-pub mod feet;
-pub mod leaderboard;
-pub mod metrics;
-pub mod motion;
-pub mod names;
-pub mod network_kernels;
-pub mod onnx_export;
-pub mod own_command;
-pub mod perf;
-pub mod physics;
+pub mod eval;
+pub mod files;
 pub mod policy;
-pub mod profile;
-pub mod registry;
-pub mod replay;
 pub mod report;
-pub mod results;
-pub mod robot;
-pub mod runner;
-pub mod sanity;
-pub mod scenario;
-pub mod sweep;
+pub mod sim;
 
 use std::path::PathBuf;
 
@@ -46,7 +32,7 @@ pub const DATA_DIR_ENV: &str = "THORARENA_DATA";
 /// The directory holding robots, profiles and the sample dataset.
 ///
 /// [`DATA_DIR_ENV`] overrides it. By default it is the copy of `data/` compiled into this
-/// binary, written once to a cache directory ([`embedded_data`]), so an installed binary
+/// binary, written once to a cache directory ([`files::embedded_data`]), so an installed binary
 /// needs no checkout and always reads the data it was built with. If no cache directory
 /// is writable it falls back to `data/` of the checkout the binary was built from, and a
 /// missing file there is reported by whoever reads it, naming the path.
@@ -54,7 +40,7 @@ pub fn data_dir() -> PathBuf {
     if let Some(dir) = std::env::var_os(DATA_DIR_ENV) {
         return PathBuf::from(dir);
     }
-    embedded_data::extracted()
+    files::embedded_data::extracted()
         .unwrap_or_else(|_| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/data")))
 }
 

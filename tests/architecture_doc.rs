@@ -1,5 +1,6 @@
-//! ARCHITECTURE.md's module tables list exactly the modules of `src/` (the `| module |`
-//! table) and of the ipc crate (the `| ipc module |` table).
+//! ARCHITECTURE.md's module tables list exactly the rooms of `src/` and their public units
+//! (the `| module |` table: `eval`, `eval::runner`, …) and the modules of the ipc crate (the
+//! `| ipc module |` table).
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -17,7 +18,24 @@ fn table(doc: &str, header: &str) -> BTreeSet<String> {
 }
 
 fn modules(lib_rs: &Path) -> BTreeSet<String> {
-    std::fs::read_to_string(lib_rs)
+    public_children(lib_rs)
+        .into_iter()
+        .flat_map(|room| {
+            let room_mod = lib_rs.parent().unwrap().join(&room).join("mod.rs");
+            let units = if room_mod.exists() {
+                public_children(&room_mod)
+            } else {
+                Vec::new()
+            };
+            let nested: Vec<String> = units.iter().map(|u| format!("{room}::{u}")).collect();
+            std::iter::once(room).chain(nested)
+        })
+        .collect()
+}
+
+/// The `pub mod` names a module file declares.
+fn public_children(file: &Path) -> Vec<String> {
+    std::fs::read_to_string(file)
         .unwrap()
         .lines()
         .filter_map(|l| l.trim().strip_prefix("pub mod "))

@@ -9,13 +9,13 @@
 //! skipped, saying so, when `../shared/reference` is absent.
 
 use std::sync::Arc;
-use thorarena::evaluation::{schedule, EpisodeRecord};
-use thorarena::motion::Sequence;
+use thorarena::eval::runner::{run_eval, EvalPlan};
+use thorarena::eval::{schedule, EpisodeRecord};
 use thorarena::policy::beyondmimic::INFERENCE_BATCH;
 use thorarena::policy::{ActOutcome, BeyondMimicPolicy, Observation, Policy, Twist2Policy};
-use thorarena::profile::{bundled_profile_path, load_profile, Profile};
-use thorarena::robot::RobotModel;
-use thorarena::runner::{run_eval, EvalPlan};
+use thorarena::sim::motion::Sequence;
+use thorarena::sim::profile::{bundled_profile_path, load_profile, Profile};
+use thorarena::sim::robot::RobotModel;
 
 mod common;
 mod prereq;

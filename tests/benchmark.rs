@@ -1,15 +1,15 @@
 //! The evaluation through the library, in process (no binary): a checked `EvalSpec` run
-//! into a `RunDir` by `benchmark::evaluate`, resumed after a kill, sharded and merged by
-//! `benchmark::merge`, and two runs compared by `results::crosscheck` — each giving the
+//! into a `RunDir` by `pipeline::evaluate`, resumed after a kill, sharded and merged by
+//! `pipeline::merge`, and two runs compared by `results::crosscheck` — each giving the
 //! same files as one uninterrupted run.
 
 use std::path::Path;
-use thorarena::benchmark::{self, BenchmarkError, EvalObserver, EvalOptions, Starting};
-use thorarena::evaluation::{EpisodeRecord, EvalRequest, EvalSpec, SpecError};
-use thorarena::motion::SequenceSelection;
+use thorarena::eval::pipeline::{self, BenchmarkError, EvalObserver, EvalOptions, Starting};
+use thorarena::eval::results::crosscheck::{compare_runs, write_crosscheck, SeriesLog};
+use thorarena::eval::results::{MergeError, ResultsError, RunDir};
+use thorarena::eval::{EpisodeRecord, EvalRequest, EvalSpec, SpecError};
 use thorarena::policy::HoldPolicy;
-use thorarena::results::crosscheck::{compare_runs, write_crosscheck, SeriesLog};
-use thorarena::results::{MergeError, ResultsError, RunDir};
+use thorarena::sim::motion::SequenceSelection;
 
 /// Two sample sequences of two tasks under force and no force: four `hold` episodes.
 fn request() -> EvalRequest {
@@ -43,18 +43,18 @@ impl EvalObserver for Counted {
         self.kept = s.started.kept.len();
         self.torn = s.started.torn_tail_dropped;
     }
-    fn episode(&mut self, _: &EpisodeRecord, _: Option<&thorarena::episode::EpisodeTrace>) {
+    fn episode(&mut self, _: &EpisodeRecord, _: Option<&thorarena::eval::episode::EpisodeTrace>) {
         self.episodes += 1;
     }
 }
 
-fn run_into(spec: &EvalSpec, dir: &Path, resume: bool) -> (benchmark::Evaluated, Counted) {
+fn run_into(spec: &EvalSpec, dir: &Path, resume: bool) -> (pipeline::Evaluated, Counted) {
     let mut counted = Counted::default();
     let options = EvalOptions {
         resume,
         ..EvalOptions::default()
     };
-    let done = benchmark::evaluate(
+    let done = pipeline::evaluate(
         spec,
         &mut HoldPolicy,
         &RunDir::new(dir),
@@ -164,7 +164,7 @@ fn a_run_resumed_after_a_kill_ends_as_the_uninterrupted_run() {
         ..request()
     })
     .unwrap();
-    let e = benchmark::evaluate(
+    let e = pipeline::evaluate(
         &other,
         &mut HoldPolicy,
         &RunDir::new(&killed),
@@ -204,9 +204,9 @@ fn shards_merge_into_the_unsharded_run() {
             RunDir::new(dir)
         })
         .collect();
-    let robot = thorarena::registry::robot("g1_29dof").unwrap();
+    let robot = thorarena::policy::registry::robot("g1_29dof").unwrap();
     let merged_dir = tmp.path().join("merged");
-    let merged = benchmark::merge(&shards, &RunDir::new(&merged_dir), &robot).unwrap();
+    let merged = pipeline::merge(&shards, &RunDir::new(&merged_dir), &robot).unwrap();
     assert_eq!(merged.summary.episodes, 4);
     assert_same_run(
         &merged_dir,
@@ -215,8 +215,7 @@ fn shards_merge_into_the_unsharded_run() {
         "the merge",
     );
     // Without one shard, the merge names what no shard holds.
-    let e =
-        benchmark::merge(&shards[..2], &RunDir::new(tmp.path().join("m2")), &robot).unwrap_err();
+    let e = pipeline::merge(&shards[..2], &RunDir::new(tmp.path().join("m2")), &robot).unwrap_err();
     match e {
         BenchmarkError::Results(ResultsError::Merge(MergeError::Missing { missing })) => {
             assert_eq!(missing.len(), 1, "{missing:?}");
@@ -232,7 +231,7 @@ fn shards_merge_into_the_unsharded_run() {
     .unwrap();
     let stranger = tmp.path().join("stranger");
     run_into(&other, &stranger, false);
-    let e = benchmark::merge(
+    let e = pipeline::merge(
         &[shards[0].clone(), RunDir::new(&stranger)],
         &RunDir::new(tmp.path().join("m3")),
         &robot,
@@ -260,7 +259,7 @@ fn two_runs_of_one_engine_crosscheck_as_identical() {
             fn episode(
                 &mut self,
                 r: &EpisodeRecord,
-                trace: Option<&thorarena::episode::EpisodeTrace>,
+                trace: Option<&thorarena::eval::episode::EpisodeTrace>,
             ) {
                 let trace = trace.expect("a trace of the first seconds");
                 let q = trace.steps.iter().map(|s| s.q.clone()).collect();
@@ -273,7 +272,7 @@ fn two_runs_of_one_engine_crosscheck_as_identical() {
             resume: false,
             trace_first_s: Some(0.5),
         };
-        benchmark::evaluate(&spec, &mut HoldPolicy, run, options, &mut Keep(&mut log)).unwrap();
+        pipeline::evaluate(&spec, &mut HoldPolicy, run, options, &mut Keep(&mut log)).unwrap();
         series.push(log);
     }
     let check = compare_runs([&runs[0], &runs[1]], [&series[0], &series[1]], 200).unwrap();
@@ -340,7 +339,7 @@ fn a_spec_is_checked_before_anything_runs() {
 
 #[test]
 fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
-    use thorarena::sweep::{
+    use thorarena::campaign::sweep::{
         check_task_run, results_rows, CellResult, DatasetInfo, Plan, SweepSpec,
     };
     let tmp = tempfile::tempdir().unwrap();
@@ -356,9 +355,9 @@ fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
     )
     .unwrap();
     let spec = SweepSpec::load(&spec_path).unwrap();
-    let robot = thorarena::registry::robot("g1_29dof").unwrap();
+    let robot = thorarena::policy::registry::robot("g1_29dof").unwrap();
     let info = DatasetInfo::read(sample.clone(), &robot).unwrap();
-    let sequences = thorarena::motion::Dataset::open(&sample, &robot)
+    let sequences = thorarena::sim::motion::Dataset::open(&sample, &robot)
         .unwrap()
         .load_all()
         .unwrap();
@@ -431,7 +430,7 @@ fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
         assert_same_run(&result.dir, &whole, &["episodes.csv"], "a collected cell");
     }
     let rows = results_rows(&plan, &results);
-    let csv = thorarena::sweep::results_csv(&plan, &results);
+    let csv = thorarena::campaign::sweep::results_csv(&plan, &results);
     assert_eq!(rows.len(), 2);
     assert_eq!(csv.lines().count(), 3, "a header and a row per cell");
     assert!(csv

@@ -6,21 +6,21 @@
 //! reported.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use thorarena::motion::ReferenceFrame;
-use thorarena::physics::RootState;
 use thorarena::policy::beyondmimic::{
     build_observation, layout_width, ObservationSpec, Scratch, Term, KNOWN_LAYOUTS, LAYOUT_154,
     LAYOUT_154_MJLAB, LAYOUT_160,
 };
 use thorarena::policy::Observation;
-use thorarena::robot::RobotModel;
+use thorarena::sim::motion::ReferenceFrame;
+use thorarena::sim::physics::RootState;
+use thorarena::sim::robot::RobotModel;
 
 #[path = "common/onnx_model.rs"]
 mod onnx_model;
 mod prereq;
 
 fn g1() -> RobotModel {
-    thorarena::robot::load_bundled("g1_29dof").unwrap()
+    thorarena::sim::robot::load_bundled("g1_29dof").unwrap()
 }
 
 /// Joint j's angle in the hand-made states: 0.01·j rad, the waist (12–14) at zero so that
@@ -158,13 +158,13 @@ fn a_yawed_robot_sees_the_reference_anchor_and_its_velocity_in_its_own_frame() {
     // Exactly: the anchors through the kinematics' own torso offset.
     let torso = robot.frame_index("torso_link").unwrap();
     let mut poses = Vec::new();
-    thorarena::robot::forward_kinematics(
+    thorarena::sim::robot::forward_kinematics(
         &robot,
         &Isometry3::identity(),
         &(0..29).map(|j| q(j as f64)).collect::<Vec<_>>(),
         &mut poses,
     );
-    let t = thorarena::robot::frame_pose(&robot, &poses, torso);
+    let t = thorarena::sim::robot::frame_pose(&robot, &poses, torso);
     let robot_anchor = Isometry3::from_parts(
         Translation3::new(0.0, 0.0, 0.79),
         UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2),
@@ -242,8 +242,8 @@ fn a_network_whose_metadata_contradicts_the_profile_is_reported() {
         return prereq::skip(TEST, &format!("{} is absent", onnx.display()));
     }
     let robot = std::sync::Arc::new(g1());
-    let path = thorarena::profile::bundled_profile_path("holosoma-wbt");
-    let profile = thorarena::profile::load_profile(&path, &robot).unwrap();
+    let path = thorarena::sim::profile::bundled_profile_path("holosoma-wbt");
+    let profile = thorarena::sim::profile::load_profile(&path, &robot).unwrap();
     let agrees =
         thorarena::policy::BeyondMimicPolicy::load(&onnx, robot.clone(), &profile).unwrap();
     assert_eq!(agrees.disagreements(), [] as [String; 0]);
@@ -254,7 +254,7 @@ fn a_network_whose_metadata_contradicts_the_profile_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let edited = dir.path().join("edited.toml");
     std::fs::write(&edited, text).unwrap();
-    let profile = thorarena::profile::load_profile(&edited, &robot).unwrap();
+    let profile = thorarena::sim::profile::load_profile(&edited, &robot).unwrap();
     let differs = thorarena::policy::BeyondMimicPolicy::load(&onnx, robot, &profile).unwrap();
     let d = differs.disagreements();
     assert_eq!(d.len(), 1, "{d:?}");
@@ -272,8 +272,8 @@ fn load_bare(width: i64, profile: &str) -> Result<thorarena::policy::BeyondMimic
     };
     std::fs::write(&path, net.bytes()).unwrap();
     let robot = std::sync::Arc::new(g1());
-    let profile = thorarena::profile::load_profile(
-        &thorarena::profile::bundled_profile_path(profile),
+    let profile = thorarena::sim::profile::load_profile(
+        &thorarena::sim::profile::bundled_profile_path(profile),
         &robot,
     )
     .unwrap();
@@ -321,8 +321,10 @@ fn load_ordered(
     };
     std::fs::write(&path, net.bytes()).unwrap();
     let robot = std::sync::Arc::new(g1());
-    let mut text =
-        std::fs::read_to_string(thorarena::profile::bundled_profile_path("holosoma-wbt")).unwrap();
+    let mut text = std::fs::read_to_string(thorarena::sim::profile::bundled_profile_path(
+        "holosoma-wbt",
+    ))
+    .unwrap();
     if !profile_order.is_empty() {
         let quoted: Vec<String> = profile_order.iter().map(|n| format!("\"{n}\"")).collect();
         text = text.replace(
@@ -332,7 +334,7 @@ fn load_ordered(
     }
     let profile_path = dir.path().join("profile.toml");
     std::fs::write(&profile_path, text).unwrap();
-    let profile = thorarena::profile::load_profile(&profile_path, &robot).unwrap();
+    let profile = thorarena::sim::profile::load_profile(&profile_path, &robot).unwrap();
     thorarena::policy::BeyondMimicPolicy::load(&path, robot, &profile).map_err(|e| e.to_string())
 }
 

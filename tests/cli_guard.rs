@@ -2,7 +2,7 @@
 //! a file itself, implements a policy, or grows past a screenful of logic. What a command
 //! writes — a run, a report, a plan, a job script — is the library's, where the other
 //! commands and the tests reach it too (a `dds` run that wrote its own `tables.md` was
-//! found rebuilding what `benchmark::evaluate` does).
+//! found rebuilding what `pipeline::evaluate` does).
 
 use std::path::{Path, PathBuf};
 

@@ -4,10 +4,10 @@
 
 use std::path::Path;
 use std::process::Command;
-use thorarena::motion::import::canonical::{to_sequence, ImportOptions};
-use thorarena::motion::import::force_csv::ForceLog;
-use thorarena::motion::import::{twist_pkl, RawMotion, G1_CANONICAL_JOINTS};
-use thorarena::motion::Dataset;
+use thorarena::sim::motion::import::canonical::{to_sequence, ImportOptions};
+use thorarena::sim::motion::import::force_csv::ForceLog;
+use thorarena::sim::motion::import::{twist_pkl, RawMotion, G1_CANONICAL_JOINTS};
+use thorarena::sim::motion::Dataset;
 
 mod common;
 use common::g1;

@@ -6,7 +6,7 @@
 use serde_json::json;
 use std::collections::HashMap;
 use std::path::Path;
-use thorarena::motion::{self, DataError, Dataset, DatasetWriter, Sequence, MANIFEST};
+use thorarena::sim::motion::{self, DataError, Dataset, DatasetWriter, Sequence, MANIFEST};
 
 mod common;
 use common::{g1, sample_sequence};

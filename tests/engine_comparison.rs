@@ -369,13 +369,13 @@ fn traces_carry_the_feet_on_both_engines() {
     }
     // The same episode traced on each engine: both feet every step, their normal forces
     // carrying the robot's weight on average, slip accumulating and never decreasing.
-    let g1 = thorarena::robot::load_bundled("g1_29dof").unwrap();
+    let g1 = thorarena::sim::robot::load_bundled("g1_29dof").unwrap();
     let weight_n = g1.total_mass_kg() * 9.81;
     let dir = tempfile::tempdir().unwrap();
     for engine in ["rapier", "mujoco"] {
         let out = dir.path().join(engine);
         hold_on_sample(engine, &out, &["--trace", "clean_table/clean_table_000"]);
-        let trace: Vec<thorarena::episode::TraceStep> = serde_json::from_str(
+        let trace: Vec<thorarena::eval::episode::TraceStep> = serde_json::from_str(
             &std::fs::read_to_string(out.join("traces/clean_table-clean_table_000-no-force.json"))
                 .unwrap(),
         )
@@ -497,13 +497,13 @@ fn crosscheck_of_pushed_chairs_shows_where_the_engines_part() {
 
 /// The G1 on stiff standing PD stepping in place open loop (each leg lifted in turn,
 /// 1.5 Hz) under a backward pull on both hands: when it falls, s (4 s if it does not).
-fn scripted_march_falls_at_s(engine: &thorarena::physics::Engine, pull_n: f64) -> f64 {
+fn scripted_march_falls_at_s(engine: &thorarena::sim::physics::Engine, pull_n: f64) -> f64 {
     use nalgebra::{Point3, Vector3};
-    use thorarena::physics::{
+    use thorarena::sim::physics::{
         make_physics, standing_default_pose, standing_gains, ExternalForce, PhysicsSettings,
         PhysicsState,
     };
-    let m = std::sync::Arc::new(thorarena::robot::load_bundled("g1_29dof").unwrap());
+    let m = std::sync::Arc::new(thorarena::sim::robot::load_bundled("g1_29dof").unwrap());
     let settings = PhysicsSettings::default();
     let mut p = make_physics(engine, m.clone(), settings, standing_gains(&m)).unwrap();
     let start = standing_default_pose(&m);
@@ -556,9 +556,11 @@ fn scripted_stepping_under_a_backward_pull_falls_alike_on_both_engines() {
         );
     }
     for pull in [0.0, 20.0, 40.0] {
-        let rapier = scripted_march_falls_at_s(&thorarena::physics::Engine::Rapier, pull);
-        let mujoco =
-            scripted_march_falls_at_s(&thorarena::physics::Engine::mujoco_on(None).unwrap(), pull);
+        let rapier = scripted_march_falls_at_s(&thorarena::sim::physics::Engine::Rapier, pull);
+        let mujoco = scripted_march_falls_at_s(
+            &thorarena::sim::physics::Engine::mujoco_on(None).unwrap(),
+            pull,
+        );
         eprintln!("{pull} N per hand: falls at {rapier:.3} s (rapier), {mujoco:.3} s (MuJoCo)");
         assert!(rapier < 4.0 && mujoco < 4.0, "an open-loop march falls");
         assert!(

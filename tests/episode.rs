@@ -3,13 +3,13 @@
 //! steps, non-finite actions never reach the physics, and re-runs are bit-identical.
 
 use std::sync::Arc;
-use thorarena::episode::{Episode, EpisodeSetup};
-use thorarena::evaluation::{Termination, TerminationRule};
-use thorarena::motion::Sequence;
-use thorarena::physics::{standing_default_pose, PhysicsSettings, RapierPhysics};
+use thorarena::eval::episode::{Episode, EpisodeSetup};
+use thorarena::eval::{Termination, TerminationRule};
 use thorarena::policy::{HoldPolicy, Policy, ReplayPolicy};
-use thorarena::profile::{bundled_profile_path, load_profile, Profile};
-use thorarena::robot::RobotModel;
+use thorarena::sim::motion::Sequence;
+use thorarena::sim::physics::{standing_default_pose, PhysicsSettings, RapierPhysics};
+use thorarena::sim::profile::{bundled_profile_path, load_profile, Profile};
+use thorarena::sim::robot::RobotModel;
 
 mod common;
 use common::{g1, sample_sequence};
@@ -40,7 +40,7 @@ fn run(
     profile: &Profile,
     seq: &Sequence,
     policy: &mut dyn Policy,
-) -> (thorarena::metrics::EpisodeSeries, Option<Termination>) {
+) -> (thorarena::eval::metrics::EpisodeSeries, Option<Termination>) {
     let setup = EpisodeSetup {
         robot,
         profile,
@@ -173,17 +173,17 @@ struct DivergingPhysics {
     nan_from: usize,
 }
 
-impl thorarena::physics::Physics for DivergingPhysics {
+impl thorarena::sim::physics::Physics for DivergingPhysics {
     fn model(&self) -> &RobotModel {
         self.inner.model()
     }
     fn settings(&self) -> &PhysicsSettings {
         self.inner.settings()
     }
-    fn reset(&mut self, state: &thorarena::physics::ResetState) {
+    fn reset(&mut self, state: &thorarena::sim::physics::ResetState) {
         self.inner.reset(state)
     }
-    fn set_gains(&mut self, gains: &thorarena::physics::PdGains) {
+    fn set_gains(&mut self, gains: &thorarena::sim::physics::PdGains) {
         self.inner.set_gains(gains)
     }
     fn set_targets(&mut self, q_target: &[f64]) {
@@ -192,7 +192,7 @@ impl thorarena::physics::Physics for DivergingPhysics {
     fn set_feedforward(&mut self, torque_nm: &[f64]) {
         self.inner.set_feedforward(torque_nm)
     }
-    fn set_external_force(&mut self, force: thorarena::physics::ExternalForce) {
+    fn set_external_force(&mut self, force: thorarena::sim::physics::ExternalForce) {
         self.inner.set_external_force(force)
     }
     fn clear_external_forces(&mut self) {
@@ -202,7 +202,7 @@ impl thorarena::physics::Physics for DivergingPhysics {
         self.steps += 1;
         self.inner.step()
     }
-    fn read_state(&self, out: &mut thorarena::physics::PhysicsState) {
+    fn read_state(&self, out: &mut thorarena::sim::physics::PhysicsState) {
         self.inner.read_state(out);
         if self.steps >= self.nan_from {
             out.q[3] = f64::NAN;
@@ -215,7 +215,7 @@ impl thorarena::physics::Physics for DivergingPhysics {
         self.inner.contact_count()
     }
 
-    fn ground_contacts(&self, out: &mut Vec<thorarena::physics::GroundContact>) {
+    fn ground_contacts(&self, out: &mut Vec<thorarena::sim::physics::GroundContact>) {
         self.inner.ground_contacts(out);
     }
 }
@@ -313,15 +313,12 @@ fn a_push_with_a_direction_turns_with_the_references_initial_heading() {
     close(hand_force(None), [10.0, 0.0, 0.0]);
     close(hand_force(Some(0.0)), [0.0, 10.0, 0.0]);
     close(hand_force(Some(90.0)), [-10.0, 0.0, 0.0]);
-    let s = thorarena::evaluation::Setting::parse("push:20@90").unwrap();
+    let s = thorarena::eval::Setting::parse("push:20@90").unwrap();
     assert_eq!(
         (s.name.as_str(), s.push_n, s.push_heading_deg),
         ("push-20@90", 20.0, Some(90.0))
     );
     for bad in ["push:20@400", "push:20@x", "push:20@", "push:2000@0"] {
-        assert!(
-            thorarena::evaluation::Setting::parse(bad).is_none(),
-            "{bad}"
-        );
+        assert!(thorarena::eval::Setting::parse(bad).is_none(), "{bad}");
     }
 }

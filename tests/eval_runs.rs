@@ -302,7 +302,7 @@ fn a_request_file_runs_the_evaluation_its_flags_would() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 
     // The same evaluation as a request: the library's type, serialized.
-    let request = thorarena::evaluation::EvalRequest {
+    let request = thorarena::eval::EvalRequest {
         policy: "hold".into(),
         dataset: Some(SAMPLE.into()),
         settings: vec!["force".into()],

@@ -7,11 +7,11 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::process::Command;
-use thorarena::physics::RootState;
 use thorarena::policy::falcon::commands::Commands;
 use thorarena::policy::falcon::observation::{frame, History, OBS_LEN};
 use thorarena::policy::falcon::{FalconPolicy, DEFAULT_POSE};
 use thorarena::policy::Observation;
+use thorarena::sim::physics::RootState;
 
 mod common;
 mod prereq;
@@ -113,7 +113,7 @@ fn the_released_network_gives_the_numpy_forward_pass_actions() {
         return;
     };
     let robot = common::g1();
-    let profile = thorarena::registry::profile("falcon", &robot).unwrap();
+    let profile = thorarena::policy::registry::profile("falcon", &robot).unwrap();
     let policy = FalconPolicy::load(&onnx, &profile).unwrap();
     let actions = policy.infer(&golden_input()).unwrap();
     let golden = numbers("actions_step2.txt");

@@ -5,14 +5,14 @@
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::f64::consts::FRAC_PI_2;
 use std::sync::Arc;
-use thorarena::motion::Reference;
-use thorarena::physics::{
+use thorarena::sim::motion::Reference;
+use thorarena::sim::physics::{
     standing_default_pose, standing_gains, ContactMode, Physics, PhysicsSettings, PhysicsState,
     RapierPhysics,
 };
-use thorarena::profile::{bundled_profile_path, load_profile};
-use thorarena::replay::{world_force, ForceReplay};
-use thorarena::robot::{self, forward_kinematics};
+use thorarena::sim::profile::{bundled_profile_path, load_profile};
+use thorarena::sim::replay::{world_force, ForceReplay};
+use thorarena::sim::robot::{self, forward_kinematics};
 
 mod common;
 use common::{g1, sample_sequence};

@@ -13,7 +13,7 @@
 //! `../shared/reference` (or Python's onnxruntime) is absent; never in CI.
 
 use std::path::{Path, PathBuf};
-use thorarena::motion::import::{import_batch, ImportBatch, SourceFormat};
+use thorarena::sim::motion::import::{import_batch, ImportBatch, SourceFormat};
 
 mod common;
 #[path = "common/dump.rs"]
@@ -40,7 +40,7 @@ fn onnx(test: &str) -> Option<PathBuf> {
 /// `holosoma-wbt`), in process: the error's text if it is refused.
 fn import_motion(onnx: &Path, task: &str, out: &Path) -> Result<(), String> {
     let robot = g1();
-    let profile = thorarena::registry::profile("holosoma-wbt", &robot).unwrap();
+    let profile = thorarena::policy::registry::profile("holosoma-wbt", &robot).unwrap();
     let batch = ImportBatch {
         inputs: vec![onnx.to_path_buf()],
         format: SourceFormat::OnnxMotion {
@@ -70,8 +70,8 @@ fn eval(dataset: &Path, policy: &str, profile: &str, settings: &str, out: &Path)
     in_process::eval(dataset, policy, Some(profile), &settings, out);
 }
 
-fn g1() -> thorarena::robot::RobotModel {
-    thorarena::robot::load_bundled("g1_29dof").unwrap()
+fn g1() -> thorarena::sim::robot::RobotModel {
+    thorarena::sim::robot::load_bundled("g1_29dof").unwrap()
 }
 
 /// Per setting (`no-force`, `push-10`, …): survival and keypoint error (mm) averaged over
@@ -162,8 +162,8 @@ fn the_motion_in_the_network_is_imported_and_a_network_without_one_is_refused() 
     let dir = tempfile::tempdir().unwrap();
     let dance = dir.path().join("dance");
     import_dance(&onnx, &dance);
-    let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
-    let ds = thorarena::motion::Dataset::open(&dance, &robot).unwrap();
+    let robot = thorarena::sim::robot::load_bundled("g1_29dof").unwrap();
+    let ds = thorarena::sim::motion::Dataset::open(&dance, &robot).unwrap();
     let seq = ds.load(0).unwrap();
     // 6774 frames (the network's clamp index 6773, + 1) at the policy's 50 Hz.
     assert_eq!(seq.root_pos.len(), 6774);
@@ -179,8 +179,8 @@ fn the_motion_in_the_network_is_imported_and_a_network_without_one_is_refused() 
         nalgebra::Translation3::from(nalgebra::Vector3::from(seq.root_pos[0])),
         nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, x, y, z)),
     );
-    thorarena::robot::forward_kinematics(&robot, &root, &q, &mut poses);
-    let t = thorarena::robot::frame_pose(&robot, &poses, torso)
+    thorarena::sim::robot::forward_kinematics(&robot, &root, &q, &mut poses);
+    let t = thorarena::sim::robot::frame_pose(&robot, &poses, torso)
         .translation
         .vector;
     assert!(
@@ -206,8 +206,8 @@ fn the_motion_in_the_network_is_imported_and_a_network_without_one_is_refused() 
 #[test]
 fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
     use std::sync::Arc;
-    use thorarena::episode::EpisodeSetup;
-    use thorarena::evaluation::TerminationRule;
+    use thorarena::eval::episode::EpisodeSetup;
+    use thorarena::eval::TerminationRule;
     use thorarena::policy::{BeyondMimicPolicy, Policy};
     const TEST: &str = "holosoma_reference::python_adapter";
     let Some(onnx) = onnx(TEST) else {
@@ -220,9 +220,9 @@ fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
     ) {
         return;
     }
-    let robot = Arc::new(thorarena::robot::load_bundled("g1_29dof").unwrap());
-    let profile = thorarena::profile::load_profile(
-        &thorarena::profile::bundled_profile_path("holosoma-wbt"),
+    let robot = Arc::new(thorarena::sim::robot::load_bundled("g1_29dof").unwrap());
+    let profile = thorarena::sim::profile::load_profile(
+        &thorarena::sim::profile::bundled_profile_path("holosoma-wbt"),
         &robot,
     )
     .unwrap();
@@ -231,7 +231,7 @@ fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
     let dir = tempfile::tempdir().unwrap();
     let dance = dir.path().join("dance");
     import_dance(&onnx, &dance);
-    let seq = thorarena::motion::Dataset::open(&dance, &robot)
+    let seq = thorarena::sim::motion::Dataset::open(&dance, &robot)
         .unwrap()
         .load(0)
         .unwrap();
@@ -267,7 +267,7 @@ fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale
     let dance = dir.path().join("dance");
     import_motion(&onnx, "dance", &dance).unwrap();
     let policy = format!("beyondmimic:{}", onnx.display());
-    let request = |profile: &str, unchecked: bool| thorarena::evaluation::EvalRequest {
+    let request = |profile: &str, unchecked: bool| thorarena::eval::EvalRequest {
         policy: policy.clone(),
         dataset: Some(dance.clone()),
         profile: Some(profile.into()),
@@ -278,8 +278,8 @@ fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale
     // In MuJoCo too (generated MJCF): measured 34.4 mm against rapier's 34.5 mm.
     if cfg!(feature = "mujoco") {
         let run = dir.path().join("mujoco");
-        let mujoco = thorarena::evaluation::EvalRequest {
-            engine: thorarena::evaluation::EngineChoice::Mujoco,
+        let mujoco = thorarena::eval::EvalRequest {
+            engine: thorarena::eval::EngineChoice::Mujoco,
             ..request("holosoma-ppo", false)
         };
         in_process::evaluate(&mujoco, &run).unwrap();

@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::process::Command;
 use std::time::Duration;
-use thorarena::motion::{DatasetWriter, MANIFEST};
+use thorarena::sim::motion::{DatasetWriter, MANIFEST};
 
 mod common;
 use common::{failure, g1, run_bin as thorarena, sample_sequence};

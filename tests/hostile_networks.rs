@@ -28,7 +28,7 @@ fn error_of(o: &Output) -> String {
 
 /// The G1's 29 joints in canonical order (`thorarena robot info`'s).
 fn g1_joints() -> Vec<String> {
-    let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
+    let robot = thorarena::sim::robot::load_bundled("g1_29dof").unwrap();
     robot.joints.iter().map(|j| j.name.clone()).collect()
 }
 

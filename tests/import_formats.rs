@@ -12,11 +12,11 @@ use npyz::npz::NpzWriter;
 use npyz::zip::write::FileOptions;
 use npyz::zip::CompressionMethod;
 use npyz::{AutoSerialize, WriterBuilder};
-use thorarena::motion::import::force_csv::{read_force_csv, ForceLog};
-use thorarena::motion::import::lafan_csv::read_lafan_csv;
-use thorarena::motion::import::npz::{read_beyondmimic_npz, ISAACLAB_G1_JOINT_ORDER};
-use thorarena::motion::import::ImportError;
-use thorarena::motion::import::G1_CANONICAL_JOINTS;
+use thorarena::sim::motion::import::force_csv::{read_force_csv, ForceLog};
+use thorarena::sim::motion::import::lafan_csv::read_lafan_csv;
+use thorarena::sim::motion::import::npz::{read_beyondmimic_npz, ISAACLAB_G1_JOINT_ORDER};
+use thorarena::sim::motion::import::ImportError;
+use thorarena::sim::motion::import::G1_CANONICAL_JOINTS;
 
 mod prereq;
 

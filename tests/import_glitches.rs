@@ -5,9 +5,9 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-use thorarena::motion::import::twist_pkl::read_twist_pkl;
-use thorarena::motion::import::SourceFormat;
-use thorarena::motion::{scan_root_glitches, Dataset, DatasetWriter, Sequence, MANIFEST};
+use thorarena::sim::motion::import::twist_pkl::read_twist_pkl;
+use thorarena::sim::motion::import::SourceFormat;
+use thorarena::sim::motion::{scan_root_glitches, Dataset, DatasetWriter, Sequence, MANIFEST};
 
 mod common;
 #[path = "common/in_process.rs"]

@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use thorarena::motion::import::twist_pkl::read_twist_pkl;
-use thorarena::motion::import::{ImportError, RawMotion};
+use thorarena::sim::motion::import::twist_pkl::read_twist_pkl;
+use thorarena::sim::motion::import::{ImportError, RawMotion};
 
 mod prereq;
 

@@ -3,7 +3,7 @@
 //! order of episodes never changes any aggregate.
 
 use nalgebra::{Isometry3, Point3, Vector3};
-use thorarena::metrics::{
+use thorarena::eval::metrics::{
     aggregate, keypoint_error_m, percentile, reanchor, score_episode, EpisodeSeries,
     RegimeThresholds, SIGMA_M,
 };

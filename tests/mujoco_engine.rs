@@ -39,14 +39,14 @@ fn run(args: &[&str]) -> std::process::Output {
 fn mujoco_bodies_are_where_the_robot_models_kinematics_puts_them() {
     use nalgebra::{Isometry3, Vector3};
     use std::sync::Arc;
-    use thorarena::physics::{
+    use thorarena::sim::physics::{
         standing_gains, Engine, PhysicsSettings, PhysicsState, ResetState, RootState,
     };
     let Some(mjcf) = twist2_mjcf("mujoco_engine::kinematics") else {
         return;
     };
-    let m = Arc::new(thorarena::robot::load_bundled("g1_29dof").unwrap());
-    let mut p = thorarena::physics::make_physics(
+    let m = Arc::new(thorarena::sim::robot::load_bundled("g1_29dof").unwrap());
+    let mut p = thorarena::sim::physics::make_physics(
         &Engine::mujoco_on(Some(mjcf)).unwrap(),
         m.clone(),
         PhysicsSettings::default(),
@@ -71,7 +71,7 @@ fn mujoco_bodies_are_where_the_robot_models_kinematics_puts_them() {
     let mut s = PhysicsState::default();
     p.read_state(&mut s);
     let mut fk = Vec::new();
-    thorarena::robot::forward_kinematics(&m, &root, &q, &mut fk);
+    thorarena::sim::robot::forward_kinematics(&m, &root, &q, &mut fk);
     for (i, (a, b)) in s.world_from_body.iter().zip(&fk).enumerate() {
         let dp = (a.translation.vector - b.translation.vector).norm();
         let da = a.rotation.angle_to(&b.rotation);
@@ -95,7 +95,7 @@ fn mujoco_bodies_are_where_the_robot_models_kinematics_puts_them() {
         q: m.default_pose(),
         qd: vec![0.0; n],
     });
-    p.set_gains(&thorarena::physics::PdGains {
+    p.set_gains(&thorarena::sim::physics::PdGains {
         kp: vec![0.0; n],
         kd: vec![0.0; n],
         effort_limit_nm: vec![0.0; n],

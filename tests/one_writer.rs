@@ -31,7 +31,7 @@ fn a_second_writer_of_a_run_is_refused_and_the_first_run_ends_whole() {
     let out = dir.path().join("run");
     let first = eval(&out, &[]).spawn().unwrap();
     // The first writer has the directory once its pid is in the lock file.
-    let lock = out.join(thorarena::results::LOCK_FILE);
+    let lock = out.join(thorarena::eval::results::LOCK_FILE);
     let pid = first.id().to_string();
     let t0 = std::time::Instant::now();
     while std::fs::read_to_string(&lock).ok().as_deref() != Some(pid.as_str()) {
@@ -78,7 +78,7 @@ fn a_second_writer_of_a_run_is_refused_and_the_first_run_ends_whole() {
 fn a_lock_held_by_a_library_writer_refuses_eval_and_merge() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("run");
-    let run = thorarena::results::RunDir::new(&out);
+    let run = thorarena::eval::results::RunDir::new(&out);
     let held = run.lock().unwrap();
     let refused = eval(&out, &[]).output().unwrap();
     assert!(!refused.status.success());

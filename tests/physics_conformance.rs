@@ -8,11 +8,11 @@
 
 use nalgebra::{Isometry3, Point3, Vector3};
 use std::sync::Arc;
-use thorarena::physics::{
+use thorarena::sim::physics::{
     legged_gym_gains, standing_default_pose, standing_gains, ContactMode, ExternalForce, PdForm,
     PdGains, Physics, PhysicsSettings, PhysicsState, ResetState, RootState,
 };
-use thorarena::robot::{self, RobotModel};
+use thorarena::sim::robot::{self, RobotModel};
 
 mod rapier {
     use super::*;
@@ -26,7 +26,7 @@ mod rapier {
         settings: PhysicsSettings,
         gains: PdGains,
     ) -> Box<dyn Physics> {
-        Box::new(thorarena::physics::RapierPhysics::new(
+        Box::new(thorarena::sim::physics::RapierPhysics::new(
             model.clone(),
             settings,
             gains,
@@ -50,8 +50,8 @@ mod mujoco {
         settings: PhysicsSettings,
         gains: PdGains,
     ) -> Box<dyn Physics> {
-        thorarena::physics::make_physics(
-            &thorarena::physics::Engine::mujoco_on(None).unwrap(),
+        thorarena::sim::physics::make_physics(
+            &thorarena::sim::physics::Engine::mujoco_on(None).unwrap(),
             model.clone(),
             settings,
             gains,

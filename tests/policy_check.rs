@@ -1,4 +1,4 @@
-//! The sanity check before a score counts (`thorarena policy check`, `thorarena::sanity`):
+//! The sanity check before a score counts (`thorarena policy check`, `thorarena::eval::sanity`):
 //! every published network the build runs passes it — TWIST2 and wbc-mjlab on the bundled
 //! sample's walk, holosoma's FastSAC and PPO dances on their own clips — and mis-wired
 //! variants fail it, naming the check: holosoma's 154 inputs fed in mjlab's order, its PPO
@@ -10,10 +10,10 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use thorarena::motion::import::SourceFormat;
-use thorarena::motion::{Dataset, Sequence};
-use thorarena::registry::{self, PolicyChoice};
-use thorarena::sanity::{check_policy, walking_sequence, SanityOptions, SanityReport};
+use thorarena::eval::sanity::{check_policy, walking_sequence, SanityOptions, SanityReport};
+use thorarena::policy::registry::{self, PolicyChoice};
+use thorarena::sim::motion::import::SourceFormat;
+use thorarena::sim::motion::{Dataset, Sequence};
 
 mod common;
 #[path = "common/in_process.rs"]
@@ -25,7 +25,7 @@ mod prereq;
 /// `policy check POLICY --profile PROFILE` tracking `tracking`, in process.
 fn check(policy: &str, profile: &Path, tracking: &Sequence) -> SanityReport {
     let robot = common::g1();
-    let profile = thorarena::profile::load_profile(profile, &robot).unwrap();
+    let profile = thorarena::sim::profile::load_profile(profile, &robot).unwrap();
     let arg = registry::PolicyArg::parse(policy).unwrap();
     let PolicyChoice::InProcess(mut p) = arg.load(&robot, &profile).unwrap() else {
         panic!("{policy} does not run in process");
@@ -50,7 +50,7 @@ fn check(policy: &str, profile: &Path, tracking: &Sequence) -> SanityReport {
 }
 
 fn bundled(profile: &str) -> PathBuf {
-    thorarena::profile::bundled_profile_path(profile)
+    thorarena::sim::profile::bundled_profile_path(profile)
 }
 
 /// The bundled sample's walk: what `policy check` tracks for a general tracker.
@@ -177,10 +177,10 @@ fn a_baseline_that_cannot_walk_fails_track_from_the_command_line() {
 /// `eval` of the bundled sample's `push_chair_001` without force, in process: the run's
 /// `run.json` `sanity`, or the error's text.
 fn sanity_of_eval(policy: &str, unchecked: bool, out: &Path) -> Result<serde_json::Value, String> {
-    let request = thorarena::evaluation::EvalRequest {
+    let request = thorarena::eval::EvalRequest {
         policy: policy.into(),
         settings: vec!["no-force".into()],
-        selection: thorarena::motion::SequenceSelection {
+        selection: thorarena::sim::motion::SequenceSelection {
             tasks: Vec::new(),
             sequences: vec!["push_chair_001".into()],
         },
@@ -257,7 +257,7 @@ fn a_published_network_runs_under_its_own_profile_whatever_its_file_is_called() 
             .default_profile(),
         "holosoma-ppo"
     );
-    let spec = thorarena::evaluation::EvalSpec::load(&thorarena::evaluation::EvalRequest {
+    let spec = thorarena::eval::EvalSpec::load(&thorarena::eval::EvalRequest {
         policy: policy.clone(),
         ..Default::default()
     })

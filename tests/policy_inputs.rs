@@ -4,14 +4,14 @@
 //! in a slot with no episode. The policy end is the Rust client, in a thread.
 
 use std::time::Duration;
-use thorarena::perf::standing_observation;
+use thorarena::campaign::bench::standing_observation;
 use thorarena::policy::{twist2, Observation, Policy, RemoteConfig, RemotePolicy};
 use thorarena_ipc::{PolicyClient, PolicyConfig, SimConfig};
 
 const N_ENVS: usize = 3;
 
 fn joint_names() -> Vec<String> {
-    let robot = thorarena::registry::robot("g1_29dof").unwrap();
+    let robot = thorarena::policy::registry::robot("g1_29dof").unwrap();
     robot.joints.iter().map(|j| j.name.clone()).collect()
 }
 

@@ -1,7 +1,7 @@
 //! Dynamics profiles: the shipped ones load with the numbers of SOURCES.md, Gains and Policies, actions map
 //! to targets as clip → scale → offset, and bad profiles are clear errors naming the field.
 
-use thorarena::profile::{bundled_profile_path, joint_group, load_profile};
+use thorarena::sim::profile::{bundled_profile_path, joint_group, load_profile};
 
 mod common;
 use common::g1;

@@ -3,8 +3,8 @@
 //! forward kinematics, and the ground check finds a known height offset.
 
 use nalgebra::Vector3;
-use thorarena::motion::{ground_check, reference_keypoints, shift_root_height, Reference};
-use thorarena::physics::standing_default_pose;
+use thorarena::sim::motion::{ground_check, reference_keypoints, shift_root_height, Reference};
+use thorarena::sim::physics::standing_default_pose;
 
 mod common;
 use common::{g1, sample_sequence};

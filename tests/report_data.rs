@@ -6,15 +6,15 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use thorarena::episode::TraceStep;
-use thorarena::evaluation::EpisodeRecord;
-use thorarena::metrics::{EpisodeSeries, RegimeThresholds};
+use thorarena::eval::episode::TraceStep;
+use thorarena::eval::metrics::{EpisodeSeries, RegimeThresholds};
+use thorarena::eval::results::summarize;
+use thorarena::eval::EpisodeRecord;
 use thorarena::report::{
     comparison_warnings, diagnostics_multi_table, diagnostics_table, fats_table, load_runs,
     report_html, view_scene, ReportError, TraceContext, WarningKind, WebBundle,
 };
-use thorarena::results::summarize;
-use thorarena::robot::{self, forward_kinematics};
+use thorarena::sim::robot::{self, forward_kinematics};
 
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
@@ -33,7 +33,7 @@ fn record(task: &str, id: &str, setting: &str, steps: usize, err_m: f64) -> Epis
         setting: setting.into(),
         coefficient: if setting == "force" { 1.0 } else { 0.0 },
         policy: "p".into(),
-        termination: (steps < 30).then_some(thorarena::evaluation::Termination::TorsoTilt),
+        termination: (steps < 30).then_some(thorarena::eval::Termination::TorsoTilt),
         faults: Default::default(),
         series: EpisodeSeries {
             kp_err_m: (0..steps).map(err).collect(),
@@ -170,7 +170,7 @@ fn runs_with_other_datasets_termination_rules_or_profiles_are_flagged() {
     let mut shard = header("e");
     shard.shard = Some((0, 2));
     let mut other_engine = header("f");
-    other_engine.engine = thorarena::physics::Engine::Mujoco {
+    other_engine.engine = thorarena::sim::physics::Engine::Mujoco {
         mjcf: Some("g1.xml".into()),
         mjcf_sha256: None,
     };
@@ -266,7 +266,7 @@ fn datasets_and_mjcfs_are_compared_by_content_and_a_path_is_only_a_note() {
     assert!(!html.contains("id=\"comparability-warnings\""));
     assert!(html.contains("id=\"comparability-notes\""));
     // One MJCF path, two contents: not comparable.
-    let mujoco = |hash: &str| thorarena::physics::Engine::Mujoco {
+    let mujoco = |hash: &str| thorarena::sim::physics::Engine::Mujoco {
         mjcf: Some("g1.xml".into()),
         mjcf_sha256: Some(hash.repeat(32)),
     };

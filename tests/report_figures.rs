@@ -8,8 +8,8 @@
 use quick_xml::events::Event;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use thorarena::evaluation::EpisodeRecord;
-use thorarena::metrics::EpisodeSeries;
+use thorarena::eval::metrics::EpisodeSeries;
+use thorarena::eval::EpisodeRecord;
 use thorarena::report::{
     load_runs, report_figures, svg_figures, write_comparison_report, ComparisonFiles, CurveSeries,
     FigureKind, ReportFigures, Swatch, SweepChart, MARKERS, SURVIVAL_JITTER,
@@ -35,7 +35,7 @@ fn write_run(dir: &Path, policy: &str, err_m: f64, fall: usize) {
                 setting: setting.into(),
                 coefficient: if setting == "force" { 1.0 } else { 0.0 },
                 policy: policy.into(),
-                termination: (steps < 30).then_some(thorarena::evaluation::Termination::TorsoTilt),
+                termination: (steps < 30).then_some(thorarena::eval::Termination::TorsoTilt),
                 faults: Default::default(),
                 series: EpisodeSeries {
                     kp_err_m: (0..steps)

@@ -4,16 +4,16 @@
 //! silently — and a run holding less than its plan is reported as partial, cell by cell.
 //!
 //! Every reader is called in process, as the commands call it: `report`'s
-//! `report::load_runs`, `merge`'s `benchmark::merge`, `eval --resume`'s
-//! `benchmark::evaluate`.
+//! `report::load_runs`, `merge`'s `pipeline::merge`, `eval --resume`'s
+//! `pipeline::evaluate`.
 
 use std::path::{Path, PathBuf};
-use thorarena::benchmark::{self, EvalObserver, EvalOptions, Starting};
-use thorarena::evaluation::{EvalRequest, EvalSpec};
-use thorarena::motion::DatasetWriter;
+use thorarena::eval::pipeline::{self, EvalObserver, EvalOptions, Starting};
+use thorarena::eval::results::RunDir;
+use thorarena::eval::{EvalRequest, EvalSpec};
 use thorarena::policy::HoldPolicy;
 use thorarena::report::{comparison_markdown, comparison_notes, comparison_warnings, load_runs};
-use thorarena::results::RunDir;
+use thorarena::sim::motion::DatasetWriter;
 
 mod common;
 use common::{g1, sample_sequence};
@@ -49,7 +49,7 @@ fn eval_hold(ds: &Path, run: &Path, resume: bool) -> Result<bool, String> {
         resume,
         ..EvalOptions::default()
     };
-    benchmark::evaluate(
+    pipeline::evaluate(
         &spec,
         &mut HoldPolicy,
         &RunDir::new(run),
@@ -99,7 +99,7 @@ fn every_reader_refuses(tmp: &Path, run: &Path, line: usize, expected: &str) {
     let at = format!("episodes.jsonl line {line}");
     let report = report_error(run);
     let merge = chain(
-        &benchmark::merge(&[RunDir::new(run)], &RunDir::new(tmp.join("merged")), &g1())
+        &pipeline::merge(&[RunDir::new(run)], &RunDir::new(tmp.join("merged")), &g1())
             .expect_err("merge refuses the run"),
     );
     let dataset = RunDir::new(run).read_header().unwrap().dataset;

@@ -4,7 +4,7 @@
 
 use nalgebra::Isometry3;
 use std::path::Path;
-use thorarena::robot::{self, RobotError};
+use thorarena::sim::robot::{self, RobotError};
 
 fn g1() -> robot::RobotModel {
     robot::load_bundled("g1_29dof").expect("bundled G1 loads")

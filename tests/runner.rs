@@ -2,13 +2,13 @@
 //! any number of workers, slots and pipeline depths, the force and no-force settings differ only through the replay,
 //! and every record streams out.
 
-use thorarena::evaluation::schedule;
-use thorarena::evaluation::task_thresholds;
-use thorarena::motion::Sequence;
+use thorarena::eval::results::summarize;
+use thorarena::eval::runner::{run_eval, EvalPlan};
+use thorarena::eval::schedule;
+use thorarena::eval::task_thresholds;
 use thorarena::policy::HoldPolicy;
-use thorarena::profile::{bundled_profile_path, load_profile};
-use thorarena::results::summarize;
-use thorarena::runner::{run_eval, EvalPlan};
+use thorarena::sim::motion::Sequence;
+use thorarena::sim::profile::{bundled_profile_path, load_profile};
 
 mod common;
 use common::{g1, runner_spec, sample_sequence};
@@ -128,8 +128,8 @@ fn force_and_no_force_differ_only_by_the_replay() {
 
 #[test]
 fn the_balance_baseline_keeps_the_standing_sample_tasks_upright_without_force() {
-    use thorarena::motion::Dataset;
     use thorarena::policy::{BalanceGains, BalancePolicy};
+    use thorarena::sim::motion::Dataset;
     let robot = g1();
     let profile = load_profile(&bundled_profile_path("default"), &robot).unwrap();
     let ds = Dataset::open(

@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use thorarena::motion::Dataset;
+use thorarena::sim::motion::Dataset;
 
 mod common;
 mod prereq;
@@ -142,12 +142,12 @@ fn a_truncated_clip_is_refused_naming_its_file_and_row() {
 // ---- the adapter: golden observations, the stiffness command, policy check ----
 
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
-use thorarena::physics::RootState;
 use thorarena::policy::softmimic::observation::{
     frame, History, Layout, Stiffness, ISAAC_FROM_CANONICAL,
 };
 use thorarena::policy::softmimic::{SoftMimicPolicy, DEFAULT_POSE, DEFAULT_STIFFNESS};
 use thorarena::policy::{Observation, Policy};
+use thorarena::sim::physics::RootState;
 
 fn numbers(file: &str) -> Vec<f64> {
     common::fixture_numbers("softmimic_golden", file)
@@ -278,7 +278,7 @@ fn network(test: &str, name: &str) -> Option<std::path::PathBuf> {
 
 fn load(path: &Path, stiffness: Stiffness) -> SoftMimicPolicy {
     let robot = std::sync::Arc::new(common::g1());
-    let profile = thorarena::registry::profile("softmimic", &robot).unwrap();
+    let profile = thorarena::policy::registry::profile("softmimic", &robot).unwrap();
     SoftMimicPolicy::load(path, robot, &profile, stiffness).unwrap()
 }
 
@@ -575,7 +575,7 @@ fn the_1159_observation_matches_the_deploy_formulas_on_a_walk() {
         String::from_utf8_lossy(&run.stderr)
     );
     let seq = Dataset::open(&ds, &common::g1()).unwrap().load(0).unwrap();
-    let reference = thorarena::motion::Reference::new(&seq);
+    let reference = thorarena::sim::motion::Reference::new(&seq);
     let t = 0.02;
     let mut policy = load(&onnx, DEFAULT_STIFFNESS);
     assert_eq!(policy.layout(), Layout::Track);

@@ -516,7 +516,7 @@ fn bad_specs_and_sweep_directories_are_clear_errors_that_write_nothing() {
     std::fs::write(
         out.join("plan.json"),
         text.replacen(
-            &format!("\"format\":{}", thorarena::sweep::PLAN_FORMAT),
+            &format!("\"format\":{}", thorarena::campaign::sweep::PLAN_FORMAT),
             "\"format\":99",
             1,
         ),

@@ -7,9 +7,9 @@
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::path::Path;
 use std::sync::OnceLock;
-use thorarena::motion::synth::{synthesize, write_synthetic, SynthOptions, TASKS};
-use thorarena::motion::{Dataset, Sequence, MANIFEST};
-use thorarena::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
+use thorarena::sim::motion::synth::{synthesize, write_synthetic, SynthOptions, TASKS};
+use thorarena::sim::motion::{Dataset, Sequence, MANIFEST};
+use thorarena::sim::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
 
 mod common;
 use common::g1;

@@ -4,12 +4,12 @@
 //! part, t for the future part), the history refill on steps 0 and 1 and its shift after.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use thorarena::motion::ReferenceFrame;
-use thorarena::physics::RootState;
 use thorarena::policy::twist2::{
     observation, single_frame, History, MIMIC_LEN, OBS_LEN, SINGLE_LEN,
 };
 use thorarena::policy::Observation;
+use thorarena::sim::motion::ReferenceFrame;
+use thorarena::sim::physics::RootState;
 
 fn frame(yaw: f64, z: f64, vx_w: f64, joint: f64) -> ReferenceFrame {
     ReferenceFrame {

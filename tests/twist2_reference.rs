@@ -153,8 +153,8 @@ fn the_published_twist2_policy_walks_the_released_walks_as_in_mujoco() {
 #[test]
 fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
     let _alone = one_at_a_time();
-    use thorarena::episode::EpisodeSetup;
-    use thorarena::evaluation::TerminationRule;
+    use thorarena::eval::episode::EpisodeSetup;
+    use thorarena::eval::TerminationRule;
     use thorarena::policy::{Policy, Twist2Policy};
     const TEST: &str = "twist2_reference::python_adapter";
     let Some(reference) = reference_dir(TEST) else {
@@ -168,16 +168,16 @@ fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
         return;
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
-    let profile = thorarena::profile::load_profile(
-        &thorarena::profile::bundled_profile_path("twist2"),
+    let robot = thorarena::sim::robot::load_bundled("g1_29dof").unwrap();
+    let profile = thorarena::sim::profile::load_profile(
+        &thorarena::sim::profile::bundled_profile_path("twist2"),
         &robot,
     )
     .unwrap();
     let onnx = reference.join("twist2_1017_25k.onnx");
     let mut policy = Twist2Policy::load(&onnx, profile.action_offset_rad.clone()).unwrap();
     let offsets = policy.reference_offsets_s();
-    let ds = thorarena::motion::Dataset::open(&root.join("data/sample"), &robot).unwrap();
+    let ds = thorarena::sim::motion::Dataset::open(&root.join("data/sample"), &robot).unwrap();
     let seq = ds
         .load_all()
         .unwrap()

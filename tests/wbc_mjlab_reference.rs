@@ -9,11 +9,11 @@
 //! never in CI.
 
 use std::path::{Path, PathBuf};
-use thorarena::evaluation::EngineChoice;
-use thorarena::motion::import::SourceFormat;
+use thorarena::eval::EngineChoice;
 use thorarena::policy::beyondmimic::LAYOUT_132_WBC;
 use thorarena::policy::BeyondMimicPolicy;
-use thorarena::profile::ActionMode;
+use thorarena::sim::motion::import::SourceFormat;
+use thorarena::sim::profile::ActionMode;
 
 mod common;
 #[path = "common/in_process.rs"]
@@ -70,7 +70,7 @@ fn the_file_is_read_as_its_deploy_code_reads_it() {
         return;
     };
     let robot = std::sync::Arc::new(common::g1());
-    let profile = thorarena::registry::profile("wbc-mjlab", &robot).unwrap();
+    let profile = thorarena::policy::registry::profile("wbc-mjlab", &robot).unwrap();
     let policy = BeyondMimicPolicy::load(&onnx, robot, &profile).unwrap();
     assert_eq!(policy.terms(), LAYOUT_132_WBC);
     assert_eq!(policy.action_mode(), ActionMode::ReferenceResidual);
@@ -91,7 +91,7 @@ fn wbc_mjlab_tracks_the_five_shared_clips_in_rapier_and_mujoco() {
     // (hip pitch, roll, yaw, knee, ankle pitch, roll); IsaacLab's order would have put the
     // right hip pitch second.
     let robot = common::g1();
-    let ds = thorarena::motion::Dataset::open(&clips, &robot).unwrap();
+    let ds = thorarena::sim::motion::Dataset::open(&clips, &robot).unwrap();
     let idle = (0..ds.len())
         .map(|i| ds.load(i).unwrap())
         .find(|s| s.sequence_id == "idle_02")

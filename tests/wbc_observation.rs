@@ -11,20 +11,20 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::sync::Arc;
-use thorarena::motion::ReferenceFrame;
-use thorarena::physics::RootState;
 use thorarena::policy::beyondmimic::{
     build_observation, layout_width, ObservationSpec, Scratch, LAYOUT_132_WBC,
 };
 use thorarena::policy::{BeyondMimicPolicy, Observation, Policy};
-use thorarena::profile::ActionMode;
-use thorarena::robot::{forward_kinematics, frame_pose, RobotModel};
+use thorarena::sim::motion::ReferenceFrame;
+use thorarena::sim::physics::RootState;
+use thorarena::sim::profile::ActionMode;
+use thorarena::sim::robot::{forward_kinematics, frame_pose, RobotModel};
 
 #[path = "common/onnx_model.rs"]
 mod onnx_model;
 
 fn g1() -> RobotModel {
-    thorarena::robot::load_bundled("g1_29dof").unwrap()
+    thorarena::sim::robot::load_bundled("g1_29dof").unwrap()
 }
 
 const WAIST: [usize; 3] = [12, 13, 14];
@@ -227,7 +227,7 @@ fn zero_residual_network(dir: &std::path::Path) -> BeyondMimicPolicy {
     };
     std::fs::write(&path, net.bytes()).unwrap();
     let robot = Arc::new(g1());
-    let profile = thorarena::registry::profile("wbc-mjlab", &robot).unwrap();
+    let profile = thorarena::policy::registry::profile("wbc-mjlab", &robot).unwrap();
     BeyondMimicPolicy::load(&path, robot, &profile).unwrap()
 }
 
@@ -242,7 +242,7 @@ fn a_residual_action_is_added_to_the_reference_and_recovered_from_the_last_step(
     assert_eq!(policy.reference_offsets_s(), vec![0.0, -0.02]);
 
     let robot = g1();
-    let profile = thorarena::registry::profile("wbc-mjlab", &robot).unwrap();
+    let profile = thorarena::policy::registry::profile("wbc-mjlab", &robot).unwrap();
     let now = moving_reference();
     let before = advanced(&now, -0.02);
     // The last action the policy meant (a_prev), as the raw action the profile received.
@@ -272,11 +272,11 @@ fn a_residual_action_is_added_to_the_reference_and_recovered_from_the_last_step(
 
 #[test]
 fn wbc_mjlab_is_one_entry_of_the_registry_with_its_own_profile() {
-    let arg = thorarena::registry::PolicyArg::parse("wbc-mjlab:w.onnx").unwrap();
+    let arg = thorarena::policy::registry::PolicyArg::parse("wbc-mjlab:w.onnx").unwrap();
     assert_eq!(arg.family().profile, "wbc-mjlab");
     assert_eq!(arg.default_profile(), "wbc-mjlab");
     let robot = g1();
-    let profile = thorarena::registry::profile("wbc-mjlab", &robot).unwrap();
+    let profile = thorarena::policy::registry::profile("wbc-mjlab", &robot).unwrap();
     let bm = profile.beyondmimic.as_ref().unwrap();
     assert_eq!(bm.action_mode, Some(ActionMode::ReferenceResidual));
     assert_eq!(bm.observation_names, LAYOUT_132_WBC.map(|t| t.name()));
@@ -284,7 +284,7 @@ fn wbc_mjlab_is_one_entry_of_the_registry_with_its_own_profile() {
     let knee = robot.joint_index("left_knee_joint").unwrap();
     assert!((profile.gains.effort_limit_nm[knee] - 0.98 * 131.0).abs() < 1e-9);
     // And the default profile is refused for it, saying why.
-    let default = thorarena::registry::profile("default", &robot).unwrap();
+    let default = thorarena::policy::registry::profile("default", &robot).unwrap();
     let e = arg.check_profile(&default).unwrap_err();
     assert!(e.contains("wbc-mjlab"), "{e}");
 }

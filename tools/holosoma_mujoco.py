@@ -38,11 +38,11 @@ action. This script rebuilds holosoma's inference loop (sim-to-sim, MuJoCo) arou
   step k-1 as ``wbt.py`` does (it feeds the motion outputs of the previous call,
   ``wbt.py:266,305``; ``--command-lag 1``); after the 10 physics substeps the state is
   compared with reference frame k+1.
-* Metrics, as ThorArena's ``src/episode.rs``: fall when |torso height - reference torso
+* Metrics, as ThorArena's ``src/eval/episode.rs``: fall when |torso height - reference torso
   height| > 0.25 m or the angle between R_robot^T(-z) and R_ref^T(-z) > 0.8 rad; survival =
   recorded steps / reference steps; per-step keypoint error = mean distance over 13 body
   origins with the reference re-anchored to the robot's pelvis by the full pose
-  (``src/metrics/keypoints.rs``, ``reanchor``: world_from_robot_root * ref_root^-1). A
+  (``src/eval/metrics/keypoints.rs``, ``reanchor``: world_from_robot_root * ref_root^-1). A
   yaw + horizontal-translation re-anchoring is reported alongside.
 
 Measured with the defaults (MuJoCo 4.0.0): the motion has 6774 frames (135.46 s at 50 Hz;
@@ -155,7 +155,7 @@ KEYPOINT_BODIES = (
 )
 FOOT_BODIES = ("left_ankle_roll_link", "right_ankle_roll_link")
 FLOOR_GEOM = "floor"
-MAX_TORSO_HEIGHT_ERROR_M = 0.25  # src/episode.rs, TerminationRule::default
+MAX_TORSO_HEIGHT_ERROR_M = 0.25  # src/eval/episode.rs, TerminationRule::default
 MAX_TORSO_TILT_ERROR_RAD = 0.8
 
 
@@ -435,7 +435,7 @@ class Controller:
         return bool(np.all(np.isfinite(self.data.qpos)) and np.all(np.isfinite(self.data.qvel)))
 
     def torso_errors(self, j: int) -> tuple[float, float]:
-        """(signed torso height error, tilt) against reference frame j (src/episode.rs)."""
+        """(signed torso height error, tilt) against reference frame j (src/eval/episode.rs)."""
         down = np.array([0.0, 0.0, -1.0])
         tilt = angle_between(
             self.torso_rot().T @ down, quat_to_mat(self.ref.torso_quat[j]).T @ down
@@ -513,7 +513,7 @@ def run_episode(
             fall = {"phase": "motion", "step": k, "reason": "physics_diverged"}
             break
 
-        # Compare with reference frame k+1 (src/episode.rs: record after the step).
+        # Compare with reference frame k+1 (src/eval/episode.rs: record after the step).
         j = min(k + 1, ref.frames - 1)
         r_wp, p_wp, kp_local = kin.reference_pelvis(
             ref.joint_pos[j], ref.torso_pos[j], ref.torso_quat[j]
@@ -521,7 +521,7 @@ def run_episode(
         robot_kp = np.asarray(data.xpos[robot.keypoints])
         rob_r = np.asarray(data.xmat[robot.pelvis]).reshape(3, 3)
         rob_p = np.asarray(data.xpos[robot.pelvis])
-        # src/metrics/keypoints.rs reanchor: world_from_robot_root * ref_root^-1 * x_ref.
+        # src/eval/metrics/keypoints.rs reanchor: world_from_robot_root * ref_root^-1 * x_ref.
         dist = np.linalg.norm(rob_p + kp_local @ rob_r.T - robot_kp, axis=1)
         kp_err.append(float(np.mean(dist)))
         kp_err_body += dist
@@ -578,7 +578,7 @@ def run_episode(
         "keypoint_error_yaw_xy_reanchor_mean_mm": mean_mm(kp_err_yaw),
         "keypoint_error_yaw_xy_reanchor_rms_mm": rms_mm(kp_err_yaw),
         "keypoint_error_vs_observed_frame_mean_mm": mean_mm(kp_err_obs),
-        # src/episode.rs root_drift_m: horizontal pelvis distance to the reference pelvis.
+        # src/eval/episode.rs root_drift_m: horizontal pelvis distance to the reference pelvis.
         "root_drift_mean_m": round(float(np.mean(root_drift)), 4) if root_drift else 0.0,
         "root_drift_end_m": round(root_drift[-1], 4) if root_drift else 0.0,
         "max_torso_height_error_m": round(float(np.max(np.abs(torso_dz))), 4) if n else 0.0,
@@ -722,7 +722,7 @@ def main(argv: list[str] | None = None) -> int:
             ctrlrange_clamp=args.ctrlrange_clamp,
         )
         robot = robot_of(model, policy.dof_names, args.ctrlrange_clamp)
-        steps_ref = ref.frames - 1  # src/episode.rs reference_steps: duration / dt
+        steps_ref = ref.frames - 1  # src/eval/episode.rs reference_steps: duration / dt
         steps = steps_ref if args.steps is None else max(0, min(args.steps, steps_ref))
         result = run_episode(policy, ref, robot, conv, steps, args.physics_dt, args.hold_s)
     except UsageError as e:

@@ -2,19 +2,19 @@
 //! every (sequence, setting) of a dataset on every worker, nothing written — against its
 //! physics floor measured in the same run; with `--policy-command` the policy is a process
 //! started for each run, and several `--pipeline-depths` are compared with the first
-//! (`thorarena::perf::EvalBench`). What every `bench` command's benchmark says is printed
+//! (`thorarena::campaign::bench::EvalBench`). What every `bench` command's benchmark says is printed
 //! here ([`print`]).
 //!
 //! `thorarena bench sweep`: what running a sweep as tasks costs next to running the same
 //! episodes directly — `sweep run --jobs N` against one `eval --workers N` per
 //! (policy, dataset, latency rule) with all the sweep's settings, timed in the same
 //! invocation — and how long planning and a status census take for a sweep of thousands
-//! of tasks (`thorarena::perf::SweepBench`).
+//! of tasks (`thorarena::campaign::bench::SweepBench`).
 
 use super::choices::EngineArg;
 use std::path::PathBuf;
-use thorarena::evaluation::EvalRequest;
-use thorarena::perf::{BenchLine, EvalBench, SweepBench};
+use thorarena::campaign::bench::{BenchLine, EvalBench, SweepBench};
+use thorarena::eval::EvalRequest;
 
 /// Arguments of `bench eval`.
 #[derive(Debug, clap::Args)]

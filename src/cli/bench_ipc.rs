@@ -1,12 +1,12 @@
 //! `thorarena bench ipc`: the policy round trip — observation batch published to action
 //! batch received — for echo policies in Rust, C++ and Python, against a Unix-socket echo
 //! moving the same bytes in the same run; and for the Python TWIST2 adapter running the
-//! real network against the network's own time (`thorarena::perf::IpcBench`). The hidden
+//! real network against the network's own time (`thorarena::campaign::bench::IpcBench`). The hidden
 //! `bench socket-peer` is the socket baseline's echo peer, this binary started again.
 
 use std::path::PathBuf;
 use std::time::Duration;
-use thorarena::perf::{answer_socket_echo, IpcBench, IpcClients};
+use thorarena::campaign::bench::{answer_socket_echo, IpcBench, IpcClients};
 use thorarena_ipc::Layout;
 
 /// Arguments of `bench ipc`.

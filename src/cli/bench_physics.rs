@@ -1,15 +1,15 @@
 //! `thorarena bench physics`: cost of one physics step of the standing G1 on each engine of
 //! this build at each step size, timed in the same run, with the ratio to rapier at the
 //! same step; and MuJoCo's cost on the reference MJCF through its Python package, when
-//! installed (`thorarena::perf::PhysicsBench`).
+//! installed (`thorarena::campaign::bench::PhysicsBench`).
 //!
 //! `thorarena bench inference`: one network's cost per environment against the batch size
 //! of a tract call, each batch size timed in the same run, with the ratio to batch one
-//! (`thorarena::perf::InferenceBench`).
+//! (`thorarena::campaign::bench::InferenceBench`).
 
 use std::path::PathBuf;
-use thorarena::perf::{InferenceBench, PhysicsBench};
-use thorarena::physics::PhysicsSettings;
+use thorarena::campaign::bench::{InferenceBench, PhysicsBench};
+use thorarena::sim::physics::PhysicsSettings;
 
 /// Arguments of `bench physics`.
 #[derive(Debug, clap::Args)]

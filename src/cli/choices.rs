@@ -2,9 +2,9 @@
 //! the library's enums derive nothing from it. Each maps one to one onto the library's,
 //! variant by variant of the same name.
 
-use thorarena::evaluation::{EngineChoice, LatencyMode, MissRule};
-use thorarena::physics::PdForm;
-use thorarena::scenario::Scenario;
+use thorarena::eval::{EngineChoice, LatencyMode, MissRule};
+use thorarena::sim::physics::PdForm;
+use thorarena::sim::scenario::Scenario;
 
 /// A value enum for `--flag` and its conversion into the library's enum of the same
 /// variants (a variant missing on either side does not compile).

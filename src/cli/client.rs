@@ -6,7 +6,7 @@
 use std::io::Write;
 use std::time::Duration;
 use thorarena::policy::client_process::{ClientFaults, ClientObserver};
-use thorarena::registry::{run_named_client, ClientRequest};
+use thorarena::policy::registry::{run_named_client, ClientRequest};
 
 /// Arguments of `client`.
 #[derive(Debug, clap::Args)]

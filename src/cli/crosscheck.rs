@@ -8,12 +8,12 @@ use super::eval::RunArgs;
 use super::eval_run::{print_evaluated, Progress};
 use super::flags::as_flags;
 use std::path::PathBuf;
-use thorarena::benchmark::{
+use thorarena::eval::pipeline::{
     compare_engines, CrosscheckObserver, CrosscheckRequest, EvalObserver, Evaluated,
 };
-use thorarena::evaluation::EvalSpec;
+use thorarena::eval::results::RunDir;
+use thorarena::eval::EvalSpec;
 use thorarena::report::crosscheck_report;
-use thorarena::results::RunDir;
 
 /// Arguments of `crosscheck`.
 #[derive(Debug, clap::Args)]

@@ -1,11 +1,11 @@
 //! `thorarena data …`: import motion files, describe, export or synthesise a dataset.
 
 use std::path::PathBuf;
-use thorarena::motion::import::news::ImportLines;
-use thorarena::motion::import::{import_batch, ImportBatch, SourceFormat};
-use thorarena::motion::synth::{write_synthetic, SynthOptions, SynthWriteError};
-use thorarena::motion::{describe, Dataset};
-use thorarena::robot::RobotModel;
+use thorarena::sim::motion::import::news::ImportLines;
+use thorarena::sim::motion::import::{import_batch, ImportBatch, SourceFormat};
+use thorarena::sim::motion::synth::{write_synthetic, SynthOptions, SynthWriteError};
+use thorarena::sim::motion::{describe, Dataset};
+use thorarena::sim::robot::RobotModel;
 
 /// `thorarena data …`
 #[derive(Debug, clap::Subcommand)]
@@ -169,14 +169,14 @@ fn source_format(args: &ImportArgs, robot: &RobotModel) -> anyhow::Result<Source
         },
         Format::LafanCsv => SourceFormat::LafanCsv { fps: args.fps },
         Format::SoftmimicCsv => SourceFormat::SoftMimicCsv { fps: args.fps },
-        Format::OnnxMotion => {
-            SourceFormat::onnx_motion_under(&thorarena::registry::profile(&args.profile, robot)?)
-        }
+        Format::OnnxMotion => SourceFormat::onnx_motion_under(
+            &thorarena::policy::registry::profile(&args.profile, robot)?,
+        ),
     })
 }
 
 fn import(args: &ImportArgs) -> anyhow::Result<()> {
-    let robot = thorarena::registry::robot(&args.robot)?;
+    let robot = thorarena::policy::registry::robot(&args.robot)?;
     let batch = ImportBatch {
         inputs: args.inputs.clone(),
         format: source_format(args, &robot)?,
@@ -195,18 +195,18 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
         &batch,
         &mut ImportLines { say: &mut say },
     )?;
-    let sequences = thorarena::motion::plural(ds.len(), "sequence");
+    let sequences = thorarena::sim::motion::plural(ds.len(), "sequence");
     eprintln!("{}: {sequences}", ds.dir.display());
     Ok(())
 }
 
 fn export(args: &ExportArgs) -> anyhow::Result<()> {
     let dataset = std::slice::from_ref(&args.dataset);
-    thorarena::results::check_dir(&args.out, args.overwrite, dataset)?;
-    let robot = thorarena::registry::robot(&args.robot)?;
+    thorarena::eval::results::check_dir(&args.out, args.overwrite, dataset)?;
+    let robot = thorarena::policy::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let ExportFormat::Npz = args.format;
-    let files = thorarena::motion::export_npz(&ds, &args.out, |done, total| {
+    let files = thorarena::sim::motion::export_npz(&ds, &args.out, |done, total| {
         eprint!("\rexported {done}/{total}")
     })?;
     eprintln!("\n{}: {} files", args.out.display(), files.len());
@@ -214,7 +214,7 @@ fn export(args: &ExportArgs) -> anyhow::Result<()> {
 }
 
 fn info(args: &InfoArgs) -> anyhow::Result<()> {
-    let robot = thorarena::registry::robot(&args.robot)?;
+    let robot = thorarena::policy::registry::robot(&args.robot)?;
     let ds = Dataset::open(&args.dataset, &robot)?;
     let text = describe(&ds, &ds.load_all()?, &robot);
     print!("{}", super::flags::as_flags(&text));
@@ -223,8 +223,8 @@ fn info(args: &InfoArgs) -> anyhow::Result<()> {
 
 /// `data synth`: the synthetic six-task dataset written, then described.
 fn synth(args: &SynthArgs) -> anyhow::Result<()> {
-    thorarena::results::check_dataset_dir(&args.out)?;
-    let robot = thorarena::registry::robot(&args.robot)?;
+    thorarena::eval::results::check_dataset_dir(&args.out)?;
+    let robot = thorarena::policy::registry::robot(&args.robot)?;
     let opts = SynthOptions {
         per_task: args.per_task,
         seed: args.seed,

@@ -7,7 +7,7 @@ use super::choices::EngineArg;
 use std::path::PathBuf;
 use thorarena::dds::session::{run_dds_session, DdsSessionEvent, DdsSessionRequest};
 use thorarena::dds::wireless_remote::RemoteScript;
-use thorarena::evaluation::TerminationRule;
+use thorarena::eval::TerminationRule;
 
 /// Arguments of `dds`.
 #[derive(Debug, clap::Args)]

@@ -4,15 +4,15 @@
 //!
 //! `thorarena merge`: the shards of one evaluation combined into the single run they add
 //! up to — the same records, summary and tables as an unsharded run
-//! ([`thorarena::benchmark::merge`]).
+//! ([`thorarena::eval::pipeline::merge`]).
 
 pub use super::run_args::RunArgs;
 use super::run_args::REQUEST_CONFLICTS;
 use anyhow::Context;
 use std::path::PathBuf;
-use thorarena::evaluation::{EvalRequest, EvalSpec};
-use thorarena::registry::{open_policy, PolicyTarget};
-use thorarena::results::{RunDir, RunTarget};
+use thorarena::eval::results::{RunDir, RunTarget};
+use thorarena::eval::{EvalRequest, EvalSpec};
+use thorarena::policy::registry::{open_policy, PolicyTarget};
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
@@ -27,7 +27,7 @@ pub struct Args {
     #[arg(long, default_value = "balance")]
     pub policy: String,
     /// Run the evaluation a request file describes (JSON, every field of
-    /// `thorarena::evaluation::EvalRequest`; a sweep task writes one per attempt) instead
+    /// `thorarena::eval::EvalRequest`; a sweep task writes one per attempt) instead
     /// of one given by flags. Only --out, --resume, --overwrite, --workers and the
     /// session options (--connect-timeout, --on-policy-failure, --spin-us) go with it.
     #[arg(long, conflicts_with_all = REQUEST_CONFLICTS)]
@@ -106,10 +106,10 @@ pub struct MergeArgs {
 
 /// `merge`: the shards written as one run, its tables printed.
 pub(super) fn merge(args: &MergeArgs) -> anyhow::Result<()> {
-    thorarena::results::check_dir(&args.out, args.overwrite, &args.runs)?;
-    let robot = thorarena::registry::robot(&args.robot)?;
+    thorarena::eval::results::check_dir(&args.out, args.overwrite, &args.runs)?;
+    let robot = thorarena::policy::registry::robot(&args.robot)?;
     let shards: Vec<RunDir> = args.runs.iter().map(RunDir::new).collect();
-    let merged = thorarena::benchmark::merge(&shards, &RunDir::new(&args.out), &robot)?;
+    let merged = thorarena::eval::pipeline::merge(&shards, &RunDir::new(&args.out), &robot)?;
     println!("{}", merged.tables);
     eprintln!(
         "merged {} runs, {} episodes → {}",

@@ -3,11 +3,11 @@
 
 use super::flags::as_flags;
 use std::path::Path;
-use thorarena::benchmark::{EvalObserver, EvalOptions, Evaluated, Starting};
-use thorarena::episode::EpisodeTrace;
-use thorarena::evaluation::{EpisodeRecord, EvalSpec};
+use thorarena::eval::episode::EpisodeTrace;
+use thorarena::eval::pipeline::{EvalObserver, EvalOptions, Evaluated, Starting};
+use thorarena::eval::results::RunDir;
+use thorarena::eval::{EpisodeRecord, EvalSpec};
 use thorarena::policy::Policy;
-use thorarena::results::RunDir;
 
 /// The progress of a run on the terminal: what it starts with, a bar over its episodes.
 pub(super) struct Progress {
@@ -82,7 +82,7 @@ pub(super) fn evaluate(
         resume,
         trace_first_s: None,
     };
-    let result = thorarena::benchmark::evaluate(spec, policy, &run, options, &mut progress);
+    let result = thorarena::eval::pipeline::evaluate(spec, policy, &run, options, &mut progress);
     progress.finish();
     let done = result?;
     print_evaluated(&done, spec, &run);

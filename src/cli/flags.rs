@@ -9,7 +9,7 @@
 //! as they are.
 
 use std::sync::OnceLock;
-use thorarena::evaluation::EvalRequest;
+use thorarena::eval::EvalRequest;
 
 /// Unit suffixes of field names that their flags leave out.
 const UNIT_SUFFIXES: [&str; 3] = ["_s", "_m", "_rad"];

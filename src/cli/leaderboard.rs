@@ -7,7 +7,7 @@
 
 use std::path::PathBuf;
 use std::time::Instant;
-use thorarena::leaderboard::{
+use thorarena::campaign::leaderboard::{
     run_leaderboard_job, CompliancePair, LeaderboardJob, OwnClip, PairOptions, ProgressLines,
 };
 

@@ -140,7 +140,7 @@ pub fn run() -> anyhow::Result<()> {
     logging::init();
     if let Command::Bench(bench) = &cli.command {
         if !matches!(bench, BenchCommand::SocketPeer(_)) {
-            println!("{}", thorarena::perf::Machine::this());
+            println!("{}", thorarena::campaign::bench::Machine::this());
         }
     }
     match cli.command {
@@ -157,7 +157,10 @@ pub fn run() -> anyhow::Result<()> {
         Command::Eval(args) => eval::run(&args),
         Command::Merge(args) => eval::merge(&args),
         Command::Policies => {
-            print!("{}", flags::as_flags(&thorarena::registry::families_text()));
+            print!(
+                "{}",
+                flags::as_flags(&thorarena::policy::registry::families_text())
+            );
             Ok(())
         }
         Command::Leaderboard(args) => leaderboard::run(&args),

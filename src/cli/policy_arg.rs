@@ -2,7 +2,7 @@
 //! baseline, or `ipc:<session>` for a policy process connecting over shared memory.
 
 use super::choices::{LatencyModeArg, MissRuleArg};
-use thorarena::evaluation::{parse_budget, Budget, PolicyIoRules};
+use thorarena::eval::{parse_budget, Budget, PolicyIoRules};
 use thorarena::policy::{SessionOptions, SessionOptionsError};
 
 /// Options of a policy's answers (all policies) and of the session (remote ones).
@@ -78,7 +78,7 @@ impl PolicyIoArgs {
     }
 
     /// The rules recorded in `run.json` (checked with the rest of the evaluation by
-    /// [`thorarena::evaluation::EvalSpec::load`]).
+    /// [`thorarena::eval::EvalSpec::load`]).
     pub fn rules(&self) -> PolicyIoRules {
         PolicyIoRules {
             miss_rule: self.miss_rule.into(),

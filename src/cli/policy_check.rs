@@ -1,9 +1,9 @@
 //! `thorarena policy check SPEC`: the sanity check before a policy's scores count
-//! (`thorarena::sanity`), printed check by check with its numbers; a failed check makes
+//! (`thorarena::eval::sanity`), printed check by check with its numbers; a failed check makes
 //! the command fail, naming it.
 
 use std::path::PathBuf;
-use thorarena::benchmark::{check_named_policy, PolicyCheckRequest};
+use thorarena::eval::pipeline::{check_named_policy, PolicyCheckRequest};
 
 /// `thorarena policy …`
 #[derive(Debug, clap::Subcommand)]

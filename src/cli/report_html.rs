@@ -86,7 +86,7 @@ pub(super) fn view(args: &ViewArgs) -> anyhow::Result<()> {
     for warning in bundle.stale_warnings() {
         eprintln!("{warning}");
     }
-    let robot = thorarena::registry::robot(&args.robot)?;
+    let robot = thorarena::policy::registry::robot(&args.robot)?;
     let written = write_view(&args.trace, &robot, &bundle, &args.out, args.overwrite)?;
     let shown = if written.reference_ghost {
         ", reference ghost"

@@ -5,8 +5,8 @@
 use super::choices::{PdFormArg, ScenarioArg};
 use std::io::Write;
 use std::sync::Arc;
-use thorarena::physics::PhysicsSettings;
-use thorarena::scenario::run_scenario;
+use thorarena::sim::physics::PhysicsSettings;
+use thorarena::sim::scenario::run_scenario;
 
 /// Arguments of `robot info`.
 #[derive(Debug, clap::Args)]
@@ -23,24 +23,24 @@ pub struct MjcfArgs {
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
     /// Physics step written into the MJCF's `<option timestep>`, s (eval sets its own).
-    #[arg(long, default_value_t = thorarena::physics::PhysicsSettings::default().dt_s)]
+    #[arg(long, default_value_t = thorarena::sim::physics::PhysicsSettings::default().dt_s)]
     pub physics_dt: f64,
 }
 
 /// `robot mjcf`: the generated MJCF on stdout.
 pub(super) fn mjcf(args: &MjcfArgs) -> anyhow::Result<()> {
-    let model = thorarena::registry::robot(&args.robot)?;
-    let settings = thorarena::physics::PhysicsSettings {
+    let model = thorarena::policy::registry::robot(&args.robot)?;
+    let settings = thorarena::sim::physics::PhysicsSettings {
         dt_s: args.physics_dt,
         ..Default::default()
     };
-    print!("{}", thorarena::physics::mjcf_of(&model, &settings));
+    print!("{}", thorarena::sim::physics::mjcf_of(&model, &settings));
     Ok(())
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let model = thorarena::registry::robot(&args.robot)?;
-    print!("{}", thorarena::robot::describe(&model));
+    let model = thorarena::policy::registry::robot(&args.robot)?;
+    print!("{}", thorarena::sim::robot::describe(&model));
     Ok(())
 }
 
@@ -72,7 +72,7 @@ pub(super) fn trace(args: &TraceArgs) -> anyhow::Result<()> {
         args.dt
     );
     anyhow::ensure!(args.iterations >= 1, "--iterations must be at least 1");
-    let model = Arc::new(thorarena::registry::robot(&args.robot)?);
+    let model = Arc::new(thorarena::policy::registry::robot(&args.robot)?);
     let settings = PhysicsSettings {
         dt_s: args.dt,
         solver_iterations: args.iterations,

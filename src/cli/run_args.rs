@@ -3,8 +3,8 @@
 
 use super::policy_arg::PolicyIoArgs;
 use std::path::PathBuf;
-use thorarena::evaluation::{parse_shard, EvalRequest, TerminationRule};
-use thorarena::motion::SequenceSelection;
+use thorarena::eval::{parse_shard, EvalRequest, TerminationRule};
+use thorarena::sim::motion::SequenceSelection;
 
 /// The flags a request file replaces (clap's ids: the field names).
 pub(super) const REQUEST_CONFLICTS: [&str; 24] = [

@@ -4,8 +4,8 @@
 use super::eval::{load_request, RunArgs};
 use super::eval_run::evaluate;
 use std::path::PathBuf;
+use thorarena::policy::registry::{serve_session, PolicyTarget};
 use thorarena::policy::Policy;
-use thorarena::registry::{serve_session, PolicyTarget};
 
 /// Arguments of `serve`.
 #[derive(Debug, clap::Args)]
@@ -39,7 +39,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         let mut say = |note: &str| eprintln!("{note}");
         let mut policy = serve_session(&args.session, &target, &mut |_| Ok(()), &mut say)?;
         let stem = format!("{}-{}", policy.name(), ctx.dataset_name());
-        let out = thorarena::results::free_numbered_dir(&args.out_root, &stem, n);
+        let out = thorarena::eval::results::free_numbered_dir(&args.out_root, &stem, n);
         let result = evaluate(args.run.resume, &ctx, &mut policy as &mut dyn Policy, &out);
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {

@@ -2,17 +2,17 @@
 //! its DDS interface, the episode run in real time by [`super::bridge::run_episode`], and
 //! the run directory it is scored into (`run.json`, the record, `summary.json`,
 //! `tables.md` with the real-time lines, `realtime.json`), as
-//! [`crate::benchmark::evaluate`] writes an in-process run.
+//! [`crate::eval::pipeline::evaluate`] writes an in-process run.
 
 use super::bridge::{run_episode, BridgeOptions, BridgeProgress, RealTimeReport};
 use super::scheduling::SchedulingError;
 use super::wireless_remote::RemoteScript;
 use super::RobotEndpoints;
-use crate::episode::{Episode, EpisodeSetup};
-use crate::evaluation::{task_thresholds, EvalRequest, EvalSpec, TerminationRule};
-use crate::motion::SequenceSelection;
-use crate::physics::{make_physics, PhysicsSettings};
-use crate::results::{RunDir, RunHeader};
+use crate::eval::episode::{Episode, EpisodeSetup};
+use crate::eval::results::{RunDir, RunHeader};
+use crate::eval::{task_thresholds, EvalRequest, EvalSpec, TerminationRule};
+use crate::sim::motion::SequenceSelection;
+use crate::sim::physics::{make_physics, PhysicsSettings};
 use std::net::IpAddr;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -36,7 +36,7 @@ pub struct DdsSessionRequest {
     /// Dynamics profile.
     pub profile: String,
     /// Physics engine.
-    pub engine: crate::evaluation::EngineChoice,
+    pub engine: crate::eval::EngineChoice,
     /// MJCF for MuJoCo (`None`: generated from the robot model).
     pub mjcf: Option<PathBuf>,
     /// When a fall ends the episode.
@@ -146,16 +146,16 @@ pub enum DdsSessionError {
     },
     /// The evaluation the episode belongs to.
     #[error(transparent)]
-    Spec(#[from] crate::evaluation::SpecError),
+    Spec(#[from] crate::eval::SpecError),
     /// The run directory.
     #[error(transparent)]
-    Results(#[from] crate::results::ResultsError),
+    Results(#[from] crate::eval::results::ResultsError),
     /// Where the run would be written.
     #[error(transparent)]
-    Output(#[from] crate::results::OutputRefused),
+    Output(#[from] crate::eval::results::OutputRefused),
     /// The physics engine.
     #[error(transparent)]
-    Engine(#[from] crate::physics::EngineError),
+    Engine(#[from] crate::sim::physics::EngineError),
     /// DDS itself, or the episode over it.
     #[error(transparent)]
     Dds(#[from] super::DdsError),
@@ -164,7 +164,7 @@ pub enum DdsSessionError {
     Interface(#[from] super::interface::InterfaceError),
     /// The policy name.
     #[error(transparent)]
-    Name(#[from] crate::names::NameError),
+    Name(#[from] crate::files::names::NameError),
     /// Writing `realtime.json`.
     #[error("writing {path}: {source}")]
     Write {
@@ -226,7 +226,7 @@ pub fn run_dds_session(
     req: &DdsSessionRequest,
     on_event: &mut dyn FnMut(DdsSessionEvent<'_>),
 ) -> Result<DdsSessionOutcome, DdsSessionError> {
-    crate::names::check_name("policy name", &req.name)?;
+    crate::files::names::check_name("policy name", &req.name)?;
     if !(req.start_timeout_s.is_finite() && req.start_timeout_s > 0.0) {
         return Err(refused(
             DdsSetting::StartTimeout,
@@ -278,7 +278,7 @@ pub fn run_dds_session(
             ),
         ));
     };
-    crate::results::check_run_dir(&req.out, req.overwrite, Some(&spec.dataset))?;
+    crate::eval::results::check_run_dir(&req.out, req.overwrite, Some(&spec.dataset))?;
     let run = RunDir::new(&req.out);
     run.check_writable()?;
     // The one writer of the run from now until its last file: a second bridge given the
@@ -380,11 +380,11 @@ pub fn run_dds_session(
     for (path, bytes) in [
         (realtime_path, json.as_bytes()),
         (
-            run.path().join(crate::results::TABLES_FILE),
+            run.path().join(crate::eval::results::TABLES_FILE),
             tables.as_bytes(),
         ),
     ] {
-        crate::atomic_file::write(&path, bytes)
+        crate::files::atomic_file::write(&path, bytes)
             .map_err(|source| DdsSessionError::Write { path, source })?;
     }
     Ok(DdsSessionOutcome { tables, realtime })

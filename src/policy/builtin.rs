@@ -93,7 +93,7 @@ impl Default for BalanceGains {
 impl BalancePolicy {
     /// For a robot (joint names) with the given default pose (the profile's action offset).
     pub fn new(
-        robot: &crate::robot::RobotModel,
+        robot: &crate::sim::robot::RobotModel,
         default_pose: Vec<f64>,
         gains: BalanceGains,
     ) -> Option<Self> {

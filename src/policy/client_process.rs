@@ -32,7 +32,7 @@ pub enum ClientError {
     /// The policy could not be made for the session.
     #[error("{0}")]
     Policy(String),
-    /// The simulator broke its promise about episodes (see [`EpisodeContinuity`]).
+    /// The simulator broke its promise about episodes (see `EpisodeContinuity`).
     #[error("{0}")]
     Continuity(String),
 }

@@ -1,6 +1,8 @@
 //! The in-process `Policy` trait — batched, so a Rust baseline, a batched Python policy
 //! and a C++ policy all see the same loop — the built-in baselines, and the remote policy
-//! that speaks `thorarena-ipc` to a policy process.
+//! that speaks `thorarena-ipc` to a policy process; beside them the [`registry`] that
+//! turns the names a user gives into policies, profiles and robots, and the ONNX side of
+//! networks ([`network_kernels`](mod@network_kernels), [`onnx_export`]).
 
 mod batch_plans;
 pub mod beyondmimic;
@@ -8,6 +10,9 @@ mod builtin;
 pub mod client_process;
 pub mod falcon;
 pub mod inputs;
+pub mod network_kernels;
+pub mod onnx_export;
+pub mod registry;
 mod remote;
 pub mod softmimic;
 mod stall_watch;
@@ -15,21 +20,19 @@ mod trained_with;
 pub mod twist2;
 pub mod wire;
 
-pub use crate::network_kernels::{
-    load_onnx, network_kernels, NetworkKernels, KERNELS_ENV, PINNED_FAMILY,
-};
 pub use batch_plans::BatchPlans;
 pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use falcon::FalconPolicy;
+pub use network_kernels::{load_onnx, network_kernels, NetworkKernels, KERNELS_ENV, PINNED_FAMILY};
 pub use remote::{
     RemoteConfig, RemoteError, RemotePolicy, SessionOptions, SessionOptionsError, TransportStats,
 };
 pub use softmimic::SoftMimicPolicy;
 pub use twist2::Twist2Policy;
 
-use crate::motion::ReferenceFrame;
-use crate::physics::RootState;
+use crate::sim::motion::ReferenceFrame;
+use crate::sim::physics::RootState;
 use std::time::Duration;
 
 /// What a policy sees of one environment at one control step: benchmark signals, not any
@@ -108,7 +111,7 @@ pub trait Policy {
     }
 
     /// The raw action with which the policy adds nothing of its own — what the sanity
-    /// check's zero-action run sends in its place (`crate::sanity`). Raw zero, the
+    /// check's zero-action run sends in its place (`crate::eval::sanity`). Raw zero, the
     /// profile's offset, unless the policy's actions are relative to something else (a
     /// residual policy: the reference's joints).
     fn zero_action(&self, _obs: &Observation, out: &mut [f64]) {
@@ -129,7 +132,7 @@ pub trait Policy {
     }
 
     /// `n` fresh copies of this policy (no episode started), one per worker thread of the
-    /// runner (`runner/free_running.rs`), each then acting for that worker's slots only,
+    /// runner (`eval/runner/free_running.rs`), each then acting for that worker's slots only,
     /// beside its physics: a network in process costs no core that waits for it, and no
     /// worker waits for another. `None` (the default): the policy acts on a coordinator for
     /// every slot, in lock-step — a policy process, whose answers are computed elsewhere,
@@ -140,7 +143,7 @@ pub trait Policy {
     }
 
     /// The kernels a network computed this policy's actions on, when it is a network run
-    /// in process ([`network_kernels`]); `None` for everything else, whose arithmetic is
+    /// in process ([`network_kernels()`]); `None` for everything else, whose arithmetic is
     /// its own (a policy process) or has no kernels to choose (a baseline).
     fn network_kernels(&self) -> Option<&'static NetworkKernels> {
         None
@@ -155,7 +158,7 @@ pub trait Policy {
     /// What the policy follows when it follows commands derived from the reference rather
     /// than the reference's joints (FALCON), in a few words; `None` for a tracker. The
     /// sanity check judges a follower by what it is asked to follow
-    /// (`crate::sanity::following`).
+    /// (`crate::eval::sanity::following`).
     fn follows_commands(&self) -> Option<&'static str> {
         None
     }

@@ -122,8 +122,8 @@ impl RemotePolicy {
     /// connected).
     pub fn serve(
         session: &str,
-        robot: &crate::robot::RobotModel,
-        profile: &crate::profile::Profile,
+        robot: &crate::sim::robot::RobotModel,
+        profile: &crate::sim::profile::Profile,
         options: &SessionOptions,
         envs: usize,
         vet: &mut dyn FnMut(&str) -> Result<(), String>,
@@ -156,7 +156,8 @@ impl RemotePolicy {
         // The name a policy process declares becomes part of paths: a name the run cannot
         // use is refused in the handshake, so the policy hears why.
         let mut vet_name = |info: &PolicyInfo| {
-            crate::names::check_name("policy name", &info.name).map_err(|e| e.to_string())?;
+            crate::files::names::check_name("policy name", &info.name)
+                .map_err(|e| e.to_string())?;
             vet(&info.name)
         };
         let remote = Self::connect(config, &mut vet_name, &mut |m| {

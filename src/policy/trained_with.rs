@@ -2,7 +2,7 @@
 //! under: the sanity check's wiring step reports every contradiction (`Policy::wiring`),
 //! so a network under another family's gains or mapping is refused before it scores.
 
-use crate::profile::Profile;
+use crate::sim::profile::Profile;
 
 /// What a network was trained with: its family's name in messages, its control period,
 /// one action scale for every joint, and its default pose (canonical order).

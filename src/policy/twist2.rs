@@ -24,7 +24,7 @@
 
 use super::batch_plans::BatchPlans;
 use super::{ActOutcome, Observation, Policy};
-use crate::motion::ReferenceFrame;
+use crate::sim::motion::ReferenceFrame;
 use nalgebra::UnitQuaternion;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

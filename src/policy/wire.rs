@@ -4,8 +4,8 @@
 //! in-process policy sees (bit for bit) — which is what lets the tests compare them.
 
 use super::Observation;
-use crate::motion::ReferenceFrame;
-use crate::physics::RootState;
+use crate::sim::motion::ReferenceFrame;
+use crate::sim::physics::RootState;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use thorarena_ipc::{
     ActionBatchMut, EnvHeader, EnvObs, EnvObsMut, ObsBatch, FLAG_ACTIVE, FLAG_RESET,

@@ -1,7 +1,7 @@
 //! The files of a comparison report, named from its HTML page (`<stem>.html`): the tables
 //! as Markdown and CSV beside it, and every figure as an SVG file in `<stem>-figures/`,
 //! for papers. Written only after every one of them has passed the output guard
-//! ([`crate::results::check_file`]), so a refused report writes nothing.
+//! ([`crate::eval::results::check_file`]), so a refused report writes nothing.
 
 use super::figures::report_figures;
 use super::html::report_html;
@@ -9,7 +9,7 @@ use super::runs::{comparison_notes, comparison_warnings, ComparisonWarning, Run}
 use super::svg::{svg_figures, SvgFigure};
 use super::tables::{comparison_markdown, diagnostics_multi_table, fats_table};
 use super::ReportError;
-use crate::results::{check_file, check_files_dir};
+use crate::eval::results::{check_file, check_files_dir};
 use std::path::{Path, PathBuf};
 
 /// Where a comparison report goes.
@@ -144,7 +144,7 @@ fn create_dir(dir: &Path) -> Result<(), ReportError> {
 }
 
 fn write(path: &Path, text: &str) -> Result<(), ReportError> {
-    crate::atomic_file::write(path, text).map_err(|source| ReportError::Write {
+    crate::files::atomic_file::write(path, text).map_err(|source| ReportError::Write {
         path: path.to_path_buf(),
         source,
     })

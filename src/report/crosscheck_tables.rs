@@ -1,7 +1,7 @@
 //! A crosscheck for people: the two engines' means and their paired difference with its
 //! interval, per setting or per push force, and how soon their joints and feet part.
 
-use crate::results::crosscheck::{Compared, MeanCi, SettingComparison, SLIP_PARTING_M};
+use crate::eval::results::crosscheck::{Compared, MeanCi, SettingComparison, SLIP_PARTING_M};
 use std::fmt::Write as _;
 
 fn fmt(c: &Compared, decimals: usize) -> String {
@@ -74,7 +74,7 @@ pub fn crosscheck_tables(
 /// A crosscheck's report as `thorarena crosscheck` prints it: the tables per setting, and
 /// per push force over its directions when the settings push from several directions.
 pub fn crosscheck_report(
-    check: &crate::results::crosscheck::Crosscheck,
+    check: &crate::eval::results::crosscheck::Crosscheck,
     divergence_s: f64,
 ) -> String {
     let mut text = crosscheck_tables("setting", &check.settings, divergence_s);

@@ -262,7 +262,7 @@ pub fn report_figures(runs: &[Run], sweep: &[SweepChart]) -> ReportFigures {
     );
     let tasks = all_tasks(runs);
     let settings = settings_of(runs);
-    let per_task = |r: &Run, s: &str, f: fn(&crate::metrics::Diagnostics) -> f64| {
+    let per_task = |r: &Run, s: &str, f: fn(&crate::eval::metrics::Diagnostics) -> f64| {
         tasks
             .iter()
             .map(|t| {

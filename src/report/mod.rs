@@ -22,8 +22,6 @@ mod runs;
 mod scene;
 mod style;
 mod svg;
-mod sweep_collect;
-mod sweep_figures;
 mod tables;
 
 pub use comparison_files::{
@@ -47,8 +45,6 @@ pub use scene::{
 };
 pub use style::{jitter, PolicyColors, DASHES, MARKERS, PALETTE, SURVIVAL_JITTER};
 pub use svg::{figure_svg, svg_figures, SvgFigure};
-pub use sweep_collect::{collect_sweep, CollectError, CollectedSweep, SweepCollect};
-pub use sweep_figures::{budget_ms, label_cells, sweep_charts, sweep_title};
 pub use tables::{
     all_tasks, columns, comparison_markdown, diagnostics_multi_table, diagnostics_table,
     fats_table, task_fats_table, DiagnosticRow, NumberRow, NumberTable, DIAGNOSTIC_ROWS,
@@ -101,10 +97,10 @@ pub enum ReportError {
     },
     /// An output would replace an input, or a run's or a dataset's file unasked.
     #[error(transparent)]
-    Refused(#[from] crate::results::OutputRefused),
+    Refused(#[from] crate::eval::results::OutputRefused),
     /// A run directory's files are unreadable or do not hold a valid run.
     #[error(transparent)]
-    Results(#[from] crate::results::ResultsError),
+    Results(#[from] crate::eval::results::ResultsError),
     /// The bundle directory named by [`WEB_DIST_ENV`] lacks a script.
     #[error(
         "the front-end bundle directory named by {WEB_DIST_ENV} has no {path} \

@@ -3,7 +3,7 @@
 //! from the run's [`Summary`], so it always says what `summary.json` says.
 
 use super::{diagnostics_table, task_fats_table};
-use crate::results::{
+use crate::eval::results::{
     PolicyIoReport, ResultsError, RunHeader, SettingResults, Summary, TABLES_FILE,
 };
 use std::collections::BTreeMap;
@@ -74,7 +74,7 @@ pub fn run_tables(summary: &Summary) -> String {
 pub fn write_run_tables(dir: &Path, summary: &Summary) -> Result<String, ResultsError> {
     let tables = run_tables(summary);
     let path = dir.join(TABLES_FILE);
-    crate::atomic_file::write(&path, &tables)
+    crate::files::atomic_file::write(&path, &tables)
         .map_err(|source| ResultsError::Io { path, source })?;
     Ok(tables)
 }

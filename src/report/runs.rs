@@ -5,12 +5,12 @@
 //! own numbers, and undefined diagnostics stay NaN (JSON wrote them as `null`).
 
 use super::ReportError;
-use crate::evaluation::EpisodeRecord;
-use crate::metrics::{score_episode, Diagnostics, RegimeThresholds, TaskSummary, SIGMA_M};
-use crate::results::{
+use crate::eval::metrics::{score_episode, Diagnostics, RegimeThresholds, TaskSummary, SIGMA_M};
+use crate::eval::results::{
     read_header, read_summary, summarize, Coverage, EpisodeLog, PolicyIoReport, RunHeader,
     SettingResults, EPISODES_FILE,
 };
+use crate::eval::EpisodeRecord;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -390,15 +390,15 @@ fn profiles_by_design(runs: &[Run]) -> bool {
 /// The engine, its model and step of a run, as the physics warning compares them.
 fn physics_of(r: &Run) -> String {
     let model = match &r.header.engine {
-        crate::physics::Engine::Rapier => String::new(),
-        crate::physics::Engine::Mujoco {
+        crate::sim::physics::Engine::Rapier => String::new(),
+        crate::sim::physics::Engine::Mujoco {
             mjcf: Some(mjcf),
             mjcf_sha256,
         } => match mjcf_sha256 {
             Some(hash) => format!(" on an MJCF with sha256 {}", short_hash(hash)),
             None => format!(" on {}", mjcf.display()),
         },
-        crate::physics::Engine::Mujoco { mjcf: None, .. } => " on the generated MJCF".into(),
+        crate::sim::physics::Engine::Mujoco { mjcf: None, .. } => " on the generated MJCF".into(),
     };
     format!(
         "{}{model} at {} ms",

@@ -4,10 +4,10 @@
 //! scored and needs no kinematics of its own.
 
 use super::ReportError;
-use crate::episode::TraceStep;
-use crate::evaluation::EpisodeRecord;
-use crate::results::{read_header, EpisodeLog, RunHeader, EPISODES_FILE};
-use crate::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
+use crate::eval::episode::TraceStep;
+use crate::eval::results::{read_header, EpisodeLog, RunHeader, EPISODES_FILE};
+use crate::eval::EpisodeRecord;
+use crate::sim::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use serde::Serialize;
 use std::path::Path;
@@ -73,7 +73,7 @@ pub struct ViewScene {
     pub feet: Option<FeetView>,
 }
 
-/// The feet's ground contact, step by step (see [`crate::feet::FootContact`]).
+/// The feet's ground contact, step by step (see [`crate::sim::feet::FootContact`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct FeetView {
     /// The feet's body names.
@@ -102,7 +102,7 @@ fn feet_view(trace: &[TraceStep]) -> Option<FeetView> {
     if names.is_empty() || !trace.iter().all(same) {
         return None;
     }
-    let per = |f: &dyn Fn(&crate::feet::FootContact) -> f64| -> Vec<Vec<f64>> {
+    let per = |f: &dyn Fn(&crate::sim::feet::FootContact) -> f64| -> Vec<Vec<f64>> {
         trace
             .iter()
             .map(|s| {
@@ -209,7 +209,7 @@ fn isometry(pos: [f64; 3], wxyz: [f64; 4]) -> Isometry3<f64> {
     )
 }
 
-fn shape_view(s: &crate::robot::Shape) -> ShapeView {
+fn shape_view(s: &crate::sim::robot::Shape) -> ShapeView {
     let (kind, size) = match s.geometry {
         Geometry::Box { half_extents } => ("box", half_extents),
         Geometry::Sphere { radius } => ("sphere", [radius, 0.0, 0.0]),
@@ -423,7 +423,7 @@ pub fn write_view(
     out: &Path,
     overwrite: bool,
 ) -> Result<WrittenView, ReportError> {
-    crate::results::check_file(out, overwrite, &[trace_path.to_path_buf()])?;
+    crate::eval::results::check_file(out, overwrite, &[trace_path.to_path_buf()])?;
     let trace = load_trace(trace_path)?;
     let scene = view_scene(robot, &trace, trace_path, &trace_context(trace_path))?;
     let html = super::view_html(&scene, &bundle.script(super::Page::View)?);

@@ -4,8 +4,8 @@
 //! paper's CSV can never disagree with the report it came with.
 
 use super::runs::Run;
-use crate::metrics::Diagnostics;
-use crate::results::SettingResults;
+use crate::eval::metrics::Diagnostics;
+use crate::eval::results::SettingResults;
 use std::fmt::Write;
 
 /// One row of the diagnostics table: how to read it from [`Diagnostics`] and print it.
@@ -293,7 +293,7 @@ impl NumberTable {
             std::iter::once(self.corner.as_str()).chain(self.columns.iter().map(|c| c.as_str()));
         w.write_record(header).expect("writing to memory");
         for r in &self.rows {
-            let name = crate::names::csv_text::cell(&r.name).into_owned();
+            let name = crate::files::names::csv_text::cell(&r.name).into_owned();
             let cells = std::iter::once(name).chain(
                 r.values
                     .iter()
@@ -330,8 +330,10 @@ impl NumberTable {
 
 /// Each setting's FATS interval of a run, `n/a` where every task has one episode.
 fn run_intervals(r: &Run) -> String {
-    let intervals =
-        crate::results::fats_intervals(&crate::results::episode_rows(&r.records, &r.thresholds));
+    let intervals = crate::eval::results::fats_intervals(&crate::eval::results::episode_rows(
+        &r.records,
+        &r.thresholds,
+    ));
     r.settings()
         .iter()
         .map(|s| match intervals.get(s) {

@@ -4,10 +4,10 @@
 #![allow(dead_code)]
 
 use std::path::Path;
-use thorarena::episode::{Episode, EpisodeSetup};
-use thorarena::motion::Sequence;
-use thorarena::physics::{PhysicsSettings, RapierPhysics};
+use thorarena::eval::episode::{Episode, EpisodeSetup};
 use thorarena::policy::Policy;
+use thorarena::sim::motion::Sequence;
+use thorarena::sim::physics::{PhysicsSettings, RapierPhysics};
 
 /// Runs `policy` on `seq` in rapier for at most `max_steps` control steps and records each
 /// step as the dump format wants it: the wire block, the network input (`last_input`

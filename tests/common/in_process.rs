@@ -4,12 +4,12 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
-use thorarena::benchmark::{self, EvalOptions};
-use thorarena::evaluation::{EngineChoice, EvalRequest, EvalSpec};
-use thorarena::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
-use thorarena::motion::{describe, Dataset, GroundCheck, Sequence, TrimmedGlitches};
-use thorarena::registry::PolicyChoice;
-use thorarena::results::RunDir;
+use thorarena::eval::pipeline::{self, EvalOptions};
+use thorarena::eval::results::RunDir;
+use thorarena::eval::{EngineChoice, EvalRequest, EvalSpec};
+use thorarena::policy::registry::PolicyChoice;
+use thorarena::sim::motion::import::{import_batch, ImportBatch, ImportObserver, SourceFormat};
+use thorarena::sim::motion::{describe, Dataset, GroundCheck, Sequence, TrimmedGlitches};
 
 /// What an import reports, a line per trimmed input.
 #[derive(Default)]
@@ -110,7 +110,7 @@ pub fn evaluate(request: &EvalRequest, out: &Path) -> Result<PathBuf, String> {
     else {
         panic!("{} is not an in-process policy", request.policy);
     };
-    benchmark::evaluate(
+    pipeline::evaluate(
         &spec,
         policy.as_mut(),
         &RunDir::new(out),

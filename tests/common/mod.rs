@@ -2,8 +2,8 @@
 #![allow(dead_code)]
 
 use serde_json::json;
-use thorarena::motion::Sequence;
-use thorarena::robot::{self, RobotModel};
+use thorarena::sim::motion::Sequence;
+use thorarena::sim::robot::{self, RobotModel};
 
 /// The numbers of a fixture file, one per line (`tests/fixtures/DIR/FILE`: golden vectors
 /// a script computed independently of this crate).
@@ -60,12 +60,12 @@ pub fn sample_sequence(robot: &RobotModel, id: &str) -> Sequence {
 #[allow(dead_code)]
 pub fn runner_spec(
     robot: &RobotModel,
-    profile: &thorarena::profile::Profile,
+    profile: &thorarena::sim::profile::Profile,
     sequences: &[Sequence],
     settings: &[&str],
     (workers, envs, pipeline_depth): (usize, usize, usize),
-) -> thorarena::evaluation::EvalSpec {
-    thorarena::evaluation::EvalSpec {
+) -> thorarena::eval::EvalSpec {
+    thorarena::eval::EvalSpec {
         policy: None,
         robot: robot.clone(),
         profile: profile.clone(),
@@ -78,7 +78,7 @@ pub fn runner_spec(
         subset: None,
         settings: settings
             .iter()
-            .map(|s| thorarena::evaluation::Setting::parse(s).unwrap())
+            .map(|s| thorarena::eval::Setting::parse(s).unwrap())
             .collect(),
         keypoints: "default".into(),
         termination: Default::default(),

@@ -3,14 +3,12 @@
 #![allow(dead_code)]
 
 use std::path::Path;
-use thorarena::evaluation::{
-    EpisodeRecord, LatencySummary, PolicyIoRules, Setting, TerminationRule,
-};
-use thorarena::metrics::RegimeThresholds;
-use thorarena::results::{
+use thorarena::eval::metrics::RegimeThresholds;
+use thorarena::eval::results::{
     write_header, write_record, write_results, PlannedSequence, PolicyIoReport, RunHeader,
     RESULTS_VERSION,
 };
+use thorarena::eval::{EpisodeRecord, LatencySummary, PolicyIoRules, Setting, TerminationRule};
 
 /// A run of `policy` planning clean_table and push_chair, two sequences each of 30
 /// steps, under `force` and `no-force`.
@@ -23,7 +21,7 @@ pub fn header(policy: &str) -> RunHeader {
         profile_mismatch_ok: false,
         control_dt_s: 0.02,
         physics_dt_s: 0.005,
-        engine: thorarena::physics::Engine::Rapier,
+        engine: thorarena::sim::physics::Engine::Rapier,
         dataset: "data/sample".into(),
         dataset_sha256: "ab".repeat(32),
         keypoints: "default".into(),

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use std::path::Path;
-use thorarena::motion::import::{import_batch, ImportBatch, SourceFormat};
+use thorarena::sim::motion::import::{import_batch, ImportBatch, SourceFormat};
 
 /// MuJoCo's mean TWIST9 keypoint error per walk in TWIST2's harness, mm (SOURCES.md, TWIST2 in MuJoCo).
 pub const MUJOCO_TWIST9_MM: [(&str, f64); 3] = [
@@ -31,7 +31,7 @@ pub fn import_walks(twist2_dir: &Path, out: &Path) {
         trim_glitches: false,
         ground_correct: true,
     };
-    let robot = thorarena::robot::load_bundled("g1_29dof").unwrap();
+    let robot = thorarena::sim::robot::load_bundled("g1_29dof").unwrap();
     if let Err(e) = import_batch(out, &robot, &batch, &mut ()) {
         panic!("importing the walks: {e}");
     }

@@ -1,9 +1,9 @@
-//! `sweep slurm` and `sweep k8s`: [`thorarena::sweep::slurm_array`] (the array's script
-//! written, and submitted on request) and [`thorarena::sweep::write_k8s_job`].
+//! `sweep slurm` and `sweep k8s`: [`thorarena::campaign::sweep::slurm_array`] (the array's script
+//! written, and submitted on request) and [`thorarena::campaign::sweep::write_k8s_job`].
 
 use super::super::flags::as_flags;
 use super::{K8sArgs, SlurmArgs};
-use thorarena::sweep::{slurm_array, write_k8s_job, K8sRequest, SlurmArray};
+use thorarena::campaign::sweep::{slurm_array, write_k8s_job, K8sRequest, SlurmArray};
 
 pub(super) fn slurm(args: &SlurmArgs) -> anyhow::Result<()> {
     let array = SlurmArray {

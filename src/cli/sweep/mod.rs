@@ -11,8 +11,8 @@
 
 use super::flags::as_flags;
 use std::path::PathBuf;
-use thorarena::report::{collect_sweep, SweepCollect};
-use thorarena::sweep::{run_engine_task, EngineTask, SweepStatus};
+use thorarena::campaign::sweep::{collect_sweep, SweepCollect};
+use thorarena::campaign::sweep::{run_engine_task, EngineTask, SweepStatus};
 
 /// `thorarena sweep …`
 #[derive(Debug, clap::Subcommand)]
@@ -150,7 +150,10 @@ pub struct CollectArgs {
 /// Runs a sweep subcommand.
 pub(super) fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
     match cmd {
-        SweepCommand::Plan(a) => println!("{}", thorarena::sweep::plan_sweep(&a.spec, &a.out)?),
+        SweepCommand::Plan(a) => println!(
+            "{}",
+            thorarena::campaign::sweep::plan_sweep(&a.spec, &a.out)?
+        ),
         SweepCommand::Run(a) => pool::run_all(a)?,
         SweepCommand::Task(a) => {
             let task = EngineTask {

@@ -1,9 +1,11 @@
-//! `sweep run`: [`thorarena::sweep::run_sweep`] on the local pool, N tasks at a time,
+//! `sweep run`: [`thorarena::campaign::sweep::run_sweep`] on the local pool, N tasks at a time,
 //! with a progress bar over the sweep's episodes.
 
 use super::RunArgs;
 use indicatif::{ProgressBar, ProgressStyle};
-use thorarena::sweep::{run_sweep, LocalRun, RunFinished, RunObserver, RunProgress, RunStarting};
+use thorarena::campaign::sweep::{
+    run_sweep, LocalRun, RunFinished, RunObserver, RunProgress, RunStarting,
+};
 
 /// The bar, once the run says how many episodes it counts up to.
 struct Bar(Option<ProgressBar>);

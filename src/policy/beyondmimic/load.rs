@@ -6,8 +6,8 @@ use super::{
     layout_width, BeyondMimicError, BeyondMimicPolicy, FileMetadata, JointOrderFrom,
     ObservationSpec, Scratch, Term, INFERENCE_BATCH, KNOWN_LAYOUTS,
 };
-use crate::profile::{ActionMode, BeyondMimicProfile, Profile};
-use crate::robot::RobotModel;
+use crate::sim::profile::{ActionMode, BeyondMimicProfile, Profile};
+use crate::sim::robot::RobotModel;
 use std::path::Path;
 use std::sync::Arc;
 use tract_onnx::prelude::*;
@@ -95,23 +95,23 @@ impl Network {
     fn open(path: &Path) -> Result<Self, BeyondMimicError> {
         let load_err = load_error(path);
         let model = crate::policy::load_onnx(path).map_err(load_err)?;
-        let meta = FileMetadata::from_props(&crate::onnx_export::metadata_props(&model)).map_err(
-            |reason| BeyondMimicError::Unusable {
+        let meta = FileMetadata::from_props(&crate::policy::onnx_export::metadata_props(&model))
+            .map_err(|reason| BeyondMimicError::Unusable {
                 path: path.to_path_buf(),
                 reason,
-            },
-        )?;
+            })?;
         let inputs = model.input_outlets().map_err(load_err)?.to_vec();
         let outputs = model.output_outlets().map_err(load_err)?.to_vec();
         let obs_input = slot(&model, &inputs, "obs").unwrap_or(0);
         let time_step_input = slot(&model, &inputs, "time_step");
         let actions_output = slot(&model, &outputs, "actions").unwrap_or(0);
         let fact = model.input_fact(obs_input).map_err(load_err)?;
-        let obs_width =
-            crate::onnx_export::fixed_width(fact).ok_or_else(|| BeyondMimicError::Unusable {
+        let obs_width = crate::policy::onnx_export::fixed_width(fact).ok_or_else(|| {
+            BeyondMimicError::Unusable {
                 path: path.to_path_buf(),
                 reason: "the observation input has no fixed width".into(),
-            })?;
+            }
+        })?;
         Ok(Self {
             model,
             meta,

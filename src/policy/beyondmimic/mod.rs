@@ -26,7 +26,7 @@
 mod load;
 mod observation;
 
-pub use crate::onnx_export::FileMetadata;
+pub use crate::policy::onnx_export::FileMetadata;
 pub use observation::{
     build_observation, layout_width, reference_anchor_in_robot_anchor, ObservationSpec,
     ReferenceAnchor, Scratch, Term, KNOWN_LAYOUTS, LAYOUT_132_WBC, LAYOUT_154, LAYOUT_154_MJLAB,
@@ -34,9 +34,9 @@ pub use observation::{
 };
 
 use super::{ActOutcome, Observation, Policy, Wiring};
-use crate::motion::ReferenceFrame;
-use crate::profile::ActionMode;
-use crate::robot::RobotModel;
+use crate::sim::motion::ReferenceFrame;
+use crate::sim::profile::ActionMode;
+use crate::sim::robot::RobotModel;
 use std::path::PathBuf;
 use std::sync::Arc;
 use tract_onnx::prelude::*;

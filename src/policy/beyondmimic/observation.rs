@@ -38,9 +38,9 @@
 //! reference anchor's velocities from the reference's root and joint velocities through
 //! the same chain ([`frame_velocity_w`]).
 
-use crate::motion::ReferenceFrame;
 use crate::policy::Observation;
-use crate::robot::{forward_kinematics, frame_pose, frame_velocity_w, RobotModel};
+use crate::sim::motion::ReferenceFrame;
+use crate::sim::robot::{forward_kinematics, frame_pose, frame_velocity_w, RobotModel};
 use nalgebra::{Isometry3, Matrix3, Vector3};
 
 /// One observation term.

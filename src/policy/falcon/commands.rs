@@ -21,8 +21,8 @@
 //!
 //! In stance the velocities are zero, as training multiplies them by the stand flag.
 
-use crate::motion::ReferenceFrame;
-use crate::physics::RootState;
+use crate::sim::motion::ReferenceFrame;
+use crate::sim::physics::RootState;
 use nalgebra::{UnitQuaternion, Vector3};
 
 /// Arm joints (canonical indices 15..29) the `ref_upper_dof_pos` term and the residual

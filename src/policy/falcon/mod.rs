@@ -17,7 +17,7 @@ pub mod observation;
 
 use super::batch_plans::BatchPlans;
 use super::{ActOutcome, Observation, Policy, Wiring};
-use crate::profile::Profile;
+use crate::sim::profile::Profile;
 use commands::UPPER;
 use observation::{History, N_JOINTS, OBS_LEN};
 use std::path::{Path, PathBuf};

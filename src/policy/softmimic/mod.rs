@@ -19,8 +19,8 @@ pub mod observation;
 
 use super::batch_plans::BatchPlans;
 use super::{ActOutcome, Observation, Policy, Wiring};
-use crate::profile::Profile;
-use crate::robot::{forward_kinematics, lowest_sole_point_z_of, RobotModel};
+use crate::sim::profile::Profile;
+use crate::sim::robot::{forward_kinematics, lowest_sole_point_z_of, RobotModel};
 use nalgebra::Isometry3;
 use observation::{History, Layout, Stiffness, ISAAC_FROM_CANONICAL, N_JOINTS};
 use std::path::{Path, PathBuf};
@@ -48,7 +48,7 @@ pub const DEFAULT_POSE: [f64; N_JOINTS] = [
 ];
 /// A reference foot is in contact when its sole's lowest point is within this height of
 /// the other foot's, m (the lower foot always is). The clips carry contact labels the
-/// dataset does not keep (`motion/import/lafan_csv.rs`); the standing, pouring and
+/// dataset does not keep (`sim/motion/import/lafan_csv.rs`); the standing, pouring and
 /// box-picking clips label every frame 1, which this gives (their right sole sits up to
 /// 5.3 mm above the left throughout), and on `walk.csv` it agrees with 2350 of the 2400
 /// labels that are clear (≥ 0.99 or ≤ 0.01; the rest are soft). A height above the
@@ -213,7 +213,7 @@ impl SoftMimicPolicy {
     }
 
     /// Left and right foot contact of a reference frame, from its soles' height.
-    fn contacts(&mut self, frame: &crate::motion::ReferenceFrame) -> [f64; 2] {
+    fn contacts(&mut self, frame: &crate::sim::motion::ReferenceFrame) -> [f64; 2] {
         forward_kinematics(
             &self.robot,
             &frame.world_from_root,

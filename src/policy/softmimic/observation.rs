@@ -27,8 +27,8 @@
 //! History starts as three copies of the first frame (`deploy_policy_interface.py:461-463`,
 //! as Isaac Lab's buffer refills after a reset). No clips, no normalisation.
 
-use crate::motion::ReferenceFrame;
 use crate::policy::Observation;
+use crate::sim::motion::ReferenceFrame;
 use nalgebra::Vector3;
 
 /// Joints of the network.

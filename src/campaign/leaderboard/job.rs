@@ -1,0 +1,120 @@
+//! `leaderboard` end to end: the dataset (the synthetic one generated once into the
+//! output directory unless one is given), every general policy and single-clip policy on
+//! each engine, the compliance pairs, then the leaderboard's tables, page and reports.
+
+use super::{
+    load_policy_file, run_leaderboard, run_pairs, synthetic_dataset, write_leaderboard_outputs,
+    CompliancePair, LeaderboardError, LeaderboardObserver, LeaderboardOutputs, LeaderboardRequest,
+    OutputsError, OwnClip, PageHeader, PairOptions,
+};
+use crate::eval::EngineChoice;
+use crate::report::{Page, ReportError, WebBundle};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Everything one `leaderboard` command asks for.
+#[derive(Debug, Clone)]
+pub struct LeaderboardJob {
+    /// General policies, as a run names them (in process).
+    pub policies: Vec<String>,
+    /// More general policies, and policy processes, from a TOML file.
+    pub policy_file: Option<PathBuf>,
+    /// Single-clip policies on their own clips.
+    pub clips: Vec<OwnClip>,
+    /// Settings of the single-clip table.
+    pub clip_settings: Vec<String>,
+    /// Compliant policies with their stiff twins.
+    pub pairs: Vec<CompliancePair>,
+    /// How the pairs run (its engines, output and checking are the job's).
+    pub pair_options: PairOptions,
+    /// Engines; empty: rapier, and MuJoCo in a build with it.
+    pub engines: Vec<EngineChoice>,
+    /// The dataset [default: the synthetic one, `per_task` sequences per task].
+    pub dataset: Option<PathBuf>,
+    /// Sequences per task of the generated synthetic dataset.
+    pub per_task: usize,
+    /// Settings of the general table.
+    pub settings: Vec<String>,
+    /// Directory of the runs, the generated dataset and the tables.
+    pub out: PathBuf,
+    /// Score policies without their sanity check.
+    pub unchecked: bool,
+    /// The command line, as the page records it.
+    pub command: String,
+}
+
+/// Why the leaderboard could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum LeaderboardJobError {
+    /// The report's front end could not be found.
+    #[error(transparent)]
+    Report(#[from] ReportError),
+    /// A run, the dataset or the policy file failed.
+    #[error(transparent)]
+    Leaderboard(#[from] LeaderboardError),
+    /// The tables, page or reports could not be written.
+    #[error(transparent)]
+    Outputs(#[from] OutputsError),
+}
+
+/// Runs `job`, resuming the runs a previous attempt left, and writes its outputs.
+pub fn run_leaderboard_job(
+    job: &LeaderboardJob,
+    observer: &mut dyn LeaderboardObserver,
+) -> Result<LeaderboardOutputs, LeaderboardJobError> {
+    let started = Instant::now();
+    // The bundle first: a missing front end fails before hours of runs.
+    let bundle = WebBundle::locate()?;
+    let dataset = match &job.dataset {
+        Some(d) => d.clone(),
+        None if job.policies.is_empty() && job.policy_file.is_none() => PathBuf::new(),
+        None => synthetic_dataset(&job.out, job.per_task, &mut |n| observer.note(n))?,
+    };
+    let engines = if !job.engines.is_empty() {
+        job.engines.clone()
+    } else if cfg!(feature = "mujoco") {
+        vec![EngineChoice::Rapier, EngineChoice::Mujoco]
+    } else {
+        vec![EngineChoice::Rapier]
+    };
+    let (mut policies, processes) = match &job.policy_file {
+        Some(file) => load_policy_file(file)?,
+        None => Default::default(),
+    };
+    policies.splice(0..0, job.policies.iter().cloned());
+    let request = LeaderboardRequest {
+        policies,
+        processes,
+        clips: job.clips.clone(),
+        clip_settings: job.clip_settings.clone(),
+        engines: engines.clone(),
+        dataset: dataset.clone(),
+        settings: job.settings.clone(),
+        out: job.out.clone(),
+        unchecked: job.unchecked,
+    };
+    let nothing_general =
+        request.policies.is_empty() && request.processes.is_empty() && request.clips.is_empty();
+    let entries = if nothing_general {
+        Vec::new()
+    } else {
+        run_leaderboard(&request, observer)?
+    };
+    let pair_options = PairOptions {
+        engines,
+        out: job.out.clone(),
+        unchecked: job.unchecked,
+        ..job.pair_options.clone()
+    };
+    let pairs = run_pairs(&job.pairs, &pair_options, observer)?;
+    let header = PageHeader {
+        dataset: &dataset,
+        settings: &job.settings,
+        command: &job.command,
+        wall_s: started.elapsed().as_secs_f64(),
+    };
+    let script = bundle.script(Page::Report)?;
+    Ok(write_leaderboard_outputs(
+        &job.out, &entries, &pairs, &header, &script,
+    )?)
+}

@@ -1,0 +1,135 @@
+//! A policy process started for a run (a leaderboard's `[[policy]] command = …`, `bench
+//! eval --policy-command`): its shell command in its own process group, its output in a
+//! log file, connected as a [`RemotePolicy`] and stopped, group and descendants that left
+//! it, when the policy is dropped.
+
+use super::PolicyProcess;
+use crate::campaign::sweep::process_group::{
+    adopt_orphans, policy_command_line, shell_in_own_group, stop_adopted, stop_group,
+};
+use crate::eval::EvalSpec;
+use crate::policy::{
+    ActOutcome, Observation, Policy, RemotePolicy, SessionOptions, TransportStats, Wiring,
+};
+use std::path::Path;
+use std::process::Child;
+use std::time::Duration;
+
+/// Lines of a policy process's log quoted when it fails to connect.
+const LOG_LINES_QUOTED: usize = 12;
+
+/// A connected policy process and the process group it runs in.
+pub struct LaunchedPolicy {
+    remote: RemotePolicy,
+    child: Child,
+}
+
+impl LaunchedPolicy {
+    /// Starts `process` on `session`, its output in `log`, and waits for it to connect
+    /// (at most its `connect_timeout_s`) to serve `spec`'s environments; `note` hears
+    /// the session's progress. `Err` says why not, quoting the end of its log.
+    pub fn start(
+        process: &PolicyProcess,
+        session: &str,
+        spec: &EvalSpec,
+        log: &Path,
+        note: &mut dyn FnMut(&str),
+    ) -> Result<Self, String> {
+        let timeout = process.connect_timeout_s;
+        let connect_timeout = match Duration::try_from_secs_f64(timeout) {
+            Ok(t) if t.is_zero() => None,
+            Ok(t) => Some(t),
+            Err(_) => {
+                return Err(format!(
+                    "connect_timeout_s = {timeout}: give seconds >= 0 (0 waits forever)"
+                ))
+            }
+        };
+        let line = policy_command_line(&process.command, session).map_err(|e| e.to_string())?;
+        let out = crate::campaign::sweep::create_log(log)
+            .map_err(|e| format!("{}: {e}", log.display()))?;
+        // A descendant that leaves the group (`setsid`) is adopted by this process when
+        // its parent dies, and stopped with the rest.
+        adopt_orphans();
+        let mut child = shell_in_own_group(&line, &process.workdir, out)
+            .and_then(|mut cmd| cmd.spawn())
+            .map_err(|e| format!("cannot start `{line}`: {e}"))?;
+        let options = SessionOptions {
+            budget: None,
+            spin: Duration::from_micros(50),
+            connect_timeout,
+            reconnect: false,
+        };
+        match RemotePolicy::serve(
+            session,
+            &spec.robot,
+            &spec.profile,
+            &options,
+            spec.envs,
+            &mut |_| Ok(()),
+            note,
+        ) {
+            Ok(remote) => Ok(Self { remote, child }),
+            Err(e) => {
+                // Give a process that failed a moment to finish its last words.
+                std::thread::sleep(Duration::from_millis(100));
+                stop_group(&mut child);
+                let tail = crate::campaign::sweep::log_tail(log, LOG_LINES_QUOTED);
+                Err(format!(
+                    "serving session `{session}`: {e} (command `{line}`; the end of its output, {}:\n{})",
+                    log.display(),
+                    tail.join("\n")
+                ))
+            }
+        }
+    }
+
+    /// The process group the policy runs in (the shell's id; it and what it started), to
+    /// measure its CPU time by.
+    pub fn process_group(&self) -> u32 {
+        self.child.id()
+    }
+}
+
+impl Drop for LaunchedPolicy {
+    fn drop(&mut self) {
+        stop_group(&mut self.child);
+        stop_adopted();
+    }
+}
+
+impl Policy for LaunchedPolicy {
+    fn name(&self) -> &str {
+        self.remote.name()
+    }
+    fn reference_offsets_s(&self) -> Vec<f64> {
+        self.remote.reference_offsets_s()
+    }
+    fn reset(&mut self, env: usize) {
+        self.remote.reset(env)
+    }
+    fn episode_ended(&mut self, env: usize, terminated: bool) {
+        self.remote.episode_ended(env, terminated)
+    }
+    fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
+        self.remote.act(observations, actions)
+    }
+    fn last_round_trip(&self) -> Option<Duration> {
+        self.remote.last_round_trip()
+    }
+    fn recover(&mut self) -> bool {
+        self.remote.recover()
+    }
+    fn transport_stats(&self) -> Option<TransportStats> {
+        self.remote.transport_stats()
+    }
+    fn zero_action(&self, obs: &Observation, out: &mut [f64]) {
+        self.remote.zero_action(obs, out)
+    }
+    fn sanity_exempt(&self) -> Option<&'static str> {
+        self.remote.sanity_exempt()
+    }
+    fn wiring(&self) -> Wiring {
+        self.remote.wiring()
+    }
+}

@@ -1,0 +1,691 @@
+//! The leaderboard (`thorarena leaderboard`): every policy given, on one dataset, with and
+//! without force, on each engine asked — one ordinary `eval` run per (policy, engine),
+//! resumed where it stopped — summarised in one table; and single-clip policies, each on
+//! its own clip under pushes of increasing force, in a table of their own. The paper's tables and figures over
+//! the same runs are `report`'s (the command writes them beside the table).
+//!
+//! Each run is exactly what `eval` with the same flags writes (the same `EvalSpec`, the
+//! same `pipeline::evaluate`, the sanity check first), so a leaderboard row can be
+//! re-derived by one `eval`. A policy in its own process ([`PolicyProcess`], any
+//! language) is started and connected by the caller
+//! (`start_process`) for each of its runs, then scored like the
+//! others.
+
+use crate::eval::pipeline::{evaluate, BenchmarkError, EvalObserver, EvalOptions};
+use crate::eval::results::{RunDir, Summary};
+use crate::eval::{EngineChoice, EvalRequest, EvalSpec, SpecError};
+use crate::policy::registry::{self, PolicyChoice, RegistryError};
+use crate::policy::Policy;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+mod job;
+mod launched;
+mod outputs;
+mod pairs;
+mod progress_lines;
+
+pub use job::{run_leaderboard_job, LeaderboardJob, LeaderboardJobError};
+pub use launched::LaunchedPolicy;
+pub use outputs::{
+    leaderboard_tables, write_leaderboard_outputs, LeaderboardOutputs, OutputsError, PageHeader,
+};
+pub use pairs::{
+    pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember, PairOptions,
+    PairResult,
+};
+pub use progress_lines::ProgressLines;
+
+/// Why the leaderboard could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum LeaderboardError {
+    /// An evaluation's request is invalid.
+    #[error("{policy} on {engine}: {source}")]
+    Spec {
+        /// The policy argument.
+        policy: String,
+        /// The engine.
+        engine: &'static str,
+        /// Why.
+        source: Box<SpecError>,
+    },
+    /// The policy could not be loaded.
+    #[error("{policy}: {source}")]
+    Policy {
+        /// The policy argument.
+        policy: String,
+        /// Why.
+        source: Box<RegistryError>,
+    },
+    /// A policy argument naming a session (`ipc:`): a policy process joins the leaderboard
+    /// as a [`PolicyProcess`], started by the leaderboard for each run.
+    #[error("{0} names a session no one starts: give the policy process as a command that joins {{session}} (a policy file's [[policy]] command = …)")]
+    NotInProcess(String),
+    /// A policy process could not be started or did not connect.
+    #[error("{policy} on {engine}: {why}")]
+    Process {
+        /// The process's name.
+        policy: String,
+        /// The engine.
+        engine: &'static str,
+        /// Why.
+        why: String,
+    },
+    /// An evaluation failed (its sanity check, its run directory, …).
+    #[error("{policy} on {engine}: {source}")]
+    Eval {
+        /// The policy argument.
+        policy: String,
+        /// The engine.
+        engine: &'static str,
+        /// Why.
+        source: Box<BenchmarkError>,
+    },
+    /// Two rows of the board would write one run directory, or one engine is asked
+    /// twice, or a process's name cannot name a run: refused before anything runs.
+    #[error("{0}")]
+    Names(String),
+    /// `--out` holds something a leaderboard must not write over.
+    #[error("`option.out` {}: {why}; choose another `option.out`", .out.display())]
+    Out {
+        /// The directory.
+        out: PathBuf,
+        /// What it holds.
+        why: &'static str,
+    },
+    /// The board's synthetic dataset could not be opened or made.
+    #[error("{}: {why}", .dir.display())]
+    Synthetic {
+        /// Its directory.
+        dir: PathBuf,
+        /// Why.
+        why: String,
+    },
+    /// A policy file is unreadable or invalid.
+    #[error("{path}: {message}")]
+    PolicyFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        message: String,
+    },
+    /// No policy or no engine.
+    #[error("the leaderboard needs at least one policy and one engine")]
+    Empty,
+    /// A compliant/stiff pair's data could not be prepared.
+    #[error("pair {pair}: {message}")]
+    PairData {
+        /// The pair's name.
+        pair: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// A single-clip policy and the dataset of its own clip.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OwnClip {
+    /// The policy argument.
+    pub policy: String,
+    /// The dataset holding its clip.
+    pub dataset: PathBuf,
+}
+
+/// `POLICY@DATASET`, as a command line gives it.
+impl std::str::FromStr for OwnClip {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        Self::parse(text).ok_or_else(|| format!("`{text}`: give POLICY@DATASET"))
+    }
+}
+
+impl OwnClip {
+    /// `POLICY@DATASET` (split at the last `@`).
+    pub fn parse(text: &str) -> Option<Self> {
+        let (policy, dataset) = text.rsplit_once('@')?;
+        (!policy.is_empty() && !dataset.is_empty()).then(|| Self {
+            policy: policy.to_string(),
+            dataset: PathBuf::from(dataset),
+        })
+    }
+}
+
+/// A policy in its own process: a shell command that joins session `{session}` (and
+/// `{thorarena}`, this binary), started for each of its runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PolicyProcess {
+    /// Its name in the table and run directories.
+    pub name: String,
+    /// The command.
+    pub command: String,
+    /// Dynamics profile [default: `default`].
+    pub profile: Option<String>,
+    /// Seconds it has to connect.
+    pub connect_timeout_s: f64,
+    /// Where the command runs.
+    pub workdir: PathBuf,
+}
+
+/// `[[policy]]` tables, as a sweep spec writes them.
+#[derive(Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PolicyFile {
+    #[serde(rename = "policy", default)]
+    policies: Vec<crate::campaign::sweep::PolicySpec>,
+}
+
+/// Reads the `[[policy]]` tables of `path` (a sweep spec's format): `policy = …`, a
+/// policy argument run in process (a network's path taken against the file's
+/// directory), or `command = …` with `{session}`, a [`PolicyProcess`] run in that
+/// directory. Returns the policy arguments and the processes, in the file's order.
+pub fn load_policy_file(
+    path: &Path,
+) -> Result<(Vec<String>, Vec<PolicyProcess>), LeaderboardError> {
+    let invalid = |message: String| LeaderboardError::PolicyFile {
+        path: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| invalid(e.to_string()))?;
+    let file: PolicyFile = toml::from_str(&text).map_err(|e| invalid(e.to_string()))?;
+    if file.policies.is_empty() {
+        return Err(invalid("no [[policy]] table".into()));
+    }
+    let workdir = path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
+    let (mut arguments, mut processes) = (Vec::new(), Vec::new());
+    for (i, p) in file.policies.iter().enumerate() {
+        let at = |m: &str| invalid(format!("[[policy]] #{}: {m}", i + 1));
+        p.check().map_err(|m| at(&m))?;
+        if p.unchecked {
+            return Err(at("a policy file does not say whether a policy is checked: the leaderboard's `option.unchecked` does"));
+        }
+        match (p.resolved_policy(&workdir), &p.command) {
+            (Some(_), _) if p.name.is_some() || p.profile.is_some() => {
+                return Err(at("an in-process policy runs under its own family's profile and name: drop its `name =` and `profile =` keys"));
+            }
+            (Some(argument), _) => arguments.push(argument),
+            (None, Some(command)) => processes.push(PolicyProcess {
+                name: p.label(),
+                command: command.clone(),
+                profile: p.resolved_profile(&workdir),
+                connect_timeout_s: p.connect_timeout_s,
+                workdir: workdir.clone(),
+            }),
+            (None, None) => return Err(at("give `policy` or `command`")),
+        }
+    }
+    Ok((arguments, processes))
+}
+
+/// What to put on the leaderboard.
+#[derive(Debug, Clone)]
+pub struct LeaderboardRequest {
+    /// Policy arguments as `eval --policy` takes them (in process).
+    pub policies: Vec<String>,
+    /// General policies in their own processes, after [`Self::policies`].
+    pub processes: Vec<PolicyProcess>,
+    /// Single-clip policies, each on its own clip under [`Self::clip_settings`].
+    pub clips: Vec<OwnClip>,
+    /// The settings of the single-clip table.
+    pub clip_settings: Vec<String>,
+    /// The engines, each policy running on every one.
+    pub engines: Vec<EngineChoice>,
+    /// The dataset.
+    pub dataset: PathBuf,
+    /// Settings, as `eval --settings` spells them.
+    pub settings: Vec<String>,
+    /// Directory of the runs (`<out>/runs/<policy>-<engine>`, `…-own-clip` for a
+    /// single-clip policy).
+    pub out: PathBuf,
+    /// Score policies without their sanity check (recorded in each run).
+    pub unchecked: bool,
+}
+
+/// One (policy, engine) run of the leaderboard.
+#[derive(Debug, Clone)]
+pub struct Entry {
+    /// The policy argument.
+    pub policy: String,
+    /// Whether it is a single-clip policy on its own clip.
+    pub own_clip: bool,
+    /// The engine's name.
+    pub engine: &'static str,
+    /// The run directory.
+    pub run: PathBuf,
+    /// Its scores.
+    pub summary: Summary,
+    /// Wall time of this invocation's part of it, s (0 for a run already complete).
+    pub wall_s: f64,
+}
+
+/// Hears the leaderboard's progress.
+pub trait LeaderboardObserver {
+    /// Run `index` of `total` is starting: `policy` on `engine` into `run`.
+    fn run_starting(&mut self, _index: usize, _total: usize, _policy: &str, _engine: &str) {}
+    /// The observer of that run's evaluation.
+    fn eval_observer(&mut self) -> &mut dyn EvalObserver;
+    /// What the runs' policy processes say (starting, their log, connection news).
+    fn note(&mut self, _text: &str) {}
+}
+
+/// Starts `process` on session `session` for a run of `spec` into `run`, its output to
+/// `<run>.policy.log` beside it, and returns it connected (it ends when the returned
+/// policy is dropped); `Err` says why not.
+fn start_process(
+    process: &PolicyProcess,
+    session: &str,
+    spec: &EvalSpec,
+    run: &Path,
+    observer: &mut dyn LeaderboardObserver,
+) -> Result<Box<dyn Policy>, String> {
+    let name = run
+        .file_name()
+        .map_or("run".into(), |n| n.to_string_lossy());
+    let log = run.with_file_name(format!("{name}.policy.log"));
+    observer.note(&format!(
+        "  starting `{}` (its output: {})",
+        process.command,
+        log.display()
+    ));
+    Ok(Box::new(LaunchedPolicy::start(
+        process,
+        session,
+        spec,
+        &log,
+        &mut |note| observer.note(note),
+    )?))
+}
+
+/// Who plays a leaderboard run: a policy argument (in process), or a policy process.
+#[derive(Debug, Clone)]
+enum Player {
+    Argument(String),
+    Process(PolicyProcess),
+}
+
+impl Player {
+    /// The policy argument, or the process's name.
+    fn name(&self) -> &str {
+        match self {
+            Self::Argument(a) => a,
+            Self::Process(p) => &p.name,
+        }
+    }
+}
+
+/// The run directory's name of `policy` on `engine`: the family and the network's file
+/// stem (`wbc-mjlab-wbc_g1_policy-rapier`), or the built-in's name.
+pub fn run_name(policy: &str, engine: EngineChoice) -> String {
+    let base = registry::PolicyArg::parse(policy)
+        .map_or_else(|_| policy.to_string(), |arg| arg.dir_label());
+    let clean: String = base
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    format!("{clean}-{}", engine_name(engine))
+}
+
+/// Refuses, before the first run, what would otherwise fail late or overwrite a run: an
+/// engine asked twice, a process's name that cannot name a run directory, and two rows
+/// that would share one run directory (two policies of one name, or whose names clean
+/// to the same directory name).
+fn check_names(
+    runs: &[(Player, PathBuf, bool)],
+    engines: &[EngineChoice],
+) -> Result<(), LeaderboardError> {
+    for (i, e) in engines.iter().enumerate() {
+        if engines[..i].contains(e) {
+            return Err(LeaderboardError::Names(format!(
+                "`option.engines` names {} twice",
+                engine_name(*e)
+            )));
+        }
+    }
+    let mut seen: std::collections::BTreeMap<String, &str> = Default::default();
+    for (player, _, own_clip) in runs {
+        if let Player::Process(p) = player {
+            crate::files::names::check_name("policy name", &p.name)
+                .map_err(|e| LeaderboardError::Names(e.to_string()))?;
+        }
+        let dir = format!(
+            "{}{}",
+            run_name(player.name(), EngineChoice::Rapier),
+            if *own_clip { "-own-clip" } else { "" }
+        );
+        if let Some(other) = seen.insert(dir.clone(), player.name()) {
+            return Err(LeaderboardError::Names(format!(
+                "`{other}` and `{}` would share the run directory runs/{dir}: give each policy a name of its own",
+                player.name()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// A leaderboard writes `runs/`, `leaderboard.md` and its reports into `out`: a new
+/// directory or an earlier leaderboard's (whose runs it resumes), never a run, a dataset
+/// or a directory holding another command's report.
+fn check_out(out: &Path) -> Result<(), LeaderboardError> {
+    let refuse = |why| {
+        Err(LeaderboardError::Out {
+            out: out.to_path_buf(),
+            why,
+        })
+    };
+    if crate::eval::results::RunDir::new(out).holds_run() {
+        return refuse("it holds a run");
+    }
+    if out.join(crate::sim::motion::MANIFEST).is_file() {
+        return refuse("it holds a dataset");
+    }
+    let earlier_board = out.join("leaderboard.md").is_file() || out.join("runs").is_dir();
+    if !earlier_board && out.join("report.html").exists() {
+        return refuse("it holds a report.html no leaderboard wrote");
+    }
+    Ok(())
+}
+
+fn engine_name(engine: EngineChoice) -> &'static str {
+    match engine {
+        EngineChoice::Rapier => "rapier",
+        EngineChoice::Mujoco => "mujoco",
+    }
+}
+
+/// Runs every (policy, engine) of `request`, resuming runs already started, engine by
+/// engine in the order given.
+pub fn run_leaderboard(
+    request: &LeaderboardRequest,
+    observer: &mut dyn LeaderboardObserver,
+) -> Result<Vec<Entry>, LeaderboardError> {
+    if (request.policies.is_empty() && request.processes.is_empty() && request.clips.is_empty())
+        || request.engines.is_empty()
+    {
+        return Err(LeaderboardError::Empty);
+    }
+    let general = request
+        .policies
+        .iter()
+        .map(|p| Player::Argument(p.clone()))
+        .chain(request.processes.iter().cloned().map(Player::Process))
+        .map(|player| (player, request.dataset.clone(), false));
+    let own = request
+        .clips
+        .iter()
+        .map(|c| (Player::Argument(c.policy.clone()), c.dataset.clone(), true));
+    let runs: Vec<(Player, PathBuf, bool)> = general.chain(own).collect();
+    check_names(&runs, &request.engines)?;
+    check_out(&request.out)?;
+    let total = runs.len() * request.engines.len();
+    let mut entries = Vec::new();
+    for &engine in &request.engines {
+        for (player, dataset, own_clip) in &runs {
+            let engine_name = engine_name(engine);
+            let name = run_name(player.name(), engine);
+            let run = request.out.join("runs").join(if *own_clip {
+                format!("{name}-own-clip")
+            } else {
+                name
+            });
+            observer.run_starting(entries.len(), total, player.name(), engine_name);
+            let started = Instant::now();
+            let settings = if *own_clip {
+                &request.clip_settings
+            } else {
+                &request.settings
+            };
+            let summary = run_one(
+                request.unchecked,
+                player,
+                dataset,
+                settings,
+                engine,
+                &run,
+                observer,
+            )?;
+            entries.push(Entry {
+                policy: player.name().to_string(),
+                own_clip: *own_clip,
+                engine: engine_name,
+                run,
+                summary,
+                wall_s: started.elapsed().as_secs_f64(),
+            });
+        }
+    }
+    Ok(entries)
+}
+
+fn run_one(
+    unchecked: bool,
+    player: &Player,
+    dataset: &Path,
+    settings: &[String],
+    engine: EngineChoice,
+    run: &Path,
+    observer: &mut dyn LeaderboardObserver,
+) -> Result<Summary, LeaderboardError> {
+    let name = player.name();
+    let engine_name = engine_name(engine);
+    // A policy process serves a session of its own: short whatever the policy's name
+    // (a session name has at most 64 characters), unique per run and per invocation.
+    let session = format!(
+        "leaderboard-{}-{}",
+        &crate::sim::motion::sha256_hex(run.to_string_lossy().as_bytes())[..8],
+        std::process::id()
+    );
+    let (policy_arg, profile) = match player {
+        Player::Argument(a) => (a.clone(), None),
+        Player::Process(p) => (format!("ipc:{session}"), p.profile.clone()),
+    };
+    let spec = EvalSpec::load(&EvalRequest {
+        policy: policy_arg.clone(),
+        dataset: Some(dataset.to_path_buf()),
+        profile,
+        settings: settings.to_vec(),
+        engine,
+        unchecked,
+        ..EvalRequest::default()
+    })
+    .map_err(|source| LeaderboardError::Spec {
+        policy: name.to_string(),
+        engine: engine_name,
+        source: Box::new(source),
+    })?;
+    let mut policy: Box<dyn Policy> = match player {
+        Player::Argument(a) => match registry::PolicyArg::parse(a).and_then(|arg| {
+            match arg.load(&spec.robot, &spec.profile)? {
+                PolicyChoice::InProcess(p) => Ok(Some(p)),
+                PolicyChoice::Session(_) => Ok(None),
+            }
+        }) {
+            Ok(Some(p)) => p,
+            Ok(None) => return Err(LeaderboardError::NotInProcess(a.clone())),
+            Err(source) => {
+                return Err(LeaderboardError::Policy {
+                    policy: a.clone(),
+                    source: Box::new(source),
+                })
+            }
+        },
+        Player::Process(p) => start_process(p, &session, &spec, run, observer).map_err(|why| {
+            LeaderboardError::Process {
+                policy: p.name.clone(),
+                engine: engine_name,
+                why,
+            }
+        })?,
+    };
+    let dir = RunDir::new(run);
+    let options = EvalOptions {
+        resume: dir.header_file().exists(),
+        trace_first_s: None,
+    };
+    let evaluated = evaluate(
+        &spec,
+        policy.as_mut(),
+        &dir,
+        options,
+        observer.eval_observer(),
+    )
+    .map_err(|source| LeaderboardError::Eval {
+        policy: name.to_string(),
+        engine: engine_name,
+        source: Box::new(source),
+    })?;
+    Ok(evaluated.summary)
+}
+
+/// The leaderboard as one Markdown table: per (policy, engine), FATS with its 95 %
+/// interval, survival and keypoint error under each setting of the runs (the first
+/// entry's, in its order), and the wall time. Give it the general entries, or the
+/// own-clip ones.
+pub fn leaderboard_table(entries: &[&Entry]) -> String {
+    let settings: Vec<String> = entries
+        .first()
+        .map(|e| {
+            e.summary
+                .header
+                .settings
+                .iter()
+                .map(|s| s.name.clone())
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut out = String::from("| policy | engine |");
+    let mut rule = String::from("|---|---|");
+    for s in &settings {
+        out.push_str(&format!(
+            " FATS {s} (95 % CI) | survival {s} | keypoint error {s} (mm) |"
+        ));
+        rule.push_str("---:|---:|---:|");
+    }
+    out.push_str(" wall time |\n");
+    rule.push_str("---:|\n");
+    out.push_str(&rule);
+    for e in entries {
+        out.push_str(&format!(
+            "| {} | {} |",
+            markdown_cell(&policy_label(&e.policy)),
+            e.engine
+        ));
+        for s in &settings {
+            match e.summary.settings.get(s.as_str()) {
+                Some(r) => {
+                    let ci = r
+                        .fats_ci95
+                        .map_or(" (n/a: one episode per task)".to_string(), |[lo, hi]| {
+                            format!(" ({lo:.1}–{hi:.1})")
+                        });
+                    out.push_str(&format!(
+                        " {:.1}{ci} | {:.3} | {:.1} |",
+                        r.average.fats, r.average.survival, r.average.kp_mm
+                    ));
+                }
+                None => out.push_str(" – | – | – |"),
+            }
+        }
+        out.push_str(&format!(" {} |\n", minutes(e.wall_s)));
+    }
+    out
+}
+
+/// Writes `out/leaderboard.md`: what was run (dataset, settings, where the runs are, the
+/// command and its wall time) and the tables; returns its path.
+pub fn write_leaderboard_page(
+    out: &Path,
+    dataset: &Path,
+    settings: &[String],
+    command: &str,
+    wall_s: f64,
+    tables: &str,
+) -> std::io::Result<PathBuf> {
+    let path = out.join("leaderboard.md");
+    let text = format!(
+        "# Leaderboard\n\nDataset `{}`, settings {}; one `eval` run per row in `{}`. Command: `thorarena {command}`. Wall time of this invocation: {wall_s:.0} s.\n\n{tables}",
+        dataset.display(),
+        settings.join(", "),
+        out.join("runs").display(),
+    );
+    crate::files::atomic_file::write(&path, text)?;
+    Ok(path)
+}
+
+/// A policy argument as a table names it: `family (file stem)` for a network
+/// (`twist2 (twist2_1017_25k)`), the argument itself otherwise.
+pub fn policy_label(policy: &str) -> String {
+    registry::PolicyArg::parse(policy).map_or_else(|_| policy.to_string(), |arg| arg.table_label())
+}
+
+/// Text that stays one cell of a Markdown table and shows as text: `|` escaped, HTML's
+/// special characters as entities (a file stem may hold either).
+fn markdown_cell(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '|' => out.push_str("\\|"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '&' => out.push_str("&amp;"),
+            c if c.is_control() => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+fn minutes(s: f64) -> String {
+    if s < 60.0 {
+        format!("{s:.0} s")
+    } else {
+        format!("{} min {:02.0} s", (s / 60.0).floor(), s % 60.0)
+    }
+}
+
+/// The board's synthetic dataset in `out`/synthetic: generated with `per_task` sequences
+/// per task (`note` hears that it is), or reused when it holds exactly that many.
+pub fn synthetic_dataset(
+    out: &Path,
+    per_task: usize,
+    note: &mut dyn FnMut(&str),
+) -> Result<PathBuf, LeaderboardError> {
+    use crate::sim::motion::synth::{write_synthetic, SynthOptions, TASKS};
+    let dir = out.join("synthetic");
+    let failed = |why: String| LeaderboardError::Synthetic {
+        dir: dir.clone(),
+        why,
+    };
+    let robot = crate::policy::registry::robot("g1_29dof").map_err(|e| failed(e.to_string()))?;
+    let want = per_task * TASKS.len();
+    if dir.join(crate::sim::motion::MANIFEST).exists() {
+        let have = crate::sim::motion::Dataset::open(&dir, &robot)
+            .map_err(|e| failed(e.to_string()))?
+            .len();
+        if have != want {
+            return Err(failed(format!(
+                "holds {have} sequences, not {want} (`option.per_task` {per_task}): remove it, or give that `option.per_task`"
+            )));
+        }
+        return Ok(dir);
+    }
+    note(&format!(
+        "generating the synthetic dataset into {} ({want} sequences)",
+        dir.display()
+    ));
+    let opts = SynthOptions {
+        per_task,
+        ..SynthOptions::default()
+    };
+    write_synthetic(&dir, &robot, &opts, false, |_, _| {}).map_err(|e| failed(e.to_string()))?;
+    Ok(dir)
+}

@@ -1,0 +1,622 @@
+//! Compliant and stiff pairs: two policies trained on the same clip — one to yield when
+//! pushed (SoftMimic's `*-SoftMimic`), one to hold its reference (`*-Baseline`) — on that
+//! clip, under no force, constant hand pushes of each magnitude from four directions, and
+//! a force history grafted onto the clip ([`crate::sim::motion::force_graft`]: the hand forces
+//! of a synthetic sequence, looped to the clip's length). The compliant member also runs
+//! at each stiffness of a short sweep. Each (member, engine) is two ordinary `eval` runs —
+//! the pushes on the clip, the force history on the grafted clip — resumed when the
+//! command is run again; the paired differences (compliant − baseline) come with
+//! bootstrap 95 % intervals over the push directions.
+//!
+//! A single clip is deterministic: one episode per setting. The intervals therefore
+//! resample the four directions of one magnitude (or all sixteen pushes), not repeated
+//! episodes; with four values they are wide, and they say only how much the difference
+//! depends on where the push comes from.
+
+use super::{engine_name, run_name, run_one, LeaderboardError, LeaderboardObserver, Player};
+// `check_out` refuses an output directory holding a dataset or a run.
+use crate::eval::metrics::{mean_ci, MeanCi, BOOTSTRAP_RESAMPLES};
+use crate::eval::results::Summary;
+use crate::eval::EngineChoice;
+use crate::policy::registry;
+use crate::sim::motion::force_graft::{first_seconds, with_forces_of};
+use crate::sim::motion::synth::{synthesize, SynthOptions};
+use crate::sim::motion::{Dataset, DatasetWriter, Sequence};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Two policies trained on one clip, and the dataset of that clip.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CompliancePair {
+    /// The compliant member's policy argument (its stiffness is swept).
+    pub compliant: String,
+    /// The stiff member's policy argument.
+    pub baseline: String,
+    /// A dataset holding the clip alone.
+    pub dataset: PathBuf,
+}
+
+/// `COMPLIANT vs BASELINE@DATASET`, as a command line gives it.
+impl std::str::FromStr for CompliancePair {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Self, String> {
+        Self::parse(text).ok_or_else(|| format!("`{text}`: give COMPLIANT vs BASELINE@DATASET"))
+    }
+}
+
+impl CompliancePair {
+    /// `COMPLIANT vs BASELINE@DATASET` (the dataset after the last `@`).
+    pub fn parse(text: &str) -> Option<Self> {
+        let (pair, dataset) = text.rsplit_once('@')?;
+        let (compliant, baseline) = pair.split_once(" vs ")?;
+        let (compliant, baseline) = (compliant.trim(), baseline.trim());
+        (!compliant.is_empty() && !baseline.is_empty() && !dataset.is_empty()).then(|| Self {
+            compliant: compliant.to_string(),
+            baseline: baseline.to_string(),
+            dataset: PathBuf::from(dataset),
+        })
+    }
+
+    /// Its name in directories and tables: `<compliant stem>-vs-<baseline stem>`.
+    pub fn name(&self) -> String {
+        let stem = |p: &str| {
+            registry::PolicyArg::parse(p)
+                .ok()
+                .and_then(|arg| arg.file_stem())
+                .unwrap_or_else(|| p.to_string())
+        };
+        let raw = format!("{}-vs-{}", stem(&self.compliant), stem(&self.baseline));
+        raw.chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect()
+    }
+}
+
+/// How the pairs run.
+#[derive(Debug, Clone)]
+pub struct PairOptions {
+    /// The compliant member's stiffness sweep, N/m (a `softmimic:` policy; none for others).
+    pub stiffness_n_per_m: Vec<f64>,
+    /// The first seconds of the clip that run.
+    pub seconds: f64,
+    /// Push magnitudes per hand, N.
+    pub push_n: Vec<f64>,
+    /// Push directions, degrees from the clip's initial heading.
+    pub push_headings_deg: Vec<f64>,
+    /// The synthetic task whose first sequence's forces are grafted onto the clip.
+    pub force_task: String,
+    /// Engines.
+    pub engines: Vec<EngineChoice>,
+    /// The leaderboard's directory (the pairs go under `<out>/pairs/<pair>`).
+    pub out: PathBuf,
+    /// Score policies without their sanity check.
+    pub unchecked: bool,
+}
+
+impl PairOptions {
+    /// The settings of the push runs: no force, then every magnitude from every direction.
+    pub fn push_settings(&self) -> Vec<String> {
+        let mut s = vec!["no-force".to_string()];
+        for n in &self.push_n {
+            for h in &self.push_headings_deg {
+                s.push(format!("push:{n}@{h}"));
+            }
+        }
+        s
+    }
+}
+
+/// One member of a pair on one engine.
+#[derive(Debug, Clone)]
+pub struct PairMember {
+    /// `baseline`, `compliant`, or `stiffness` (a value of the sweep).
+    pub role: &'static str,
+    /// Its policy argument.
+    pub policy: String,
+    /// The engine.
+    pub engine: &'static str,
+    /// The pushes run's scores.
+    pub pushes: Summary,
+    /// The grafted force history's scores.
+    pub force_log: Summary,
+    /// Wall time of this invocation's part, s.
+    pub wall_s: f64,
+}
+
+impl PairMember {
+    /// The stiffness command it ran with, N/m, when it has one.
+    pub fn stiffness(&self) -> Option<f64> {
+        self.pushes
+            .header
+            .policy_parameters
+            .get("stiffness_n_per_m")
+            .copied()
+    }
+}
+
+/// A pair's runs.
+#[derive(Debug, Clone)]
+pub struct PairResult {
+    /// The pair.
+    pub pair: CompliancePair,
+    /// The clip, `task/sequence`, and the seconds of it that ran.
+    pub clip: String,
+    /// Seconds of the clip that ran.
+    pub seconds: f64,
+    /// The sequence whose forces were grafted, `task/sequence`.
+    pub force_source: String,
+    /// The push settings, in order (no force first).
+    pub push_settings: Vec<String>,
+    /// Push magnitudes and directions.
+    pub push_n: Vec<f64>,
+    /// Push directions, degrees.
+    pub push_headings_deg: Vec<f64>,
+    /// Every member on every engine, engine by engine.
+    pub members: Vec<PairMember>,
+}
+
+fn data_error(pair: &str, message: String) -> LeaderboardError {
+    LeaderboardError::PairData {
+        pair: pair.to_string(),
+        message,
+    }
+}
+
+/// Writes `seq` as the one sequence of dataset `dir`, or checks that `dir` already holds
+/// it (a rerun resumes its runs; a changed clip or option is refused, not mixed).
+fn one_sequence_dataset(
+    pair: &str,
+    dir: &Path,
+    seq: &Sequence,
+    robot: &crate::sim::robot::RobotModel,
+) -> Result<(), LeaderboardError> {
+    let fail =
+        |e: crate::sim::motion::DataError| data_error(pair, format!("{}: {e}", dir.display()));
+    if dir.join(crate::sim::motion::MANIFEST).exists() {
+        let ds = Dataset::open(dir, robot).map_err(fail)?;
+        let same = ds.len() == 1
+            && ds.load(0).map_err(fail)?.sequence_id == seq.sequence_id
+            && ds.load(0).map_err(fail)?.n_frames() == seq.n_frames();
+        if !same {
+            return Err(data_error(
+                pair,
+                format!(
+                    "{} holds another clip than this invocation makes (another `option.pair_seconds` or dataset?): remove {} to start the pair anew",
+                    dir.display(),
+                    dir.parent().unwrap_or(dir).display()
+                ),
+            ));
+        }
+        return Ok(());
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| data_error(pair, format!("{}: {e}", dir.display())))?;
+    let mut writer = DatasetWriter::create(dir, robot).map_err(fail)?;
+    writer.add(seq).map_err(fail)?;
+    writer.finish().map_err(fail)?;
+    Ok(())
+}
+
+/// Runs every pair: the clip and its grafted twin written under `<out>/pairs/<pair>/`,
+/// then each member's two runs on each engine.
+pub fn run_pairs(
+    pairs: &[CompliancePair],
+    options: &PairOptions,
+    observer: &mut dyn LeaderboardObserver,
+) -> Result<Vec<PairResult>, LeaderboardError> {
+    if pairs.is_empty() {
+        return Ok(Vec::new());
+    }
+    if options.engines.is_empty() {
+        return Err(LeaderboardError::Empty);
+    }
+    super::check_out(&options.out)?;
+    let robot = registry::robot("g1_29dof").map_err(|e| data_error("(robot)", e.to_string()))?;
+    let synth = SynthOptions {
+        per_task: 1,
+        tasks: vec![options.force_task.clone()],
+        ..SynthOptions::default()
+    };
+    let source = synthesize(&robot, &synth, |_, _| {})
+        .map_err(|e| data_error("(force history)", e.to_string()))?
+        .into_iter()
+        .next()
+        .ok_or_else(|| data_error("(force history)", "nothing synthesized".into()))?;
+    let settings = options.push_settings();
+    let mut results = Vec::new();
+    let total = pairs
+        .iter()
+        .map(|p| 2 + sweep_of(p, options).len())
+        .sum::<usize>()
+        * options.engines.len();
+    let mut index = 0;
+    for pair in pairs {
+        let name = pair.name();
+        let ds = Dataset::open(&pair.dataset, &robot)
+            .map_err(|e| data_error(&name, format!("{}: {e}", pair.dataset.display())))?;
+        if ds.len() != 1 {
+            return Err(data_error(
+                &name,
+                format!(
+                    "{} holds {} sequences: a pair runs on its own clip, so give a dataset of that clip alone",
+                    pair.dataset.display(),
+                    ds.len()
+                ),
+            ));
+        }
+        let full = ds.load(0).map_err(|e| data_error(&name, e.to_string()))?;
+        let clip = first_seconds(&full, options.seconds);
+        let grafted = with_forces_of(&clip, &source);
+        let dir = options.out.join("pairs").join(&name);
+        let (clip_dir, graft_dir) = (dir.join("clip"), dir.join("force-log"));
+        one_sequence_dataset(&name, &clip_dir, &clip, &robot)?;
+        one_sequence_dataset(&name, &graft_dir, &grafted, &robot)?;
+        let mut players = vec![
+            ("baseline", pair.baseline.clone()),
+            ("compliant", pair.compliant.clone()),
+        ];
+        players.extend(
+            sweep_of(pair, options)
+                .into_iter()
+                .map(|p| ("stiffness", p)),
+        );
+        let mut members = Vec::new();
+        for &engine in &options.engines {
+            for (role, policy) in &players {
+                let player = Player::Argument(policy.clone());
+                observer.run_starting(index, total, policy, engine_name(engine));
+                index += 1;
+                let started = Instant::now();
+                let run = dir.join("runs").join(run_name(policy, engine));
+                let pushes = run_one(
+                    options.unchecked,
+                    &player,
+                    &clip_dir,
+                    &settings,
+                    engine,
+                    &run.with_extension("pushes"),
+                    observer,
+                )?;
+                let force_log = run_one(
+                    options.unchecked,
+                    &player,
+                    &graft_dir,
+                    &["force".to_string()],
+                    engine,
+                    &run.with_extension("force-log"),
+                    observer,
+                )?;
+                members.push(PairMember {
+                    role,
+                    policy: policy.clone(),
+                    engine: engine_name(engine),
+                    pushes,
+                    force_log,
+                    wall_s: started.elapsed().as_secs_f64(),
+                });
+            }
+        }
+        results.push(PairResult {
+            pair: pair.clone(),
+            clip: format!("{}/{}", full.task, full.sequence_id),
+            seconds: clip.duration_s(),
+            force_source: format!("{}/{}", source.task, source.sequence_id),
+            push_settings: settings.clone(),
+            push_n: options.push_n.clone(),
+            push_headings_deg: options.push_headings_deg.clone(),
+            members,
+        });
+    }
+    Ok(results)
+}
+
+/// The compliant member at each stiffness of the sweep, for a `softmimic:` policy naming
+/// no stiffness of its own, but the default it already runs at (its `compliant` row);
+/// nothing otherwise.
+fn sweep_of(pair: &CompliancePair, options: &PairOptions) -> Vec<String> {
+    let Ok(compliant) = registry::PolicyArg::parse(&pair.compliant) else {
+        return Vec::new();
+    };
+    if compliant.family().name != "softmimic" || compliant.parameters().is_some() {
+        return Vec::new();
+    }
+    options
+        .stiffness_n_per_m
+        .iter()
+        .filter(|&&k| k != crate::policy::softmimic::DEFAULT_STIFFNESS.linear)
+        .filter_map(|k| compliant.with_parameters(&format!("stiffness={k}")).ok())
+        .map(|arg| arg.to_string())
+        .collect()
+}
+
+/// (FATS, survival, keypoint error mm) of one setting of a run.
+fn cell(summary: &Summary, setting: &str) -> Option<[f64; 3]> {
+    // Results name a setting canonically (`push:10@90` → `push-10@90`).
+    let key = crate::eval::Setting::parse(setting).map_or_else(|| setting.to_string(), |s| s.name);
+    let r = summary.settings.get(&key)?;
+    Some([r.average.fats, r.average.survival, r.average.kp_mm])
+}
+
+/// A magnitude's four directions (or every push), averaged per quantity.
+fn mean_over(summary: &Summary, settings: &[String]) -> Option<[f64; 3]> {
+    let cells: Vec<[f64; 3]> = settings
+        .iter()
+        .map(|s| cell(summary, s))
+        .collect::<Option<_>>()?;
+    let n = cells.len() as f64;
+    Some(std::array::from_fn(|k| {
+        cells.iter().map(|c| c[k]).sum::<f64>() / n
+    }))
+}
+
+impl PairResult {
+    /// The push settings of magnitude `n`, one per direction.
+    fn settings_of(&self, n: f64) -> Vec<String> {
+        self.push_headings_deg
+            .iter()
+            .map(|h| format!("push:{n}@{h}"))
+            .collect()
+    }
+
+    /// Every push setting.
+    fn all_pushes(&self) -> Vec<String> {
+        self.push_settings[1..].to_vec()
+    }
+
+    /// The baseline and the compliant member on `engine`.
+    fn pair_on(&self, engine: &str) -> Option<(&PairMember, &PairMember)> {
+        let find = |role| {
+            self.members
+                .iter()
+                .find(|m| m.engine == engine && m.role == role)
+        };
+        Some((find("baseline")?, find("compliant")?))
+    }
+
+    /// The paired differences (compliant − baseline) of (FATS, survival, keypoint error)
+    /// over `settings`, each with its bootstrap interval.
+    fn differences(&self, engine: &str, settings: &[String]) -> Option<[MeanCi; 3]> {
+        let (base, soft) = self.pair_on(engine)?;
+        let mut d: [Vec<f64>; 3] = Default::default();
+        for s in settings {
+            let (b, c) = if s == "force" {
+                (cell(&base.force_log, s)?, cell(&soft.force_log, s)?)
+            } else {
+                (cell(&base.pushes, s)?, cell(&soft.pushes, s)?)
+            };
+            for k in 0..3 {
+                d[k].push(c[k] - b[k]);
+            }
+        }
+        Some(d.map(|v| mean_ci(&v, BOOTSTRAP_RESAMPLES, 0)))
+    }
+}
+
+/// `FATS · survival · error` of a cell.
+fn cell_text(c: Option<[f64; 3]>) -> String {
+    c.map_or_else(
+        || "–".into(),
+        |[f, s, e]| format!("{f:.1} · {s:.2} · {e:.1}"),
+    )
+}
+
+/// A difference with its interval, or the single value when it has none.
+fn difference_text(d: &MeanCi, digits: usize) -> String {
+    if d.episodes > 1 {
+        format!(
+            "{:+.*} ({:+.*} to {:+.*})",
+            digits, d.mean, digits, d.ci95[0], digits, d.ci95[1]
+        )
+    } else {
+        format!("{:+.*}", digits, d.mean)
+    }
+}
+
+/// The pairs as Markdown: per pair and engine, one table of every member's cells (FATS ·
+/// survival · keypoint error in mm; a push magnitude's cell averages its directions) and
+/// one of the paired differences with their bootstrap 95 % intervals.
+pub fn pairs_table(results: &[PairResult]) -> String {
+    let mut out = String::new();
+    for r in results {
+        let engines: Vec<&str> = {
+            let mut e: Vec<&str> = r.members.iter().map(|m| m.engine).collect();
+            e.dedup();
+            e
+        };
+        for engine in engines {
+            out.push_str(&format!(
+                "**{}** on {} ({:.1} s of it), {engine}; pushes per hand from {} degrees off the clip's initial heading; force log: the hand forces of synthetic {} replayed on the clip (looped), not a recording of this motion. Cells: FATS · survival · keypoint error (mm); a push column averages its directions.\n\n",
+                r.pair.name(),
+                r.clip,
+                r.seconds,
+                r.push_headings_deg.iter().map(|h| format!("{h}")).collect::<Vec<_>>().join("/"),
+                r.force_source
+            ));
+            out.push_str("| member | stiffness (N/m) | no force |");
+            let mut rule = String::from("|---|---:|---:|");
+            for n in &r.push_n {
+                out.push_str(&format!(" {n} N |"));
+                rule.push_str("---:|");
+            }
+            out.push_str(" force log | wall time |\n");
+            rule.push_str("---:|---:|\n");
+            out.push_str(&rule);
+            for m in r.members.iter().filter(|m| m.engine == engine) {
+                out.push_str(&format!(
+                    "| {} ({}) | {} | {} |",
+                    super::markdown_cell(&super::policy_label(&m.policy)),
+                    m.role,
+                    m.stiffness().map_or_else(|| "–".into(), |k| format!("{k}")),
+                    cell_text(cell(&m.pushes, "no-force"))
+                ));
+                for n in &r.push_n {
+                    out.push_str(&format!(
+                        " {} |",
+                        cell_text(mean_over(&m.pushes, &r.settings_of(*n)))
+                    ));
+                }
+                out.push_str(&format!(
+                    " {} | {} |\n",
+                    cell_text(cell(&m.force_log, "force")),
+                    super::minutes(m.wall_s)
+                ));
+            }
+            out.push('\n');
+            out.push_str("| compliant − baseline | no force |");
+            let mut rule = String::from("|---|---:|");
+            for n in &r.push_n {
+                out.push_str(&format!(" {n} N (95 % CI) |"));
+                rule.push_str("---:|");
+            }
+            out.push_str(" all pushes (95 % CI) | force log |\n");
+            rule.push_str("---:|---:|\n");
+            out.push_str(&rule);
+            let mut columns: Vec<Vec<String>> = vec![vec!["no-force".into()]];
+            columns.extend(r.push_n.iter().map(|n| r.settings_of(*n)));
+            columns.push(r.all_pushes());
+            columns.push(vec!["force".into()]);
+            for (k, (what, digits)) in [
+                ("Δ FATS", 1),
+                ("Δ survival", 3),
+                ("Δ keypoint error (mm)", 1),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                out.push_str(&format!("| {what} |"));
+                for settings in &columns {
+                    let text = r
+                        .differences(engine, settings)
+                        .map_or_else(|| "–".into(), |d| difference_text(&d[k], digits));
+                    out.push_str(&format!(" {text} |"));
+                }
+                out.push('\n');
+            }
+            out.push('\n');
+        }
+    }
+    out
+}
+
+/// Every cell of every pair as CSV: pair, engine, role, policy, stiffness, setting, FATS,
+/// survival, keypoint error (names spreadsheet-safe, `names::csv_text`).
+pub fn pairs_csv(results: &[PairResult]) -> String {
+    use crate::files::names::csv_text::cell as text;
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let mut row = |fields: &[&str]| {
+        // Writing to memory cannot fail.
+        let _ = w.write_record(fields);
+    };
+    row(&[
+        "pair",
+        "engine",
+        "role",
+        "policy",
+        "stiffness_n_per_m",
+        "setting",
+        "fats",
+        "survival",
+        "kp_mm",
+    ]);
+    for r in results {
+        for m in &r.members {
+            let runs = r
+                .push_settings
+                .iter()
+                .map(|s| (s.as_str(), &m.pushes))
+                .chain(std::iter::once(("force", &m.force_log)));
+            for (setting, summary) in runs {
+                let Some([f, s, e]) = cell(summary, setting) else {
+                    continue;
+                };
+                let setting = if setting == "force" {
+                    format!("force-log:{}", r.force_source)
+                } else {
+                    setting.to_string()
+                };
+                row(&[
+                    &text(&r.pair.name()),
+                    m.engine,
+                    m.role,
+                    &text(&m.policy),
+                    &m.stiffness().map_or_else(String::new, |k| k.to_string()),
+                    &text(&setting),
+                    &f.to_string(),
+                    &s.to_string(),
+                    &e.to_string(),
+                ]);
+            }
+        }
+    }
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
+}
+
+/// Writes `pairs.md` (the tables) and `pairs.csv` (every cell) into `out`, each whole or
+/// not at all; returns their paths.
+pub fn write_pair_files(out: &Path, results: &[PairResult]) -> std::io::Result<[PathBuf; 2]> {
+    let md = out.join("pairs.md");
+    let csv = out.join("pairs.csv");
+    crate::files::atomic_file::write(
+        &md,
+        format!("# Compliant and stiff pairs\n\n{}", pairs_table(results)),
+    )?;
+    crate::files::atomic_file::write(&csv, pairs_csv(results))?;
+    Ok([md, csv])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pair_parses_with_parameters_and_a_dataset() {
+        let p = CompliancePair::parse(
+            "softmimic:a/Pour-SoftMimic.onnx vs softmimic:a/Pour-Baseline.onnx@ds/pour",
+        )
+        .unwrap();
+        assert_eq!(p.compliant, "softmimic:a/Pour-SoftMimic.onnx");
+        assert_eq!(p.baseline, "softmimic:a/Pour-Baseline.onnx");
+        assert_eq!(p.dataset, PathBuf::from("ds/pour"));
+        assert_eq!(p.name(), "Pour-SoftMimic-vs-Pour-Baseline");
+        let p =
+            CompliancePair::parse("softmimic:S.onnx@stiffness=60 vs softmimic:B.onnx@d").unwrap();
+        assert_eq!(p.compliant, "softmimic:S.onnx@stiffness=60");
+        for bad in ["a vs b", "a@d", " vs b@d", "a vs @d", "a vs b@"] {
+            assert!(CompliancePair::parse(bad).is_none(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn the_push_settings_cover_every_magnitude_and_direction() {
+        let o = PairOptions {
+            stiffness_n_per_m: vec![],
+            seconds: 10.0,
+            push_n: vec![10.0, 50.0],
+            push_headings_deg: vec![0.0, 90.0],
+            force_task: "push_chair".into(),
+            engines: vec![],
+            out: PathBuf::new(),
+            unchecked: false,
+        };
+        assert_eq!(
+            o.push_settings(),
+            [
+                "no-force",
+                "push:10@0",
+                "push:10@90",
+                "push:50@0",
+                "push:50@90"
+            ]
+        );
+        for s in o.push_settings() {
+            assert!(crate::eval::Setting::parse(&s).is_some(), "{s}");
+        }
+    }
+}

@@ -1,0 +1,119 @@
+//! `policy check`'s run: the sanity check (`crate::eval::sanity`) of a policy named as a run
+//! names it, under its profile (given, or the one it would run under), on one sequence of
+//! a dataset — the one named, else the walk the check picks.
+
+use crate::eval::sanity::{
+    check_policy, walking_sequence, SanityError, SanityOptions, SanityReport,
+};
+use crate::eval::EngineChoice;
+use crate::policy::registry::{self, PolicyArg, PolicyChoice, RegistryError};
+use crate::sim::motion::{DataError, Dataset};
+use crate::sim::physics::{Engine, EngineError};
+use std::path::PathBuf;
+
+/// What to check.
+#[derive(Debug, Clone)]
+pub struct PolicyCheckRequest {
+    /// The policy, as a run names it (in process only).
+    pub policy: String,
+    /// Its profile [default: the one a run would choose].
+    pub profile: Option<String>,
+    /// The dataset [default: the bundled sample].
+    pub dataset: Option<PathBuf>,
+    /// The sequence tracked [default: the dataset's walk].
+    pub sequence: Option<String>,
+    /// Seconds tracked.
+    pub track_s: f64,
+    /// The largest keypoint RMS error that passes, mm.
+    pub max_kp_rms_mm: f64,
+    /// The robot.
+    pub robot: String,
+    /// The engine.
+    pub engine: EngineChoice,
+    /// MuJoCo's model [default: generated from the robot].
+    pub mjcf: Option<PathBuf>,
+}
+
+/// Why the check could not run (a failed check is a report, not an error).
+#[derive(Debug, thiserror::Error)]
+pub enum PolicyCheckError {
+    /// The policy, robot or profile is not usable.
+    #[error(transparent)]
+    Registry(#[from] RegistryError),
+    /// An engine that cannot run.
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    /// A model for the wrong engine.
+    #[error("`option.mjcf` is for `option.engine` mujoco")]
+    MjcfWithoutMujoco,
+    /// The dataset could not be read.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// The sequence named is not in the dataset.
+    #[error("{} has no sequence `{id}`", .dataset.display())]
+    NoSuchSequence {
+        /// The dataset.
+        dataset: PathBuf,
+        /// The sequence asked for.
+        id: String,
+    },
+    /// An empty dataset.
+    #[error("{} has no sequences", .0.display())]
+    NoSequences(PathBuf),
+    /// A policy process: the check steps the policy itself.
+    #[error("policy check runs a policy in process; `{0}` is a policy process (check it by running its network in process, e.g. beyondmimic:FILE)")]
+    PolicyProcess(String),
+    /// The check itself failed to run.
+    #[error(transparent)]
+    Sanity(#[from] SanityError),
+}
+
+/// Runs the check `request` describes, saying what it does as it goes (the check's
+/// announcements are logged).
+pub fn check_named_policy(request: &PolicyCheckRequest) -> Result<SanityReport, PolicyCheckError> {
+    let robot = registry::robot(&request.robot)?;
+    let arg = PolicyArg::parse(&request.policy)?;
+    let profile_name = request
+        .profile
+        .clone()
+        .unwrap_or_else(|| arg.default_profile().to_string());
+    let profile = registry::profile(&profile_name, &robot)?;
+    let engine = match (request.engine, &request.mjcf) {
+        (EngineChoice::Rapier, None) => Engine::Rapier,
+        (EngineChoice::Rapier, Some(_)) => return Err(PolicyCheckError::MjcfWithoutMujoco),
+        (EngineChoice::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
+    };
+    let dataset_dir = request
+        .dataset
+        .clone()
+        .unwrap_or_else(|| crate::data_dir().join("sample"));
+    let sequences = Dataset::open(&dataset_dir, &robot)?.load_all()?;
+    let index = match &request.sequence {
+        Some(id) => sequences
+            .iter()
+            .position(|s| &s.sequence_id == id)
+            .ok_or_else(|| PolicyCheckError::NoSuchSequence {
+                dataset: dataset_dir.clone(),
+                id: id.clone(),
+            })?,
+        None => walking_sequence(&sequences, request.track_s)
+            .ok_or_else(|| PolicyCheckError::NoSequences(dataset_dir.clone()))?,
+    };
+    let PolicyChoice::InProcess(mut policy) = arg.load(&robot, &profile)? else {
+        return Err(PolicyCheckError::PolicyProcess(request.policy.clone()));
+    };
+    let options = SanityOptions {
+        track_s: request.track_s,
+        max_kp_rms_mm: request.max_kp_rms_mm,
+        engine,
+        announce: true,
+        ..SanityOptions::default()
+    };
+    Ok(check_policy(
+        policy.as_mut(),
+        &robot,
+        &profile,
+        &sequences[index],
+        &options,
+    )?)
+}

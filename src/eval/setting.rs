@@ -1,0 +1,100 @@
+//! A force setting of an evaluation: replayed recorded forces under a coefficient, or a
+//! constant push; every sequence runs once per setting.
+
+use serde::{Deserialize, Serialize};
+
+/// A force setting: a name, the replay coefficient, and an optional constant push.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Setting {
+    /// `force`, `no-force`, `coef-<x>`, `push-<N>` or `push-<N>@<deg>`.
+    pub name: String,
+    /// Replay coefficient.
+    pub coefficient: f64,
+    /// A constant world-frame +x push on each hand, N, ramped in over
+    /// [`crate::sim::replay::PUSH_RAMP_S`] (a sensitivity probe, as in SOURCES.md, TWIST2 in MuJoCo; recorded
+    /// forces are not replayed with it).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub push_n: f64,
+    /// The push's direction, degrees counter-clockwise from the reference's initial
+    /// heading (`push:<N>@<deg>`; 90: from the robot's right); `None`: world +x.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub push_heading_deg: Option<f64>,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+impl Setting {
+    /// True when both settings load the robot the same way, however spelled (`force` and
+    /// `1`; `no-force` and `push:0`; a zero push in any direction).
+    pub fn same_load(&self, other: &Self) -> bool {
+        let heading = |s: &Self| {
+            if s.push_n == 0.0 {
+                None
+            } else {
+                Some(s.push_heading_deg.unwrap_or(0.0).rem_euclid(360.0))
+            }
+        };
+        self.coefficient == other.coefficient
+            && self.push_n == other.push_n
+            && heading(self) == heading(other)
+    }
+
+    /// Largest |replay coefficient| accepted: ten times the recorded forces is already
+    /// far beyond any interaction; larger values only make the physics diverge.
+    pub const MAX_COEFFICIENT: f64 = 10.0;
+    /// Largest |push| per hand accepted, N (the G1 weighs 33 kg; a probe beyond this
+    /// measures nothing but divergence).
+    pub const MAX_PUSH_N: f64 = 1000.0;
+
+    /// Parses `force`, `no-force`, a replay coefficient (|c| ≤ [`Self::MAX_COEFFICIENT`]),
+    /// or `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]) with an optional `@<deg>` direction from
+    /// the reference's initial heading (−360 ≤ deg ≤ 360).
+    pub fn parse(s: &str) -> Option<Self> {
+        let plain = |name: String, coefficient: f64| Self {
+            name,
+            coefficient,
+            push_n: 0.0,
+            push_heading_deg: None,
+        };
+        match s {
+            "force" => Some(plain("force".into(), 1.0)),
+            "no-force" => Some(plain("no-force".into(), 0.0)),
+            other => {
+                if let Some(spec) = other.strip_prefix("push:") {
+                    let (n, deg) = match spec.split_once('@') {
+                        Some((n, deg)) => (n, Some(deg)),
+                        None => (spec, None),
+                    };
+                    let n: f64 = n
+                        .parse()
+                        .ok()
+                        .filter(|n: &f64| n.is_finite() && n.abs() <= Self::MAX_PUSH_N)?;
+                    let deg: Option<f64> = match deg {
+                        Some(d) => Some(
+                            d.parse()
+                                .ok()
+                                .filter(|d: &f64| d.is_finite() && d.abs() <= 360.0)?,
+                        ),
+                        None => None,
+                    };
+                    return Some(Self {
+                        name: match deg {
+                            Some(d) => format!("push-{n}@{d}"),
+                            None => format!("push-{n}"),
+                        },
+                        coefficient: 0.0,
+                        push_n: n,
+                        push_heading_deg: deg,
+                    });
+                }
+                other
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|c| c.is_finite() && c.abs() <= Self::MAX_COEFFICIENT)
+                    .map(|c| plain(format!("coef-{c}"), c))
+            }
+        }
+    }
+}

@@ -1,0 +1,524 @@
+//! [`EvalSpec`]: one evaluation, validated. It is made from plain values
+//! ([`EvalRequest`]: what `eval`'s flags or a sweep cell say) before any policy connects,
+//! so a typo fails at once, and everything downstream — the run's header, the runner, a
+//! sweep's validation of its cells — reads this one shape.
+
+use super::{EngineChoice, EvalRequest, PolicyIoRules, Setting, TerminationRule};
+use crate::policy::registry::{self, PolicyArg, RegistryError};
+use crate::sim::motion::{DataError, Dataset, SelectionError, Sequence, Subset};
+use crate::sim::physics::{make_physics, Engine, EngineError, PhysicsSettings};
+use crate::sim::profile::Profile;
+use crate::sim::robot::RobotModel;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Most worker threads a run may ask for.
+pub const MAX_WORKERS: usize = 1024;
+/// Most environment slots a run may ask for.
+pub const MAX_ENVS: usize = 4096;
+/// The deepest slot pipeline: two groups, one stepping while the policy answers the other.
+pub const MAX_PIPELINE_DEPTH: usize = 2;
+/// The most physics steps per control step a physics step may ask for (0.02 ms at 50 Hz
+/// control: far finer than any engine's validated step; 10⁻⁹ s asked for 2·10⁷).
+pub const MAX_SUBSTEPS: usize = 1000;
+/// Settings when none is given (on a dataset with force logs).
+pub const DEFAULT_SETTINGS: [&str; 2] = ["force", "no-force"];
+
+/// Something the caller should tell the user about a valid spec.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Advice {
+    /// What the run does that was not asked for in so many words.
+    Note(String),
+    /// What may not be what the user meant.
+    Warning(String),
+}
+
+impl std::fmt::Display for Advice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Note(s) => write!(f, "note: {s}"),
+            Self::Warning(s) => write!(f, "warning: {s}"),
+        }
+    }
+}
+
+/// Why a request is not an evaluation that can run.
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    /// A value out of its domain; the message names the request's field in backticks
+    /// (`request.envs`, `request.io.budget_s`) — a command line shows its flag there.
+    #[error("{0}")]
+    Invalid(String),
+    /// The robot or profile named does not resolve.
+    #[error(transparent)]
+    Registry(#[from] RegistryError),
+    /// The engine cannot simulate the robot.
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    /// The dataset cannot be read.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// `selection` chooses nothing usable.
+    #[error("{spelled} in {dataset}")]
+    Selection {
+        /// The selection as given.
+        spelled: String,
+        /// The dataset.
+        dataset: PathBuf,
+        /// Why.
+        source: SelectionError,
+    },
+}
+
+fn invalid(message: impl Into<String>) -> SpecError {
+    SpecError::Invalid(message.into())
+}
+
+/// One evaluation, checked: robot, profile, engine, the sequences and settings, the
+/// rules, and how it is spread over threads.
+#[derive(Debug, Clone)]
+pub struct EvalSpec {
+    /// The policy argument, parsed (`None`: a name that is no argument — a deployment
+    /// over DDS names its run so — which runs on the `default` profile, one slot per
+    /// worker).
+    pub policy: Option<PolicyArg>,
+    /// The robot.
+    pub robot: RobotModel,
+    /// The dynamics profile (with the physics step asked for).
+    pub profile: Profile,
+    /// The profile contradicts the policy family and the request allowed it.
+    pub profile_mismatch: bool,
+    /// The policy is scored without its sanity check (`--unchecked`).
+    pub unchecked: bool,
+    /// The engine (checked: it makes a physics for the robot).
+    pub engine: Engine,
+    /// Dataset directory.
+    pub dataset: PathBuf,
+    /// Its content hash.
+    pub dataset_sha256: String,
+    /// The sequences evaluated, in dataset order.
+    pub sequences: Vec<Sequence>,
+    /// The selection and the dataset's size, when they chose part of it.
+    pub subset: Option<Subset>,
+    /// Settings, in the order asked.
+    pub settings: Vec<Setting>,
+    /// Keypoint set (exists for the robot).
+    pub keypoints: String,
+    /// When an episode has failed.
+    pub termination: TerminationRule,
+    /// The rules of the policy's answers.
+    pub io: PolicyIoRules,
+    /// Only shard i of n.
+    pub shard: Option<(usize, usize)>,
+    /// Sequences (`TASK/SEQUENCE_ID`, each evaluated) whose rollouts are written as traces.
+    pub trace: Vec<String>,
+    /// Worker threads.
+    pub workers: usize,
+    /// Environment slots.
+    pub envs: usize,
+    /// Slot groups in the pipeline (checked: 1, or 2 under lock-step rules with at least
+    /// two slots).
+    pub pipeline_depth: usize,
+    /// What the caller should tell the user.
+    pub advice: Vec<Advice>,
+}
+
+impl EvalSpec {
+    /// Checks `request` and loads everything it names: robot, profile (the policy
+    /// family's unless named), engine (a physics is made once, so the run's workers cannot
+    /// fail to), dataset and selection, settings, rules, threads.
+    pub fn load(request: &EvalRequest) -> Result<Self, SpecError> {
+        let mut advice = Vec::new();
+        let dataset = request
+            .dataset
+            .clone()
+            .unwrap_or_else(|| crate::data_dir().join("sample"));
+        let robot = registry::robot(&request.robot)?;
+        let policy = PolicyArg::parse(&request.policy).ok();
+        let (profile, profile_mismatch) =
+            resolve_profile(request, policy.as_ref(), &robot, &mut advice)?;
+        let engine = check_engine(request, &robot, &profile)?;
+        if robot.keypoint_set(&request.keypoints).is_none() {
+            return Err(invalid(format!(
+                "unknown keypoint set `{}` for robot {}",
+                request.keypoints, robot.name
+            )));
+        }
+        let settings = parse_settings(&request.settings)?;
+        check_termination(&request.termination)?;
+        check_io(&request.io)?;
+        let picked = pick_sequences(request, &dataset, &robot)?;
+        let settings = fit_settings_to_force_logs(
+            settings,
+            &picked.sequences,
+            request.settings.is_empty(),
+            request.replay_without_force_logs,
+            &dataset,
+            &mut advice,
+        )?;
+        check_trace(&request.trace, &picked.sequences, &dataset)?;
+        let slots_per_worker = policy.as_ref().map_or(1, PolicyArg::slots_per_worker);
+        let (workers, envs) = threads(request, slots_per_worker)?;
+        check_pipeline(request.pipeline_depth, envs, &request.io)?;
+        Ok(Self {
+            policy,
+            profile_mismatch,
+            unchecked: request.unchecked,
+            dataset_sha256: picked.sha256,
+            robot,
+            profile,
+            engine,
+            dataset,
+            sequences: picked.sequences,
+            subset: picked.subset,
+            settings,
+            keypoints: request.keypoints.clone(),
+            termination: request.termination,
+            io: request.io,
+            shard: request.shard,
+            trace: request.trace.clone(),
+            workers,
+            envs,
+            pipeline_depth: request.pipeline_depth,
+            advice,
+        })
+    }
+
+    /// The dataset directory's name, for default output directories.
+    pub fn dataset_name(&self) -> &str {
+        self.dataset
+            .file_name()
+            .and_then(|s| s.to_str())
+            .unwrap_or("dataset")
+    }
+
+    /// Whether the sequence of `task`/`sequence_id` is one whose rollouts are traced.
+    pub fn traces(&self, task: &str, sequence_id: &str) -> bool {
+        self.trace
+            .iter()
+            .any(|t| names_sequence(t, task, sequence_id))
+    }
+}
+
+/// Whether `name`, spelled `TASK/SEQUENCE_ID`, is that sequence.
+fn names_sequence(name: &str, task: &str, sequence_id: &str) -> bool {
+    name.split_once('/') == Some((task, sequence_id))
+}
+
+/// The profile the request names, or its policy family's; one that contradicts the
+/// family is refused unless the request allows it (then a warning, and recorded), and the
+/// physics step is the request's when it gives one. Also returns the mismatch.
+fn resolve_profile(
+    request: &EvalRequest,
+    policy: Option<&PolicyArg>,
+    robot: &RobotModel,
+    advice: &mut Vec<Advice>,
+) -> Result<(Profile, bool), SpecError> {
+    let profile_name = request.profile.clone().unwrap_or_else(|| {
+        policy
+            .map_or("default", PolicyArg::default_profile)
+            .to_string()
+    });
+    let mut profile = registry::profile(&profile_name, robot).map_err(|e| match e {
+        RegistryError::UnknownProfile { .. } => {
+            invalid(format!("`request.profile` {profile_name}: {e}"))
+        }
+        e => e.into(),
+    })?;
+    let fits = policy.map_or(Ok(()), |p| p.check_profile(&profile));
+    let mismatch = match fits {
+        Ok(()) => false,
+        Err(why) if request.profile_mismatch_ok => {
+            advice.push(Advice::Warning(format!(
+                "{why} (`request.profile_mismatch_ok`: run anyway, recorded in run.json)"
+            )));
+            true
+        }
+        Err(why) => return Err(invalid(format!("{why}: leave out `request.profile` to use the family's, or give `request.profile_mismatch_ok` to run it anyway"))),
+    };
+    if let Some(dt) = request.physics_dt_s {
+        set_physics_dt(&mut profile, dt)?;
+    }
+    Ok((profile, mismatch))
+}
+
+/// The engine asked for, checked once by making a physics of it for the robot, so that
+/// the run's workers cannot fail to.
+fn check_engine(
+    request: &EvalRequest,
+    robot: &RobotModel,
+    profile: &Profile,
+) -> Result<Engine, SpecError> {
+    let engine = match (request.engine, &request.mjcf) {
+        (EngineChoice::Rapier, None) => Engine::Rapier,
+        (EngineChoice::Rapier, Some(_)) => {
+            return Err(invalid(
+                "`request.mjcf` is for `request.engine` mujoco (rapier simulates the robot model itself)",
+            ))
+        }
+        (EngineChoice::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
+    };
+    make_physics(
+        &engine,
+        Arc::new(robot.clone()),
+        PhysicsSettings {
+            dt_s: profile.physics_dt_s,
+            ..Default::default()
+        },
+        profile.gains.clone(),
+    )?;
+    Ok(engine)
+}
+
+/// The sequences a request evaluates, with the dataset's hash and the subset they are.
+struct Picked {
+    sequences: Vec<Sequence>,
+    subset: Option<Subset>,
+    sha256: String,
+}
+
+/// Opens the dataset (every file checked against its manifest) and keeps the sequences
+/// of the request's selection; an empty dataset is refused.
+fn pick_sequences(
+    request: &EvalRequest,
+    dataset: &Path,
+    robot: &RobotModel,
+) -> Result<Picked, SpecError> {
+    let ds = Dataset::open(dataset, robot)?;
+    let all = ds.load_all()?;
+    if all.is_empty() {
+        return Err(invalid(format!(
+            "{} holds no sequence: nothing to evaluate",
+            dataset.display()
+        )));
+    }
+    let selection = request.selection.clone();
+    let dataset_sequences = all.len();
+    let sequences = selection
+        .pick(all, |q| (&q.task, &q.sequence_id))
+        .map_err(|source| SpecError::Selection {
+            spelled: selection.spelled(),
+            dataset: dataset.to_path_buf(),
+            source,
+        })?;
+    Ok(Picked {
+        sequences,
+        subset: (!selection.is_all()).then_some(Subset {
+            selection,
+            dataset_sequences,
+        }),
+        sha256: ds.content_hash(),
+    })
+}
+
+/// Every traced sequence (`TASK/SEQUENCE_ID`) must be one of those evaluated.
+fn check_trace(trace: &[String], sequences: &[Sequence], dataset: &Path) -> Result<(), SpecError> {
+    for name in trace {
+        if !sequences
+            .iter()
+            .any(|q| names_sequence(name, &q.task, &q.sequence_id))
+        {
+            return Err(invalid(format!(
+                "`request.trace`: no sequence `{name}` among those evaluated from {} (use TASK/SEQUENCE_ID)",
+                dataset.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Worker threads (default: every core) and environment slots (default: the policy
+/// family's `slots_per_worker` for each worker), within their limits.
+fn threads(request: &EvalRequest, slots_per_worker: usize) -> Result<(usize, usize), SpecError> {
+    let workers = match request.workers {
+        Some(0) => return Err(invalid("`request.workers` must be at least 1")),
+        Some(n) if n > MAX_WORKERS => {
+            return Err(invalid(format!("`request.workers` {n}: at most {MAX_WORKERS} threads (each one simulates its own environment slots)")))
+        }
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    let envs = match request.envs {
+        Some(0) => return Err(invalid("`request.envs` must be at least 1")),
+        Some(n) if n > MAX_ENVS => {
+            return Err(invalid(format!(
+                "`request.envs` {n}: at most {MAX_ENVS} environment slots (each holds a robot's physics)"
+            )))
+        }
+        Some(n) => n,
+        None => (workers.max(1) * slots_per_worker).min(MAX_ENVS),
+    };
+    Ok((workers, envs))
+}
+
+/// A pipeline of `depth` slot groups over `envs` slots: deeper than one, the policy's
+/// answer overlaps the physics of the other group, so it shares the cores with it and its
+/// measured latency is no longer the one it would have alone — a budget or measured latency
+/// would then judge the run's timing, not the policy's, and are refused.
+fn check_pipeline(depth: usize, envs: usize, io: &PolicyIoRules) -> Result<(), SpecError> {
+    if !(1..=MAX_PIPELINE_DEPTH).contains(&depth) {
+        return Err(invalid(format!(
+            "`request.pipeline_depth` {depth}: 1 (lock-step) or {MAX_PIPELINE_DEPTH} (the physics of one half of the slots overlaps the policy's answer for the other)"
+        )));
+    }
+    if depth == 1 {
+        return Ok(());
+    }
+    if envs < depth {
+        return Err(invalid(format!(
+            "`request.pipeline_depth` {depth} needs at least {depth} environment slots (`request.envs` {envs})"
+        )));
+    }
+    if let Some(b) = io.budget_s {
+        return Err(invalid(format!(
+            "`request.pipeline_depth` {depth} with `request.io.budget_s` {b}s: overlapped with physics, the policy's round trip is not what it would be alone, so a deadline would judge the run, not the policy (use `request.pipeline_depth` 1)"
+        )));
+    }
+    if io.latency_mode == crate::eval::LatencyMode::Measured {
+        return Err(invalid(format!(
+            "`request.pipeline_depth` {depth} with `request.io.latency_mode` measured: overlapped with physics, the measured latency is not the policy's alone (use `request.pipeline_depth` 1)"
+        )));
+    }
+    Ok(())
+}
+
+/// Sets the profile's physics step to `dt` s, which must divide its control step.
+fn set_physics_dt(profile: &mut Profile, dt: f64) -> Result<(), SpecError> {
+    let ratio = profile.control_dt_s / dt;
+    if !(dt.is_finite() && dt > 0.0) || (ratio - ratio.round()).abs() > 1e-6 || ratio < 0.5 {
+        return Err(invalid(format!(
+            "`request.physics_dt_s` {dt}: must be > 0 and divide the profile's control step {} s",
+            profile.control_dt_s
+        )));
+    }
+    if ratio.round() > MAX_SUBSTEPS as f64 {
+        return Err(invalid(format!(
+            "`request.physics_dt_s` {dt}: {} physics steps per control step of {} s; at most {MAX_SUBSTEPS} (a step of {} s)",
+            ratio.round(),
+            profile.control_dt_s,
+            profile.control_dt_s / MAX_SUBSTEPS as f64
+        )));
+    }
+    profile.physics_dt_s = dt;
+    profile.substeps = ratio.round() as usize;
+    Ok(())
+}
+
+/// Parses the settings as spelled (none: [`DEFAULT_SETTINGS`]) and refuses two that load
+/// the robot the same way: every episode would run and count twice.
+pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
+    let spelled: Vec<String> = if spelled.is_empty() {
+        DEFAULT_SETTINGS.iter().map(|s| s.to_string()).collect()
+    } else {
+        spelled.to_vec()
+    };
+    let settings: Vec<Setting> = spelled
+        .iter()
+        .map(|s| {
+            Setting::parse(s).ok_or_else(|| {
+                invalid(format!(
+                    "`request.settings`: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
+                    Setting::MAX_COEFFICIENT,
+                    Setting::MAX_PUSH_N
+                ))
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    for (i, a) in settings.iter().enumerate() {
+        if let Some((j, _)) = settings[..i]
+            .iter()
+            .enumerate()
+            .find(|(_, b)| b.same_load(a))
+        {
+            let (first, second) = (&spelled[j], &spelled[i]);
+            if first == second || settings[j].name == a.name {
+                return Err(invalid(format!(
+                    "`request.settings` lists `{}` twice: every episode would run and count twice",
+                    a.name
+                )));
+            }
+            return Err(invalid(format!(
+                "`request.settings` lists `{first}` and `{second}`, which are the same load on the robot: every episode would run and count twice under two names"
+            )));
+        }
+    }
+    Ok(settings)
+}
+
+fn check_termination(rule: &TerminationRule) -> Result<(), SpecError> {
+    for (flag, v) in [
+        (
+            "`request.termination.max_torso_height_error_m`",
+            rule.max_torso_height_error_m,
+        ),
+        (
+            "`request.termination.max_torso_tilt_error_rad`",
+            rule.max_torso_tilt_error_rad,
+        ),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(invalid(format!("{flag} must be > 0, got {v}")));
+        }
+    }
+    Ok(())
+}
+
+fn check_io(io: &PolicyIoRules) -> Result<(), SpecError> {
+    if !(io.max_abs_action.is_finite() && io.max_abs_action > 0.0) {
+        return Err(invalid(format!(
+            "`request.io.max_abs_action` must be > 0, got {}",
+            io.max_abs_action
+        )));
+    }
+    Ok(())
+}
+
+/// Replay settings need recorded forces: on a dataset without force logs the default
+/// becomes `no-force` alone, and an explicit replay setting is refused unless
+/// `replay_anyway` (it would print a second `no-force` column under another name). A
+/// dataset only partly logged is run as asked, with a warning.
+fn fit_settings_to_force_logs(
+    settings: Vec<Setting>,
+    sequences: &[Sequence],
+    defaulted: bool,
+    replay_anyway: bool,
+    dataset: &std::path::Path,
+    advice: &mut Vec<Advice>,
+) -> Result<Vec<Setting>, SpecError> {
+    let logged = sequences.iter().filter(|q| q.forces_recorded).count();
+    let replaying: Vec<&str> = settings
+        .iter()
+        .filter(|s| s.coefficient != 0.0)
+        .map(|s| s.name.as_str())
+        .collect();
+    if replaying.is_empty() || logged == sequences.len() {
+        return Ok(settings);
+    }
+    if logged == 0 && defaulted {
+        advice.push(Advice::Note(format!(
+            "no sequence evaluated from {} has force logs (imported without its forces): running `no-force` only (`request.settings` force,... with `request.replay_without_force_logs` to replay zeros anyway)",
+            dataset.display()
+        )));
+        return Ok(settings
+            .into_iter()
+            .filter(|s| s.coefficient == 0.0)
+            .collect());
+    }
+    if logged == 0 && !replay_anyway {
+        return Err(invalid(format!(
+            "`request.settings` {}: replays recorded hand forces, but no sequence evaluated from {} has force logs (imported without its forces), so it would run as `no-force` under another name; use no-force or push:<N>, or `request.replay_without_force_logs` to run it anyway",
+            replaying.join(","),
+            dataset.display()
+        )));
+    }
+    if logged < sequences.len() {
+        advice.push(Advice::Warning(format!(
+            "{} of the {} sequences evaluated from {} have no force logs: under {} they replay zero forces",
+            sequences.len() - logged,
+            sequences.len(),
+            dataset.display(),
+            replaying.join(", ")
+        )));
+    }
+    Ok(settings)
+}

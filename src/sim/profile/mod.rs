@@ -1,0 +1,302 @@
+//! Dynamics profiles (`data/profiles/*.toml`): the fixed deployment settings a policy is
+//! evaluated under — robot, control and physics steps, action mapping, delay, PD gains and
+//! torque limits — resolved against the robot model and validated on load.
+
+use crate::sim::physics::PdGains;
+use crate::sim::robot::RobotModel;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Why a profile could not be loaded. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ProfileError {
+    /// The file could not be read.
+    #[error("cannot read {path}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// Not valid TOML, or not the schema.
+    #[error("{path}: {message}")]
+    Toml {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message (with line and column).
+        message: String,
+    },
+    /// A field contradicts the robot or the rules of a profile.
+    #[error("{path}: field `{field}`: {reason}")]
+    BadField {
+        /// The file.
+        path: PathBuf,
+        /// The field.
+        field: String,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// A value per joint: keyed by the full joint name (`left_shoulder_roll_joint`), by its
+/// group — the name without side prefix and `_joint` suffix (`hip_pitch`, `knee`,
+/// `waist_yaw`, …) — or `default`; the most specific key wins.
+type PerGroup = BTreeMap<String, f64>;
+
+/// The profile file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ProfileFile {
+    name: String,
+    robot: String,
+    control_dt_s: f64,
+    physics_dt_s: f64,
+    #[serde(default)]
+    action_delay_steps: usize,
+    action_clip: Option<f64>,
+    action_scale: PerGroup,
+    #[serde(default)]
+    action_offset_rad: Option<PerGroup>,
+    kp: PerGroup,
+    kd: PerGroup,
+    #[serde(default)]
+    effort_limit_nm: PerGroup,
+    #[serde(default)]
+    source: String,
+    #[serde(default)]
+    beyondmimic: Option<BeyondMimicProfile>,
+}
+
+/// `[beyondmimic]`: what a `beyondmimic:` policy is fed when its file does not say
+/// (holosoma's exports carry no observation metadata).
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeyondMimicProfile {
+    /// Observation terms in order (names as in `observation_names` metadata).
+    #[serde(default)]
+    pub observation_names: Vec<String>,
+    /// The body whose pose anchors the reference (`torso_link` in every G1 export known).
+    #[serde(default = "torso_link")]
+    pub anchor_body: String,
+    /// How the network's action becomes a joint target, when the file does not say.
+    #[serde(default)]
+    pub action_mode: Option<ActionMode>,
+    /// The network's joint order, when the file does not say (bare exports, e.g. in Isaac
+    /// Lab's breadth-first order); empty: the file's `joint_names`, else the robot's order.
+    #[serde(default)]
+    pub joint_names: Vec<String>,
+}
+
+/// How a BeyondMimic-family network's action becomes a joint target (wbc-mjlab's
+/// `action_mode`, wbc-g1-deploy `src/wbc_tracking_params.cpp`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ActionMode {
+    /// target = default pose + scale · action (mjlab's `JointPositionAction`).
+    #[default]
+    DefaultRelative,
+    /// target = the reference's joint position at this step + scale · action (wbc-mjlab's
+    /// `ReferenceJointPositionAction`): the network learns a residual on the reference.
+    ReferenceResidual,
+}
+
+impl ActionMode {
+    /// Every mode, for parsing and for errors.
+    pub const ALL: [ActionMode; 2] = [Self::DefaultRelative, Self::ReferenceResidual];
+
+    /// Its name, as the metadata and the profile spell it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::DefaultRelative => "default_relative",
+            Self::ReferenceResidual => "reference_residual",
+        }
+    }
+
+    /// The mode `name` spells.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name.trim())
+    }
+}
+
+fn torso_link() -> String {
+    "torso_link".into()
+}
+
+/// A resolved profile: every per-joint quantity in the robot's canonical order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Profile {
+    /// Profile name.
+    pub name: String,
+    /// Robot name.
+    pub robot: String,
+    /// Policy period, s.
+    pub control_dt_s: f64,
+    /// Physics step, s.
+    pub physics_dt_s: f64,
+    /// Physics steps per control step.
+    pub substeps: usize,
+    /// Control steps between a policy output and its effect.
+    pub action_delay_steps: usize,
+    /// Raw actions are clipped to ±this before scaling (no clip when `None`).
+    pub action_clip: Option<f64>,
+    /// Target = offset + scale · action, per joint.
+    pub action_scale: Vec<f64>,
+    /// The action offset (the policy's default pose; the robot's unless the profile gives
+    /// one), rad.
+    pub action_offset_rad: Vec<f64>,
+    /// PD gains and torque limits.
+    pub gains: PdGains,
+    /// Where the numbers come from.
+    pub source: String,
+    /// Defaults for `beyondmimic:` policies.
+    pub beyondmimic: Option<BeyondMimicProfile>,
+}
+
+impl Profile {
+    /// Joint position targets for a raw policy action (clip, scale, offset).
+    pub fn targets_from_action(&self, action: &[f64], targets: &mut [f64]) {
+        for (i, t) in targets.iter_mut().enumerate() {
+            let a = match self.action_clip {
+                Some(c) => action[i].clamp(-c, c),
+                None => action[i],
+            };
+            *t = self.action_offset_rad[i] + self.action_scale[i] * a;
+        }
+    }
+}
+
+/// `data/profiles/<name>.toml` of the bundled profiles.
+pub fn bundled_profile_path(name: &str) -> PathBuf {
+    crate::data_dir()
+        .join("profiles")
+        .join(format!("{name}.toml"))
+}
+
+/// Loads and resolves a profile file for `robot`.
+pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ProfileError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let file: ProfileFile = toml::from_str(&text).map_err(|e| ProfileError::Toml {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let bad = |field: &str, reason: String| ProfileError::BadField {
+        path: path.to_path_buf(),
+        field: field.into(),
+        reason,
+    };
+    if file.robot != robot.name {
+        return Err(bad(
+            "robot",
+            format!("`{}`, but the robot loaded is `{}`", file.robot, robot.name),
+        ));
+    }
+    for (field, v) in [
+        ("control_dt_s", file.control_dt_s),
+        ("physics_dt_s", file.physics_dt_s),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad(field, format!("must be > 0, got {v}")));
+        }
+    }
+    let ratio = file.control_dt_s / file.physics_dt_s;
+    let substeps = ratio.round();
+    if substeps < 1.0 || (ratio - substeps).abs() > 1e-6 {
+        return Err(bad(
+            "control_dt_s",
+            format!(
+                "{} s is not a whole multiple of physics_dt_s {} s",
+                file.control_dt_s, file.physics_dt_s
+            ),
+        ));
+    }
+    if let Some(c) = file.action_clip {
+        if !(c.is_finite() && c > 0.0) {
+            return Err(bad("action_clip", format!("must be > 0, got {c}")));
+        }
+    }
+    let resolve_signed = |field: &str,
+                          table: &PerGroup,
+                          fallback: Option<&dyn Fn(usize) -> f64>,
+                          allow_negative: bool|
+     -> Result<Vec<f64>, ProfileError> {
+        let groups: Vec<String> = robot.joints.iter().map(|j| joint_group(&j.name)).collect();
+        for key in table.keys() {
+            if key != "default"
+                && !groups.iter().any(|g| g == key)
+                && robot.joint_index(key).is_none()
+            {
+                return Err(bad(
+                    &format!("{field}.{key}"),
+                    format!("no joint of {} is named or grouped `{key}`", robot.name),
+                ));
+            }
+        }
+        groups
+            .iter()
+            .enumerate()
+            .map(|(j, g)| {
+                let v = table
+                    .get(&robot.joints[j].name)
+                    .or_else(|| table.get(g))
+                    .or_else(|| table.get("default"))
+                    .copied()
+                    .or_else(|| fallback.map(|f| f(j)));
+                match v {
+                    Some(v) if v.is_finite() && (allow_negative || v >= 0.0) => Ok(v),
+                    Some(v) => Err(bad(
+                        &format!("{field}.{g}"),
+                        format!("must be a finite value >= 0, got {v}"),
+                    )),
+                    None => Err(bad(
+                        field,
+                        format!(
+                            "no value for joint `{}` (group `{g}`) and no `default`",
+                            robot.joints[j].name
+                        ),
+                    )),
+                }
+            })
+            .collect()
+    };
+    let resolve = |field: &str, table: &PerGroup, fallback: Option<&dyn Fn(usize) -> f64>| {
+        resolve_signed(field, table, fallback, false)
+    };
+    let effort = |j: usize| robot.joints[j].effort_nm;
+    let default_pose = |j: usize| robot.joints[j].default_rad;
+    let action_offset_rad = match &file.action_offset_rad {
+        Some(t) => resolve_signed("action_offset_rad", t, Some(&default_pose), true)?,
+        None => robot.default_pose(),
+    };
+    Ok(Profile {
+        name: file.name,
+        robot: file.robot,
+        control_dt_s: file.control_dt_s,
+        physics_dt_s: file.physics_dt_s,
+        substeps: substeps as usize,
+        action_delay_steps: file.action_delay_steps,
+        action_clip: file.action_clip,
+        action_scale: resolve("action_scale", &file.action_scale, None)?,
+        action_offset_rad,
+        gains: PdGains {
+            kp: resolve("kp", &file.kp, None)?,
+            kd: resolve("kd", &file.kd, None)?,
+            effort_limit_nm: resolve("effort_limit_nm", &file.effort_limit_nm, Some(&effort))?,
+        },
+        source: file.source,
+        beyondmimic: file.beyondmimic,
+    })
+}
+
+/// `left_hip_pitch_joint` → `hip_pitch`; `waist_yaw_joint` → `waist_yaw`.
+pub fn joint_group(joint: &str) -> String {
+    let s = joint.strip_suffix("_joint").unwrap_or(joint);
+    let s = s
+        .strip_prefix("left_")
+        .or_else(|| s.strip_prefix("right_"))
+        .unwrap_or(s);
+    s.to_string()
+}
