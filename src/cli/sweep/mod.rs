@@ -154,7 +154,7 @@ pub(super) fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
             "{}",
             thorarena::campaign::sweep::plan_sweep(&a.spec, &a.out)?
         ),
-        SweepCommand::Run(a) => pool::run_all(a)?,
+        SweepCommand::Run(a) => progress_bar::run_all(a)?,
         SweepCommand::Task(a) => {
             let task = EngineTask {
                 exe: &std::env::current_exe()?,
@@ -170,8 +170,8 @@ pub(super) fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
             print!("{status}");
             println!("{}", as_flags(&status.not_done_line()));
         }
-        SweepCommand::Slurm(a) => cluster::slurm(a)?,
-        SweepCommand::K8s(a) => cluster::k8s(a)?,
+        SweepCommand::Slurm(a) => slurm_k8s::slurm(a)?,
+        SweepCommand::K8s(a) => slurm_k8s::k8s(a)?,
         SweepCommand::Collect(a) => {
             let request = SweepCollect {
                 dir: &a.dir,
@@ -187,5 +187,5 @@ pub(super) fn run(cmd: &SweepCommand) -> anyhow::Result<()> {
     Ok(())
 }
 
-mod cluster;
-mod pool;
+mod progress_bar;
+mod slurm_k8s;
