@@ -99,7 +99,7 @@ else
     say "no MuJoCo 3.17.0 library: building without the mujoco feature (its tests count as skipped)"
 fi
 
-say "rust tests (cargo test --release ${rust_targets[*]} ${features[*]}; the first build takes ~15 min on 2 cores)"
+say "rust tests (cargo test --release ${rust_targets[*]} ${features[*]}; the first build takes 10 to 20 min on 2 cores)"
 export THORARENA_SKIP_LOG=$logs/skipped.tsv
 : > "$THORARENA_SKIP_LOG"
 cargo test --release "${rust_targets[@]}" "${features[@]}" --no-fail-fast 2>&1 | tee "$logs/cargo-test.log"

@@ -116,7 +116,7 @@ fn same_records_under_every_family(test: &str, engine: &[&str]) -> String {
         let (records, kernels, _) = records(&onnx, &walks, &dir.path().join("run"), engine, &env);
         assert_eq!(
             kernels.as_deref(),
-            Some(thorarena::policy::PINNED_FAMILY),
+            Some(thorarena::policy::network_kernels::PINNED_FAMILY),
             "{label}: run.json names other kernels"
         );
         eprintln!("{label}: records {}", sha256(&records));

@@ -2,7 +2,7 @@
 //! and a C++ policy all see the same loop — the built-in baselines, and the remote policy
 //! that speaks `thorarena-ipc` to a policy process; beside them the [`registry`] that
 //! turns the names a user gives into policies, profiles and robots, and the ONNX side of
-//! networks ([`network_kernels`](mod@network_kernels), [`onnx_export`]).
+//! networks ([`network_kernels`], [`onnx_export`]).
 
 mod batch_plans;
 pub mod beyondmimic;
@@ -24,7 +24,6 @@ pub use batch_plans::BatchPlans;
 pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use falcon::FalconPolicy;
-pub use network_kernels::{load_onnx, network_kernels, NetworkKernels, KERNELS_ENV, PINNED_FAMILY};
 pub use remote::{
     RemoteConfig, RemoteError, RemotePolicy, SessionOptions, SessionOptionsError, TransportStats,
 };
@@ -143,9 +142,9 @@ pub trait Policy {
     }
 
     /// The kernels a network computed this policy's actions on, when it is a network run
-    /// in process ([`network_kernels()`]); `None` for everything else, whose arithmetic is
+    /// in process ([`network_kernels::network_kernels()`]); `None` for everything else, whose arithmetic is
     /// its own (a policy process) or has no kernels to choose (a baseline).
-    fn network_kernels(&self) -> Option<&'static NetworkKernels> {
+    fn network_kernels(&self) -> Option<&'static network_kernels::NetworkKernels> {
         None
     }
 

@@ -248,7 +248,7 @@ impl Twist2Policy {
             return Err(Twist2Error::Joints(default_pose.len()));
         }
         let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
-            let plans = BatchPlans::new(super::load_onnx(path)?, OBS_LEN)?;
+            let plans = BatchPlans::new(super::network_kernels::load_onnx(path)?, OBS_LEN)?;
             let act_plan = plans.plan(INFERENCE_BATCH)?;
             Ok((plans, act_plan))
         };
@@ -288,8 +288,8 @@ impl Policy for Twist2Policy {
         "twist2"
     }
 
-    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
-        Some(super::network_kernels())
+    fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {
+        Some(super::network_kernels::network_kernels())
     }
 
     fn reference_offsets_s(&self) -> Vec<f64> {

@@ -94,7 +94,7 @@ impl Network {
     /// Loads the ONNX file and reads its metadata and input and output slots.
     fn open(path: &Path) -> Result<Self, BeyondMimicError> {
         let load_err = load_error(path);
-        let model = crate::policy::load_onnx(path).map_err(load_err)?;
+        let model = crate::policy::network_kernels::load_onnx(path).map_err(load_err)?;
         let meta = FileMetadata::from_props(&crate::policy::onnx_export::metadata_props(&model))
             .map_err(|reason| BeyondMimicError::Unusable {
                 path: path.to_path_buf(),

@@ -287,8 +287,8 @@ impl Policy for BeyondMimicPolicy {
         &self.name
     }
 
-    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
-        Some(super::network_kernels())
+    fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {
+        Some(super::network_kernels::network_kernels())
     }
 
     fn reference_offsets_s(&self) -> Vec<f64> {

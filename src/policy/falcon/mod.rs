@@ -92,7 +92,7 @@ impl FalconPolicy {
             return Err(FalconError::Joints(profile.action_offset_rad.len()));
         }
         let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
-            let plans = BatchPlans::new(super::load_onnx(path)?, OBS_LEN)?;
+            let plans = BatchPlans::new(super::network_kernels::load_onnx(path)?, OBS_LEN)?;
             let plan = plans.plan(1)?;
             Ok((plans, plan))
         };
@@ -144,8 +144,8 @@ impl Policy for FalconPolicy {
         "falcon"
     }
 
-    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
-        Some(super::network_kernels())
+    fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {
+        Some(super::network_kernels::network_kernels())
     }
 
     fn reference_offsets_s(&self) -> Vec<f64> {

@@ -162,7 +162,7 @@ impl SoftMimicPolicy {
             return Err(SoftMimicError::Joints(robot.n_joints()));
         }
         let load = |layout: Layout| -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
-            let plans = BatchPlans::new(super::load_onnx(path)?, layout.width())?;
+            let plans = BatchPlans::new(super::network_kernels::load_onnx(path)?, layout.width())?;
             let plan = plans.plan(1)?;
             Ok((plans, plan))
         };
@@ -251,8 +251,8 @@ impl Policy for SoftMimicPolicy {
         "softmimic"
     }
 
-    fn network_kernels(&self) -> Option<&'static super::NetworkKernels> {
-        Some(super::network_kernels())
+    fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {
+        Some(super::network_kernels::network_kernels())
     }
 
     fn reference_offsets_s(&self) -> Vec<f64> {
