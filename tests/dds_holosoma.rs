@@ -96,21 +96,31 @@ fn holosomas_inference_package_runs_unchanged_and_its_dance_is_scored() {
     // A run the machine did not keep in real time (the bridge says so, and its scores are
     // not a real-time run's) is not scored: it is run again, up to three times in all,
     // each attempt's report printed. Shared VMs stall the loop for milliseconds at a time
-    // (docs/deployment.md, "Real time needs slack").
+    // (docs/deployment.md, "Real time needs slack"). Held to the quiet host the figures
+    // were measured on, too: more than one physics step in 500 late (quiet MuJoCo runs have
+    // 1 to 32 of 67 730) means the host also stalled the deploy code, whose lag then grows
+    // (a run 515 steps late, within the bridge's 1 %, tracked 73.8 mm against 58).
+    let quiet = |realtime: &serde_json::Value| {
+        let late = realtime["late_steps"].as_f64().unwrap_or(f64::INFINITY);
+        let steps = realtime["physics_steps"].as_f64().unwrap_or(0.0);
+        realtime["kept_real_time"] == true && late * 500.0 <= steps
+    };
     let mut attempts = Vec::new();
     let mut kept = None;
     for attempt in 1..=3 {
         let deployed = path(&format!("deployed-{attempt}"));
         let realtime = deploy_once(&python, onnx, &engine, &dataset, &deployed);
-        if realtime["kept_real_time"] == true {
+        if quiet(&realtime) {
             kept = Some((deployed, realtime));
             break;
         }
-        eprintln!("attempt {attempt}: real time not kept, not scored: {realtime}");
+        eprintln!(
+            "attempt {attempt}: real time not kept, or more than 1 step in 500 late; not scored: {realtime}"
+        );
         attempts.push(realtime);
     }
     let Some((deployed, realtime)) = kept else {
-        panic!("no attempt kept real time: {attempts:#?}");
+        panic!("no attempt kept real time on a quiet host: {attempts:#?}");
     };
     let offset = realtime["start_offset_s"].as_f64().unwrap();
     assert!((3.5..4.0).contains(&offset), "{realtime}");
