@@ -78,8 +78,8 @@ fn every_call_shape_of_several_rows_rounds_alike_and_one_row_within_1e_5() {
         return;
     };
     let width = 132;
-    let model = thorarena::policy::network_kernels::load_onnx(&onnx).unwrap();
-    let plans = thorarena::policy::BatchPlans::new(model, width).unwrap();
+    let (model, _) = thorarena::policy::network_kernels::load_onnx(&onnx).unwrap();
+    let plans = thorarena::policy::BatchPlans::new(model, width, None).unwrap();
     let row = input_row(width, 0);
     let alone = plans.run(&row, 1).unwrap();
     let in_a_call = |rows: usize| {

@@ -3,6 +3,13 @@
 //!
 //! Both are fixed-size `#[repr(C)]` messages with stable iceoryx2 type names, mirrored
 //! field for field by the C header and the Python ctypes structures.
+//!
+//! `Hello` carries the protocol version, the joint count and a hash of the joint names,
+//! the reference offsets the policy wants to see, its pid and name, and the name of a
+//! network input for the simulator to build. `Welcome` answers with the batch's shape,
+//! the control step, the budget, the action mapping (`action_offset_rad`, `action_scale`,
+//! so a policy answers in actions without knowing the profile) and the input's width — or
+//! a status and a message saying why the policy was refused.
 
 use iceoryx2::prelude::ZeroCopySend;
 

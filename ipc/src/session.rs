@@ -1,5 +1,13 @@
 //! What both sides share: service names per session, node creation, errors, and the
 //! spin-then-block wait.
+//!
+//! The wait busy-polls, then blocks to the microsecond (`precise_wait.rs`: iceoryx2's own
+//! timed wait rounds up to scheduler ticks). A side that knows when the other is due
+//! (`RecentTurns`: its last few turns) polls again through that window
+//! (`WaitPolicy::wake_early`). While blocked it checks that the peer lives by the peer's
+//! iceoryx2 node (`PeerNode`), whose lock the kernel releases when its process dies —
+//! never by the pid the peer reports. A session's files live in this user's own root
+//! (`private_root.rs`).
 
 use iceoryx2::config::Config;
 use iceoryx2::identifiers::UniqueNodeId;

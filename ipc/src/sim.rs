@@ -3,7 +3,11 @@
 //! under an optional deadline.
 //!
 //! In iceoryx2 terms the simulator is the *client* of the step service (it sends the
-//! request, the observation) and the *server* of the hello service.
+//! request, the observation) and the *server* of the hello service, which it creates last,
+//! so a policy that finds `hello` finds the other three. A reply after its deadline is a
+//! miss, and the late reply is counted when it arrives (a lower bound: iceoryx2 0.10 puts a
+//! client's responses on one channel). `step_prepared` loans the next step's batch while
+//! the policy computes, so the caller writes into it what is already known.
 
 mod accept;
 

@@ -22,12 +22,11 @@ pub struct Args {
     /// Dataset directory.
     #[arg(long, default_value = "data/sample")]
     pub dataset: PathBuf,
-    /// Policy in process: a built-in (hold, replay, balance) or a network
-    /// (`twist2:FILE.onnx`, `wbc-mjlab:FILE.onnx`, …; see `thorarena policies`).
-    #[arg(long, default_value = "hold")]
+    // Its help lists every family of the registry run in process.
+    #[arg(long, default_value = "hold", help = thorarena::policy::registry::policy_help(true))]
     pub policy: String,
-    /// Dynamics profile [default: the policy family's].
-    #[arg(long)]
+    // Its help says how the registry chooses the default.
+    #[arg(long, help = thorarena::policy::registry::profile_help())]
     pub profile: Option<String>,
     /// Settings, comma separated, as for `eval`.
     #[arg(long, value_delimiter = ',', default_value = "force,no-force")]

@@ -18,8 +18,8 @@ use thorarena::report::crosscheck_report;
 /// Arguments of `crosscheck`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// An in-process policy (as `eval --policy`; not `ipc:`).
-    #[arg(long, default_value = "balance")]
+    // Its help lists every family of the registry run in process.
+    #[arg(long, default_value = "balance", help = thorarena::policy::registry::policy_help(true))]
     pub policy: String,
     /// Output directory (default: results/crosscheck-<policy>-<dataset name>): the two
     /// runs, `crosscheck.json` and `crosscheck.csv`.

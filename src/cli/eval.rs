@@ -17,14 +17,8 @@ use thorarena::policy::registry::{open_policy, PolicyTarget};
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Built-in policy: `balance` (reference PD + tilt feedback), `replay` (reference
-    /// joints, open loop) or `hold` (default pose); `twist2:<file.onnx>` for the TWIST2
-    /// network in process (with `--profile twist2`); `beyondmimic:<file.onnx>` for a
-    /// BeyondMimic-style tracking network (mjlab, whole_body_tracking, holosoma; e.g. with
-    /// `--profile holosoma-wbt`); `wbc-mjlab:<file.onnx>` for wbc-mjlab's general tracker;
-    /// or `ipc:<session>` to serve a session
-    /// and evaluate whichever policy process connects to it (Python, C++, Rust clients).
-    #[arg(long, default_value = "balance")]
+    // Its help lists every family of the registry.
+    #[arg(long, default_value = "balance", help = thorarena::policy::registry::policy_help(false))]
     pub policy: String,
     /// Run the evaluation a request file describes (JSON, every field of
     /// `thorarena::eval::EvalRequest`; a sweep task writes one per attempt) instead

@@ -17,12 +17,11 @@ pub enum PolicyCommand {
 /// Arguments of `policy check`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// The policy, as `eval --policy` takes it (`thorarena policies`): a built-in or a
-    /// network run in process (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`,
-    /// `wbc-mjlab:FILE.onnx`, `falcon:FILE.onnx`).
+    // Its help lists every family of the registry run in process.
+    #[arg(help = thorarena::policy::registry::policy_help(true))]
     pub policy: String,
-    /// Dynamics profile [default: the one the policy family was trained with].
-    #[arg(long)]
+    // Its help says how the registry chooses the default.
+    #[arg(long, help = thorarena::policy::registry::profile_help())]
     pub profile: Option<String>,
     /// Dataset holding the tracking reference [default: the bundled sample]; for a
     /// single-clip policy, its own clip (e.g. the dance imported from holosoma's network).

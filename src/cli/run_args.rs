@@ -40,18 +40,15 @@ pub struct RunArgs {
     /// Dataset directory (canonical format) [default: the bundled data/sample].
     #[arg(long)]
     pub dataset: Option<PathBuf>,
-    /// Dynamics profile (a name under data/profiles or a .toml path) [default: the one the
-    /// policy family was trained with: `twist2` for twist2:, `beyondmimic` for
-    /// beyondmimic:, `wbc-mjlab` for wbc-mjlab:, else `default`; `thorarena policies`
-    /// lists them]. One that contradicts the family is an error.
-    #[arg(long)]
+    // Its help says how the registry chooses the default.
+    #[arg(long, help = thorarena::policy::registry::profile_help())]
     pub profile: Option<String>,
     /// Run a policy under a profile its family was not trained with (recorded in
     /// run.json): a TWIST2 network on the default profile scores 2 instead of 86.
     #[arg(long)]
     pub profile_mismatch_ok: bool,
     /// Score a network policy without its sanity check (recorded in run.json). Without
-    /// it, a policy run in process (twist2:, beyondmimic:, wbc-mjlab:) is first checked as
+    /// it, a network run in process is first checked as
     /// `thorarena policy check` does, on the walk of the dataset evaluated (a single-clip
     /// policy: its clip), and refused if it fails.
     #[arg(long)]

@@ -8,6 +8,12 @@
 //! checksum holds, with the robot's law per motor, `τ = τ_ff + kp (q* − q) + kd (q̇* − q̇)`,
 //! clamped to the motor's limit: the simulator's PD law with the command's gains and
 //! `τ_ff + kd q̇*` as its feed-forward torque (`Physics::set_feedforward`).
+//!
+//! Until the reference clock starts (the first valid command, or with a start button the
+//! command in force at its press) the robot is held still at the reference's first frame.
+//! What the run says about itself is `RealTimeReport`: late steps, each physics step's
+//! wall time, and the command stream's health (`CommandStream`: broken by a second
+//! publisher, another robot on the domain, or a gap over `MAX_COMMAND_GAP_MS`).
 
 use super::scheduling::Scheduling;
 use super::transport::{DdsError, RobotEndpoints};

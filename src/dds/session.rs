@@ -248,7 +248,7 @@ pub fn run_dds_session(
             format!("`{}`: give TASK/SEQUENCE_ID", req.sequence),
         ));
     };
-    let spec = EvalSpec::load(&EvalRequest {
+    let spec = EvalSpec::load_deployment(&EvalRequest {
         policy: req.name.clone(),
         dataset: req.dataset.clone(),
         profile: Some(req.profile.clone()),
@@ -363,7 +363,13 @@ pub fn run_dds_session(
     let trace = episode.take_trace();
     let record = episode.into_record(seq, setting, &req.name);
     // Started only now: a bridge that got no command leaves no empty run behind.
-    let header = RunHeader::of(&spec, &req.name);
+    let mut header = RunHeader::of(&spec, &req.name);
+    // Deployment code runs its own network, which the bridge never sees.
+    header.identity = Some(crate::eval::results::PolicyIdentity {
+        network: None,
+        profile_sha256: spec.profile.fingerprint(),
+        robot_sha256: spec.robot.fingerprint(),
+    });
     run.start(&header, false)?;
     let mut appender = run.appender()?;
     appender.append(&record)?;

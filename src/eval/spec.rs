@@ -124,17 +124,29 @@ pub struct EvalSpec {
 }
 
 impl EvalSpec {
-    /// Checks `request` and loads everything it names: robot, profile (the policy
-    /// family's unless named), engine (a physics is made once, so the run's workers cannot
-    /// fail to), dataset and selection, settings, rules, threads.
+    /// Checks `request` and loads everything it names: the policy argument (refused when
+    /// it names no policy, or parameters its family does not take), robot, profile (the
+    /// policy family's unless named), engine (a physics is made once, so the run's workers
+    /// cannot fail to), dataset and selection, settings, rules, threads.
     pub fn load(request: &EvalRequest) -> Result<Self, SpecError> {
+        let policy = PolicyArg::parse(&request.policy)?;
+        Self::load_with(request, Some(policy))
+    }
+
+    /// [`Self::load`] for a run whose policy is no argument of the registry — deployment
+    /// code driving the robot over DDS, which names its run with `request.policy` — on
+    /// the `default` profile unless one is named, one slot per worker.
+    pub fn load_deployment(request: &EvalRequest) -> Result<Self, SpecError> {
+        Self::load_with(request, None)
+    }
+
+    fn load_with(request: &EvalRequest, policy: Option<PolicyArg>) -> Result<Self, SpecError> {
         let mut advice = Vec::new();
         let dataset = request
             .dataset
             .clone()
             .unwrap_or_else(|| crate::data_dir().join("sample"));
         let robot = registry::robot(&request.robot)?;
-        let policy = PolicyArg::parse(&request.policy).ok();
         let (profile, profile_mismatch) =
             resolve_profile(request, policy.as_ref(), &robot, &mut advice)?;
         let engine = check_engine(request, &robot, &profile)?;

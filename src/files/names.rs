@@ -1,6 +1,9 @@
 //! Names that come from outside (a policy process's self-declared name, `--task`, task and
 //! sequence ids of a manifest) and become file or directory names. Each is checked before
 //! it touches a path, so no input can write outside the directory it was meant for.
+//!
+//! Beside them, the text cells of every CSV the library writes (`csv_text`): a cell a
+//! spreadsheet would read as a formula is written with a leading `'`.
 
 /// A name that cannot be used as one path component.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

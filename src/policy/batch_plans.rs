@@ -21,20 +21,52 @@ pub struct BatchPlans {
     model: Arc<InferenceModel>,
     /// Width of the (single) input, floats.
     width: usize,
+    /// Width of the first output, floats per row.
+    outputs: usize,
     made: Arc<Mutex<HashMap<usize, Arc<TypedRunnableModel>>>>,
 }
 
 impl BatchPlans {
-    /// Plans for `model`, whose first input is `[batch, width]` float32; the batch-one
-    /// plan is made now, so a network tract cannot run is refused at load.
-    pub fn new(model: InferenceModel, width: usize) -> TractResult<Self> {
+    /// Plans for `model`, which must fit its family's contract: its first input
+    /// `[batch, width]` float32 (the batch axis symbolic or 1), its first output `outputs`
+    /// floats per row when given (`None`: whatever it answers, e.g. a benchmark's network
+    /// of any kind). The batch-one plan is made now and run once on zeros, so a network
+    /// of another family — whose own input width differs, or whose graph only fails when
+    /// it runs — is refused at load, naming what was expected and found, not once per
+    /// control step.
+    pub fn new(model: InferenceModel, width: usize, outputs: Option<usize>) -> TractResult<Self> {
+        let fact = model.input_fact(0)?;
+        if let Some(declared) = super::onnx_export::fixed_width(fact) {
+            if declared != width {
+                anyhow::bail!(
+                    "the network's input is {declared} wide (declared shape {:?}); this family's networks take [batch, {width}]",
+                    fact.shape
+                );
+            }
+        }
         let plans = Self {
             model: Arc::new(model),
             width,
+            outputs: 0,
             made: Arc::new(Mutex::new(HashMap::new())),
         };
-        plans.plan(1)?;
+        let mut plans = plans;
+        let probe = plans
+            .run(&vec![0.0; width], 1)
+            .map_err(|e| e.context(format!("the network does not run on a [1, {width}] input")))?;
+        if let Some(outputs) = outputs.filter(|&n| n != probe.len()) {
+            anyhow::bail!(
+                "the network answers {} values per row; this family's networks answer {outputs}",
+                probe.len()
+            );
+        }
+        plans.outputs = probe.len();
         Ok(plans)
+    }
+
+    /// Floats per row of the first output.
+    pub fn outputs(&self) -> usize {
+        self.outputs
     }
 
     /// The plan for `batch` rows.

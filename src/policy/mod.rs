@@ -10,6 +10,7 @@ mod builtin;
 pub mod client_process;
 pub mod falcon;
 pub mod inputs;
+pub mod network_file;
 pub mod network_kernels;
 pub mod onnx_export;
 pub mod registry;
@@ -138,6 +139,13 @@ pub trait Policy {
     /// or a built-in costing next to nothing. A policy may offer copies only if an
     /// environment's action depends on that environment's observations alone.
     fn worker_copies(&self, _n: usize) -> Option<Vec<Box<dyn Policy + Send>>> {
+        None
+    }
+
+    /// The network file this policy loaded, by content, when it is a network run in
+    /// process: what `run.json` records as the run's network. `None` for a built-in (no
+    /// network) and for a policy process (whose network this process never sees).
+    fn network(&self) -> Option<&network_file::NetworkFile> {
         None
     }
 

@@ -25,6 +25,7 @@
 //! environment variable [`KERNELS_ENV`]`=host` leaves tract's own choice, for measuring what
 //! the pin costs; such a run records the kernels it used, like any other.
 
+use super::network_file::NetworkFile;
 use std::sync::OnceLock;
 use tract_onnx::prelude::*;
 use tract_onnx::tract_core::tract_linalg::isa::{self, Isa};
@@ -88,8 +89,21 @@ pub fn network_kernels() -> &'static NetworkKernels {
     })
 }
 
-/// Loads an ONNX network after pinning the kernels its plans will use.
-pub fn load_onnx(path: &std::path::Path) -> TractResult<InferenceModel> {
+/// Loads an ONNX network after pinning the kernels its plans will use, and says which
+/// network it is by content: the file is read once (bounded, a regular file only:
+/// [`NetworkFile::read`]) and parsed from those bytes, external data resolved beside it.
+pub fn load_onnx(path: &std::path::Path) -> TractResult<(InferenceModel, NetworkFile)> {
     network_kernels();
-    tract_onnx::onnx().model_for_path(path)
+    let (bytes, identity) = NetworkFile::read(path)?;
+    let onnx = tract_onnx::onnx();
+    let proto = onnx.proto_model_for_read(&mut bytes.as_slice())?;
+    let dir = path.parent().and_then(std::path::Path::to_str);
+    let parsed = onnx.parse(&proto, dir)?;
+    if !parsed.unresolved_inputs.is_empty() {
+        anyhow::bail!(
+            "the network has inputs that nothing feeds: {}",
+            parsed.unresolved_inputs.join(", ")
+        );
+    }
+    Ok((parsed.model, identity))
 }

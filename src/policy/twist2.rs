@@ -233,6 +233,8 @@ pub struct Twist2Policy {
     plans: BatchPlans,
     /// The plan of `act`'s call shape ([`INFERENCE_BATCH`] rows), taken once.
     act_plan: Arc<TypedRunnableModel>,
+    /// The file loaded, by content (`run.json`'s network).
+    network: super::network_file::NetworkFile,
     default_pose: Vec<f64>,
     histories: Vec<History>,
     last_inputs: Vec<Vec<f32>>,
@@ -247,18 +249,20 @@ impl Twist2Policy {
         if default_pose.len() != N_JOINTS {
             return Err(Twist2Error::Joints(default_pose.len()));
         }
-        let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
-            let plans = BatchPlans::new(super::network_kernels::load_onnx(path)?, OBS_LEN)?;
+        let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>, _)> {
+            let (model, network) = super::network_kernels::load_onnx(path)?;
+            let plans = BatchPlans::new(model, OBS_LEN, Some(N_JOINTS))?;
             let act_plan = plans.plan(INFERENCE_BATCH)?;
-            Ok((plans, act_plan))
+            Ok((plans, act_plan, network))
         };
-        let (plans, act_plan) = load().map_err(|e| Twist2Error::Load {
+        let (plans, act_plan, network) = load().map_err(|e| Twist2Error::Load {
             path: path.to_path_buf(),
             message: format!("{e:#}"),
         })?;
         Ok(Self {
             plans,
             act_plan,
+            network,
             default_pose,
             histories: Vec::new(),
             last_inputs: Vec::new(),
@@ -286,6 +290,10 @@ impl Twist2Policy {
 impl Policy for Twist2Policy {
     fn name(&self) -> &str {
         "twist2"
+    }
+
+    fn network(&self) -> Option<&crate::policy::network_file::NetworkFile> {
+        Some(&self.network)
     }
 
     fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {
@@ -317,6 +325,7 @@ impl Policy for Twist2Policy {
                     Box::new(Self {
                         plans: self.plans.clone(),
                         act_plan: self.act_plan.clone(),
+                        network: self.network.clone(),
                         default_pose: self.default_pose.clone(),
                         histories: Vec::new(),
                         last_inputs: Vec::new(),

@@ -320,7 +320,7 @@ fn report_body(runs: &[Run], data: &ReportFigures) -> String {
             s,
             "<tr><th>{}</th><td>{}</td><td>{}</td><td>{}</td><td>{} <code>{}</code></td><td>{}</td><td>height &gt; {} m or tilt &gt; {} rad</td><td>{}</td><td>{}</td><td><code>{}</code></td></tr>",
             escape(&r.label),
-            escape(&h.policy),
+            escape(&h.policy_text().replace('`', "")),
             escape(&h.profile),
             escape(&h.engine_label()),
             escape(&h.dataset),

@@ -33,9 +33,9 @@ pub fn run_tables(summary: &Summary) -> String {
         None => String::new(),
     };
     let title = format!(
-        "ThorArena {} — policy `{}`, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{termination_note}{subset_note}{shard_note}{partial_note}",
+        "ThorArena {} — policy {}, profile `{}`, engine {}, dataset {} (content sha256 {}), keypoints `{}`, termination: torso height error > {} m or tilt error > {} rad{termination_note}{subset_note}{shard_note}{partial_note}",
         header.version,
-        header.policy,
+        header.policy_text(),
         header.profile,
         header.engine_label(),
         header.dataset,

@@ -148,7 +148,8 @@ pub fn load_run(dir: &Path) -> Result<Run, ReportError> {
 }
 
 /// Reads several runs, labelling each by its policy — or, when two runs share a policy
-/// name, by policy and directory name (then by position, if even those agree).
+/// name, by policy and network (when their networks differ) or directory name (then by
+/// position, if even those agree).
 pub fn load_runs(dirs: &[PathBuf]) -> Result<Vec<Run>, ReportError> {
     let mut runs = dirs
         .iter()
@@ -156,6 +157,10 @@ pub fn load_runs(dirs: &[PathBuf]) -> Result<Vec<Run>, ReportError> {
         .collect::<Result<Vec<_>, _>>()?;
     label_runs(&mut runs);
     Ok(runs)
+}
+
+fn count_same(all: &[Option<String>], one: &Option<String>) -> usize {
+    all.iter().filter(|x| *x == one).count()
 }
 
 /// Makes every run's label unique (see [`load_runs`]).
@@ -166,6 +171,13 @@ pub fn label_runs(runs: &mut [Run]) {
         .iter()
         .map(|r| {
             if count(&policies, &r.header.policy) > 1 {
+                let same_policy = runs.iter().filter(|o| o.header.policy == r.header.policy);
+                let networks: Vec<Option<String>> =
+                    same_policy.map(|o| o.header.network_label()).collect();
+                let network = r.header.network_label();
+                if network.is_some() && count_same(&networks, &network) == 1 {
+                    return format!("{} ({})", r.header.policy, network.unwrap_or_default());
+                }
                 let dir = r.dir.file_name().map_or_else(
                     || r.dir.display().to_string(),
                     |n| n.to_string_lossy().into(),

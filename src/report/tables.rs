@@ -354,10 +354,10 @@ pub fn comparison_markdown(
     let mut md = String::from("# ThorArena report\n\n");
     for r in runs {
         md += &format!(
-            "- **{}**: `{}` — policy `{}`, profile `{}`, engine {}, dataset {} (sha256 {}), keypoints `{}`; {} episodes; FATS 95 % interval (bootstrap over episodes within tasks): {}\n",
+            "- **{}**: `{}` — policy {}, profile `{}`, engine {}, dataset {} (sha256 {}), keypoints `{}`; {} episodes; FATS 95 % interval (bootstrap over episodes within tasks): {}\n",
             r.label,
             r.dir.display(),
-            r.header.policy,
+            r.header.policy_text(),
             r.header.profile,
             r.header.engine_label(),
             r.header.dataset,

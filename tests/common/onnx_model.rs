@@ -20,8 +20,14 @@ fn value(name: &str, dims: &[i64]) -> ValueInfoProto {
                 shape: Some(TensorShapeProto {
                     dim: dims
                         .iter()
+                        // A negative dimension is symbolic (`batch`), as exporters write
+                        // a dynamic batch axis.
                         .map(|&d| Dimension {
-                            value: Some(dimension::Value::DimValue(d)),
+                            value: Some(if d < 0 {
+                                dimension::Value::DimParam("batch".into())
+                            } else {
+                                dimension::Value::DimValue(d)
+                            }),
                             ..Default::default()
                         })
                         .collect(),
@@ -74,7 +80,12 @@ impl Network<'_> {
                 output: vec![name.to_string()],
                 ..Default::default()
             });
-            graph.output.push(value(name, &[1, *width]));
+            let batch = self
+                .inputs
+                .iter()
+                .find(|(n, _)| n == input)
+                .map_or(1, |(_, d)| d[0]);
+            graph.output.push(value(name, &[batch, *width]));
         }
         ModelProto {
             ir_version: 8,

@@ -46,6 +46,7 @@ pub fn header(policy: &str) -> RunHeader {
         sanity: None,
         network_kernels: None,
         policy_parameters: Default::default(),
+        identity: None,
     }
 }
 

@@ -28,7 +28,8 @@ impl InferenceBench {
     /// Loads the network, then times each batch size, handing the table's heading and
     /// each row to `say` as it is measured.
     pub fn run(&self, say: &mut dyn FnMut(BenchLine)) -> Result<(), PerfError> {
-        let model = crate::policy::network_kernels::load_onnx(&self.onnx).map_err(network_error)?;
+        let (model, _) =
+            crate::policy::network_kernels::load_onnx(&self.onnx).map_err(network_error)?;
         let fact = model.input_fact(0).map_err(network_error)?;
         let width = crate::policy::onnx_export::fixed_width(fact).ok_or_else(|| {
             PerfError::Network(format!(
@@ -36,7 +37,7 @@ impl InferenceBench {
                 self.onnx.display()
             ))
         })?;
-        let plans = BatchPlans::new(model, width).map_err(network_error)?;
+        let plans = BatchPlans::new(model, width, None).map_err(network_error)?;
         for line in [
             format!(
                 "{}: input width {width}; µs per tract call and per environment, {} environments per batch size",

@@ -528,7 +528,7 @@ fn run_one(
     };
     let dir = RunDir::new(run);
     let options = EvalOptions {
-        resume: dir.header_file().exists(),
+        resume: resumable(&dir, policy.as_ref(), &spec, observer),
         trace_first_s: None,
     };
     let evaluated = evaluate(
@@ -544,6 +544,34 @@ fn run_one(
         source: Box::new(source),
     })?;
     Ok(evaluated.summary)
+}
+
+/// Whether the run in `dir` is one to resume: it exists and ran the same policy by
+/// content (network, profile, robot) as `policy` under `spec`. A run of another network —
+/// the file was replaced since — or one that never recorded its network is run again from
+/// the start, and `observer` hears why; any other difference is left to the resume to
+/// refuse.
+fn resumable(
+    dir: &RunDir,
+    policy: &dyn Policy,
+    spec: &EvalSpec,
+    observer: &mut dyn LeaderboardObserver,
+) -> bool {
+    let Ok(previous) = dir.read_header() else {
+        return dir.header_file().exists();
+    };
+    let now = crate::eval::results::PolicyIdentity::of(policy, &spec.profile, &spec.robot);
+    let differences =
+        crate::eval::results::identity_differences(previous.identity.as_ref(), Some(&now));
+    if differences.is_empty() {
+        return true;
+    }
+    observer.note(&format!(
+        "  {} ran another policy than this one ({}, the run's first): running it again from the start",
+        dir.path().display(),
+        differences.join("; ")
+    ));
+    false
 }
 
 /// The leaderboard as one Markdown table: per (policy, engine), FATS with its 95 %

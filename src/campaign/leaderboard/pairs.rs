@@ -231,13 +231,13 @@ pub fn run_pairs(
         .ok_or_else(|| data_error("(force history)", "nothing synthesized".into()))?;
     let settings = options.push_settings();
     let mut results = Vec::new();
-    let total = pairs
+    let sweeps = pairs
         .iter()
-        .map(|p| 2 + sweep_of(p, options).len())
-        .sum::<usize>()
-        * options.engines.len();
+        .map(|p| sweep_of(p, options))
+        .collect::<Result<Vec<_>, _>>()?;
+    let total = sweeps.iter().map(|s| 2 + s.len()).sum::<usize>() * options.engines.len();
     let mut index = 0;
-    for pair in pairs {
+    for (pair, sweep) in pairs.iter().zip(sweeps) {
         let name = pair.name();
         let ds = Dataset::open(&pair.dataset, &robot)
             .map_err(|e| data_error(&name, format!("{}: {e}", pair.dataset.display())))?;
@@ -262,11 +262,7 @@ pub fn run_pairs(
             ("baseline", pair.baseline.clone()),
             ("compliant", pair.compliant.clone()),
         ];
-        players.extend(
-            sweep_of(pair, options)
-                .into_iter()
-                .map(|p| ("stiffness", p)),
-        );
+        players.extend(sweep.into_iter().map(|p| ("stiffness", p)));
         let mut members = Vec::new();
         for &engine in &options.engines {
             for (role, policy) in &players {
@@ -319,20 +315,25 @@ pub fn run_pairs(
 
 /// The compliant member at each stiffness of the sweep, for a `softmimic:` policy naming
 /// no stiffness of its own, but the default it already runs at (its `compliant` row);
-/// nothing otherwise.
-fn sweep_of(pair: &CompliancePair, options: &PairOptions) -> Vec<String> {
+/// nothing otherwise. A stiffness the family does not take is refused before anything
+/// runs, never dropped.
+fn sweep_of(pair: &CompliancePair, options: &PairOptions) -> Result<Vec<String>, LeaderboardError> {
     let Ok(compliant) = registry::PolicyArg::parse(&pair.compliant) else {
-        return Vec::new();
+        return Ok(Vec::new());
     };
     if compliant.family().name != "softmimic" || compliant.parameters().is_some() {
-        return Vec::new();
+        return Ok(Vec::new());
     }
     options
         .stiffness_n_per_m
         .iter()
         .filter(|&&k| k != crate::policy::softmimic::DEFAULT_STIFFNESS.linear)
-        .filter_map(|k| compliant.with_parameters(&format!("stiffness={k}")).ok())
-        .map(|arg| arg.to_string())
+        .map(|k| {
+            compliant
+                .with_parameters(&format!("stiffness={k}"))
+                .map(|arg| arg.to_string())
+                .map_err(|why| data_error(&pair.name(), format!("`option.pair_stiffness`: {why}")))
+        })
         .collect()
 }
 

@@ -9,6 +9,7 @@ use super::verify::{check_task_run, RunProblem};
 use super::{DoneRecord, Plan, SweepError, Task, TaskDir, TaskLog, TaskState};
 use crate::campaign::own_command;
 use crate::eval::results::RunDir;
+use crate::policy::network_file::short_hash;
 use crate::sim::motion::Dataset;
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
@@ -84,6 +85,22 @@ pub fn run_task(
             ),
             &[],
         );
+    }
+
+    // So must the network: a curve over cells is one network's.
+    if let Some(planned) = &cell.policy.network_sha256 {
+        let now = super::plan::planned_network(&cell.policy.policy);
+        if now.as_ref() != Some(planned) {
+            return fail(
+                format!(
+                    "the network of `{}` changed since the sweep was planned (sha256 {} planned, {} now): plan the sweep again in a new directory",
+                    cell.policy.name,
+                    short_hash(planned),
+                    now.as_deref().map_or("unreadable", short_hash)
+                ),
+                &[],
+            );
+        }
     }
 
     let session = format!("sweep-{index}-{}", std::process::id());

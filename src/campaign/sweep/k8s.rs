@@ -81,13 +81,7 @@ fn yaml_str(s: &str) -> String {
     serde_json::to_string(s).expect("a string serializes")
 }
 
-fn sha_hex(bytes: &[u8]) -> String {
-    use sha2::{Digest, Sha256};
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
+use crate::files::content_hash::sha256_hex as sha_hex;
 
 /// Writes `manifest` (`k8s_manifest`'s, for sweep `dir`) to [`k8s_manifest_path`];
 /// returns its path.

@@ -93,6 +93,12 @@ pub struct PolicyAxis {
     /// `eval --unchecked`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub unchecked: bool,
+    /// SHA-256 of the network file when it was planned (`None`: no file, or one that could
+    /// not be read then — its task says why). A task refuses a file changed since, and a
+    /// run of another network never counts for the cell: one policy's curve is one
+    /// network's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub network_sha256: Option<String>,
 }
 
 /// A physics engine as planned.
@@ -451,11 +457,19 @@ fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
                 .map_or("default", |arg| arg.default_profile())
                 .to_string()
         }),
+        network_sha256: planned_network(&policy),
         policy,
         keypoints: p.keypoints.clone(),
         connect_timeout_s: p.connect_timeout_s,
         unchecked: p.unchecked,
     }
+}
+
+/// The SHA-256 of the network file `policy` names, if it names one that can be read.
+pub(super) fn planned_network(policy: &str) -> Option<String> {
+    let arg = crate::policy::registry::PolicyArg::parse(policy).ok()?;
+    let (_, network) = crate::policy::network_file::NetworkFile::read(arg.file()?).ok()?;
+    Some(network.sha256)
 }
 
 /// Appends the tasks of `cell`, one per shard, numbered on from those in `tasks`; `Err`

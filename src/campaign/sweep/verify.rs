@@ -9,6 +9,7 @@
 use super::{census, Census, Plan, SweepError, Task, TaskDir, SESSION_POLICY};
 use crate::eval::results::{Coverage, ResultsError, RunDir, RunHeader};
 use crate::eval::{EpisodeRecord, EvalRequest, Setting};
+use crate::policy::network_file::short_hash;
 
 /// Why a task's run does not count for the task.
 #[derive(Debug)]
@@ -68,6 +69,22 @@ fn header_problem(
         let kind = cell.policy.policy.split(':').next().unwrap_or_default();
         if header.policy != kind {
             return differs("policy", &header.policy, &kind);
+        }
+    }
+    if let Some(planned) = &cell.policy.network_sha256 {
+        let ran = header
+            .identity
+            .as_ref()
+            .and_then(|i| i.network.as_ref())
+            .map(|n| n.sha256.as_str());
+        if ran != Some(planned.as_str()) {
+            return Some(format!(
+                "its network is {}, cell {} (`{}`) plans sha256 {} (the file was replaced since the sweep was planned)",
+                ran.map_or_else(|| "not recorded".into(), |s| format!("sha256 {}", short_hash(s))),
+                cell.index,
+                cell.policy.name,
+                short_hash(planned)
+            ));
         }
     }
     let dataset = cell.dataset.display().to_string();

@@ -269,6 +269,11 @@ pub fn evaluate(
         .into_iter()
         .map(|(name, value)| (name.to_string(), value))
         .collect();
+    header.identity = Some(crate::eval::results::PolicyIdentity::of(
+        policy,
+        &spec.profile,
+        &spec.robot,
+    ));
     header.sanity = Some(sanity(spec, policy)?);
     let started = run.start(&header, options.resume).map_err(|e| match e {
         e @ ResultsError::OtherConfiguration { .. } => BenchmarkError::ResumedOther(e),

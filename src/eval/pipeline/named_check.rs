@@ -63,6 +63,15 @@ pub enum PolicyCheckError {
     /// A policy process: the check steps the policy itself.
     #[error("policy check runs a policy in process; `{0}` is a policy process (check it by running its network in process, e.g. beyondmimic:FILE)")]
     PolicyProcess(String),
+    /// A profile the policy's family contradicts: a run would refuse it, so the check does
+    /// not judge the policy under it.
+    #[error("`{policy}`: {why}; a run refuses this profile, so the check does not judge the policy under it (leave out `option.profile` for the family's)")]
+    ProfileContradicts {
+        /// The policy argument.
+        policy: String,
+        /// Why the family refuses the profile.
+        why: String,
+    },
     /// The check itself failed to run.
     #[error(transparent)]
     Sanity(#[from] SanityError),
@@ -78,6 +87,12 @@ pub fn check_named_policy(request: &PolicyCheckRequest) -> Result<SanityReport, 
         .clone()
         .unwrap_or_else(|| arg.default_profile().to_string());
     let profile = registry::profile(&profile_name, &robot)?;
+    // Judged only as a run would run it: `eval` refuses a profile the family contradicts.
+    arg.check_profile(&profile)
+        .map_err(|why| PolicyCheckError::ProfileContradicts {
+            policy: request.policy.clone(),
+            why,
+        })?;
     let engine = match (request.engine, &request.mjcf) {
         (EngineChoice::Rapier, None) => Engine::Rapier,
         (EngineChoice::Rapier, Some(_)) => return Err(PolicyCheckError::MjcfWithoutMujoco),

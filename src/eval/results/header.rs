@@ -1,6 +1,8 @@
 //! `run.json`: what a run measured.
 
-use super::{ResultsError, HEADER_FILE, RESULTS_VERSION};
+use super::{
+    identity_differences, network_label, PolicyIdentity, ResultsError, HEADER_FILE, RESULTS_VERSION,
+};
 use crate::eval::{
     reference_steps, EpisodeKey, EvalSpec, PolicyIoRules, SanityRecord, Setting, TerminationRule,
 };
@@ -89,6 +91,11 @@ pub struct RunHeader {
     /// by name with their unit; empty for a policy without any.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub policy_parameters: std::collections::BTreeMap<String, f64>,
+    /// Which policy ran, by content: its network file's SHA-256 and size, the profile's and
+    /// the robot's fingerprints. `None`: a run written before runs recorded it, which
+    /// reports say ("network not recorded") and which joins no run that has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identity: Option<PolicyIdentity>,
 }
 
 impl RunHeader {
@@ -116,6 +123,7 @@ impl RunHeader {
             sanity: None,
             network_kernels: None,
             policy_parameters: Default::default(),
+            identity: None,
         }
     }
 
@@ -174,13 +182,14 @@ impl RunHeader {
         }
     }
 
-    /// The fields in which `other` differs from this header, by name (`version`,
-    /// `policy`, `settings`, …): what a refused resume or merge reports.
-    pub fn differences(&self, other: &Self) -> Vec<&'static str> {
+    /// What differs between this header and `other`: fields by name (`version`,
+    /// `policy`, `settings`, …), the policy's identity with both hashes, this header's
+    /// first — what a refused resume or merge reports.
+    pub fn differences(&self, other: &Self) -> Vec<String> {
         let mut d = Vec::new();
-        let mut check = |name, same: bool| {
+        let mut check = |name: &str, same: bool| {
             if !same {
-                d.push(name);
+                d.push(name.to_string());
             }
         };
         check(
@@ -218,7 +227,25 @@ impl RunHeader {
             "policy_parameters",
             self.policy_parameters == other.policy_parameters,
         );
+        d.extend(identity_differences(
+            self.identity.as_ref(),
+            other.identity.as_ref(),
+        ));
         d
+    }
+
+    /// How tables name this run's network beside its policy ([`network_label`]).
+    pub fn network_label(&self) -> Option<String> {
+        network_label(self.identity.as_ref())
+    }
+
+    /// The policy as a table's title names it: `` `softmimic` (network 3f2a9c0b1d4e) ``,
+    /// `` `balance` `` for a policy without a network file.
+    pub fn policy_text(&self) -> String {
+        match self.network_label() {
+            Some(network) => format!("`{}` ({network})", self.policy),
+            None => format!("`{}`", self.policy),
+        }
     }
 
     /// Index of a setting by name.

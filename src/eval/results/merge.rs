@@ -13,12 +13,14 @@ pub enum MergeError {
     #[error("no run to merge")]
     NoRuns,
     /// A run of another evaluation than the first.
-    #[error("{run} is not a shard of the same evaluation as {first} (policy, profile, dataset, keypoints, termination and settings must agree)")]
+    #[error("{run} is not a shard of the same evaluation as {first}: it differs in {} ({first}'s first; the network, policy, profile, dataset, keypoints, termination and settings must agree)", differences.join(", "))]
     NotAShard {
         /// The odd run.
         run: PathBuf,
         /// The first run.
         first: PathBuf,
+        /// What differs ([`RunHeader::differences`]).
+        differences: Vec<String>,
     },
     /// A shard whose last record was cut short.
     #[error("{run}: episodes.jsonl ends in a line cut short (the shard was killed mid-write); resume it (`option.resume`) first")]
@@ -83,6 +85,7 @@ pub fn read_shards(runs: &[RunDir]) -> Result<Shards, ResultsError> {
             return Err(MergeError::NotAShard {
                 run: run.path().to_path_buf(),
                 first: first.path().to_path_buf(),
+                differences: header.differences(&h),
             }
             .into());
         }

@@ -27,6 +27,7 @@ pub mod crosscheck;
 mod episode_table;
 mod episodes;
 mod header;
+mod identity;
 mod merge;
 mod output_guard;
 mod record_check;
@@ -38,6 +39,7 @@ pub use coverage::{CellCoverage, Coverage};
 pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_CSV_FILE};
 pub use episodes::{write_record, EpisodeLog};
 pub use header::{read_header, write_header, PlannedSequence, RunHeader};
+pub use identity::{identity_differences, network_label, PolicyIdentity};
 pub use merge::{read_shards, MergeError, Shards};
 pub use output_guard::{
     check_dataset_dir, check_dir, check_file, check_files_dir, check_run_dir, OutputRefused,
@@ -113,12 +115,13 @@ pub enum ResultsError {
         source: std::io::Error,
     },
     /// A run resumed or merged with one of another configuration.
-    #[error("{path} was started with another configuration (it differs in: {})", differences.join(", "))]
+    #[error("{path} was started with another configuration (it differs in: {}; the run's first)", differences.join(", "))]
     OtherConfiguration {
         /// The previous run.
         path: PathBuf,
-        /// The header fields that differ.
-        differences: Vec<&'static str>,
+        /// What differs: header fields by name, the policy's identity with both hashes
+        /// ([`RunHeader::differences`]).
+        differences: Vec<String>,
     },
     /// Two engines' runs of a crosscheck that do not hold the same episodes.
     #[error("{count} episodes ran on one engine only (e.g. {example})")]

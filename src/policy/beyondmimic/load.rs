@@ -37,6 +37,7 @@ impl BeyondMimicPolicy {
         let n = robot.n_joints();
         let terms = observation_terms(meta, profile_bm, n, network.obs_width).map_err(unusable)?;
         let anchor_frame = anchor_frame(meta, profile_bm, &robot).map_err(unusable)?;
+        let identity = network.identity.clone();
         let (obs_width, time_step_input, actions_output) = (
             network.obs_width,
             network.time_step_input,
@@ -49,6 +50,7 @@ impl BeyondMimicPolicy {
         Ok(Self {
             name: "beyondmimic".into(),
             plan,
+            network: identity,
             call_rows,
             spec: ObservationSpec {
                 terms,
@@ -79,6 +81,8 @@ impl BeyondMimicPolicy {
 /// and where its inputs and outputs are.
 struct Network {
     model: InferenceModel,
+    /// The file, by content.
+    identity: crate::policy::network_file::NetworkFile,
     meta: FileMetadata,
     /// Input slot of `obs` (else the first input).
     obs_input: usize,
@@ -94,7 +98,8 @@ impl Network {
     /// Loads the ONNX file and reads its metadata and input and output slots.
     fn open(path: &Path) -> Result<Self, BeyondMimicError> {
         let load_err = load_error(path);
-        let model = crate::policy::network_kernels::load_onnx(path).map_err(load_err)?;
+        let (model, identity) =
+            crate::policy::network_kernels::load_onnx(path).map_err(load_err)?;
         let meta = FileMetadata::from_props(&crate::policy::onnx_export::metadata_props(&model))
             .map_err(|reason| BeyondMimicError::Unusable {
                 path: path.to_path_buf(),
@@ -114,6 +119,7 @@ impl Network {
         })?;
         Ok(Self {
             model,
+            identity,
             meta,
             obs_input,
             time_step_input,

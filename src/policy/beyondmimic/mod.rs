@@ -103,6 +103,8 @@ pub struct BeyondMimicPolicy {
     /// The name results carry (the family's).
     name: String,
     plan: Arc<TypedRunnableModel>,
+    /// The file loaded, by content (`run.json`'s network).
+    network: crate::policy::network_file::NetworkFile,
     /// Rows of each call to `plan` ([`INFERENCE_BATCH`], or 1 for a network planned for
     /// one row only).
     call_rows: usize,
@@ -189,6 +191,7 @@ impl BeyondMimicPolicy {
         Self {
             name: self.name.clone(),
             plan: self.plan.clone(),
+            network: self.network.clone(),
             call_rows: self.call_rows,
             robot: self.robot.clone(),
             spec: self.spec.clone(),
@@ -285,6 +288,10 @@ impl BeyondMimicPolicy {
 impl Policy for BeyondMimicPolicy {
     fn name(&self) -> &str {
         &self.name
+    }
+
+    fn network(&self) -> Option<&crate::policy::network_file::NetworkFile> {
+        Some(&self.network)
     }
 
     fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {

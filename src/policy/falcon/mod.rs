@@ -74,6 +74,8 @@ struct Slot {
 pub struct FalconPolicy {
     plans: BatchPlans,
     plan: Arc<TypedRunnableModel>,
+    /// The file loaded, by content (`run.json`'s network).
+    network: crate::policy::network_file::NetworkFile,
     /// The profile's action offset and scale, to express the arms' residual as a raw action.
     profile_offset: Vec<f64>,
     profile_scale: Vec<f64>,
@@ -91,18 +93,20 @@ impl FalconPolicy {
         if profile.action_offset_rad.len() != N_JOINTS {
             return Err(FalconError::Joints(profile.action_offset_rad.len()));
         }
-        let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
-            let plans = BatchPlans::new(super::network_kernels::load_onnx(path)?, OBS_LEN)?;
+        let load = || -> TractResult<(BatchPlans, Arc<TypedRunnableModel>, _)> {
+            let (model, network) = super::network_kernels::load_onnx(path)?;
+            let plans = BatchPlans::new(model, OBS_LEN, Some(N_JOINTS))?;
             let plan = plans.plan(1)?;
-            Ok((plans, plan))
+            Ok((plans, plan, network))
         };
-        let (plans, plan) = load().map_err(|e| FalconError::Load {
+        let (plans, plan, network) = load().map_err(|e| FalconError::Load {
             path: path.to_path_buf(),
             message: format!("{e:#}"),
         })?;
         Ok(Self {
             plans,
             plan,
+            network,
             profile_offset: profile.action_offset_rad.clone(),
             profile_scale: profile.action_scale.clone(),
             disagreements: disagreements(profile),
@@ -142,6 +146,10 @@ fn disagreements(profile: &Profile) -> Vec<String> {
 impl Policy for FalconPolicy {
     fn name(&self) -> &str {
         "falcon"
+    }
+
+    fn network(&self) -> Option<&crate::policy::network_file::NetworkFile> {
+        Some(&self.network)
     }
 
     fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {
@@ -191,6 +199,7 @@ impl Policy for FalconPolicy {
                     Box::new(Self {
                         plans: self.plans.clone(),
                         plan: self.plan.clone(),
+                        network: self.network.clone(),
                         profile_offset: self.profile_offset.clone(),
                         profile_scale: self.profile_scale.clone(),
                         disagreements: self.disagreements.clone(),

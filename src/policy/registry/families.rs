@@ -5,6 +5,7 @@
 //! new family is one entry here (with its builder and profile rule, beside it in
 //! `policies.rs`).
 
+use super::parameters::Parameter;
 use super::policies;
 use super::{PolicyArg, RegistryError};
 use crate::policy::Policy;
@@ -62,6 +63,8 @@ pub struct PolicyFamily {
     pub build: Option<Build>,
     /// The profiles it runs under.
     pub profile_rule: ProfileRule,
+    /// The parameters its argument may give after the file's `@` (none: any is refused).
+    pub parameters: &'static [Parameter],
     /// A file to name when the argument lacks one (`twist2_1017_25k.onnx, TWIST2's
     /// released checkpoint`), for the error message.
     pub example: Option<&'static str>,
@@ -108,6 +111,26 @@ pub const NETWORK_SLOTS_PER_WORKER: usize = 4;
 /// 4 and 4, 69.4–70.9 s, 1.10.
 pub const BEYONDMIMIC_SLOTS_PER_WORKER: usize = crate::policy::beyondmimic::INFERENCE_BATCH;
 
+/// SoftMimic's stiffness command: what its networks were trained on
+/// (`compliant_motion_augmentation/constants.py` of robodreamer/softmimic@458f475).
+pub const SOFTMIMIC_PARAMETERS: [Parameter; 2] = {
+    use crate::policy::softmimic::{ROTATIONAL_RANGE, STIFFNESS_RANGE};
+    [
+        Parameter {
+            name: "stiffness",
+            unit: "N/m",
+            range: STIFFNESS_RANGE,
+            what: "the commanded linear stiffness of both wrists; default 60",
+        },
+        Parameter {
+            name: "rotational_stiffness",
+            unit: "N·m/rad",
+            range: ROTATIONAL_RANGE,
+            what: "the commanded rotational stiffness; default stiffness / 60",
+        },
+    ]
+};
+
 /// Every policy family, built-ins first.
 pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
     PolicyFamily {
@@ -121,6 +144,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::Nothing,
         build: Some(policies::builtin),
         profile_rule: policies::any_profile,
+        parameters: &[],
         example: None,
     },
     PolicyFamily {
@@ -134,6 +158,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::Nothing,
         build: Some(policies::builtin),
         profile_rule: policies::any_profile,
+        parameters: &[],
         example: None,
     },
     PolicyFamily {
@@ -147,6 +172,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::Nothing,
         build: Some(policies::builtin),
         profile_rule: policies::any_profile,
+        parameters: &[],
         example: None,
     },
     PolicyFamily {
@@ -160,6 +186,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::File,
         build: Some(policies::twist2),
         profile_rule: policies::twist2_profile,
+        parameters: &[],
         example: Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
     },
     PolicyFamily {
@@ -173,6 +200,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::File,
         build: Some(policies::beyondmimic),
         profile_rule: policies::beyondmimic_profile,
+        parameters: &[],
         example: Some("policy.onnx, an mjlab or holosoma G1 export"),
     },
     PolicyFamily {
@@ -186,6 +214,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::File,
         build: Some(policies::wbc_mjlab),
         profile_rule: policies::wbc_mjlab_profile,
+        parameters: &[],
         example: Some("wbc_g1_policy.onnx, wbc-mjlab's general G1 tracker"),
     },
     PolicyFamily {
@@ -199,6 +228,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::File,
         build: Some(policies::falcon),
         profile_rule: policies::falcon_profile,
+        parameters: &[],
         example: Some("g1_29dof_falcon.onnx, FALCON's released G1 network"),
     },
     PolicyFamily {
@@ -212,6 +242,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::File,
         build: Some(policies::softmimic),
         profile_rule: policies::softmimic_profile,
+        parameters: &SOFTMIMIC_PARAMETERS,
         example: Some("StaticStand-SoftMimic.onnx@stiffness=60, a SoftMimic network and its stiffness in N/m"),
     },
     PolicyFamily {
@@ -225,9 +256,40 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::Session,
         build: None,
         profile_rule: policies::any_profile,
+        parameters: &[],
         example: None,
     },
 ];
+
+/// `--policy`'s help, from the table: every family's spelling, so the help follows the
+/// registry (`tests/cli.rs` holds every command's help to it). `in_process_only`: for the
+/// commands that run the policy themselves (no `ipc:` session).
+pub fn policy_help(in_process_only: bool) -> String {
+    let spellings: Vec<&str> = POLICY_FAMILIES
+        .iter()
+        .filter(|f| !in_process_only || f.runs == Runs::InProcess)
+        .map(|f| f.spelling)
+        .collect();
+    format!(
+        "The policy: {} (`thorarena policies` says what each is, what you supply and the profile it runs under)",
+        spellings.join(", ")
+    )
+}
+
+/// `--profile`'s help, from the table: how the profile is chosen when none is named.
+pub fn profile_help() -> String {
+    let mut by_family: Vec<String> = Vec::new();
+    for f in &POLICY_FAMILIES {
+        let entry = format!("`{}` for {}", f.profile, f.name);
+        if !by_family.contains(&entry) {
+            by_family.push(entry);
+        }
+    }
+    format!(
+        "Dynamics profile: a bundled name (data/profiles) or a .toml path. Default: a published network known by content runs under its own (`thorarena policies` lists them), any other policy under its family's: {}. A profile the family contradicts is refused",
+        by_family.join(", ")
+    )
+}
 
 /// The family policy argument `spec` names, if any.
 pub fn policy_family(spec: &str) -> Option<&'static PolicyFamily> {

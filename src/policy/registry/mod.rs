@@ -8,17 +8,19 @@ mod client;
 mod families;
 mod networks;
 mod open;
+mod parameters;
 mod policies;
 mod policy_arg;
 mod suggest;
 
 pub use client::{run_named_client, ClientRequest, NamedClientError};
 pub use families::{
-    families_text, Build, PolicyFamily, ProfileRule, Runs, Target, NETWORK_SLOTS_PER_WORKER,
-    POLICY_FAMILIES,
+    families_text, policy_help, profile_help, Build, PolicyFamily, ProfileRule, Runs, Target,
+    NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
 };
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
 pub use open::{open_policy, serve_session, OpenPolicyError, PolicyTarget};
+pub use parameters::{parse_parameters, Parameter, ParameterValues};
 pub use policies::{builtin_policy, PolicyChoice};
 pub use policy_arg::PolicyArg;
 pub use suggest::{closest, did_you_mean};
@@ -46,6 +48,14 @@ pub enum RegistryError {
     /// A policy argument that names no policy (the message says what it probably meant).
     #[error("{0}")]
     UnknownPolicy(String),
+    /// Parameters the policy's family does not take as given ([`parse_parameters`]).
+    #[error("`{policy}`: {why}")]
+    Parameters {
+        /// The argument.
+        policy: String,
+        /// What is wrong, and what the family takes.
+        why: String,
+    },
     /// `balance` needs the leg joints of a humanoid.
     #[error("the robot lacks the leg joints `balance` needs")]
     BalanceNeedsLegs,

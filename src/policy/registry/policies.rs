@@ -101,7 +101,10 @@ pub(super) fn softmimic(
     r: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
-    let stiffness = crate::policy::softmimic::stiffness_from(a.parameters())?;
+    let stiffness = crate::policy::softmimic::stiffness_from(
+        a.parameter("stiffness"),
+        a.parameter("rotational_stiffness"),
+    )?;
     Ok(Box::new(SoftMimicPolicy::load(
         file(a),
         Arc::new(r.clone()),

@@ -5,7 +5,9 @@
 //! entry in [`super::POLICY_FAMILIES`].
 
 use super::families::{policy_family, PolicyFamily, Target, POLICY_FAMILIES};
-use super::{did_you_mean, known_network, PolicyChoice, RegistryError};
+use super::{
+    did_you_mean, known_network, parse_parameters, ParameterValues, PolicyChoice, RegistryError,
+};
 use crate::sim::profile::Profile;
 use crate::sim::robot::RobotModel;
 use std::path::Path;
@@ -19,8 +21,10 @@ pub struct PolicyArg {
     /// What follows `name:` without the parameters: a file or a session ("" for a
     /// built-in).
     target: String,
-    /// `KEY=VALUE,…` after the file's `@`.
+    /// `KEY=VALUE,…` after the file's `@`, as given.
     parameters: Option<String>,
+    /// Those parameters read against the family's declaration, in the order given.
+    values: ParameterValues,
 }
 
 impl PolicyArg {
@@ -40,11 +44,23 @@ impl PolicyArg {
         if family.target != Target::Nothing && target.is_empty() {
             return Err(RegistryError::UnknownPolicy(unknown_policy(spec)));
         }
+        let values = match parameters {
+            Some(text) => {
+                parse_parameters(family.name, family.parameters, text).map_err(|why| {
+                    RegistryError::Parameters {
+                        policy: spec.to_string(),
+                        why,
+                    }
+                })?
+            }
+            None => ParameterValues::new(),
+        };
         Ok(Self {
             spec: spec.to_string(),
             family,
             target: target.to_string(),
             parameters: parameters.map(str::to_string),
+            values,
         })
     }
 
@@ -71,6 +87,14 @@ impl PolicyArg {
     /// The parameters after the file (`stiffness=200` of `softmimic:F.onnx@stiffness=200`).
     pub fn parameters(&self) -> Option<&str> {
         self.parameters.as_deref()
+    }
+
+    /// The value the argument gives parameter `name` (declared by its family and checked
+    /// against its range), if it gives one.
+    pub fn parameter(&self, name: &str) -> Option<f64> {
+        self.values
+            .iter()
+            .find_map(|&(n, v)| (n == name).then_some(v))
     }
 
     /// The network file's stem (`twist2_1017_25k`).
@@ -104,8 +128,9 @@ impl PolicyArg {
         }
     }
 
-    /// The same argument with `parameters` (`stiffness=40`) after its file; refused for a
-    /// family without a file, or an argument that names parameters already.
+    /// The same argument with `parameters` (`stiffness=40`) after its file, held to the
+    /// family's declaration; refused for a family without a file, or an argument that
+    /// names parameters already.
     pub fn with_parameters(&self, parameters: &str) -> Result<Self, String> {
         if self.file().is_none() {
             return Err(format!(
@@ -119,9 +144,11 @@ impl PolicyArg {
                 self.spec
             ));
         }
+        let values = parse_parameters(self.family.name, self.family.parameters, parameters)?;
         Ok(Self {
             spec: format!("{}@{parameters}", self.spec),
             parameters: Some(parameters.to_string()),
+            values,
             ..self.clone()
         })
     }
@@ -162,11 +189,12 @@ impl PolicyArg {
     }
 
     /// The profile it runs under when none is named: a published network's own (known by
-    /// the file's content, which is read and hashed here: call it once per run), else its
-    /// family's.
+    /// the file's content, which is read and hashed here: call it once per run) when this
+    /// family runs that network, else its family's.
     pub fn default_profile(&self) -> &'static str {
         self.file()
             .and_then(known_network)
+            .filter(|known| known.families.contains(&self.family.name))
             .map_or(self.family.profile, |known| known.profile)
     }
 
@@ -266,6 +294,30 @@ mod tests {
     }
 
     #[test]
+    fn parameters_are_held_to_the_family_declaration() {
+        for (spec, says) in [
+            ("falcon:F.onnx@stiffness=5", "`falcon` takes no parameters"),
+            ("twist2:F.onnx@stiffness=5", "`twist2` takes no parameters"),
+            ("wbc-mjlab:F.onnx@x=1", "`wbc-mjlab` takes no parameters"),
+            (
+                "softmimic:F.onnx@stiffness=100,stiffness=200",
+                "given twice",
+            ),
+            (
+                "softmimic:F.onnx@stifness=100",
+                "(did you mean `stiffness`?)",
+            ),
+            ("softmimic:F.onnx@stiffness=5", "outside 10 to 1000 N/m"),
+        ] {
+            let e = PolicyArg::parse(spec).unwrap_err().to_string();
+            assert!(e.contains(says), "{spec}: {e}");
+        }
+        let ok = PolicyArg::parse("softmimic:F.onnx@stiffness=200,rotational_stiffness=2").unwrap();
+        assert_eq!(ok.parameter("rotational_stiffness"), Some(2.0));
+        assert_eq!(ok.parameter("stiffness"), Some(200.0));
+    }
+
+    #[test]
     fn an_argument_names_its_family_and_what_it_needs() {
         assert_eq!(PolicyArg::parse("hold").unwrap().family().name, "hold");
         assert_eq!(
@@ -298,6 +350,13 @@ mod tests {
             .with_parameters("stiffness=40")
             .unwrap();
         assert_eq!(varied.as_str(), "softmimic:S.onnx@stiffness=40");
+        assert_eq!(varied.parameter("stiffness"), Some(40.0));
+        // A sweep's axis over a parameter the family lacks is refused where it is made.
+        assert!(PolicyArg::parse("falcon:F.onnx")
+            .unwrap()
+            .with_parameters("stiffness=40")
+            .unwrap_err()
+            .contains("takes no parameters"));
         assert!(varied.with_parameters("stiffness=50").is_err());
         assert!(PolicyArg::parse("hold")
             .unwrap()

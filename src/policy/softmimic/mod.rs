@@ -75,34 +75,16 @@ pub enum SoftMimicError {
     Parameter(String),
 }
 
-/// Reads the policy parameters of `softmimic:FILE.onnx@stiffness=K[,rotational_stiffness=R]`
-/// (`params` is what follows the `@`; `None`: the default).
-pub fn stiffness_from(params: Option<&str>) -> Result<Stiffness, SoftMimicError> {
-    let Some(params) = params else {
-        return Ok(DEFAULT_STIFFNESS);
-    };
+/// The stiffness command from the parameters of
+/// `softmimic:FILE.onnx@stiffness=K[,rotational_stiffness=R]` (each already held to its
+/// declared range by the registry; `None`: not given). The rotational stiffness follows
+/// the linear one (÷ 60) unless given, and must then still lie in the trained range.
+pub fn stiffness_from(
+    linear: Option<f64>,
+    rotational: Option<f64>,
+) -> Result<Stiffness, SoftMimicError> {
     let bad = |m: String| SoftMimicError::Parameter(m);
-    let (mut linear, mut rotational) = (None, None);
-    for item in params.split(',') {
-        let (key, value) = item
-            .split_once('=')
-            .ok_or_else(|| bad(format!("`{item}` is not KEY=VALUE (e.g. @stiffness=200)")))?;
-        let v: f64 = value
-            .trim()
-            .parse()
-            .ok()
-            .filter(|v: &f64| v.is_finite())
-            .ok_or_else(|| bad(format!("{key}: `{value}` is not a number")))?;
-        match key.trim() {
-            "stiffness" => linear = Some(v),
-            "rotational_stiffness" => rotational = Some(v),
-            other => {
-                return Err(bad(format!(
-                    "unknown parameter `{other}` (softmimic takes stiffness=N/m and rotational_stiffness=N·m/rad)"
-                )))
-            }
-        }
-    }
+    let named_rotational = rotational.is_some();
     let linear = linear.unwrap_or(DEFAULT_STIFFNESS.linear);
     let rotational = rotational.unwrap_or(linear * ROTATIONAL_PER_LINEAR);
     let within = |v: f64, (lo, hi): (f64, f64)| (lo..=hi).contains(&v);
@@ -117,7 +99,7 @@ pub fn stiffness_from(params: Option<&str>) -> Result<Stiffness, SoftMimicError>
             "rotational stiffness {rotational} N·m/rad is outside the {}–{} N·m/rad the networks were trained on{}",
             ROTATIONAL_RANGE.0,
             ROTATIONAL_RANGE.1,
-            if params.contains("rotational_stiffness") {
+            if named_rotational {
                 ""
             } else {
                 " (it follows stiffness / 60 unless rotational_stiffness= names it)"
@@ -139,6 +121,8 @@ struct Slot {
 pub struct SoftMimicPolicy {
     plans: BatchPlans,
     plan: Arc<TypedRunnableModel>,
+    /// The file loaded, by content (`run.json`'s network).
+    network: crate::policy::network_file::NetworkFile,
     layout: Layout,
     stiffness: Stiffness,
     robot: Arc<RobotModel>,
@@ -161,19 +145,22 @@ impl SoftMimicPolicy {
         if robot.n_joints() != N_JOINTS {
             return Err(SoftMimicError::Joints(robot.n_joints()));
         }
-        let load = |layout: Layout| -> TractResult<(BatchPlans, Arc<TypedRunnableModel>)> {
-            let plans = BatchPlans::new(super::network_kernels::load_onnx(path)?, layout.width())?;
+        let load = |layout: Layout| -> TractResult<(BatchPlans, Arc<TypedRunnableModel>, _)> {
+            let (model, network) = super::network_kernels::load_onnx(path)?;
+            let plans = BatchPlans::new(model, layout.width(), Some(N_JOINTS))?;
             let plan = plans.plan(1)?;
-            Ok((plans, plan))
+            Ok((plans, plan, network))
         };
-        let (layout, (plans, plan)) = match load(Layout::Stand) {
+        let (layout, (plans, plan, network)) = match load(Layout::Stand) {
             Ok(p) => (Layout::Stand, p),
             Err(first) => match load(Layout::Track) {
                 Ok(p) => (Layout::Track, p),
-                Err(_) => {
+                Err(second) => {
                     return Err(SoftMimicError::Load {
                         path: path.to_path_buf(),
-                        message: format!("{first:#}"),
+                        message: format!(
+                            "neither a standing network ({first:#}) nor a tracking one ({second:#})"
+                        ),
                     })
                 }
             },
@@ -181,6 +168,7 @@ impl SoftMimicPolicy {
         Ok(Self {
             plans,
             plan,
+            network,
             layout,
             stiffness,
             robot,
@@ -251,6 +239,10 @@ impl Policy for SoftMimicPolicy {
         "softmimic"
     }
 
+    fn network(&self) -> Option<&crate::policy::network_file::NetworkFile> {
+        Some(&self.network)
+    }
+
     fn network_kernels(&self) -> Option<&'static super::network_kernels::NetworkKernels> {
         Some(super::network_kernels::network_kernels())
     }
@@ -301,6 +293,7 @@ impl Policy for SoftMimicPolicy {
                     Box::new(Self {
                         plans: self.plans.clone(),
                         plan: self.plan.clone(),
+                        network: self.network.clone(),
                         layout: self.layout,
                         stiffness: self.stiffness,
                         robot: self.robot.clone(),
@@ -378,24 +371,19 @@ mod tests {
 
     #[test]
     fn stiffness_parameters_parse_and_refuse_what_training_never_saw() {
-        assert_eq!(stiffness_from(None).unwrap(), DEFAULT_STIFFNESS);
-        let s = stiffness_from(Some("stiffness=300")).unwrap();
+        assert_eq!(stiffness_from(None, None).unwrap(), DEFAULT_STIFFNESS);
+        let s = stiffness_from(Some(300.0), None).unwrap();
         assert_eq!((s.linear, s.rotational), (300.0, 5.0));
-        let s = stiffness_from(Some("stiffness=300,rotational_stiffness=0.5")).unwrap();
+        let s = stiffness_from(Some(300.0), Some(0.5)).unwrap();
         assert_eq!(s.rotational, 0.5);
-        for bad in [
-            "stiffness=5",
-            "stiffness=900",
-            "stiffness=x",
-            "stiff=3",
-            "300",
-        ] {
-            assert!(stiffness_from(Some(bad)).is_err(), "{bad}");
+        for (linear, rotational) in [(5.0, None), (900.0, Some(20.0)), (60.0, Some(0.01))] {
+            assert!(
+                stiffness_from(Some(linear), rotational).is_err(),
+                "{linear}"
+            );
         }
         // 900 N/m implies 15 N·m/rad, above the rotational range: the message says why.
-        let e = stiffness_from(Some("stiffness=900"))
-            .unwrap_err()
-            .to_string();
+        let e = stiffness_from(Some(900.0), None).unwrap_err().to_string();
         assert!(e.contains("stiffness / 60"), "{e}");
     }
 

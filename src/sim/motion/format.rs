@@ -1,12 +1,17 @@
 //! A sequence on disk: one safetensors file of float32 tensors, with the sequence's
 //! metadata as a single JSON string (safetensors keeps metadata in a hash map, so one key
 //! keeps the header byte-for-byte deterministic).
+//!
+//! The tensors are `root_pos`, `root_quat_wxyz`, `joint_pos` (canonical joint order),
+//! optionally `joint_vel`, and `force_left_sensor`, `force_right_sensor` (each hand's
+//! force in its sensor frame); the metadata's key is `thorarena`. On disk f32, in memory
+//! f64: files stay small and mmap-friendly for Python, and every computation on them
+//! (interpolation, differences, kinematics) runs in f64.
 
 use super::error::{bad, DataError};
 use super::sequence::{Sequence, LEFT, RIGHT};
 use safetensors::{Dtype, SafeTensors, View};
 use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -122,13 +127,7 @@ pub fn write_sequence(seq: &Sequence, path: &Path) -> Result<String, DataError> 
     Ok(sha256_hex(&bytes))
 }
 
-/// sha256 of a byte string, lowercase hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
+pub use crate::files::content_hash::sha256_hex;
 
 /// Decodes and validates a sequence file's bytes.
 pub fn decode_sequence(bytes: &[u8], file: &Path) -> Result<Sequence, DataError> {

@@ -1,5 +1,13 @@
 //! Reference clips and datasets: the canonical format (safetensors + manifest), importers,
 //! resampling and forward kinematics of references.
+//!
+//! Beside them: a batch of files imported all or nothing (`import_batch`), teleoperation
+//! glitches found, and trimmed only when asked (`glitch.rs`, shared with `data info`), the
+//! synthetic dataset (`synth`, `thorarena data synth`), one sequence's hand forces grafted
+//! onto another motion (`force_graft`), which of a dataset's sequences a run evaluates
+//! (`SequenceSelection`: `--tasks`, `--sequences`), and the export for Python
+//! (`export.rs`). `import::G1_CANONICAL_JOINTS` is the one list of the G1's joint order in
+//! code; `robot.toml` holds the same order as data.
 
 mod dataset;
 mod describe;

@@ -45,11 +45,7 @@ impl Engine {
             path: path.clone(),
             source,
         })?;
-        use sha2::{Digest, Sha256};
-        let hash = Sha256::digest(&bytes)
-            .iter()
-            .map(|b| format!("{b:02x}"))
-            .collect();
+        let hash = crate::files::content_hash::sha256_hex(&bytes);
         Ok(Self::Mujoco {
             mjcf: Some(path),
             mjcf_sha256: Some(hash),

@@ -3,6 +3,10 @@
 //!
 //! Everything engine-specific stays behind the trait, so episodes, force replay and
 //! metrics never see rapier types, and another backend can run the same conformance tests.
+//! The other backend is MuJoCo (`mujoco.rs`, cargo feature `mujoco`), on an MJCF generated
+//! from the robot model (`mjcf.rs`) or a user's. `make_physics` is the one factory, for the
+//! run's `Engine` (`engine.rs`); the field's gain sets are `gains.rs`, the physics settings
+//! and their defaults `settings.rs`.
 
 mod engine;
 mod gains;

@@ -10,6 +10,13 @@
 //! control; its contacts, friction, solver, armature and joint friction are its own. Hand
 //! forces go through `xfrc_applied`, moved from the force point to the body's centre of
 //! mass. Applied torques are reported from the law, the same way as rapier's.
+//!
+//! MuJoCo resets an unstable state by itself (`mjWARN_BADQACC`); the backend then reads the
+//! state as not finite until the next reset, so the reset state never passes for physics
+//! and the episode ends as `physics_diverged`. A user's MJCF is refused when a robot joint
+//! is missing, is not a hinge, moves another body or turns about another axis; the library
+//! loaded at run time must be `MUJOCO_VERSION`; the run names a user's MJCF by its SHA-256
+//! (`Engine::mujoco_on`).
 
 use super::settings::{PdForm, PhysicsSettings};
 use super::state::{ExternalForce, GroundContact, PdGains, PhysicsState, ResetState, RootState};

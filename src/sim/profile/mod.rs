@@ -154,6 +154,16 @@ pub struct Profile {
 }
 
 impl Profile {
+    /// SHA-256 of the resolved profile — every number a run uses (periods, delay, action
+    /// clip, scale and offset, gains, torque limits, the `[beyondmimic]` section) and its
+    /// name — lowercase hex: the profile's part of a run's identity (`run.json`). It is of
+    /// the resolved values, not the file's text, so a comment edited changes nothing and a
+    /// gain changed anywhere (a `.toml` path, a `THORARENA_DATA` copy) always shows.
+    /// Rust's `Debug` text prints every `f64` exactly (shortest round trip).
+    pub fn fingerprint(&self) -> String {
+        crate::files::content_hash::sha256_hex(format!("{self:?}").as_bytes())
+    }
+
     /// Joint position targets for a raw policy action (clip, scale, offset).
     pub fn targets_from_action(&self, action: &[f64], targets: &mut [f64]) {
         for (i, t) in targets.iter_mut().enumerate() {

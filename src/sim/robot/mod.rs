@@ -1,5 +1,6 @@
 //! The robot model: joints in canonical order, bodies, keypoints and hands, loaded from
-//! `data/robots/<name>/` (a URDF plus `robot.toml`), and forward kinematics on it.
+//! `data/robots/<name>/` (a URDF plus `robot.toml`), forward kinematics on it, and the
+//! model as a table for people (`describe`, printed by `thorarena robot`).
 
 mod config;
 mod describe;

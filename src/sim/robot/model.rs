@@ -146,6 +146,15 @@ pub struct Hand {
 }
 
 impl RobotModel {
+    /// SHA-256 of the resolved model — joints with their limits, bodies with their mass,
+    /// inertia and shapes, frames, keypoint sets, hands — lowercase hex: the robot's part of
+    /// a run's identity (`run.json`). Of the resolved values (exact: `Debug` prints every
+    /// `f64` as its shortest round trip), so a URDF reformatted changes nothing and any
+    /// number the simulation reads does.
+    pub fn fingerprint(&self) -> String {
+        crate::files::content_hash::sha256_hex(format!("{self:?}").as_bytes())
+    }
+
     /// Number of actuated joints.
     pub fn n_joints(&self) -> usize {
         self.joints.len()

@@ -52,7 +52,7 @@ pub fn read_onnx_motion(
             source: std::io::Error::from(std::io::ErrorKind::NotFound),
         });
     }
-    let model = crate::policy::network_kernels::load_onnx(path).map_err(tract_error(path))?;
+    let (model, _) = crate::policy::network_kernels::load_onnx(path).map_err(tract_error(path))?;
     let props = crate::policy::onnx_export::metadata_props(&model);
     let meta = crate::policy::onnx_export::FileMetadata::from_props(&props)
         .map_err(|reason| format_error(path, reason))?;

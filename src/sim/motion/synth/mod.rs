@@ -7,6 +7,28 @@
 //! hand's sensor frame through a per-sequence sensor calibration. Every sequence draws
 //! from its own generator seeded by (seed, task, index), so any subset of tasks or any
 //! number of sequences per task regenerates the same sequences bit for bit.
+//!
+//! One file per idea: `tasks.rs` and `walking.rs` plan each frame in the world, `gait.rs`
+//! makes the walking tasks' footholds and pelvis path, `solve.rs` turns a plan into joints
+//! with `ik.rs` (6-D leg IK per foot relative to the planned pelvis, the waist set
+//! directly, 3-D hand IK with a null-space pull toward a nominal arm; joints kept 0.03 rad
+//! inside their limits), and `forces.rs` draws the forces and says how their levels were
+//! calibrated. Hand targets are first pulled within 90 % of the arm's reach, so the IK
+//! fails (`SynthError::IkFailed`, naming task, sequence, frame and limb) only where a
+//! joint limit binds.
+//!
+//! The tasks: `clean_table` stands and wipes (circles or back and forth, one hand or
+//! both, bouts with pauses); `liftup_water` / `liftdown_water` squat to a container on a
+//! low surface and stand up holding it, or the reverse; `push_chair` walks forward and
+//! `pull_chair` backward with both hands on a chair back; `syn_carry` walks forward or
+//! backward, turning in 60 % of its sequences, holding an object with a partner. Steps
+//! are 0.15–0.26 m forward (longer ones push a flat trailing foot's ankle past its
+//! −0.87 rad limit) and 0.15–0.22 m backward.
+//!
+//! Forces are planned in the world and stored in each hand's sensor frame,
+//! `f_sensor = (R_world_hand · R_hand_sensor)⁻¹ f_world`, through a per-sequence
+//! `hand_from_sensor` of ±90° about the hand's x axis (opposite per side) tilted by up to
+//! 3°, so a replay that skips the calibration applies wrongly directed forces.
 
 mod forces;
 mod gait;
