@@ -363,3 +363,45 @@ fn a_dataset_without_force_logs_runs_no_force_unless_asked_and_says_so() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("has force logs"), "{e}");
 }
+
+/// A value a float32 sequence file cannot hold (1e308), or an angle no joint reaches
+/// (1e30 rad), is refused naming file, frame and column; appended to an existing dataset,
+/// the refusal leaves that dataset whole and readable.
+#[test]
+fn an_impossible_joint_value_is_refused_and_never_breaks_a_dataset() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = import_walk_csv(dir.path());
+    for bad in ["1e308", "1e30", "-40"] {
+        let motion = dir.path().join("bad.csv");
+        write_lafan(&motion, 1.0);
+        let text = std::fs::read_to_string(&motion).unwrap();
+        let mut rows: Vec<Vec<String>> = text
+            .lines()
+            .map(|l| l.split(',').map(str::to_string).collect())
+            .collect();
+        rows[5][7 + 3] = bad.to_string(); // frame 5, left knee
+        let text: String = rows.iter().map(|r| r.join(",") + "\n").collect();
+        std::fs::write(&motion, text).unwrap();
+        let run = thorarena(&[
+            "data",
+            "import",
+            "--format",
+            "lafan-csv",
+            motion.to_str().unwrap(),
+            "--out",
+            ds.to_str().unwrap(),
+            "--task",
+            "walk",
+        ]);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{bad}: imported: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(
+            err.contains("bad.csv") && err.contains("frame 5") && err.contains("left_knee_joint"),
+            "{bad}: {err}"
+        );
+        let dataset = Dataset::open(&ds, &g1()).expect("the dataset is still readable");
+        assert_eq!(dataset.len(), 1, "{bad}: the bad sequence was appended");
+        dataset.load(0).expect("its sequence still loads");
+    }
+}

@@ -296,42 +296,26 @@ fn an_edited_or_planted_data_cache_is_never_used() {
 }
 
 #[test]
-fn a_full_disk_is_reported_naming_the_file_once() {
-    // /dev/full (Linux) stands in for a full disk: every write to it fails with ENOSPC.
-    // Only the appended record log writes into what is there; whole files (summary.json,
-    // tables.md) are written beside and renamed over it, so a symlink there is replaced,
-    // and their failure mid-way is `tests/one_writer.rs`' (under a file-size limit).
+fn a_failed_record_write_is_reported_naming_the_file_once() {
+    // A file-size limit (SIGXFSZ ignored, so the write fails with EFBIG) stands in for a
+    // full disk: run.json (2 KB) fits under 64 KiB, the appended record log (some 120 KB
+    // per episode here) does not. A link to /dev/full no longer can: output files are
+    // never opened through a link (`tests/planted_links.rs`). Whole files' failure mid-way
+    // is `tests/one_writer.rs`'.
     let tmp = tempfile::tempdir().unwrap();
-    let file = "episodes.jsonl";
-    let out = tmp.path().join(file.replace('.', "-"));
-    std::fs::create_dir(&out).unwrap();
-    std::os::unix::fs::symlink("/dev/full", out.join(file)).unwrap();
-    let o = thorarena(
-        tmp.path(),
-        &[
-            "eval",
-            "--dataset",
-            SAMPLE,
-            "--policy",
-            "hold",
-            "--settings",
-            "force",
-            "--shard",
-            "0/6",
-            "--out",
-            out.to_str().unwrap(),
-        ],
+    let out = tmp.path().join("run");
+    let cmd = format!(
+        "trap '' XFSZ; ulimit -f 64; exec {} eval --dataset {SAMPLE} --policy hold --settings force --shard 0/6 --out {}",
+        env!("CARGO_BIN_EXE_thorarena"),
+        out.display()
     );
+    let o = Command::new("bash").args(["-c", &cmd]).output().unwrap();
     let e = failure(&o);
     assert!(
-        e.contains(file) && e.contains("No space left on device"),
-        "{file}: {e}"
+        e.contains("episodes.jsonl") && e.contains("File too large"),
+        "{e}"
     );
-    assert_eq!(
-        e.matches("No space left on device").count(),
-        1,
-        "{file}: {e}"
-    );
+    assert_eq!(e.matches("File too large").count(), 1, "{e}");
 }
 
 #[test]
@@ -468,7 +452,7 @@ fn absurd_durations_and_steps_are_errors_not_panics_or_endless_runs() {
                 "--out",
                 out,
             ],
-            "s: too long to wait",
+            "1e20 s: give 0 (wait forever) to 86400 s",
         ),
         (
             vec![
@@ -480,7 +464,7 @@ fn absurd_durations_and_steps_are_errors_not_panics_or_endless_runs() {
                 "--connect-timeout",
                 "1e20",
             ],
-            "s: too long to wait",
+            "1e20 s: give more than 0 s, at most 86400 s",
         ),
         (
             vec![
@@ -542,7 +526,7 @@ fn absurd_durations_and_steps_are_errors_not_panics_or_endless_runs() {
                 "--out",
                 out,
             ],
-            "too long for a budget",
+            "a budget is 1 us to 60 s (or none), not 1e29",
         ),
     ] {
         let started = std::time::Instant::now();

@@ -381,7 +381,7 @@ fn the_stiffness_command_reaches_the_network_and_the_record() {
     ]);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(!run.status.success());
-    assert!(stderr.contains("10–1000 N/m"), "{stderr}");
+    assert!(stderr.contains("outside 10 to 1000 N/m"), "{stderr}");
 }
 
 /// Each released network with the clip it goes with (`deploy/run_mujoco.sh` names stand

@@ -366,7 +366,9 @@ fn latency_budgets_under_measured_latency_are_plotted_against_fats() {
 datasets = ["{SAMPLE}"]
 settings = ["no-force"]
 [[policy]]
-policy = "hold"
+name = "hold"
+command = "{{thorarena}} client --session {{session}} --policy hold"
+connect_timeout_s = 30
 [[latency]]
 name = "lock-step"
 [[latency]]
@@ -402,6 +404,44 @@ mode = "measured"
         csv.contains(",5ms,measured,hold,") && csv.contains(",10ms,measured,hold,"),
         "{csv}"
     );
+}
+
+/// A budget times a policy process's round trip: a policy in process is planned under the
+/// rules that do not time it (no flat "tolerates any latency" curve over rules never
+/// applied), and refused when every rule would.
+#[test]
+fn an_in_process_policy_is_planned_only_under_rules_it_can_honour() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rules =
+        "[[latency]]\nbudget = \"5ms\"\nmode = \"measured\"\n[[latency]]\nbudget = \"1us\"\n";
+    let body = |lock_step: &str| {
+        format!(
+            "datasets = [\"{SAMPLE}\"]\nsettings = [\"no-force\"]\n[[policy]]\npolicy = \"hold\"\n{lock_step}{rules}"
+        )
+    };
+    let dir = tmp.path().join("some");
+    plan(
+        &spec(tmp.path(), &body("[[latency]]\nname = \"lock-step\"\n")),
+        &dir,
+    );
+    let plan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("plan.json")).unwrap()).unwrap();
+    let cells = plan["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 1, "{cells:?}");
+    assert_eq!(cells[0]["latency"]["name"], "lock-step");
+    let dir = tmp.path().join("none");
+    let e = err(&thorarena(&[
+        "sweep",
+        "plan",
+        spec(tmp.path(), &body("")).to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]));
+    assert!(
+        e.contains("runs in process") && e.contains("lock-step"),
+        "{e}"
+    );
+    assert!(!dir.join("plan.json").exists());
 }
 
 #[test]

@@ -27,7 +27,8 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let ctx = load_request(&args.run.request(""))?;
+    // The run serves a policy process on the session: its policy is that session's.
+    let ctx = load_request(&args.run.request(&format!("ipc:{}", args.session)))?;
     let session = args.run.io.session_options(ctx.io.budget_s)?;
     let target = PolicyTarget {
         robot: &ctx.robot,

@@ -227,12 +227,8 @@ pub fn run_dds_session(
     on_event: &mut dyn FnMut(DdsSessionEvent<'_>),
 ) -> Result<DdsSessionOutcome, DdsSessionError> {
     crate::files::names::check_name("policy name", &req.name)?;
-    if !(req.start_timeout_s.is_finite() && req.start_timeout_s > 0.0) {
-        return Err(refused(
-            DdsSetting::StartTimeout,
-            format!("{} s: give more than 0 s", req.start_timeout_s),
-        ));
-    }
+    crate::policy::check_wait_s(req.start_timeout_s, false)
+        .map_err(|why| refused(DdsSetting::StartTimeout, why))?;
     let start_button = start_button(req)?;
     let address = match &req.interface {
         Some(name) => IpAddr::V4(super::interface::ipv4_of(name)?),

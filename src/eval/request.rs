@@ -97,6 +97,10 @@ impl Default for EvalRequest {
     }
 }
 
+/// The largest request file read, bytes (16 MiB): a request is a few kilobytes, even
+/// with thousands of sequences named.
+pub const MAX_REQUEST_FILE_BYTES: u64 = 16 << 20;
+
 /// Why a request file cannot be read.
 #[derive(Debug, thiserror::Error)]
 pub enum RequestFileError {
@@ -121,7 +125,12 @@ pub enum RequestFileError {
 impl EvalRequest {
     /// The request in file `path` (JSON; a field left out takes its default).
     pub fn read(path: &Path) -> Result<Self, RequestFileError> {
-        let text = std::fs::read_to_string(path).map_err(|source| RequestFileError::Io {
+        let text = crate::files::bounded_read::read_to_string(
+            path,
+            "request file",
+            MAX_REQUEST_FILE_BYTES,
+        )
+        .map_err(|source| RequestFileError::Io {
             path: path.to_path_buf(),
             source,
         })?;

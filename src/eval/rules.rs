@@ -3,6 +3,7 @@
 //! run's identity (`run.json`), so runs under other rules are never merged or compared
 //! as one.
 
+pub use crate::files::names::short_number;
 use serde::{Deserialize, Serialize};
 use std::time::Duration;
 
@@ -108,6 +109,26 @@ pub enum LatencyMode {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Budget(pub Option<Duration>);
 
+/// The shortest budget a run takes: below a microsecond no round trip through shared
+/// memory can answer, and a budget printed as "0ns" would say nothing.
+pub const MIN_BUDGET: Duration = Duration::from_micros(1);
+
+/// The longest budget a run takes: a per-step deadline beyond a minute is no deadline.
+pub const MAX_BUDGET: Duration = Duration::from_secs(60);
+
+/// A budget of `secs` s checked against [`MIN_BUDGET`] and [`MAX_BUDGET`]: the one check
+/// of a budget, whether it came as `--budget`, a request file's `io.budget_s` or a sweep's
+/// latency rule.
+pub fn check_budget_s(secs: f64) -> Result<Duration, String> {
+    if !secs.is_finite() || secs < MIN_BUDGET.as_secs_f64() || secs > MAX_BUDGET.as_secs_f64() {
+        return Err(format!(
+            "a budget is 1 us to 60 s (or none), not {}",
+            short_number(secs)
+        ));
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
 /// Parses `--budget` (`none`, `2ms`, `500us`, `0.004s`); shared with the sweep, whose
 /// latency curves put budgets on an axis.
 pub fn parse_budget(s: &str) -> Result<Budget, String> {
@@ -127,12 +148,9 @@ pub fn parse_budget(s: &str) -> Result<Budget, String> {
         "s" => v,
         _ => return Err(format!("`{s}`: unknown unit `{unit}` (us, ms, s)")),
     };
-    if !(secs.is_finite() && secs > 0.0) {
-        return Err(format!("`{s}`: the budget must be > 0 (or `none`)"));
-    }
-    Duration::try_from_secs_f64(secs)
+    check_budget_s(secs)
         .map(|d| Budget(Some(d)))
-        .map_err(|_| format!("`{s}`: too long for a budget (give one that fits a duration)"))
+        .map_err(|why| format!("`{}`: {why}", s.chars().take(24).collect::<String>()))
 }
 
 #[cfg(test)]

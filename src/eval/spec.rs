@@ -158,7 +158,12 @@ impl EvalSpec {
         }
         let settings = parse_settings(&request.settings)?;
         check_termination(&request.termination)?;
-        check_io(&request.io)?;
+        let in_process = policy
+            .as_ref()
+            .filter(|arg| arg.session().is_none())
+            .map(PolicyArg::as_str);
+        check_io(&request.io, in_process)?;
+        check_shard(request.shard)?;
         let picked = pick_sequences(request, &dataset, &robot)?;
         let settings = fit_settings_to_force_logs(
             settings,
@@ -475,14 +480,45 @@ fn check_termination(rule: &TerminationRule) -> Result<(), SpecError> {
     Ok(())
 }
 
-fn check_io(io: &PolicyIoRules) -> Result<(), SpecError> {
+/// The policy's I/O rules: an action bound > 0, a budget within [`crate::eval::MIN_BUDGET`]
+/// and [`crate::eval::MAX_BUDGET`] — and a budget or measured latency only for a policy
+/// process (`in_process`: the policy runs in this process, where a call's time is not a
+/// round trip and no deadline is applied, so the setting would be recorded and printed
+/// but never honoured).
+fn check_io(io: &PolicyIoRules, in_process: Option<&str>) -> Result<(), SpecError> {
     if !(io.max_abs_action.is_finite() && io.max_abs_action > 0.0) {
         return Err(invalid(format!(
             "`request.io.max_abs_action` must be > 0, got {}",
-            io.max_abs_action
+            crate::eval::short_number(io.max_abs_action)
         )));
     }
+    if let Some(b) = io.budget_s {
+        crate::eval::check_budget_s(b)
+            .map_err(|why| invalid(format!("`request.io.budget_s`: {why}")))?;
+    }
+    if let Some(policy) = in_process {
+        if io.budget_s.is_some() {
+            return Err(invalid(format!(
+                "`request.io.budget_s`: `{policy}` runs inside this process, where no deadline applies; a latency budget is for a policy process (`ipc:SESSION`)"
+            )));
+        }
+        if io.latency_mode == crate::eval::LatencyMode::Measured {
+            return Err(invalid(format!(
+                "`request.io.latency_mode` measured: `{policy}` runs inside this process, whose call time is not a policy's round trip; measured latency is for a policy process (`ipc:SESSION`)"
+            )));
+        }
+    }
     Ok(())
+}
+
+/// `request.shard` `(i, n)`: `0 <= i < n`, as `--shard` checks it.
+fn check_shard(shard: Option<(usize, usize)>) -> Result<(), SpecError> {
+    match shard {
+        Some((i, n)) if n == 0 || i >= n => {
+            Err(invalid(format!("`request.shard` {i}/{n}: need 0 <= I < N")))
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Replay settings need recorded forces: on a dataset without force logs the default

@@ -3,7 +3,18 @@
 //! it touches a path, so no input can write outside the directory it was meant for.
 //!
 //! Beside them, the text cells of every CSV the library writes (`csv_text`): a cell a
-//! spreadsheet would read as a formula is written with a leading `'`.
+//! spreadsheet would read as a formula is written with a leading `'`; and a user's number
+//! echoed in a message (`short_number`): `1e300`, never three hundred digits.
+
+/// `x` as a message echoes it, in a few characters: exponent form outside 0.001 to 10⁶.
+pub fn short_number(x: f64) -> String {
+    let a = x.abs();
+    if a != 0.0 && a.is_finite() && !(1e-3..1e6).contains(&a) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
 
 /// A name that cannot be used as one path component.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

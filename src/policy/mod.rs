@@ -26,7 +26,8 @@ pub use beyondmimic::BeyondMimicPolicy;
 pub use builtin::{BalanceGains, BalancePolicy, HoldPolicy, ReplayPolicy};
 pub use falcon::FalconPolicy;
 pub use remote::{
-    RemoteConfig, RemoteError, RemotePolicy, SessionOptions, SessionOptionsError, TransportStats,
+    check_wait_s, RemoteConfig, RemoteError, RemotePolicy, SessionOptions, SessionOptionsError,
+    TransportStats, MAX_WAIT,
 };
 pub use softmimic::SoftMimicPolicy;
 pub use twist2::Twist2Policy;

@@ -10,7 +10,6 @@
 //! rather than read into memory.
 
 use serde::{Deserialize, Serialize};
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// The largest network file read, bytes (1 GiB). The published G1 policies are 0.3–13 MB;
@@ -43,7 +42,8 @@ impl PartialEq for NetworkFile {
 /// Why a network file could not be read.
 #[derive(Debug, thiserror::Error)]
 pub enum NetworkFileError {
-    /// The file cannot be opened or read.
+    /// The file cannot be opened or read, is no regular file, or is over
+    /// [`MAX_NETWORK_BYTES`].
     #[error("reading network {}: {source}", path.display())]
     Io {
         /// The file.
@@ -51,68 +51,16 @@ pub enum NetworkFileError {
         /// Why.
         source: std::io::Error,
     },
-    /// Not a regular file.
-    #[error("network {} is {what}, not a file", path.display())]
-    NotAFile {
-        /// The path.
-        path: PathBuf,
-        /// What it is (`a directory`, `a FIFO`, `a device`, …).
-        what: &'static str,
-    },
-    /// Larger than any network read.
-    #[error("network {} is {bytes} bytes, over the {max}-byte limit of a network file", path.display())]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// Its size.
-        bytes: u64,
-        /// [`MAX_NETWORK_BYTES`].
-        max: u64,
-    },
 }
 
 impl NetworkFile {
     /// Reads `path` whole (bounded, a regular file only) and says what it is by content.
     pub fn read(path: &Path) -> Result<(Vec<u8>, Self), NetworkFileError> {
-        let io = |source| NetworkFileError::Io {
-            path: path.to_path_buf(),
-            source,
-        };
-        // O_NONBLOCK: opening a FIFO without a writer must not wait; the type check
-        // below refuses it.
-        let file = {
-            use std::os::unix::fs::OpenOptionsExt;
-            std::fs::OpenOptions::new()
-                .read(true)
-                .custom_flags(libc::O_NONBLOCK)
-                .open(path)
-                .map_err(io)?
-        };
-        let meta = file.metadata().map_err(io)?;
-        if !meta.is_file() {
-            return Err(NetworkFileError::NotAFile {
+        let bytes = crate::files::bounded_read::read(path, "network file", MAX_NETWORK_BYTES)
+            .map_err(|source| NetworkFileError::Io {
                 path: path.to_path_buf(),
-                what: file_kind(&meta),
-            });
-        }
-        if meta.len() > MAX_NETWORK_BYTES {
-            return Err(NetworkFileError::TooLarge {
-                path: path.to_path_buf(),
-                bytes: meta.len(),
-                max: MAX_NETWORK_BYTES,
-            });
-        }
-        let mut bytes = Vec::with_capacity(meta.len() as usize);
-        file.take(MAX_NETWORK_BYTES + 1)
-            .read_to_end(&mut bytes)
-            .map_err(io)?;
-        if bytes.len() as u64 > MAX_NETWORK_BYTES {
-            return Err(NetworkFileError::TooLarge {
-                path: path.to_path_buf(),
-                bytes: bytes.len() as u64,
-                max: MAX_NETWORK_BYTES,
-            });
-        }
+                source,
+            })?;
         let identity = Self {
             file: path.display().to_string(),
             sha256: crate::files::content_hash::sha256_hex(&bytes),
@@ -130,22 +78,6 @@ impl NetworkFile {
 /// The first [`SHORT_HASH_DIGITS`] digits of a hex hash (all of a shorter one).
 pub fn short_hash(sha256: &str) -> &str {
     &sha256[..sha256.len().min(SHORT_HASH_DIGITS)]
-}
-
-fn file_kind(meta: &std::fs::Metadata) -> &'static str {
-    use std::os::unix::fs::FileTypeExt;
-    let t = meta.file_type();
-    if t.is_dir() {
-        "a directory"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_char_device() || t.is_block_device() {
-        "a device"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "not a regular file"
-    }
 }
 
 #[cfg(test)]

@@ -22,6 +22,34 @@ pub struct RemoteConfig {
     pub reconnect: bool,
 }
 
+/// The longest wait for a process a run waits on (a policy connecting, a deployment's
+/// first command): a day. Longer is a mistake, not a wait, and beyond a duration's range
+/// it would panic.
+pub const MAX_WAIT: Duration = Duration::from_secs(24 * 3600);
+
+/// A wait of `secs` s checked — finite, at most [`MAX_WAIT`], and above 0 unless
+/// `zero_waits_forever` (then 0 is `None`, no limit). The one check of every timeout a
+/// user gives, from a flag, a sweep spec, a leaderboard policy file or a request.
+pub fn check_wait_s(secs: f64, zero_waits_forever: bool) -> Result<Option<Duration>, String> {
+    let shown = crate::files::names::short_number(secs);
+    let range = if zero_waits_forever {
+        "give 0 (wait forever) to 86400 s"
+    } else {
+        "give more than 0 s, at most 86400 s"
+    };
+    if !secs.is_finite() || secs < 0.0 || secs > MAX_WAIT.as_secs_f64() {
+        return Err(format!("{shown} s: {range}"));
+    }
+    if secs == 0.0 {
+        return if zero_waits_forever {
+            Ok(None)
+        } else {
+            Err(format!("{shown} s: {range}"))
+        };
+    }
+    Ok(Some(Duration::from_secs_f64(secs)))
+}
+
 /// How a run serves its policy process, beyond what the robot and the profile fix.
 #[derive(Debug, Clone)]
 pub struct SessionOptions {
@@ -45,13 +73,8 @@ impl SessionOptions {
         connect_timeout_s: f64,
         reconnect: bool,
     ) -> Result<Self, SessionOptionsError> {
-        if !(connect_timeout_s.is_finite() && connect_timeout_s >= 0.0) {
-            return Err(SessionOptionsError::NegativeConnectTimeout);
-        }
-        let connect_timeout = (connect_timeout_s > 0.0)
-            .then(|| Duration::try_from_secs_f64(connect_timeout_s))
-            .transpose()
-            .map_err(|_| SessionOptionsError::ConnectTimeoutTooLong(connect_timeout_s))?;
+        let connect_timeout =
+            check_wait_s(connect_timeout_s, true).map_err(SessionOptionsError::ConnectTimeout)?;
         Ok(Self {
             budget: budget_s.map(Duration::from_secs_f64),
             spin: Duration::from_micros(spin_us),
@@ -64,12 +87,9 @@ impl SessionOptions {
 /// Why session options are unusable.
 #[derive(Debug, thiserror::Error)]
 pub enum SessionOptionsError {
-    /// A negative or non-finite connect timeout.
-    #[error("`option.connect_timeout` must be >= 0 s")]
-    NegativeConnectTimeout,
-    /// A timeout no duration holds.
-    #[error("`option.connect_timeout` {0} s: too long to wait (give seconds that fit a duration, or 0 to wait forever)")]
-    ConnectTimeoutTooLong(f64),
+    /// A connect timeout outside 0 (forever) to [`MAX_WAIT`].
+    #[error("`option.connect_timeout` {0}")]
+    ConnectTimeout(String),
 }
 
 /// Why serving a session failed.

@@ -159,12 +159,16 @@ pub struct TraceContext {
     pub record: Option<EpisodeRecord>,
 }
 
+/// The largest trace file read, bytes (1 GiB: a trace is some 10 KB per control step).
+pub const MAX_TRACE_BYTES: u64 = 1 << 30;
+
 /// Reads a trace file written by `eval --trace`.
 pub fn load_trace(path: &Path) -> Result<Vec<TraceStep>, ReportError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ReportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::files::bounded_read::read_to_string(path, "trace file", MAX_TRACE_BYTES)
+        .map_err(|source| ReportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     serde_json::from_str(&text).map_err(|source| ReportError::Json {
         path: path.to_path_buf(),
         source,

@@ -3,9 +3,9 @@
 //! each engine, the compliance pairs, then the leaderboard's tables, page and reports.
 
 use super::{
-    load_policy_file, run_leaderboard, run_pairs, synthetic_dataset, write_leaderboard_outputs,
-    CompliancePair, LeaderboardError, LeaderboardObserver, LeaderboardOutputs, LeaderboardRequest,
-    OutputsError, OwnClip, PageHeader, PairOptions,
+    check_pairs, load_policy_file, run_leaderboard, run_pairs, synthetic_dataset,
+    write_leaderboard_outputs, CompliancePair, LeaderboardError, LeaderboardObserver,
+    LeaderboardOutputs, LeaderboardRequest, OutputsError, OwnClip, PageHeader, PairOptions,
 };
 use crate::eval::EngineChoice;
 use crate::report::{Page, ReportError, WebBundle};
@@ -77,6 +77,14 @@ pub fn run_leaderboard_job(
     } else {
         vec![EngineChoice::Rapier]
     };
+    let pair_options = PairOptions {
+        engines: engines.clone(),
+        out: job.out.clone(),
+        unchecked: job.unchecked,
+        ..job.pair_options.clone()
+    };
+    // The pairs before any run: a bad pair option fails now, not after the board's runs.
+    check_pairs(&job.pairs, &pair_options)?;
     let (mut policies, processes) = match &job.policy_file {
         Some(file) => load_policy_file(file)?,
         None => Default::default(),
@@ -99,12 +107,6 @@ pub fn run_leaderboard_job(
         Vec::new()
     } else {
         run_leaderboard(&request, observer)?
-    };
-    let pair_options = PairOptions {
-        engines,
-        out: job.out.clone(),
-        unchecked: job.unchecked,
-        ..job.pair_options.clone()
     };
     let pairs = run_pairs(&job.pairs, &pair_options, observer)?;
     let header = PageHeader {

@@ -35,16 +35,8 @@ impl LaunchedPolicy {
         log: &Path,
         note: &mut dyn FnMut(&str),
     ) -> Result<Self, String> {
-        let timeout = process.connect_timeout_s;
-        let connect_timeout = match Duration::try_from_secs_f64(timeout) {
-            Ok(t) if t.is_zero() => None,
-            Ok(t) => Some(t),
-            Err(_) => {
-                return Err(format!(
-                    "connect_timeout_s = {timeout}: give seconds >= 0 (0 waits forever)"
-                ))
-            }
-        };
+        let connect_timeout = crate::policy::check_wait_s(process.connect_timeout_s, true)
+            .map_err(|why| format!("connect_timeout_s = {why}"))?;
         let line = policy_command_line(&process.command, session).map_err(|e| e.to_string())?;
         let out = crate::campaign::sweep::create_log(log)
             .map_err(|e| format!("{}: {e}", log.display()))?;

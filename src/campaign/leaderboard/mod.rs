@@ -31,8 +31,8 @@ pub use outputs::{
     leaderboard_tables, write_leaderboard_outputs, LeaderboardOutputs, OutputsError, PageHeader,
 };
 pub use pairs::{
-    pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember, PairOptions,
-    PairResult,
+    check_pairs, pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember,
+    PairOptions, PairResult,
 };
 pub use progress_lines::ProgressLines;
 
@@ -186,7 +186,9 @@ pub fn load_policy_file(
         path: path.to_path_buf(),
         message,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| invalid(e.to_string()))?;
+    // A policy file is a few kilobytes; 16 MiB bounds what a mistaken path costs.
+    let text = crate::files::bounded_read::read_to_string(path, "policy file", 16 << 20)
+        .map_err(|e| invalid(e.to_string()))?;
     let file: PolicyFile = toml::from_str(&text).map_err(|e| invalid(e.to_string()))?;
     if file.policies.is_empty() {
         return Err(invalid("no [[policy]] table".into()));
@@ -208,6 +210,7 @@ pub fn load_policy_file(
                 return Err(at("an in-process policy runs under its own family's profile and name: drop its `name =` and `profile =` keys"));
             }
             (Some(argument), _) => arguments.push(argument),
+            // `p.check()` held its `connect_timeout_s` to the one check of a wait.
             (None, Some(command)) => processes.push(PolicyProcess {
                 name: p.label(),
                 command: command.clone(),
@@ -628,8 +631,10 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
     out
 }
 
-/// Writes `out/leaderboard.md`: what was run (dataset, settings, where the runs are, the
-/// command and its wall time) and the tables; returns its path.
+/// Writes `out/leaderboard.md`: what was run (dataset and settings of the general board —
+/// none for a board of single-clip policies or pairs only, each of whose tables says its
+/// own —, where the runs are, the command and its wall time) and the tables; returns its
+/// path.
 pub fn write_leaderboard_page(
     out: &Path,
     dataset: &Path,
@@ -639,10 +644,17 @@ pub fn write_leaderboard_page(
     tables: &str,
 ) -> std::io::Result<PathBuf> {
     let path = out.join("leaderboard.md");
+    let general = if dataset.as_os_str().is_empty() {
+        String::new()
+    } else {
+        format!(
+            "Dataset `{}`, settings {}; ",
+            dataset.display(),
+            settings.join(", ")
+        )
+    };
     let text = format!(
-        "# Leaderboard\n\nDataset `{}`, settings {}; one `eval` run per row in `{}`. Command: `thorarena {command}`. Wall time of this invocation: {wall_s:.0} s.\n\n{tables}",
-        dataset.display(),
-        settings.join(", "),
+        "# Leaderboard\n\n{general}one `eval` run per row in `{}`. Command: `thorarena {command}`. Wall time of this invocation: {wall_s:.0} s.\n\n{tables}",
         out.join("runs").display(),
     );
     crate::files::atomic_file::write(&path, text)?;

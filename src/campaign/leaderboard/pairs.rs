@@ -204,8 +204,77 @@ fn one_sequence_dataset(
     Ok(())
 }
 
+/// The shortest stretch of a clip a pair runs, s: a policy's sanity check and the
+/// velocity errors of the scores need a second of motion.
+pub const MIN_PAIR_SECONDS: f64 = 1.0;
+
+/// Checks the pairs and their options before anything runs — the leaderboard's own runs
+/// included — and gives each pair's stiffness sweep (the compliant member's arguments at
+/// each stiffness besides its default): a pair is two different network files, the
+/// seconds are a number of at least [`MIN_PAIR_SECONDS`], the pushes settings `eval`
+/// takes, and a stiffness the family's declared one (a value repeated, as `30,30.0`, runs
+/// once).
+pub fn check_pairs(
+    pairs: &[CompliancePair],
+    options: &PairOptions,
+) -> Result<Vec<Vec<String>>, LeaderboardError> {
+    if pairs.is_empty() {
+        return Ok(Vec::new());
+    }
+    let all = |message: String| data_error("(every pair)", message);
+    if !(options.seconds.is_finite() && options.seconds >= MIN_PAIR_SECONDS) {
+        return Err(all(format!(
+            "`option.pair_seconds` {}: give at least {MIN_PAIR_SECONDS} s of the clip",
+            crate::eval::short_number(options.seconds)
+        )));
+    }
+    for setting in options.push_settings() {
+        if crate::eval::Setting::parse(&setting).is_none() {
+            return Err(all(format!(
+                "`{setting}` (from `option.pair_pushes` and `option.pair_headings`) is no setting `eval` takes: a push is finite, at most {} N, from -360 to 360 degrees",
+                crate::eval::Setting::MAX_PUSH_N
+            )));
+        }
+    }
+    let mut seen = std::collections::BTreeSet::new();
+    for pair in pairs {
+        if !seen.insert((pair.compliant.clone(), pair.baseline.clone())) {
+            return Err(data_error(&pair.name(), "given twice".into()));
+        }
+        for member in [&pair.compliant, &pair.baseline] {
+            let arg = registry::PolicyArg::parse(member)
+                .map_err(|e| data_error(&pair.name(), format!("`{member}`: {e}")))?;
+            if arg.file().is_none() {
+                return Err(data_error(
+                    &pair.name(),
+                    format!(
+                        "`{member}` is no network file: a pair is two networks trained on one clip"
+                    ),
+                ));
+            }
+        }
+        let same_file = |a: &str, b: &str| {
+            let file = |p: &str| {
+                registry::PolicyArg::parse(p)
+                    .ok()
+                    .and_then(|arg| arg.file().map(|f| f.to_path_buf()))
+                    .and_then(|f| crate::policy::network_file::NetworkFile::read(&f).ok())
+                    .map(|(_, id)| id)
+            };
+            matches!((file(a), file(b)), (Some(x), Some(y)) if x == y)
+        };
+        if pair.compliant == pair.baseline || same_file(&pair.compliant, &pair.baseline) {
+            return Err(data_error(
+                &pair.name(),
+                "both members are one network: a pair compares two".into(),
+            ));
+        }
+    }
+    pairs.iter().map(|p| sweep_of(p, options)).collect()
+}
+
 /// Runs every pair: the clip and its grafted twin written under `<out>/pairs/<pair>/`,
-/// then each member's two runs on each engine.
+/// then each member's two runs on each engine (the pairs checked first, [`check_pairs`]).
 pub fn run_pairs(
     pairs: &[CompliancePair],
     options: &PairOptions,
@@ -231,10 +300,7 @@ pub fn run_pairs(
         .ok_or_else(|| data_error("(force history)", "nothing synthesized".into()))?;
     let settings = options.push_settings();
     let mut results = Vec::new();
-    let sweeps = pairs
-        .iter()
-        .map(|p| sweep_of(p, options))
-        .collect::<Result<Vec<_>, _>>()?;
+    let sweeps = check_pairs(pairs, options)?;
     let total = sweeps.iter().map(|s| 2 + s.len()).sum::<usize>() * options.engines.len();
     let mut index = 0;
     for (pair, sweep) in pairs.iter().zip(sweeps) {
@@ -321,13 +387,25 @@ fn sweep_of(pair: &CompliancePair, options: &PairOptions) -> Result<Vec<String>,
     let Ok(compliant) = registry::PolicyArg::parse(&pair.compliant) else {
         return Ok(Vec::new());
     };
-    if compliant.family().name != "softmimic" || compliant.parameters().is_some() {
+    if compliant.family().name != "softmimic" {
         return Ok(Vec::new());
     }
-    options
-        .stiffness_n_per_m
+    if let Some(own) = compliant.parameters() {
+        return Err(data_error(
+            &pair.name(),
+            format!(
+                "the compliant member names its parameters (`@{own}`), but its stiffness is what the pair sweeps (`option.pair_stiffness`): name the network alone"
+            ),
+        ));
+    }
+    let mut stiffness: Vec<f64> = Vec::new();
+    for &k in &options.stiffness_n_per_m {
+        if !stiffness.contains(&k) && k != crate::policy::softmimic::DEFAULT_STIFFNESS.linear {
+            stiffness.push(k);
+        }
+    }
+    stiffness
         .iter()
-        .filter(|&&k| k != crate::policy::softmimic::DEFAULT_STIFFNESS.linear)
         .map(|k| {
             compliant
                 .with_parameters(&format!("stiffness={k}"))

@@ -236,10 +236,31 @@ impl Plan {
         let durations = selected_durations(spec, datasets, &selection).map_err(invalid)?;
         check_shards(spec, &durations).map_err(invalid)?;
         super::axes::refuse_equivalent(spec, spec_path, datasets)?;
+        // Every rule's budget parses, whichever policies it ends up applied to.
+        for l in spec.latency_rules() {
+            parse_budget(&l.budget)
+                .map_err(|e| invalid(format!("latency rule `{}`: budget: {e}", l.label())))?;
+        }
         let mut cells = Vec::new();
         let mut tasks = Vec::new();
         for p in &spec.policies {
             let policy = policy_axis(p, &workdir);
+            // An in-process policy has no round trip to time: it runs under the rules that
+            // do not time it, so no latency curve is drawn over an axis that never varied.
+            let in_process = p.command.is_none()
+                && crate::policy::registry::PolicyArg::parse(&policy.policy)
+                    .is_ok_and(|arg| arg.session().is_none());
+            let rules: Vec<_> = spec
+                .latency_rules()
+                .into_iter()
+                .filter(|l| !(in_process && l.times_the_policy()))
+                .collect();
+            if rules.is_empty() {
+                return Err(invalid(format!(
+                    "policy `{}` runs in process, where no budget or measured latency applies, and every `[[latency]]` rule sets one: add a lock-step rule (`[[latency]]` with `name = \"lock-step\"`) or run the policy as a process (`command = …`)",
+                    policy.name
+                )));
+            }
             for e in spec.engine_axis() {
                 let engine = EngineAxis {
                     name: e.label(),
@@ -248,7 +269,7 @@ impl Plan {
                     physics_dt_s: e.physics_dt_s,
                 };
                 for (ds, durations_s) in datasets.iter().zip(&durations) {
-                    for l in spec.latency_rules() {
+                    for l in &rules {
                         let latency = LatencyRule {
                             name: l.label(),
                             budget: l.budget.clone(),

@@ -74,13 +74,15 @@ pub fn check_cells_load(plan: &Plan) -> Result<(), SweepError> {
         }
         // Loading the dataset, profile and keypoints once per combination keeps planning
         // a sweep of thousands of cells fast.
+        // The latency rule too: a budget an in-process policy cannot honour is refused.
         let key = format!(
-            "{}|{}|{}|{}|{:?}",
+            "{}|{}|{}|{}|{:?}|{:?}",
             cell.policy.policy,
             cell.policy.profile,
             cell.policy.keypoints,
             cell.dataset.display(),
-            cell.engine
+            cell.engine,
+            cell.latency
         );
         if !checked.insert(key) {
             continue;

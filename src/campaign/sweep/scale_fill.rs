@@ -104,10 +104,12 @@ pub fn finish_with_shard_runs(dir: &Path, shards: &[PathBuf]) -> Result<usize, S
             (source.summary_file(), run.summary_file()),
             (source.tables_file(), run.tables_file()),
         ] {
-            std::fs::copy(&from, &to).map_err(|e| ScaleFillError::Io {
-                path: to,
-                source: e,
-            })?;
+            std::fs::read(&from)
+                .and_then(|bytes| crate::files::atomic_file::write(&to, bytes))
+                .map_err(|e| ScaleFillError::Io {
+                    path: to,
+                    source: e,
+                })?;
         }
         episodes += records.len();
     }

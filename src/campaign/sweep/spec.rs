@@ -150,10 +150,12 @@ fn default_miss_rule() -> String {
 impl SweepSpec {
     /// Reads and checks a spec file: TOML, no unknown keys, no empty axis.
     pub fn load(path: &Path) -> Result<Self, SweepError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SweepError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        // A spec is a few kilobytes; 16 MiB bounds what a mistaken path costs.
+        let text = crate::files::bounded_read::read_to_string(path, "sweep spec", 16 << 20)
+            .map_err(|source| SweepError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
         let mut spec: Self = toml::from_str(&text).map_err(|e| SweepError::Toml {
             path: path.to_path_buf(),
             message: e.to_string(),
@@ -242,6 +244,14 @@ impl SweepSpec {
     }
 }
 
+impl LatencySpec {
+    /// Whether the rule times the policy (a budget, or measured latency): only a policy
+    /// process is timed, so an in-process policy runs under the other rules alone.
+    pub fn times_the_policy(&self) -> bool {
+        self.budget != "none" || self.mode == "measured"
+    }
+}
+
 impl PolicySpec {
     /// One policy per combination of [`Self::parameters`]' values, each naming its values
     /// in its policy argument (`FILE@stiffness=40`); itself when it has none.
@@ -321,9 +331,8 @@ impl PolicySpec {
             }
             _ => {}
         }
-        if !(self.connect_timeout_s.is_finite() && self.connect_timeout_s > 0.0) {
-            return Err("`connect_timeout_s` must be > 0".into());
-        }
+        crate::policy::check_wait_s(self.connect_timeout_s, false)
+            .map_err(|why| format!("`connect_timeout_s` = {why}"))?;
         Ok(())
     }
 

@@ -10,7 +10,7 @@ use super::text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_M
 use super::SweepError;
 use crate::eval::EvalRequest;
 use std::fs::File;
-use std::io::{Read, Write};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// `done.json`: written last, atomically, once the task's run is complete and flushed.
@@ -100,7 +100,7 @@ impl TaskDir {
     pub fn lock(&self) -> Result<TaskLock, SweepError> {
         std::fs::create_dir_all(&self.dir).map_err(self.io(self.dir.clone()))?;
         let path = self.dir.join(LOCK_FILE);
-        let file = File::create(&path).map_err(self.io(path.clone()))?;
+        let file = crate::files::no_follow::create(&path).map_err(self.io(path.clone()))?;
         use std::os::fd::AsRawFd;
         loop {
             // SAFETY: flock on a descriptor we own.
@@ -117,7 +117,7 @@ impl TaskDir {
     /// Creates (truncates) one of its logs for an attempt.
     pub fn create_log(&self, log: TaskLog) -> Result<File, SweepError> {
         let path = self.log_file(log);
-        File::create(&path).map_err(self.io(path))
+        crate::files::no_follow::create(&path).map_err(self.io(path))
     }
 
     /// Forgets the last attempt's failure (a new attempt starts).
@@ -232,30 +232,13 @@ impl TaskDir {
     }
 }
 
-/// Writes `bytes` to `path` through a temporary sibling, synced and renamed; the temporary
-/// file is removed if any step fails (a full disk leaves nothing behind), and the
-/// directory is synced so the rename survives a crash.
+/// Writes `bytes` to `path` with [`crate::files::atomic_file::write`] (a temporary
+/// sibling, synced, renamed, its directory synced; nothing left behind on failure).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SweepError> {
-    let tmp = path.with_extension(format!("tmp-{}", std::process::id()));
-    let written = (|| -> std::io::Result<()> {
-        let mut f = File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    })();
-    if let Err(source) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(SweepError::Io {
-            path: path.to_path_buf(),
-            source,
-        });
-    }
-    if let Some(parent) = path.parent() {
-        if let Ok(d) = File::open(parent) {
-            let _ = d.sync_all();
-        }
-    }
-    Ok(())
+    crate::files::atomic_file::write(path, bytes).map_err(|source| SweepError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }
 
 /// [`write_atomic`], creating `path`'s directory (and `also`, a directory the file names,

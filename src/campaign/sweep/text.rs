@@ -45,7 +45,7 @@ pub fn create_log(path: &std::path::Path) -> std::io::Result<std::fs::File> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir)?;
     }
-    std::fs::File::create(path)
+    crate::files::no_follow::create(path)
 }
 
 /// The last `n` non-empty lines of a log file, each printable and at most

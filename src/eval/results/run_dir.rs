@@ -138,13 +138,15 @@ impl RunDir {
         use std::os::fd::AsRawFd;
         std::fs::create_dir_all(&self.dir).map_err(ResultsError::io(&self.dir))?;
         let path = self.dir.join(LOCK_FILE);
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(false)
-            .open(&path)
-            .map_err(ResultsError::io(&path))?;
+        let mut file = crate::files::no_follow::open(
+            crate::files::no_follow::options()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false),
+            &path,
+        )
+        .map_err(ResultsError::io(&path))?;
         // SAFETY: flock on a descriptor this function owns; no memory is shared.
         if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
             let err = std::io::Error::last_os_error();
@@ -174,7 +176,13 @@ impl RunDir {
         let existed = self.dir.exists();
         std::fs::create_dir_all(&self.dir).map_err(ResultsError::io(&self.dir))?;
         let probe = self.dir.join(format!(".write-test-{}", std::process::id()));
-        std::fs::write(&probe, b"").map_err(|source| ResultsError::NotWritable {
+        crate::files::no_follow::open(
+            crate::files::no_follow::options()
+                .write(true)
+                .create_new(true),
+            &probe,
+        )
+        .map_err(|source| ResultsError::NotWritable {
             path: self.dir.clone(),
             source,
         })?;
@@ -212,7 +220,7 @@ impl RunDir {
                 .collect();
             EpisodeLog::rewrite(&episodes, &started.kept)?;
         } else {
-            std::fs::File::create(&episodes).map_err(ResultsError::io(&episodes))?;
+            crate::files::no_follow::create(&episodes).map_err(ResultsError::io(&episodes))?;
         }
         write_header(&self.dir, header)?;
         Ok(started)
@@ -221,10 +229,9 @@ impl RunDir {
     /// Opens `episodes.jsonl` to append records as episodes finish.
     pub fn appender(&self) -> Result<RecordAppender, ResultsError> {
         let path = self.episodes_file();
-        let file = std::fs::OpenOptions::new()
-            .append(true)
-            .open(&path)
-            .map_err(ResultsError::io(&path))?;
+        let file =
+            crate::files::no_follow::open(crate::files::no_follow::options().append(true), &path)
+                .map_err(ResultsError::io(&path))?;
         Ok(RecordAppender {
             writer: std::io::BufWriter::new(file),
             path,

@@ -36,12 +36,9 @@ pub enum NamedClientError {
     /// The robot is not known.
     #[error(transparent)]
     Registry(#[from] RegistryError),
-    /// A timeout that is not a positive number of seconds.
-    #[error("`option.connect_timeout` must be > 0 s")]
-    ConnectTimeout,
-    /// A timeout no duration holds.
-    #[error("`option.connect_timeout` {0} s: too long to wait (give seconds that fit a duration)")]
-    ConnectTimeoutTooLong(f64),
+    /// A timeout outside what [`crate::policy::check_wait_s`] takes.
+    #[error("`option.connect_timeout` {0}")]
+    ConnectTimeout(String),
     /// The session failed.
     #[error("session `{session}`")]
     Client {
@@ -69,12 +66,10 @@ pub fn run_named_client(
         spin: Duration::from_micros(request.spin_us),
         ..WaitPolicy::default()
     };
-    let seconds = request.connect_timeout_s;
-    if !(seconds.is_finite() && seconds > 0.0) {
-        return Err(NamedClientError::ConnectTimeout);
-    }
-    let timeout = Duration::try_from_secs_f64(seconds)
-        .map_err(|_| NamedClientError::ConnectTimeoutTooLong(seconds))?;
+    let timeout = crate::policy::check_wait_s(request.connect_timeout_s, false)
+        .map_err(NamedClientError::ConnectTimeout)?
+        .unwrap_or(crate::policy::MAX_WAIT); // never forever: 0 was refused
+
     let mut make = |info: &SessionInfo| -> MadePolicy {
         match request.policy.as_str() {
             "echo" => Ok(None),

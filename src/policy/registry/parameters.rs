@@ -112,8 +112,8 @@ mod tests {
             (&[][..], "stiffness=5", "`falcon` takes no parameters"),
             (
                 &STIFFNESS[..],
-                "stiff=5",
-                "has no parameter `stiff` (did you mean",
+                "stifness=5",
+                "has no parameter `stifness` (did you mean `stiffness`",
             ),
             (
                 &STIFFNESS[..],

@@ -59,14 +59,22 @@ pub struct Dataset {
     pub manifest: Manifest,
 }
 
+/// The largest `manifest.json` read, bytes (64 MiB: a million sequences' entries).
+pub const MAX_MANIFEST_BYTES: u64 = 64 << 20;
+
+/// The largest sequence file read, bytes (1 GiB: hours of motion at 50 Hz).
+pub const MAX_SEQUENCE_BYTES: u64 = 1 << 30;
+
 impl Dataset {
     /// Opens `dir`, checking the manifest against the schema and the robot's joints.
     pub fn open(dir: &Path, robot: &RobotModel) -> Result<Self, DataError> {
         let path = dir.join(MANIFEST);
-        let text = std::fs::read_to_string(&path).map_err(|source| DataError::Io {
-            path: path.clone(),
-            source,
-        })?;
+        let text =
+            crate::files::bounded_read::read_to_string(&path, "manifest", MAX_MANIFEST_BYTES)
+                .map_err(|source| DataError::Io {
+                    path: path.clone(),
+                    source,
+                })?;
         let value: serde_json::Value = serde_json::from_str(&text)
             .map_err(|e| bad(&path, "(document)", format!("invalid JSON: {e}")))?;
         // The version is checked before the rest so that a newer manifest says so plainly.
@@ -154,10 +162,11 @@ impl Dataset {
     pub fn load(&self, i: usize) -> Result<Sequence, DataError> {
         let e = &self.manifest.sequences[i];
         let path = self.dir.join(&e.file);
-        let bytes = std::fs::read(&path).map_err(|source| DataError::Io {
-            path: path.clone(),
-            source,
-        })?;
+        let bytes = crate::files::bounded_read::read(&path, "sequence file", MAX_SEQUENCE_BYTES)
+            .map_err(|source| DataError::Io {
+                path: path.clone(),
+                source,
+            })?;
         let actual = sha256_hex(&bytes);
         if actual != e.sha256 {
             return Err(DataError::Checksum {

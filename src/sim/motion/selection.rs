@@ -9,6 +9,7 @@ use thiserror::Error;
 /// A selection of sequences. Empty lists select everything; both given, a sequence must
 /// pass both.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SequenceSelection {
     /// Tasks to keep (empty: every task).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

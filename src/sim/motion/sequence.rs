@@ -147,8 +147,30 @@ fn check_rows(file: &Path, name: &str, rows: &[Vec<f64>], width: usize) -> Resul
                 ),
             ));
         }
+        for (c, v) in row.iter().enumerate() {
+            if !storable(*v) {
+                return Err(bad(
+                    file,
+                    name,
+                    format!(
+                        "frame {k}, column {c} is {}: {}",
+                        crate::files::names::short_number(*v),
+                        NOT_STORABLE
+                    ),
+                ));
+            }
+        }
     }
-    check_finite(file, name, rows.iter().flatten())
+    Ok(())
+}
+
+/// Why a value is refused: sequence files store float32, so a finite f64 beyond its range
+/// would be written as infinity and leave the dataset unreadable.
+const NOT_STORABLE: &str = "not a finite number a float32 sequence file can hold";
+
+/// Finite, and finite still as the float32 a sequence file stores.
+fn storable(v: f64) -> bool {
+    v.is_finite() && v.abs() <= f64::from(f32::MAX)
 }
 
 fn check_finite<'a>(
@@ -157,11 +179,14 @@ fn check_finite<'a>(
     values: impl Iterator<Item = &'a f64>,
 ) -> Result<(), DataError> {
     for (i, v) in values.enumerate() {
-        if !v.is_finite() {
+        if !storable(*v) {
             return Err(bad(
                 file,
                 name,
-                format!("element {i} is {v} (NaN and Inf are not allowed)"),
+                format!(
+                    "element {i} is {}: {NOT_STORABLE}",
+                    crate::files::names::short_number(*v)
+                ),
             ));
         }
     }

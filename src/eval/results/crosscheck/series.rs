@@ -72,7 +72,7 @@ impl SeriesLog {
             }
         }
         // Rewrite what was kept, without a torn last line, then append.
-        let mut file = std::fs::File::create(&path).map_err(ResultsError::io(&path))?;
+        let mut file = crate::files::no_follow::create(&path).map_err(ResultsError::io(&path))?;
         for line in &kept {
             writeln!(file, "{line}").map_err(ResultsError::io(&path))?;
         }

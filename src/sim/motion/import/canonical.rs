@@ -177,6 +177,12 @@ fn trim_root_glitches(
     Ok(glitches)
 }
 
+/// How far beyond a joint's limits an imported angle may lie, rad: retargeted human motion
+/// overshoots a limit by a little (the controller's PD law clamps it), while a value far
+/// beyond one is a broken file (a unit mix-up, a corrupt cell) that would be stored and
+/// scored as if it were motion.
+pub const JOINT_LIMIT_MARGIN_RAD: f64 = 1.0;
+
 /// For each robot joint, the file's column holding it (`None`: the file lacks it, and it
 /// is set to 0). A joint name the robot lacks, or named twice, is an error, and so is a
 /// frame whose joint angles do not match the names.
@@ -211,6 +217,33 @@ fn joint_columns(
                     "frame {k} has {} values for {} joint names",
                     r.len(),
                     raw.joint_names.len()
+                ),
+            ));
+        }
+    }
+    for (j, c) in column_of.iter().enumerate() {
+        let Some(c) = *c else { continue };
+        let joint = &robot.joints[j];
+        let (lo, hi) = (
+            joint.lower_rad - JOINT_LIMIT_MARGIN_RAD,
+            joint.upper_rad + JOINT_LIMIT_MARGIN_RAD,
+        );
+        if let Some((k, v)) = raw
+            .joint_pos
+            .iter()
+            .map(|r| r[c])
+            .enumerate()
+            .find(|(_, v)| !(lo..=hi).contains(v))
+        {
+            return Err(bad_field(
+                source,
+                "joint_pos",
+                format!(
+                    "frame {k}, column {c} (`{}`) is {} rad, outside the joint's limits {:.3} to {:.3} rad widened by {JOINT_LIMIT_MARGIN_RAD} rad",
+                    joint.name,
+                    crate::files::names::short_number(v),
+                    joint.lower_rad,
+                    joint.upper_rad
                 ),
             ));
         }
@@ -338,8 +371,9 @@ mod tests {
     use super::*;
     use crate::sim::motion::import::G1_CANONICAL_JOINTS;
 
-    /// 45 frames at 30 fps walking +x at 1.2 m/s; joint j of frame k is `k + j / 100` rad
-    /// and its velocity `-k`, so every frame's rows identify it.
+    /// 45 frames at 30 fps walking +x at 1.2 m/s; joint j of frame k is
+    /// `k / 100 + j / 10000` rad (within every joint's limits) and its velocity `-k`, so
+    /// every frame's rows identify it.
     fn raw_walk() -> RawMotion {
         let t = 45;
         RawMotion {
@@ -348,7 +382,11 @@ mod tests {
             root_quat_wxyz: vec![[1.0, 0.0, 0.0, 0.0]; t],
             joint_names: G1_CANONICAL_JOINTS.iter().map(|n| n.to_string()).collect(),
             joint_pos: (0..t)
-                .map(|k| (0..29).map(|j| k as f64 + j as f64 / 100.0).collect())
+                .map(|k| {
+                    (0..29)
+                        .map(|j| k as f64 / 100.0 + j as f64 / 10_000.0)
+                        .collect()
+                })
                 .collect(),
             joint_vel: Some((0..t).map(|k| vec![-(k as f64); 29]).collect()),
             provenance: Default::default(),
@@ -378,7 +416,7 @@ mod tests {
     /// Source frame of a sequence frame, read back from its joint angles.
     fn source_frame(seq: &Sequence, k: usize) -> f64 {
         let j = robot().joint_index(G1_CANONICAL_JOINTS[0]).unwrap();
-        seq.joint_pos[k][j]
+        (seq.joint_pos[k][j] * 100.0).round()
     }
 
     #[test]

@@ -5,7 +5,6 @@
 //! optional and recognised by its first row not being numbers. Sensors log at 100–1000 Hz
 //! on their own clock, so [`ForceLog::resample`] brings a log onto the motion's frames.
 
-use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
@@ -28,10 +27,11 @@ pub fn read_force_csv(path: &Path) -> Result<ForceLog, ImportError> {
         field,
         reason,
     };
-    let file = File::open(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let file = crate::files::bounded_read::open(path, "force log", super::MAX_IMPORT_BYTES)
+        .map_err(|source| ImportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     // Headers are detected by hand; `flexible` lets a bad row reach our own message.
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)

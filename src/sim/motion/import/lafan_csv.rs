@@ -11,7 +11,6 @@
 //! does not ask for them. Neither layout carries a frame rate (both datasets are 30 fps,
 //! SoftMimic's at `30 · speed`), so the caller passes it.
 
-use std::fs::File;
 use std::io::BufReader;
 use std::path::Path;
 
@@ -113,10 +112,11 @@ pub fn read_retargeted_csv(
             format!("must be a positive number, got {fps}"),
         ));
     }
-    let file = File::open(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let file = crate::files::bounded_read::open(path, "motion file", super::MAX_IMPORT_BYTES)
+        .map_err(|source| ImportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     // `flexible` so that a short or long row reaches our own check (and message).
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)

@@ -16,6 +16,10 @@ pub use batch::{import_batch, BatchError, ImportBatch, ImportObserver, SourceFor
 
 use std::path::PathBuf;
 
+/// The largest input file an importer reads, bytes (1 GiB): hours of motion in any of the
+/// formats; a device or FIFO given as an input is refused before it is read.
+pub const MAX_IMPORT_BYTES: u64 = 1 << 30;
+
 /// The G1 29-DoF joint order of the Unitree URDF, MJCF and SDK motor indices, which this
 /// project treats as canonical (GMR/TWIST pickles and LAFAN CSVs use it too): left leg, right leg, waist, left arm, right arm.
 pub const G1_CANONICAL_JOINTS: [&str; 29] = [

@@ -15,7 +15,6 @@
 //! npz members are zip entries at arbitrary offsets (often deflated), so every array is
 //! decoded into an owned `Vec<f64>` rather than memory-mapped.
 
-use std::fs::File;
 use std::io::{self, BufReader};
 use std::path::Path;
 
@@ -68,10 +67,13 @@ pub fn read_beyondmimic_npz(
         field: field.to_string(),
         reason,
     };
-    let file = File::open(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    // Checked as a bounded read (a regular file within the limit), then read by seeking.
+    let file = crate::files::bounded_read::open(path, "motion file", super::MAX_IMPORT_BYTES)
+        .map_err(|source| ImportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .into_inner();
     let mut archive = NpzArchive::new(BufReader::new(file)).map_err(|e| ImportError::Format {
         path: path.to_path_buf(),
         format: "npz",

@@ -48,10 +48,11 @@ fn is_wrist(name: &&str) -> bool {
 
 /// Reads a GMR/TWIST/TWIST2/GMT motion pickle.
 pub fn read_twist_pkl(path: &std::path::Path) -> Result<super::RawMotion, super::ImportError> {
-    let bytes = std::fs::read(path).map_err(|source| ImportError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::files::bounded_read::read(path, "motion file", super::MAX_IMPORT_BYTES)
+        .map_err(|source| ImportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let format_err = |reason: String| ImportError::Format {
         path: path.to_path_buf(),
         format: FORMAT,
