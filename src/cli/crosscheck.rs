@@ -4,7 +4,7 @@
 //! interval. Both runs are ordinary run directories (`<out>/rapier`, `<out>/mujoco`).
 
 use super::choices::EngineArg;
-use super::eval::RunArgs;
+use super::eval::{RunArgs, RunOutArgs};
 use super::eval_run::{print_evaluated, Progress};
 use super::flags::as_flags;
 use std::path::PathBuf;
@@ -25,6 +25,9 @@ pub struct Args {
     /// runs, `crosscheck.json` and `crosscheck.csv`.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// What to do with a comparison already in --out, and the shard to run.
+    #[command(flatten)]
+    pub to: RunOutArgs,
     /// Bootstrap resamples of the confidence intervals.
     #[arg(long, default_value_t = 2000)]
     pub bootstrap: usize,
@@ -47,19 +50,21 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     if args.run.engine != EngineArg::Rapier {
         anyhow::bail!("crosscheck runs both engines: leave out --engine");
     }
-    let [rapier, mujoco] =
-        CrosscheckRequest::engine_requests(&args.run.request(&args.policy), args.mujoco_physics_dt);
+    let [rapier, mujoco] = CrosscheckRequest::engine_requests(
+        &args.run.request(&args.policy, args.to.shard),
+        args.mujoco_physics_dt,
+    );
     let request = CrosscheckRequest {
         rapier,
         mujoco,
         out: args.out.clone(),
-        resume: args.run.resume,
-        overwrite: args.run.overwrite,
+        resume: args.to.resume,
+        overwrite: args.to.overwrite,
         bootstrap: args.bootstrap,
         divergence_s: args.divergence_seconds,
     };
     let mut terminal = Terminal {
-        resume: args.run.resume,
+        resume: args.to.resume,
         progress: None,
     };
     let compared = compare_engines(&request, &mut terminal)?;

@@ -6,8 +6,8 @@
 //! up to — the same records, summary and tables as an unsharded run
 //! ([`thorarena::eval::pipeline::merge`]).
 
-pub use super::run_args::RunArgs;
 use super::run_args::REQUEST_CONFLICTS;
+pub use super::run_args::{RunArgs, RunOutArgs};
 use anyhow::Context;
 use std::path::PathBuf;
 use thorarena::eval::results::{RunDir, RunTarget};
@@ -29,6 +29,9 @@ pub struct Args {
     /// Run directory (default: results/<policy>-<dataset name>).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// What to do with a run already in --out, and the shard to run.
+    #[command(flatten)]
+    pub to: RunOutArgs,
     /// Everything else of the run.
     #[command(flatten)]
     pub run: RunArgs,
@@ -50,13 +53,13 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             request.workers = args.run.workers.or(request.workers);
             request
         }
-        None => args.run.request(&args.policy),
+        None => args.run.request(&args.policy, args.to.shard),
     };
     let spec = load_request(&request)?;
     let target = RunTarget {
         out: args.out.clone(),
-        resume: args.run.resume,
-        overwrite: args.run.overwrite,
+        resume: args.to.resume,
+        overwrite: args.to.overwrite,
         spec: &spec,
     };
     // An unusable --out is found before a policy process is made to connect.
@@ -78,7 +81,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         &mut |note| eprintln!("{note}"),
     )?;
     let out = target.out_for(policy.name())?;
-    super::eval_run::evaluate(args.run.resume, &spec, policy.as_mut(), &out)
+    super::eval_run::evaluate(args.to.resume, &spec, policy.as_mut(), &out)
 }
 
 /// Arguments of `merge`.

@@ -1,7 +1,8 @@
 //! The arguments that describe one evaluation, shared by `eval`, `serve` and
-//! `crosscheck`, and the [`EvalRequest`] they make.
+//! `crosscheck`, and the [`EvalRequest`] they make; and what a command writing one run to
+//! `--out` does with it ([`RunOutArgs`]: `eval`, `crosscheck`).
 
-use super::policy_arg::PolicyIoArgs;
+use super::policy_io_args::PolicyIoArgs;
 use std::path::PathBuf;
 use thorarena::eval::{parse_shard, EvalRequest, TerminationRule};
 use thorarena::sim::motion::SequenceSelection;
@@ -79,15 +80,6 @@ pub struct RunArgs {
     /// Keypoint set of the tracking error.
     #[arg(long, default_value = "default")]
     pub keypoints: String,
-    /// Continue the run in `--out`: keep its finished episodes, run the rest.
-    #[arg(long, conflicts_with = "overwrite")]
-    pub resume: bool,
-    /// Replace a run already in `--out` (without it, an existing run is refused).
-    #[arg(long)]
-    pub overwrite: bool,
-    /// Run only shard I of N of the schedule (`I/N`, 0-based); merge shards with `thorarena merge`.
-    #[arg(long, value_parser = parse_shard)]
-    pub shard: Option<(usize, usize)>,
     /// Termination: torso height off its reference by more than this, m.
     #[arg(long, default_value_t = TerminationRule::default().max_torso_height_error_m)]
     pub max_torso_height_error: f64,
@@ -122,8 +114,8 @@ pub struct RunArgs {
 
 impl RunArgs {
     /// The evaluation these arguments ask for, with policy argument `policy` (whose
-    /// family picks the profile when none is named).
-    pub fn request(&self, policy: &str) -> EvalRequest {
+    /// family picks the profile when none is named), of shard `shard`.
+    pub fn request(&self, policy: &str, shard: Option<(usize, usize)>) -> EvalRequest {
         EvalRequest {
             policy: policy.to_string(),
             dataset: self.dataset.clone(),
@@ -150,7 +142,22 @@ impl RunArgs {
             mjcf: self.mjcf.clone(),
             physics_dt_s: self.physics_dt,
             io: self.io.rules(),
-            shard: self.shard,
+            shard,
         }
     }
+}
+
+/// What a command that writes one run to `--out` does with it: continue it, replace it,
+/// or run one shard of it (not `serve`, whose every connection writes a new numbered run).
+#[derive(Debug, Clone, clap::Args)]
+pub struct RunOutArgs {
+    /// Continue the run in `--out`: keep its finished episodes, run the rest.
+    #[arg(long, conflicts_with = "overwrite")]
+    pub resume: bool,
+    /// Replace a run already in `--out` (without it, an existing run is refused).
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Run only shard I of N of the schedule (`I/N`, 0-based); merge shards with `thorarena merge`.
+    #[arg(long, value_parser = parse_shard)]
+    pub shard: Option<(usize, usize)>,
 }

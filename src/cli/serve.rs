@@ -27,8 +27,7 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    // The run serves a policy process on the session: its policy is that session's.
-    let ctx = load_request(&args.run.request(&format!("ipc:{}", args.session)))?;
+    let ctx = load_request(&args.run.request(&format!("ipc:{}", args.session), None))?;
     let session = args.run.io.session_options(ctx.io.budget_s)?;
     let target = PolicyTarget {
         robot: &ctx.robot,
@@ -41,7 +40,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         let mut policy = serve_session(&args.session, &target, &mut |_| Ok(()), &mut say)?;
         let stem = format!("{}-{}", policy.name(), ctx.dataset_name());
         let out = thorarena::eval::results::free_numbered_dir(&args.out_root, &stem, n);
-        let result = evaluate(args.run.resume, &ctx, &mut policy as &mut dyn Policy, &out);
+        let result = evaluate(false, &ctx, &mut policy as &mut dyn Policy, &out);
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {
             eprintln!("run {n} ended with an error: {e:#}");

@@ -22,7 +22,7 @@ pub enum SweepCommand {
     /// changed spec against an existing plan is refused with what changed.
     Plan(PlanArgs),
     /// Run every task that is not done, N at a time, with a progress bar over the sweep.
-    Run(RunArgs),
+    Run(SweepRunArgs),
     /// Run exactly one task (the index defaults to SLURM_ARRAY_TASK_ID, else
     /// JOB_COMPLETION_INDEX): skipped when done, resumed when half-done.
     Task(TaskArgs),
@@ -51,7 +51,7 @@ pub struct PlanArgs {
 
 /// Arguments of `sweep run`.
 #[derive(Debug, clap::Args)]
-pub struct RunArgs {
+pub struct SweepRunArgs {
     /// The sweep directory.
     pub dir: PathBuf,
     /// Tasks at a time [default: the cores]; each task's eval gets cores / jobs workers.

@@ -1,7 +1,7 @@
 //! `sweep run`: [`thorarena::campaign::sweep::run_sweep`] on the local pool, N tasks at a time,
 //! with a progress bar over the sweep's episodes.
 
-use super::RunArgs;
+use super::SweepRunArgs;
 use indicatif::{ProgressBar, ProgressStyle};
 use thorarena::campaign::sweep::{
     run_sweep, LocalRun, RunFinished, RunObserver, RunProgress, RunStarting,
@@ -38,7 +38,7 @@ impl RunObserver for Bar {
     }
 }
 
-pub(super) fn run_all(args: &RunArgs) -> anyhow::Result<()> {
+pub(super) fn run_all(args: &SweepRunArgs) -> anyhow::Result<()> {
     let run = LocalRun {
         exe: &std::env::current_exe()?,
         dir: &args.dir,

@@ -5,10 +5,10 @@
 //! run they add up to. The commands (`eval`, `serve`, `merge`, `crosscheck`, a sweep's
 //! tasks) only parse, call these and print.
 
-mod engines_compared;
+mod crosscheck;
 mod named_check;
 
-pub use engines_compared::{
+pub use crosscheck::{
     compare_engines, Compared, CrosscheckError, CrosscheckObserver, CrosscheckRequest,
     MAX_BOOTSTRAP,
 };
