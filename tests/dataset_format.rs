@@ -166,7 +166,7 @@ fn nan_and_inf_are_rejected() {
         t.get_mut("joint_pos").unwrap().1[100] = f32::NAN
     }));
     assert!(
-        msg.contains("joint_pos") && msg.contains("element 100 is NaN"),
+        msg.contains("joint_pos") && msg.contains("frame 3, column 13 is NaN"),
         "{msg}"
     );
     let msg = load_error(&raw_file(&seq, |t, _| {

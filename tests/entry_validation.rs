@@ -313,3 +313,34 @@ fn a_device_or_fifo_is_refused_wherever_a_file_is_read() {
         assert!(e.contains(says), "{args:?}: {e}");
     }
 }
+
+/// A run is never written into another run's directory (`--out runs/b0/sub`): its files
+/// would mix with that run's, and `merge`, `report` and `--resume` of it would not see it.
+#[test]
+fn a_run_inside_a_run_directory_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("b0");
+    let eval = |out: &Path| {
+        thorarena(&[
+            "eval",
+            "--dataset",
+            SAMPLE,
+            "--policy",
+            "hold",
+            "--sequences",
+            "clean_table_000",
+            "--settings",
+            "no-force",
+            "--workers",
+            "1",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
+    let o = eval(&run);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let inner = run.join("sub");
+    let e = error_of(&eval(&inner));
+    assert!(e.contains("lies inside the run"), "{e}");
+    assert!(!inner.exists(), "the inner run's directory was made");
+}

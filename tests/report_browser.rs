@@ -113,14 +113,15 @@ fn make_runs(dir: &Path) -> (PathBuf, PathBuf, PathBuf) {
     (balance, hold, trace)
 }
 
-/// An eight-cell sweep (balance and hold, without and with force, in lock step and with a
+/// An eight-cell sweep (balance and hold as policy processes — a budget times a process's
+/// round trip —, without and with force, in lock step and with a
 /// 5 ms budget under measured latency) collected into its report.
 fn make_sweep(dir: &Path) -> PathBuf {
     let spec = dir.join("sweep.toml");
     std::fs::write(
         &spec,
         format!(
-            "datasets = [\"{ROOT}/data/sample\"]\nsettings = [\"no-force\", \"force\"]\n[[policy]]\npolicy = \"hold\"\n[[policy]]\npolicy = \"balance\"\n[[latency]]\nname = \"lock-step\"\n[[latency]]\nname = \"5ms\"\nbudget = \"5ms\"\nmode = \"measured\"\n"
+            "datasets = [\"{ROOT}/data/sample\"]\nsettings = [\"no-force\", \"force\"]\n[[policy]]\nname = \"hold\"\ncommand = \"{{thorarena}} client --session {{session}} --policy hold\"\nconnect_timeout_s = 30\n[[policy]]\nname = \"balance\"\ncommand = \"{{thorarena}} client --session {{session}} --policy balance\"\nconnect_timeout_s = 30\n[[latency]]\nname = \"lock-step\"\n[[latency]]\nname = \"5ms\"\nbudget = \"5ms\"\nmode = \"measured\"\n"
         ),
     )
     .unwrap();

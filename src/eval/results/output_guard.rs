@@ -33,6 +33,15 @@ pub enum OutputRefused {
     /// A run's directory holds a dataset (refused even with `--overwrite`).
     #[error("`option.out` {} holds a dataset: a run is never written over one; choose another `option.out`", .0.display())]
     RunOverDataset(PathBuf),
+    /// A run's directory lies inside another run's directory (whose files would mix with
+    /// its own, and whose `merge`, `report` and `--resume` would not see it).
+    #[error("`option.out` {} lies inside the run {}: a run is never written into another; choose another `option.out`", .out.display(), .run.display())]
+    RunInsideRun {
+        /// The directory asked for.
+        out: PathBuf,
+        /// The run it lies in.
+        run: PathBuf,
+    },
     /// A dataset would be written into a run directory.
     #[error("`option.out` {} holds a run: a dataset is never written over one; choose another `option.out`", .0.display())]
     DatasetOverRun(PathBuf),
@@ -143,6 +152,16 @@ pub fn check_run_dir(
 ) -> Result<(), OutputRefused> {
     if out.join(MANIFEST).is_file() {
         return Err(OutputRefused::RunOverDataset(out.to_path_buf()));
+    }
+    if let Some(run) = resolved(out)
+        .ancestors()
+        .skip(1)
+        .find(|a| RunDir::new(a).holds_run())
+    {
+        return Err(OutputRefused::RunInsideRun {
+            out: out.to_path_buf(),
+            run: run.to_path_buf(),
+        });
     }
     let inputs: Vec<PathBuf> = dataset.into_iter().map(Path::to_path_buf).collect();
     check_dir(out, overwrite, &inputs)
