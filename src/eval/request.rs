@@ -157,8 +157,14 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
         i.parse().map_err(|_| "I is not a number")?,
         n.parse().map_err(|_| "N is not a number")?,
     );
+    check_shard(i, n)?;
+    Ok((i, n))
+}
+
+/// The one rule of a shard `I/N`, for `--shard` and a request file's `shard` alike.
+pub fn check_shard(i: usize, n: usize) -> Result<(), String> {
     if n == 0 || i >= n {
         return Err(format!("shard {i}/{n}: need 0 <= I < N"));
     }
-    Ok((i, n))
+    Ok(())
 }

@@ -514,10 +514,9 @@ fn check_io(io: &PolicyIoRules, in_process: Option<&str>) -> Result<(), SpecErro
 /// `request.shard` `(i, n)`: `0 <= i < n`, as `--shard` checks it.
 fn check_shard(shard: Option<(usize, usize)>) -> Result<(), SpecError> {
     match shard {
-        Some((i, n)) if n == 0 || i >= n => {
-            Err(invalid(format!("`request.shard` {i}/{n}: need 0 <= I < N")))
-        }
-        _ => Ok(()),
+        Some((i, n)) => super::request::check_shard(i, n)
+            .map_err(|why| invalid(format!("`request.shard`: {why}"))),
+        None => Ok(()),
     }
 }
 

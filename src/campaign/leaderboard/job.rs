@@ -84,7 +84,7 @@ pub fn run_leaderboard_job(
         ..job.pair_options.clone()
     };
     // The pairs before any run: a bad pair option fails now, not after the board's runs.
-    check_pairs(&job.pairs, &pair_options)?;
+    let sweeps = check_pairs(&job.pairs, &pair_options)?;
     let (mut policies, processes) = match &job.policy_file {
         Some(file) => load_policy_file(file)?,
         None => Default::default(),
@@ -108,7 +108,7 @@ pub fn run_leaderboard_job(
     } else {
         run_leaderboard(&request, observer)?
     };
-    let pairs = run_pairs(&job.pairs, &pair_options, observer)?;
+    let pairs = run_pairs(&job.pairs, sweeps, &pair_options, observer)?;
     let header = PageHeader {
         dataset: &dataset,
         settings: &job.settings,

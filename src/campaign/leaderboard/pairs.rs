@@ -241,29 +241,26 @@ pub fn check_pairs(
         if !seen.insert((pair.compliant.clone(), pair.baseline.clone())) {
             return Err(data_error(&pair.name(), "given twice".into()));
         }
+        let mut networks = Vec::new();
         for member in [&pair.compliant, &pair.baseline] {
             let arg = registry::PolicyArg::parse(member)
                 .map_err(|e| data_error(&pair.name(), format!("`{member}`: {e}")))?;
-            if arg.file().is_none() {
+            let Some(file) = arg.file() else {
                 return Err(data_error(
                     &pair.name(),
                     format!(
                         "`{member}` is no network file: a pair is two networks trained on one clip"
                     ),
                 ));
-            }
-        }
-        let same_file = |a: &str, b: &str| {
-            let file = |p: &str| {
-                registry::PolicyArg::parse(p)
-                    .ok()
-                    .and_then(|arg| arg.file().map(|f| f.to_path_buf()))
-                    .and_then(|f| crate::policy::network_file::NetworkFile::read(&f).ok())
-                    .map(|(_, id)| id)
             };
-            matches!((file(a), file(b)), (Some(x), Some(y)) if x == y)
-        };
-        if pair.compliant == pair.baseline || same_file(&pair.compliant, &pair.baseline) {
+            networks.push(
+                crate::policy::network_file::NetworkFile::read(file)
+                    .ok()
+                    .map(|(_, id)| id),
+            );
+        }
+        let same_file = matches!(&networks[..], [Some(a), Some(b)] if a == b);
+        if pair.compliant == pair.baseline || same_file {
             return Err(data_error(
                 &pair.name(),
                 "both members are one network: a pair compares two".into(),
@@ -274,9 +271,11 @@ pub fn check_pairs(
 }
 
 /// Runs every pair: the clip and its grafted twin written under `<out>/pairs/<pair>/`,
-/// then each member's two runs on each engine (the pairs checked first, [`check_pairs`]).
+/// then each member's two runs on each engine; `sweeps` are [`check_pairs`]' answer for
+/// `pairs` and `options` (checked before anything else runs, so not again here).
 pub fn run_pairs(
     pairs: &[CompliancePair],
+    sweeps: Vec<Vec<String>>,
     options: &PairOptions,
     observer: &mut dyn LeaderboardObserver,
 ) -> Result<Vec<PairResult>, LeaderboardError> {
@@ -300,7 +299,6 @@ pub fn run_pairs(
         .ok_or_else(|| data_error("(force history)", "nothing synthesized".into()))?;
     let settings = options.push_settings();
     let mut results = Vec::new();
-    let sweeps = check_pairs(pairs, options)?;
     let total = sweeps.iter().map(|s| 2 + s.len()).sum::<usize>() * options.engines.len();
     let mut index = 0;
     for (pair, sweep) in pairs.iter().zip(sweeps) {
