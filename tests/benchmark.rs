@@ -14,7 +14,7 @@ use thorarena::sim::motion::SequenceSelection;
 /// Two sample sequences of two tasks under force and no force: four `hold` episodes.
 fn request() -> EvalRequest {
     EvalRequest {
-        policy: "hold".into(),
+        policy: thorarena::policy::registry::PolicySource::parse("hold").unwrap(),
         dataset: Some(concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample").into()),
         selection: SequenceSelection {
             tasks: Vec::new(),
@@ -376,6 +376,18 @@ fn a_sweeps_cells_collect_from_their_shards_as_one_run_each() {
             .unwrap()
             .expect("the task's own complete run counts");
         assert_eq!(records.len(), t.episodes);
+        // Another shard's run does not count, and the refusal reads as run.json does
+        // (`[0,2]`), not as Rust's debug text (`Some((0, 2))`).
+        if t.shard.0 == 0 {
+            let sibling = &plan.tasks[t.index + 1];
+            match check_task_run(&plan, sibling, &RunDir::new(&run)).unwrap() {
+                Err(thorarena::campaign::sweep::RunProblem::NotThisTask(why)) => assert!(
+                    why.contains("its shard is [0,2]") && why.contains("plans [1,2]"),
+                    "{why}"
+                ),
+                other => panic!("task {}'s run counted for its sibling: {other:?}", t.index),
+            }
+        }
         // Another task's run does not count for this one.
         let other = &plan.tasks[(t.index + 2) % plan.tasks.len()];
         assert!(

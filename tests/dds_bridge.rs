@@ -292,6 +292,24 @@ fn a_bridge_without_commands_gives_up_plainly_and_writes_no_run() {
         "an empty run was left in {}",
         out.display()
     );
+    // Nor a directory holding only the writer's lock (issue 52, probe item 8).
+    assert!(!out.exists(), "{} was left behind", out.display());
+    // One setting, refused under this command's own flag, its value cut short.
+    let junk = Command::new(BIN)
+        .args(["dds", "--sequence", "pull_chair/pull_chair_000"])
+        .args(["--setting", &format!("junk{}", "9".repeat(300))])
+        .args(["--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&junk.stderr);
+    assert!(
+        !junk.status.success()
+            && stderr.contains("--setting: `junk9")
+            && !stderr.contains("--settings")
+            && !stderr.contains(&"9".repeat(100)),
+        "{stderr}"
+    );
+    assert!(!out.exists(), "{} was left behind", out.display());
     let bad = Command::new(BIN)
         .args([
             "dds",

@@ -303,7 +303,7 @@ fn a_request_file_runs_the_evaluation_its_flags_would() {
 
     // The same evaluation as a request: the library's type, serialized.
     let request = thorarena::eval::EvalRequest {
-        policy: "hold".into(),
+        policy: thorarena::policy::registry::PolicySource::parse("hold").unwrap(),
         dataset: Some(SAMPLE.into()),
         settings: vec!["force".into()],
         ..Default::default()

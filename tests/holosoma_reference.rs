@@ -268,7 +268,7 @@ fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale
     import_motion(&onnx, "dance", &dance).unwrap();
     let policy = format!("beyondmimic:{}", onnx.display());
     let request = |profile: &str, unchecked: bool| thorarena::eval::EvalRequest {
-        policy: policy.clone(),
+        policy: thorarena::policy::registry::PolicySource::parse(&policy).unwrap(),
         dataset: Some(dance.clone()),
         profile: Some(profile.into()),
         settings: vec!["no-force".into()],

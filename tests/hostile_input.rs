@@ -597,6 +597,19 @@ fn import_refuses_frame_rates_and_force_alignments_that_lose_the_motion_or_its_f
         String::from_utf8_lossy(&fine.stderr)
     );
     std::fs::remove_dir_all(&out).unwrap();
+    // A log covering half the motion imports, and says so (issue 52, probe item 8: it
+    // said nothing, and the frames it misses replay no force).
+    let (half_l, half_r) = (log("left-half.csv", 2.5), log("right-half.csv", 2.5));
+    let half = import(&["--forces", &half_l, &half_r]);
+    let said = String::from_utf8_lossy(&half.stderr);
+    assert!(half.status.success(), "{said}");
+    assert!(
+        said.contains("note: the left force log covers")
+            && said.contains("of the motion's 150 frames")
+            && said.contains("--force-offset"),
+        "{said}"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
     for (extra, wants) in [
         (vec!["--fps", "1e-300"], vec!["fps", "1 to 1000 Hz"]),
         (

@@ -26,7 +26,7 @@ mod prereq;
 fn check(policy: &str, profile: &Path, tracking: &Sequence) -> SanityReport {
     let robot = common::g1();
     let profile = thorarena::sim::profile::load_profile(profile, &robot).unwrap();
-    let arg = registry::PolicyArg::parse(policy).unwrap();
+    let arg = registry::PolicySource::parse(policy).unwrap();
     let PolicyChoice::InProcess(mut p) = arg.load(&robot, &profile).unwrap() else {
         panic!("{policy} does not run in process");
     };
@@ -178,7 +178,7 @@ fn a_baseline_that_cannot_walk_fails_track_from_the_command_line() {
 /// `run.json` `sanity`, or the error's text.
 fn sanity_of_eval(policy: &str, unchecked: bool, out: &Path) -> Result<serde_json::Value, String> {
     let request = thorarena::eval::EvalRequest {
-        policy: policy.into(),
+        policy: thorarena::policy::registry::PolicySource::parse(policy).unwrap(),
         settings: vec!["no-force".into()],
         selection: thorarena::sim::motion::SequenceSelection {
             tasks: Vec::new(),
@@ -252,13 +252,13 @@ fn a_published_network_runs_under_its_own_profile_whatever_its_file_is_called() 
     std::fs::copy(&ppo, &renamed).unwrap();
     let policy = format!("beyondmimic:{}", renamed.display());
     assert_eq!(
-        registry::PolicyArg::parse(&policy)
+        registry::PolicySource::parse(&policy)
             .unwrap()
             .default_profile(),
         "holosoma-ppo"
     );
     let spec = thorarena::eval::EvalSpec::load(&thorarena::eval::EvalRequest {
-        policy: policy.clone(),
+        policy: thorarena::policy::registry::PolicySource::parse(&policy).unwrap(),
         ..Default::default()
     })
     .unwrap();
@@ -270,7 +270,7 @@ fn a_published_network_runs_under_its_own_profile_whatever_its_file_is_called() 
     let edited = dir.path().join("edited.onnx");
     std::fs::write(&edited, bytes).unwrap();
     assert_eq!(
-        registry::PolicyArg::parse(&format!("beyondmimic:{}", edited.display()))
+        registry::PolicySource::parse(&format!("beyondmimic:{}", edited.display()))
             .unwrap()
             .default_profile(),
         "beyondmimic"

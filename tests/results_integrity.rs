@@ -39,7 +39,7 @@ fn eval_hold(ds: &Path, run: &Path, resume: bool) -> Result<bool, String> {
         }
     }
     let spec = EvalSpec::load(&EvalRequest {
-        policy: "hold".into(),
+        policy: thorarena::policy::registry::PolicySource::parse("hold").unwrap(),
         dataset: Some(ds.to_path_buf()),
         ..EvalRequest::default()
     })

@@ -170,12 +170,16 @@ fn an_edited_policy_command_in_plan_json_is_never_run() {
     plan(&spec, &dir);
     let marker = tmp.path().join("MARKER");
     edit_plan(&dir, |v| {
-        let command = v["cells"][0]["policy"]["command"]
+        // A launched policy is planned as its command's table (plan format 5).
+        let command = v["cells"][0]["policy"]["policy"]["command"]
             .as_str()
             .unwrap()
             .to_string();
-        v["cells"][0]["policy"]["command"] =
-            serde_json::json!(format!("touch {}; {command}", marker.display()));
+        let edited = serde_json::json!(format!("touch {}; {command}", marker.display()));
+        v["cells"][0]["policy"]["policy"]["command"] = edited.clone();
+        // The task's request too: an edit consistent with itself, which only the seal
+        // can tell from the plan as planned.
+        v["tasks"][0]["request"]["policy"]["command"] = edited;
     });
     for args in [vec!["task", "--index", "0"], vec!["run"], vec!["status"]] {
         let mut full = vec!["sweep", args[0], s(&dir)];

@@ -272,7 +272,7 @@ fn a_residual_action_is_added_to_the_reference_and_recovered_from_the_last_step(
 
 #[test]
 fn wbc_mjlab_is_one_entry_of_the_registry_with_its_own_profile() {
-    let arg = thorarena::policy::registry::PolicyArg::parse("wbc-mjlab:w.onnx").unwrap();
+    let arg = thorarena::policy::registry::PolicySource::parse("wbc-mjlab:w.onnx").unwrap();
     assert_eq!(arg.family().profile, "wbc-mjlab");
     assert_eq!(arg.default_profile(), "wbc-mjlab");
     let robot = g1();

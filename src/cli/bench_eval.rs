@@ -15,6 +15,7 @@ use super::choices::EngineArg;
 use std::path::PathBuf;
 use thorarena::campaign::bench::{BenchLine, EvalBench, SweepBench};
 use thorarena::eval::EvalRequest;
+use thorarena::policy::launched::PolicyCommand;
 
 /// Arguments of `bench eval`.
 #[derive(Debug, clap::Args)]
@@ -23,8 +24,8 @@ pub struct Args {
     #[arg(long, default_value = "data/sample")]
     pub dataset: PathBuf,
     // Its help lists every family of the registry run in process.
-    #[arg(long, default_value = "hold", help = thorarena::policy::registry::policy_help(true))]
-    pub policy: String,
+    #[arg(long, default_value = "hold", value_parser = thorarena::policy::registry::PolicySource::parse, help = thorarena::policy::registry::policy_help(true))]
+    pub policy: thorarena::policy::registry::PolicySource,
     // Its help says how the registry chooses the default.
     #[arg(long, help = thorarena::policy::registry::profile_help())]
     pub profile: Option<String>,
@@ -61,9 +62,15 @@ pub struct Args {
 
 /// `bench eval`: the library runs each depth and hands over each line as the run ends.
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
+    let workdir = std::env::current_dir()?;
+    let command = args.policy_command.as_deref();
+    let policy = match command.map(|c| PolicyCommand::new(c, &workdir, args.connect_timeout)) {
+        Some(c) => c.map_err(anyhow::Error::msg)?.into(),
+        None => args.policy.clone(),
+    };
     let bench = EvalBench {
         request: EvalRequest {
-            policy: args.policy.clone(),
+            policy,
             dataset: Some(args.dataset.clone()),
             profile: args.profile.clone(),
             settings: args.settings.clone(),
@@ -73,10 +80,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             envs: args.envs,
             ..EvalRequest::default()
         },
-        policy_command: args.policy_command.clone(),
-        connect_timeout_s: args.connect_timeout,
         pipeline_depths: args.pipeline_depths.clone(),
-        workdir: std::env::current_dir()?,
     };
     bench.run(&mut print)?;
     Ok(())

@@ -19,8 +19,8 @@ use thorarena::report::crosscheck_report;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     // Its help lists every family of the registry run in process.
-    #[arg(long, default_value = "balance", help = thorarena::policy::registry::policy_help(true))]
-    pub policy: String,
+    #[arg(long, default_value = "balance", value_parser = thorarena::policy::registry::PolicySource::parse, help = thorarena::policy::registry::policy_help(true))]
+    pub policy: thorarena::policy::registry::PolicySource,
     /// Output directory (default: results/crosscheck-<policy>-<dataset name>): the two
     /// runs, `crosscheck.json` and `crosscheck.csv`.
     #[arg(long)]
@@ -51,7 +51,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         anyhow::bail!("crosscheck runs both engines: leave out --engine");
     }
     let [rapier, mujoco] = CrosscheckRequest::engine_requests(
-        &args.run.request(&args.policy, args.to.shard),
+        &args.run.request(args.policy.clone(), args.to.shard),
         args.mujoco_physics_dt,
     );
     let request = CrosscheckRequest {

@@ -188,7 +188,7 @@ fn import(args: &ImportArgs) -> anyhow::Result<()> {
         trim_glitches: args.trim_glitches,
         ground_correct: args.ground_correct,
     };
-    let mut say = |line: &str| eprintln!("{line}");
+    let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
     let ds = import_batch(
         &args.out,
         &robot,

@@ -10,16 +10,15 @@ use super::run_args::REQUEST_CONFLICTS;
 pub use super::run_args::{RunArgs, RunOutArgs};
 use anyhow::Context;
 use std::path::PathBuf;
-use thorarena::eval::results::{RunDir, RunTarget};
-use thorarena::eval::{EvalRequest, EvalSpec};
+use thorarena::eval::{pipeline::merge_dirs, results::RunTarget, EvalRequest, EvalSpec};
 use thorarena::policy::registry::{open_policy, PolicyTarget};
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     // Its help lists every family of the registry.
-    #[arg(long, default_value = "balance", help = thorarena::policy::registry::policy_help(false))]
-    pub policy: String,
+    #[arg(long, default_value = "balance", value_parser = thorarena::policy::registry::PolicySource::parse, help = thorarena::policy::registry::policy_help(false))]
+    pub policy: thorarena::policy::registry::PolicySource,
     /// Run the evaluation a request file describes (JSON, every field of
     /// `thorarena::eval::EvalRequest`; a sweep task writes one per attempt) instead
     /// of one given by flags. Only --out, --resume, --overwrite, --workers and the
@@ -53,7 +52,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             request.workers = args.run.workers.or(request.workers);
             request
         }
-        None => args.run.request(&args.policy, args.to.shard),
+        None => args.run.request(args.policy.clone(), args.to.shard),
     };
     let spec = load_request(&request)?;
     let target = RunTarget {
@@ -65,6 +64,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     // An unusable --out is found before a policy process is made to connect.
     target.check_given()?;
     let session = args.run.io.session_options(spec.io.budget_s)?;
+    let launch_log = args
+        .out
+        .as_deref()
+        .map(thorarena::policy::launched::log_beside);
     let mut policy = open_policy(
         &request.policy,
         &PolicyTarget {
@@ -72,6 +75,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             profile: &spec.profile,
             session: &session,
             envs: spec.envs,
+            launch_log: launch_log.as_deref(),
         },
         &mut |name| {
             target
@@ -103,10 +107,8 @@ pub struct MergeArgs {
 
 /// `merge`: the shards written as one run, its tables printed.
 pub(super) fn merge(args: &MergeArgs) -> anyhow::Result<()> {
-    thorarena::eval::results::check_dir(&args.out, args.overwrite, &args.runs)?;
     let robot = thorarena::policy::registry::robot(&args.robot)?;
-    let shards: Vec<RunDir> = args.runs.iter().map(RunDir::new).collect();
-    let merged = thorarena::eval::pipeline::merge(&shards, &RunDir::new(&args.out), &robot)?;
+    let merged = merge_dirs(&args.runs, &args.out, args.overwrite, &robot)?;
     println!("{}", merged.tables);
     eprintln!(
         "merged {} runs, {} episodes → {}",

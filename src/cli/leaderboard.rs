@@ -16,8 +16,8 @@ use thorarena::campaign::leaderboard::{
 pub struct Args {
     /// A general policy, as `eval --policy` takes it, run in process (`twist2:FILE.onnx`,
     /// `wbc-mjlab:FILE.onnx`, `beyondmimic:FILE.onnx`, a built-in); repeat for each.
-    #[arg(long = "policy", required_unless_present_any = ["clips", "policy_file", "pairs"])]
-    pub policies: Vec<String>,
+    #[arg(long = "policy", value_parser = thorarena::policy::registry::PolicySource::parse, required_unless_present_any = ["clips", "policy_file", "pairs"])]
+    pub policies: Vec<thorarena::policy::registry::PolicySource>,
     /// More general policies from a TOML file of `[[policy]]` tables, in a sweep spec's
     /// format: `policy = "wbc-mjlab:FILE.onnx"` runs in process; `command = "…"` is a
     /// policy process in any language, started for each run and joining session
@@ -103,9 +103,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             push_n: args.pair_pushes.clone(),
             push_headings_deg: args.pair_headings.clone(),
             force_task: args.pair_force_task.clone(),
-            engines: Vec::new(),
-            out: args.out.clone(),
-            unchecked: args.unchecked,
+            ..PairOptions::default() // engines, output and checking: the job's
         },
         engines: args.engines.iter().map(|&e| e.into()).collect(),
         dataset: args.dataset.clone(),

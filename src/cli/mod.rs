@@ -134,9 +134,8 @@ pub enum BenchCommand {
     SocketPeer(bench_ipc::PeerArgs),
 }
 
-/// Parses the command line and runs it.
-pub fn run() -> anyhow::Result<()> {
-    let cli = Cli::parse();
+/// Runs the command line `cli`.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
     logging::init();
     if let Command::Bench(bench) = &cli.command {
         if !matches!(bench, BenchCommand::SocketPeer(_)) {

@@ -18,8 +18,8 @@ pub enum PolicyCommand {
 #[derive(Debug, clap::Args)]
 pub struct Args {
     // Its help lists every family of the registry run in process.
-    #[arg(help = thorarena::policy::registry::policy_help(true))]
-    pub policy: String,
+    #[arg(value_parser = thorarena::policy::registry::PolicySource::parse, help = thorarena::policy::registry::policy_help(true))]
+    pub policy: thorarena::policy::registry::PolicySource,
     // Its help says how the registry chooses the default.
     #[arg(long, help = thorarena::policy::registry::profile_help())]
     pub profile: Option<String>,

@@ -9,8 +9,8 @@
 
 use std::path::PathBuf;
 use thorarena::report::{
-    label_engines, load_runs, mixed_engines, write_comparison_report, write_view, ComparisonFiles,
-    Page, WebBundle, WrittenReport, MIXED_ENGINES_WHY,
+    load_runs, one_engine_or_labelled, write_comparison_report, write_view, ComparisonFiles, Page,
+    WebBundle, WrittenReport,
 };
 
 /// Arguments of `report`.
@@ -41,14 +41,8 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         eprintln!("{warning}");
     }
     let mut runs = load_runs(&args.runs)?;
-    if let Some(groups) = mixed_engines(&runs) {
-        if !args.mixed_engines {
-            anyhow::bail!(
-                "these runs were simulated by different physics engines ({groups}); {MIXED_ENGINES_WHY}: compare runs of one engine, or pass --mixed-engines to compare them anyway (each label then names its engine)"
-            );
-        }
-        label_engines(&mut runs);
-    }
+    one_engine_or_labelled(&mut runs, args.mixed_engines)
+        .map_err(|why| anyhow::anyhow!(super::flags::as_flags(&why)))?;
     let files = ComparisonFiles::beside(&args.out);
     let script = bundle.script(Page::Report)?;
     let written = write_comparison_report(&runs, &files, &script, args.overwrite, &args.runs)?;

@@ -5,6 +5,7 @@
 use super::policy_io_args::PolicyIoArgs;
 use std::path::PathBuf;
 use thorarena::eval::{parse_shard, EvalRequest, TerminationRule};
+use thorarena::policy::registry::PolicySource;
 use thorarena::sim::motion::SequenceSelection;
 
 /// The flags a request file replaces (clap's ids: the field names).
@@ -113,11 +114,11 @@ pub struct RunArgs {
 }
 
 impl RunArgs {
-    /// The evaluation these arguments ask for, with policy argument `policy` (whose
-    /// family picks the profile when none is named), of shard `shard`.
-    pub fn request(&self, policy: &str, shard: Option<(usize, usize)>) -> EvalRequest {
+    /// The evaluation these arguments ask for, with policy `policy` (whose family picks
+    /// the profile when none is named), of shard `shard`.
+    pub fn request(&self, policy: PolicySource, shard: Option<(usize, usize)>) -> EvalRequest {
         EvalRequest {
-            policy: policy.to_string(),
+            policy,
             dataset: self.dataset.clone(),
             robot: self.robot.clone(),
             profile: self.profile.clone(),

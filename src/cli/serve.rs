@@ -27,13 +27,15 @@ pub struct Args {
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
-    let ctx = load_request(&args.run.request(&format!("ipc:{}", args.session), None))?;
+    let policy = thorarena::policy::registry::PolicySource::on_session(&args.session);
+    let ctx = load_request(&args.run.request(policy, None))?;
     let session = args.run.io.session_options(ctx.io.budget_s)?;
     let target = PolicyTarget {
         robot: &ctx.robot,
         profile: &ctx.profile,
         session: &session,
         envs: ctx.envs,
+        launch_log: None,
     };
     for n in 1.. {
         let mut say = |note: &str| eprintln!("{note}");

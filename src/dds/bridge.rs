@@ -496,7 +496,8 @@ impl RobotIo {
                     if let Some(before) = self.last_usable_at {
                         self.longest_gap = self.longest_gap.max(now - before);
                     }
-                    self.applied_from.insert(format!("{writer:?}"));
+                    self.applied_from
+                        .insert(super::transport::guid_text(&writer));
                 }
                 self.last_usable_at = Some(now);
                 newest = Some(command);

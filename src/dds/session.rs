@@ -1,16 +1,18 @@
 //! One deployment episode, whole: the evaluation it belongs to, the simulated robot on
 //! its DDS interface, the episode run in real time by [`super::bridge::run_episode`], and
 //! the run directory it is scored into (`run.json`, the record, `summary.json`,
-//! `tables.md` with the real-time lines, `realtime.json`), as
-//! [`crate::eval::pipeline::evaluate`] writes an in-process run.
+//! `tables.md` with the real-time lines, `realtime.json`), through the same
+//! [`crate::eval::pipeline::RunRecording`] that [`crate::eval::pipeline::evaluate`] writes
+//! every other run with.
 
 use super::bridge::{run_episode, BridgeOptions, BridgeProgress, RealTimeReport};
 use super::scheduling::SchedulingError;
 use super::wireless_remote::RemoteScript;
 use super::RobotEndpoints;
 use crate::eval::episode::{Episode, EpisodeSetup};
+use crate::eval::pipeline::RunRecording;
 use crate::eval::results::{RunDir, RunHeader};
-use crate::eval::{task_thresholds, EvalRequest, EvalSpec, TerminationRule};
+use crate::eval::{EvalRequest, EvalSpec, TerminationRule};
 use crate::sim::motion::SequenceSelection;
 use crate::sim::physics::{make_physics, PhysicsSettings};
 use std::net::IpAddr;
@@ -113,6 +115,8 @@ impl DdsSessionOutcome {
 pub enum DdsSetting {
     /// [`DdsSessionRequest::sequence`].
     Sequence,
+    /// [`DdsSessionRequest::setting`].
+    Setting,
     /// [`DdsSessionRequest::start_timeout_s`].
     StartTimeout,
     /// [`DdsSessionRequest::start_on`].
@@ -126,6 +130,7 @@ impl DdsSetting {
     pub fn field(self) -> &'static str {
         match self {
             Self::Sequence => "option.sequence",
+            Self::Setting => "option.setting",
             Self::StartTimeout => "option.start_timeout",
             Self::StartOn => "option.start_on",
             Self::RtPriority => "option.rt_priority",
@@ -150,6 +155,9 @@ pub enum DdsSessionError {
     /// The run directory.
     #[error(transparent)]
     Results(#[from] crate::eval::results::ResultsError),
+    /// Writing the run's records and scores.
+    #[error(transparent)]
+    Recording(#[from] crate::eval::pipeline::BenchmarkError),
     /// Where the run would be written.
     #[error(transparent)]
     Output(#[from] crate::eval::results::OutputRefused),
@@ -238,6 +246,13 @@ pub fn run_dds_session(
     if req.domain > super::MAX_DOMAIN {
         return Err(super::DdsError::Domain(req.domain).into());
     }
+    // Checked here, so the refusal names this command's one setting, not `eval`'s list.
+    if crate::eval::Setting::parse(&req.setting).is_none() {
+        return Err(refused(
+            DdsSetting::Setting,
+            crate::eval::Setting::refusal(&req.setting),
+        ));
+    }
     let Some((task, _)) = req.sequence.split_once('/') else {
         return Err(refused(
             DdsSetting::Sequence,
@@ -245,7 +260,6 @@ pub fn run_dds_session(
         ));
     };
     let spec = EvalSpec::load_deployment(&EvalRequest {
-        policy: req.name.clone(),
         dataset: req.dataset.clone(),
         profile: Some(req.profile.clone()),
         settings: vec![req.setting.clone()],
@@ -279,7 +293,27 @@ pub fn run_dds_session(
     run.check_writable()?;
     // The one writer of the run from now until its last file: a second bridge given the
     // same --out is refused before it joins the domain.
-    let _writer = run.lock()?;
+    let writer = run.lock()?;
+    let scored = serve_and_score(req, &spec, seq, &run, start_button, address, on_event);
+    if scored.is_err() {
+        // A bridge that got no command, or failed before its run began, leaves no
+        // directory holding a lock file alone.
+        writer.release_if_unwritten();
+    }
+    scored
+}
+
+/// The episode of `seq` served over DDS, run in real time and scored into `run` (whose
+/// writer lock the caller holds).
+fn serve_and_score(
+    req: &DdsSessionRequest,
+    spec: &EvalSpec,
+    seq: &crate::sim::motion::Sequence,
+    run: &RunDir,
+    start_button: Option<u16>,
+    address: IpAddr,
+    on_event: &mut dyn FnMut(DdsSessionEvent<'_>),
+) -> Result<DdsSessionOutcome, DdsSessionError> {
     let robot = Arc::new(spec.robot.clone());
     let mut physics = make_physics(
         &spec.engine,
@@ -359,36 +393,25 @@ pub fn run_dds_session(
     let trace = episode.take_trace();
     let record = episode.into_record(seq, setting, &req.name);
     // Started only now: a bridge that got no command leaves no empty run behind.
-    let mut header = RunHeader::of(&spec, &req.name);
+    let mut header = RunHeader::of(spec, &req.name);
     // Deployment code runs its own network, which the bridge never sees.
     header.identity = Some(crate::eval::results::PolicyIdentity {
         network: None,
         profile_sha256: spec.profile.fingerprint(),
         robot_sha256: spec.robot.fingerprint(),
     });
-    run.start(&header, false)?;
-    let mut appender = run.appender()?;
-    appender.append(&record)?;
-    appender.flush()?;
-    if let Some(trace) = trace {
-        run.write_trace(&record.key(), &trace.steps)?;
-    }
-    let thresholds = task_thresholds(&spec.sequences, spec.profile.control_dt_s);
-    let summary = run.finish(&header, &mut [record], thresholds, None)?;
-    let mut tables = crate::report::run_tables(&summary);
-    tables.push_str(&realtime_lines(&realtime));
+    let (mut recording, _) = RunRecording::start(run, spec, header, false)?;
+    recording.record(&record, trace.as_ref().map(|t| t.steps.as_slice()));
+    let recorded = recording.finish(None, &realtime_lines(&realtime))?;
     let realtime_path = run.path().join(REALTIME_FILE);
     let json = serde_json::to_string_pretty(&realtime).expect("a real-time report serializes");
-    for (path, bytes) in [
-        (realtime_path, json.as_bytes()),
-        (
-            run.path().join(crate::eval::results::TABLES_FILE),
-            tables.as_bytes(),
-        ),
-    ] {
-        crate::files::atomic_file::write(&path, bytes)
-            .map_err(|source| DdsSessionError::Write { path, source })?;
-    }
+    crate::files::atomic_file::write(&realtime_path, json.as_bytes()).map_err(|source| {
+        DdsSessionError::Write {
+            path: realtime_path,
+            source,
+        }
+    })?;
+    let tables = recorded.tables;
     Ok(DdsSessionOutcome { tables, realtime })
 }
 

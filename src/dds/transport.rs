@@ -317,7 +317,7 @@ impl RobotEndpoints {
         while let Ok(Some(sample)) = self.state_watch.take_next_sample() {
             let writer = sample.sample_info().writer_guid();
             if writer.prefix != own.prefix {
-                others.push(format!("{writer:?}"));
+                others.push(guid_text(&writer));
             }
         }
         others
@@ -337,6 +337,14 @@ impl RobotEndpoints {
     pub fn undecodable_commands(&self) -> u64 {
         self.undecodable
     }
+}
+
+/// A DDS writer's GUID as people read it: its 12-byte participant prefix and 4-byte
+/// entity id in hex (`0a1b…:00000102`), not Rust's debug text of the struct.
+pub fn guid_text(guid: &rustdds::GUID) -> String {
+    let bytes = guid.to_bytes();
+    let hex = |b: &[u8]| b.iter().map(|x| format!("{x:02x}")).collect::<String>();
+    format!("{}:{}", hex(&bytes[..12]), hex(&bytes[12..]))
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 //! (`eval --request`). [`super::EvalSpec::load`] checks it.
 
 use super::{PolicyIoRules, TerminationRule};
+use crate::policy::registry::PolicySource;
 use crate::sim::motion::SequenceSelection;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -25,9 +26,10 @@ pub enum EngineChoice {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct EvalRequest {
-    /// The policy argument (`balance`, `twist2:FILE`, `ipc:SESSION`, …): its family picks
-    /// the profile when none is named.
-    pub policy: String,
+    /// Where the policy comes from (`balance`, `twist2:FILE`, `ipc:SESSION`, a command to
+    /// start, …; a file spells an argument as its string): its family picks the profile
+    /// when none is named.
+    pub policy: PolicySource,
     /// Dataset directory (`None`: the bundled sample).
     pub dataset: Option<PathBuf>,
     /// Robot name or directory.
@@ -73,7 +75,7 @@ pub struct EvalRequest {
 impl Default for EvalRequest {
     fn default() -> Self {
         Self {
-            policy: "balance".into(),
+            policy: PolicySource::builtin("balance").expect("`balance` is a built-in"),
             dataset: None,
             robot: "g1_29dof".into(),
             profile: None,

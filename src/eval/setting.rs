@@ -48,6 +48,19 @@ impl Setting {
     /// measures nothing but divergence).
     pub const MAX_PUSH_N: f64 = 1000.0;
 
+    /// Why `s` is no setting [`Self::parse`] takes, naming it (cut short when long, so
+    /// a number of three hundred digits is not echoed whole).
+    pub fn refusal(s: &str) -> String {
+        let shown: String = s.chars().take(40).collect();
+        let cut = if shown.len() < s.len() { "…" } else { "" };
+        format!(
+            "`{}{cut}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
+            shown.escape_default(),
+            Self::MAX_COEFFICIENT,
+            Self::MAX_PUSH_N
+        )
+    }
+
     /// Parses `force`, `no-force`, a replay coefficient (|c| ≤ [`Self::MAX_COEFFICIENT`]),
     /// or `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]) with an optional `@<deg>` direction from
     /// the reference's initial heading (−360 ≤ deg ≤ 360).

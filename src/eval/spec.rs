@@ -4,7 +4,7 @@
 //! sweep's validation of its cells — reads this one shape.
 
 use super::{EngineChoice, EvalRequest, PolicyIoRules, Setting, TerminationRule};
-use crate::policy::registry::{self, PolicyArg, RegistryError};
+use crate::policy::registry::{self, PolicySource, RegistryError};
 use crate::sim::motion::{DataError, Dataset, SelectionError, Sequence, Subset};
 use crate::sim::physics::{make_physics, Engine, EngineError, PhysicsSettings};
 use crate::sim::profile::Profile;
@@ -78,10 +78,10 @@ fn invalid(message: impl Into<String>) -> SpecError {
 /// rules, and how it is spread over threads.
 #[derive(Debug, Clone)]
 pub struct EvalSpec {
-    /// The policy argument, parsed (`None`: a name that is no argument — a deployment
+    /// Where the policy comes from (`None`: a policy the registry does not know — a deployment
     /// over DDS names its run so — which runs on the `default` profile, one slot per
     /// worker).
-    pub policy: Option<PolicyArg>,
+    pub policy: Option<PolicySource>,
     /// The robot.
     pub robot: RobotModel,
     /// The dynamics profile (with the physics step asked for).
@@ -124,23 +124,22 @@ pub struct EvalSpec {
 }
 
 impl EvalSpec {
-    /// Checks `request` and loads everything it names: the policy argument (refused when
-    /// it names no policy, or parameters its family does not take), robot, profile (the
+    /// Checks `request` and loads everything it names (its policy was parsed where the
+    /// request was made): robot, profile (the
     /// policy family's unless named), engine (a physics is made once, so the run's workers
     /// cannot fail to), dataset and selection, settings, rules, threads.
     pub fn load(request: &EvalRequest) -> Result<Self, SpecError> {
-        let policy = PolicyArg::parse(&request.policy)?;
-        Self::load_with(request, Some(policy))
+        Self::load_with(request, Some(request.policy.clone()))
     }
 
-    /// [`Self::load`] for a run whose policy is no argument of the registry — deployment
-    /// code driving the robot over DDS, which names its run with `request.policy` — on
-    /// the `default` profile unless one is named, one slot per worker.
+    /// [`Self::load`] for a run whose policy the registry does not know — deployment code
+    /// driving the robot over DDS, which names its run itself — on the `default` profile
+    /// unless one is named, one slot per worker; `request.policy` is not read.
     pub fn load_deployment(request: &EvalRequest) -> Result<Self, SpecError> {
         Self::load_with(request, None)
     }
 
-    fn load_with(request: &EvalRequest, policy: Option<PolicyArg>) -> Result<Self, SpecError> {
+    fn load_with(request: &EvalRequest, policy: Option<PolicySource>) -> Result<Self, SpecError> {
         let mut advice = Vec::new();
         let dataset = request
             .dataset
@@ -160,9 +159,9 @@ impl EvalSpec {
         check_termination(&request.termination)?;
         let in_process = policy
             .as_ref()
-            .filter(|arg| arg.session().is_none())
-            .map(PolicyArg::as_str);
-        check_io(&request.io, in_process)?;
+            .filter(|source| source.in_process())
+            .map(PolicySource::to_string);
+        check_io(&request.io, in_process.as_deref())?;
         check_shard(request.shard)?;
         let picked = pick_sequences(request, &dataset, &robot)?;
         let settings = fit_settings_to_force_logs(
@@ -174,7 +173,7 @@ impl EvalSpec {
             &mut advice,
         )?;
         check_trace(&request.trace, &picked.sequences, &dataset)?;
-        let slots_per_worker = policy.as_ref().map_or(1, PolicyArg::slots_per_worker);
+        let slots_per_worker = policy.as_ref().map_or(1, PolicySource::slots_per_worker);
         let (workers, envs) = threads(request, slots_per_worker)?;
         check_pipeline(request.pipeline_depth, envs, &request.io)?;
         Ok(Self {
@@ -227,13 +226,13 @@ fn names_sequence(name: &str, task: &str, sequence_id: &str) -> bool {
 /// physics step is the request's when it gives one. Also returns the mismatch.
 fn resolve_profile(
     request: &EvalRequest,
-    policy: Option<&PolicyArg>,
+    policy: Option<&PolicySource>,
     robot: &RobotModel,
     advice: &mut Vec<Advice>,
 ) -> Result<(Profile, bool), SpecError> {
     let profile_name = request.profile.clone().unwrap_or_else(|| {
         policy
-            .map_or("default", PolicyArg::default_profile)
+            .map_or("default", PolicySource::default_profile)
             .to_string()
     });
     let mut profile = registry::profile(&profile_name, robot).map_err(|e| match e {
@@ -432,13 +431,8 @@ pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
     let settings: Vec<Setting> = spelled
         .iter()
         .map(|s| {
-            Setting::parse(s).ok_or_else(|| {
-                invalid(format!(
-                    "`request.settings`: `{s}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
-                    Setting::MAX_COEFFICIENT,
-                    Setting::MAX_PUSH_N
-                ))
-            })
+            Setting::parse(s)
+                .ok_or_else(|| invalid(format!("`request.settings`: {}", Setting::refusal(s))))
         })
         .collect::<Result<_, _>>()?;
     for (i, a) in settings.iter().enumerate() {

@@ -10,6 +10,7 @@ mod builtin;
 pub mod client_process;
 pub mod falcon;
 pub mod inputs;
+pub mod launched;
 pub mod network_file;
 pub mod network_kernels;
 pub mod onnx_export;

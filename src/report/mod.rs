@@ -37,7 +37,8 @@ pub use html::{escape, report_html, sweep_report_html, view_html, Page, WebBundl
 pub use run_tables::{run_tables, write_run_tables};
 pub use runs::{
     comparison_notes, comparison_warnings, label_engines, label_runs, load_run, load_runs,
-    mixed_engines, ComparisonWarning, EpisodePoint, Run, WarningKind, MIXED_ENGINES_WHY,
+    mixed_engines, one_engine_or_labelled, ComparisonWarning, EpisodePoint, Run, WarningKind,
+    MIXED_ENGINES_WHY,
 };
 pub use scene::{
     load_trace, trace_context, view_scene, write_view, BodyShapes, FeetView, ShapeView,

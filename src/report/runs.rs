@@ -214,6 +214,21 @@ pub fn mixed_engines(runs: &[Run]) -> Option<String> {
     )
 }
 
+/// Holds `runs` to one physics engine, or — with `mixed_ok` — labels each with its
+/// engine; `Err` says which engines ran which runs and why they are not compared.
+pub fn one_engine_or_labelled(runs: &mut [Run], mixed_ok: bool) -> Result<(), String> {
+    match mixed_engines(runs) {
+        Some(groups) if !mixed_ok => Err(format!(
+            "these runs were simulated by different physics engines ({groups}); {MIXED_ENGINES_WHY}: compare runs of one engine, or give `option.mixed_engines` to compare them anyway (each label then names its engine)"
+        )),
+        Some(_) => {
+            label_engines(runs);
+            Ok(())
+        }
+        None => Ok(()),
+    }
+}
+
 /// Appends each run's engine to its label (`twist2 [mujoco]`), for a comparison that
 /// mixes engines on purpose.
 pub fn label_engines(runs: &mut [Run]) {

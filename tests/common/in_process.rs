@@ -87,7 +87,7 @@ pub fn eval_on(
     out: &Path,
 ) -> PathBuf {
     let request = EvalRequest {
-        policy: policy.into(),
+        policy: thorarena::policy::registry::PolicySource::parse(policy).unwrap(),
         dataset: Some(dataset.to_path_buf()),
         profile: profile.map(String::from),
         settings: settings.iter().map(|s| s.to_string()).collect(),

@@ -4,30 +4,19 @@
 //! physics floor, the later ones against the first (wall time, and whether every record is
 //! the same).
 
-use super::timed_policy::{PolicySource, TimedPolicy};
+use super::timed_policy::TimedPolicy;
 use super::{physics_floor, time_run, BenchLine, PerfError, RunTiming};
 use crate::eval::{EvalRequest, EvalSpec};
-use std::path::PathBuf;
 use std::time::Duration;
-
-/// The policy name a request carries when the bench starts the policy process itself.
-const LAUNCHED_POLICY: &str = "ipc:bench";
 
 /// `bench eval` as asked for.
 #[derive(Debug, Clone)]
 pub struct EvalBench {
-    /// The evaluation to time (its `pipeline_depth` set per run from `pipeline_depths`;
-    /// its `policy` the one in process, unless `policy_command` is given).
+    /// The evaluation to time (its `pipeline_depth` set per run from `pipeline_depths`);
+    /// its `policy` runs in process, or is a command started afresh for each run.
     pub request: EvalRequest,
-    /// A policy process instead of `request.policy`: a shell command joining session
-    /// `{session}` (`{thorarena}` is this binary), started afresh for each run.
-    pub policy_command: Option<String>,
-    /// Seconds the policy process has to connect.
-    pub connect_timeout_s: f64,
     /// Pipeline depths, one run each; the later runs are compared with the first.
     pub pipeline_depths: Vec<usize>,
-    /// Where the policy process runs.
-    pub workdir: PathBuf,
 }
 
 impl EvalBench {
@@ -47,7 +36,7 @@ impl EvalBench {
                 say(BenchLine::Note(advice.to_string()));
             }
             let (label, mut timed) =
-                TimedPolicy::start(&self.policy_source(), &spec, depth, &mut |note| {
+                TimedPolicy::start(&self.request.policy, &spec, depth, &mut |note| {
                     say(BenchLine::Note(note.to_string()))
                 })?;
             say(BenchLine::Note(format!(
@@ -84,20 +73,7 @@ impl EvalBench {
     fn spec(&self, pipeline_depth: usize) -> Result<EvalSpec, PerfError> {
         let mut request = self.request.clone();
         request.pipeline_depth = pipeline_depth;
-        if self.policy_command.is_some() {
-            request.policy = LAUNCHED_POLICY.into();
-        }
         Ok(EvalSpec::load(&request)?)
-    }
-
-    fn policy_source(&self) -> PolicySource<'_> {
-        PolicySource {
-            policy: &self.request.policy,
-            command: self.policy_command.as_deref(),
-            profile: self.request.profile.as_deref(),
-            connect_timeout_s: self.connect_timeout_s,
-            workdir: &self.workdir,
-        }
     }
 }
 

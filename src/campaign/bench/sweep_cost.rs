@@ -110,7 +110,7 @@ fn baseline_requests(plan: &Plan) -> Result<Vec<EvalRequest>, PerfError> {
     let mut groups: Vec<(String, EvalRequest)> = Vec::new();
     for task in plan.tasks.iter().filter(|t| t.shard.0 == 0) {
         let cell = &plan.cells[task.cell];
-        if cell.policy.command.is_some() {
+        if cell.policy.policy.command().is_some() {
             return Err(PerfError::Precondition(format!(
                 "policy `{}` runs as a command: the baseline needs in-process policies",
                 cell.policy.name

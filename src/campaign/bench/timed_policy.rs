@@ -3,11 +3,10 @@
 //! times a cold start alike), whose CPU time then counts in the cores the run kept busy.
 
 use super::{process_group_cpu_time, PerfError};
-use crate::campaign::leaderboard::{LaunchedPolicy, PolicyProcess};
 use crate::eval::EvalSpec;
-use crate::policy::registry::{PolicyArg, PolicyChoice};
-use crate::policy::Policy;
-use std::path::Path;
+use crate::policy::launched::LaunchedPolicy;
+use crate::policy::registry::{self, OpenPolicyError, PolicySource, PolicyTarget};
+use crate::policy::{Policy, SessionOptions};
 use std::time::Duration;
 
 /// The policy of one run.
@@ -18,52 +17,48 @@ pub(super) enum TimedPolicy {
     Process(Box<LaunchedPolicy>),
 }
 
-/// How the policy of a run is had: built from `policy` in process, or `command` started.
-pub(super) struct PolicySource<'a> {
-    /// The policy in process (`hold`, `twist2:FILE.onnx`, …), when there is no command.
-    pub policy: &'a str,
-    /// A shell command joining session `{session}` (`{thorarena}`: this binary).
-    pub command: Option<&'a str>,
-    /// The dynamics profile asked for, handed to the process.
-    pub profile: Option<&'a str>,
-    /// Seconds the process has to connect.
-    pub connect_timeout_s: f64,
-    /// Where the process runs.
-    pub workdir: &'a Path,
-}
-
 impl TimedPolicy {
-    /// The policy for `spec`'s run at pipeline depth `depth` and its label in the output
-    /// (the policy's name, or the command in backticks); `note` hears a process's session
-    /// as it connects.
+    /// The policy `source` names for `spec`'s run at pipeline depth `depth` and its label
+    /// in the output (the policy's name, or the command in backticks); `note` hears a
+    /// process's session as it connects.
     pub(super) fn start(
         source: &PolicySource,
         spec: &EvalSpec,
         depth: usize,
         note: &mut dyn FnMut(&str),
     ) -> Result<(String, Self), PerfError> {
-        let Some(command) = source.command else {
-            let arg = PolicyArg::parse(source.policy)?;
-            let PolicyChoice::InProcess(policy) = arg.load(&spec.robot, &spec.profile)? else {
-                return Err(PerfError::Precondition(format!(
-                    "bench eval times a policy in process or one it starts (`option.policy_command`): not `{}`",
-                    source.policy
-                )));
+        let Some(command) = source.command() else {
+            let policy = match registry::open_in_process(source, &spec.robot, &spec.profile) {
+                Ok(policy) => policy,
+                Err(OpenPolicyError::Registry(e)) => return Err(e.into()),
+                Err(_) => {
+                    return Err(PerfError::Precondition(format!(
+                        "bench eval times a policy in process or one it starts (`option.policy_command`): not `{source}`"
+                    )))
+                }
             };
-            return Ok((source.policy.to_string(), Self::InProcess(policy)));
+            return Ok((source.to_string(), Self::InProcess(policy)));
         };
-        let process = PolicyProcess {
-            name: "bench".into(),
-            command: command.to_string(),
-            profile: source.profile.map(str::to_string),
-            connect_timeout_s: source.connect_timeout_s,
-            workdir: source.workdir.to_path_buf(),
+        let log = std::env::temp_dir().join(format!(
+            "thorarena-bench-eval-{}-{depth}.log",
+            std::process::id()
+        ));
+        let session = SessionOptions {
+            budget: None,
+            spin: Duration::from_micros(50),
+            connect_timeout: None,
+            reconnect: false,
         };
-        let session = format!("bench-eval-{}-{depth}", std::process::id());
-        let log = std::env::temp_dir().join(format!("thorarena-{session}.log"));
-        let launched = LaunchedPolicy::start(&process, &session, spec, &log, note)
-            .map_err(PerfError::PolicyProcess)?;
-        Ok((format!("`{command}`"), Self::Process(Box::new(launched))))
+        let target = PolicyTarget {
+            robot: &spec.robot,
+            profile: &spec.profile,
+            session: &session,
+            envs: spec.envs,
+            launch_log: Some(&log),
+        };
+        let launched = registry::launch(command, &target, note)
+            .map_err(|e| PerfError::PolicyProcess(e.to_string()))?;
+        Ok((command.to_string(), Self::Process(Box::new(launched))))
     }
 
     /// The policy to run.

@@ -16,7 +16,7 @@ use std::time::Instant;
 #[derive(Debug, Clone)]
 pub struct LeaderboardJob {
     /// General policies, as a run names them (in process).
-    pub policies: Vec<String>,
+    pub policies: Vec<crate::policy::registry::PolicySource>,
     /// More general policies, and policy processes, from a TOML file.
     pub policy_file: Option<PathBuf>,
     /// Single-clip policies on their own clips.

@@ -7,26 +7,24 @@
 //! Each run is exactly what `eval` with the same flags writes (the same `EvalSpec`, the
 //! same `pipeline::evaluate`, the sanity check first), so a leaderboard row can be
 //! re-derived by one `eval`. A policy in its own process ([`PolicyProcess`], any
-//! language) is started and connected by the caller
-//! (`start_process`) for each of its runs, then scored like the
-//! others.
+//! language) is started and connected through the same door as every policy
+//! ([`registry::open_policy`]) for each of its runs, then scored like the others.
 
 use crate::eval::pipeline::{evaluate, BenchmarkError, EvalObserver, EvalOptions};
 use crate::eval::results::{RunDir, Summary};
 use crate::eval::{EngineChoice, EvalRequest, EvalSpec, SpecError};
-use crate::policy::registry::{self, PolicyChoice, RegistryError};
-use crate::policy::Policy;
+use crate::policy::launched::PolicyCommand;
+use crate::policy::registry::{self, OpenPolicyError, PolicySource, PolicyTarget};
+use crate::policy::{Policy, SessionOptions};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 mod job;
-mod launched;
 mod outputs;
 mod pairs;
 mod progress_lines;
 
 pub use job::{run_leaderboard_job, LeaderboardJob, LeaderboardJobError};
-pub use launched::LaunchedPolicy;
 pub use outputs::{
     leaderboard_tables, write_leaderboard_outputs, LeaderboardOutputs, OutputsError, PageHeader,
 };
@@ -49,28 +47,20 @@ pub enum LeaderboardError {
         /// Why.
         source: Box<SpecError>,
     },
-    /// The policy could not be loaded.
-    #[error("{policy}: {source}")]
+    /// The policy could not be loaded, or its process started or connected.
+    #[error("{policy} on {engine}: {source}")]
     Policy {
-        /// The policy argument.
+        /// The policy argument, or the process's name.
         policy: String,
+        /// The engine.
+        engine: &'static str,
         /// Why.
-        source: Box<RegistryError>,
+        source: Box<OpenPolicyError>,
     },
     /// A policy argument naming a session (`ipc:`): a policy process joins the leaderboard
     /// as a [`PolicyProcess`], started by the leaderboard for each run.
     #[error("{0} names a session no one starts: give the policy process as a command that joins {{session}} (a policy file's [[policy]] command = …)")]
     NotInProcess(String),
-    /// A policy process could not be started or did not connect.
-    #[error("{policy} on {engine}: {why}")]
-    Process {
-        /// The process's name.
-        policy: String,
-        /// The engine.
-        engine: &'static str,
-        /// Why.
-        why: String,
-    },
     /// An evaluation failed (its sanity check, its run directory, …).
     #[error("{policy} on {engine}: {source}")]
     Eval {
@@ -123,10 +113,10 @@ pub enum LeaderboardError {
 }
 
 /// A single-clip policy and the dataset of its own clip.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct OwnClip {
-    /// The policy argument.
-    pub policy: String,
+    /// The policy.
+    pub policy: PolicySource,
     /// The dataset holding its clip.
     pub dataset: PathBuf,
 }
@@ -135,17 +125,14 @@ pub struct OwnClip {
 impl std::str::FromStr for OwnClip {
     type Err = String;
 
+    /// `POLICY@DATASET` (split at the last `@`), the policy parsed as `--policy` is.
     fn from_str(text: &str) -> Result<Self, String> {
-        Self::parse(text).ok_or_else(|| format!("`{text}`: give POLICY@DATASET"))
-    }
-}
-
-impl OwnClip {
-    /// `POLICY@DATASET` (split at the last `@`).
-    pub fn parse(text: &str) -> Option<Self> {
-        let (policy, dataset) = text.rsplit_once('@')?;
-        (!policy.is_empty() && !dataset.is_empty()).then(|| Self {
-            policy: policy.to_string(),
+        let (policy, dataset) = text
+            .rsplit_once('@')
+            .filter(|(p, d)| !p.is_empty() && !d.is_empty())
+            .ok_or_else(|| format!("`{text}`: give POLICY@DATASET"))?;
+        Ok(Self {
+            policy: PolicySource::parse(policy).map_err(|e| format!("`{text}`: {e}"))?,
             dataset: PathBuf::from(dataset),
         })
     }
@@ -157,14 +144,10 @@ impl OwnClip {
 pub struct PolicyProcess {
     /// Its name in the table and run directories.
     pub name: String,
-    /// The command.
-    pub command: String,
+    /// The command, its working directory and connect timeout.
+    pub command: PolicyCommand,
     /// Dynamics profile [default: `default`].
     pub profile: Option<String>,
-    /// Seconds it has to connect.
-    pub connect_timeout_s: f64,
-    /// Where the command runs.
-    pub workdir: PathBuf,
 }
 
 /// `[[policy]]` tables, as a sweep spec writes them.
@@ -181,7 +164,7 @@ struct PolicyFile {
 /// directory. Returns the policy arguments and the processes, in the file's order.
 pub fn load_policy_file(
     path: &Path,
-) -> Result<(Vec<String>, Vec<PolicyProcess>), LeaderboardError> {
+) -> Result<(Vec<PolicySource>, Vec<PolicyProcess>), LeaderboardError> {
     let invalid = |message: String| LeaderboardError::PolicyFile {
         path: path.to_path_buf(),
         message,
@@ -201,24 +184,20 @@ pub fn load_policy_file(
     let (mut arguments, mut processes) = (Vec::new(), Vec::new());
     for (i, p) in file.policies.iter().enumerate() {
         let at = |m: &str| invalid(format!("[[policy]] #{}: {m}", i + 1));
-        p.check().map_err(|m| at(&m))?;
+        let source = p.source(&workdir).map_err(|m| at(&m))?;
         if p.unchecked {
             return Err(at("a policy file does not say whether a policy is checked: the leaderboard's `option.unchecked` does"));
         }
-        match (p.resolved_policy(&workdir), &p.command) {
-            (Some(_), _) if p.name.is_some() || p.profile.is_some() => {
+        match source {
+            PolicySource::Named(_) if p.name.is_some() || p.profile.is_some() => {
                 return Err(at("an in-process policy runs under its own family's profile and name: drop its `name =` and `profile =` keys"));
             }
-            (Some(argument), _) => arguments.push(argument),
-            // `p.check()` held its `connect_timeout_s` to the one check of a wait.
-            (None, Some(command)) => processes.push(PolicyProcess {
+            PolicySource::Named(_) => arguments.push(source),
+            PolicySource::Launched(command) => processes.push(PolicyProcess {
                 name: p.label(),
-                command: command.clone(),
+                command,
                 profile: p.resolved_profile(&workdir),
-                connect_timeout_s: p.connect_timeout_s,
-                workdir: workdir.clone(),
             }),
-            (None, None) => return Err(at("give `policy` or `command`")),
         }
     }
     Ok((arguments, processes))
@@ -227,8 +206,8 @@ pub fn load_policy_file(
 /// What to put on the leaderboard.
 #[derive(Debug, Clone)]
 pub struct LeaderboardRequest {
-    /// Policy arguments as `eval --policy` takes them (in process).
-    pub policies: Vec<String>,
+    /// Policies in process, as `eval --policy` takes them.
+    pub policies: Vec<PolicySource>,
     /// General policies in their own processes, after [`Self::policies`].
     pub processes: Vec<PolicyProcess>,
     /// Single-clip policies, each on its own clip under [`Self::clip_settings`].
@@ -251,7 +230,7 @@ pub struct LeaderboardRequest {
 /// One (policy, engine) run of the leaderboard.
 #[derive(Debug, Clone)]
 pub struct Entry {
-    /// The policy argument.
+    /// How the table names the policy (`twist2 (twist2_1017_25k)`, a process's name).
     pub policy: String,
     /// Whether it is a single-clip policy on its own clip.
     pub own_clip: bool,
@@ -275,56 +254,43 @@ pub trait LeaderboardObserver {
     fn note(&mut self, _text: &str) {}
 }
 
-/// Starts `process` on session `session` for a run of `spec` into `run`, its output to
-/// `<run>.policy.log` beside it, and returns it connected (it ends when the returned
-/// policy is dropped); `Err` says why not.
-fn start_process(
-    process: &PolicyProcess,
-    session: &str,
-    spec: &EvalSpec,
-    run: &Path,
-    observer: &mut dyn LeaderboardObserver,
-) -> Result<Box<dyn Policy>, String> {
-    let name = run
-        .file_name()
-        .map_or("run".into(), |n| n.to_string_lossy());
-    let log = run.with_file_name(format!("{name}.policy.log"));
-    observer.note(&format!(
-        "  starting `{}` (its output: {})",
-        process.command,
-        log.display()
-    ));
-    Ok(Box::new(LaunchedPolicy::start(
-        process,
-        session,
-        spec,
-        &log,
-        &mut |note| observer.note(note),
-    )?))
-}
-
 /// Who plays a leaderboard run: a policy argument (in process), or a policy process.
 #[derive(Debug, Clone)]
 enum Player {
-    Argument(String),
+    Argument(PolicySource),
     Process(PolicyProcess),
 }
 
 impl Player {
-    /// The policy argument, or the process's name.
-    fn name(&self) -> &str {
+    /// The policy argument, or the process's name, as messages name it.
+    fn name(&self) -> String {
         match self {
-            Self::Argument(a) => a,
-            Self::Process(p) => &p.name,
+            Self::Argument(a) => a.to_string(),
+            Self::Process(p) => p.name.clone(),
+        }
+    }
+
+    /// How a table names it.
+    fn table_label(&self) -> String {
+        match self {
+            Self::Argument(a) => a.table_label(),
+            Self::Process(p) => p.name.clone(),
+        }
+    }
+
+    /// The base of its run directories' names: the family and the network's file stem
+    /// (`wbc-mjlab-wbc_g1_policy`), a built-in's name, a process's name.
+    fn dir_label(&self) -> String {
+        match self {
+            Self::Argument(a) => a.dir_label(),
+            Self::Process(p) => p.name.clone(),
         }
     }
 }
 
-/// The run directory's name of `policy` on `engine`: the family and the network's file
-/// stem (`wbc-mjlab-wbc_g1_policy-rapier`), or the built-in's name.
-pub fn run_name(policy: &str, engine: EngineChoice) -> String {
-    let base = registry::PolicyArg::parse(policy)
-        .map_or_else(|_| policy.to_string(), |arg| arg.dir_label());
+/// The run directory's name of a player whose directory label is `base` on `engine`
+/// (`wbc-mjlab-wbc_g1_policy-rapier`).
+fn run_name(base: &str, engine: EngineChoice) -> String {
     let clean: String = base
         .chars()
         .map(|c| {
@@ -354,7 +320,7 @@ fn check_names(
             )));
         }
     }
-    let mut seen: std::collections::BTreeMap<String, &str> = Default::default();
+    let mut seen: std::collections::BTreeMap<String, String> = Default::default();
     for (player, _, own_clip) in runs {
         if let Player::Process(p) = player {
             crate::files::names::check_name("policy name", &p.name)
@@ -362,7 +328,7 @@ fn check_names(
         }
         let dir = format!(
             "{}{}",
-            run_name(player.name(), EngineChoice::Rapier),
+            run_name(&player.dir_label(), EngineChoice::Rapier),
             if *own_clip { "-own-clip" } else { "" }
         );
         if let Some(other) = seen.insert(dir.clone(), player.name()) {
@@ -434,13 +400,13 @@ pub fn run_leaderboard(
     for &engine in &request.engines {
         for (player, dataset, own_clip) in &runs {
             let engine_name = engine_name(engine);
-            let name = run_name(player.name(), engine);
+            let name = run_name(&player.dir_label(), engine);
             let run = request.out.join("runs").join(if *own_clip {
                 format!("{name}-own-clip")
             } else {
                 name
             });
-            observer.run_starting(entries.len(), total, player.name(), engine_name);
+            observer.run_starting(entries.len(), total, &player.name(), engine_name);
             let started = Instant::now();
             let settings = if *own_clip {
                 &request.clip_settings
@@ -457,7 +423,7 @@ pub fn run_leaderboard(
                 observer,
             )?;
             entries.push(Entry {
-                policy: player.name().to_string(),
+                policy: player.table_label(),
                 own_clip: *own_clip,
                 engine: engine_name,
                 run,
@@ -480,55 +446,48 @@ fn run_one(
 ) -> Result<Summary, LeaderboardError> {
     let name = player.name();
     let engine_name = engine_name(engine);
-    // A policy process serves a session of its own: short whatever the policy's name
-    // (a session name has at most 64 characters), unique per run and per invocation.
-    let session = format!(
-        "leaderboard-{}-{}",
-        &crate::sim::motion::sha256_hex(run.to_string_lossy().as_bytes())[..8],
-        std::process::id()
-    );
-    let (policy_arg, profile) = match player {
-        Player::Argument(a) => (a.clone(), None),
-        Player::Process(p) => (format!("ipc:{session}"), p.profile.clone()),
+    let (source, profile) = match player {
+        Player::Argument(a) if a.in_process() => (a.clone(), None),
+        Player::Argument(a) => return Err(LeaderboardError::NotInProcess(a.to_string())),
+        Player::Process(p) => (PolicySource::from(p.command.clone()), p.profile.clone()),
     };
-    let spec = EvalSpec::load(&EvalRequest {
-        policy: policy_arg.clone(),
+    let request = EvalRequest {
+        policy: source,
         dataset: Some(dataset.to_path_buf()),
         profile,
         settings: settings.to_vec(),
         engine,
         unchecked,
         ..EvalRequest::default()
-    })
-    .map_err(|source| LeaderboardError::Spec {
-        policy: name.to_string(),
+    };
+    let spec = EvalSpec::load(&request).map_err(|source| LeaderboardError::Spec {
+        policy: name.clone(),
         engine: engine_name,
         source: Box::new(source),
     })?;
-    let mut policy: Box<dyn Policy> = match player {
-        Player::Argument(a) => match registry::PolicyArg::parse(a).and_then(|arg| {
-            match arg.load(&spec.robot, &spec.profile)? {
-                PolicyChoice::InProcess(p) => Ok(Some(p)),
-                PolicyChoice::Session(_) => Ok(None),
-            }
-        }) {
-            Ok(Some(p)) => p,
-            Ok(None) => return Err(LeaderboardError::NotInProcess(a.clone())),
-            Err(source) => {
-                return Err(LeaderboardError::Policy {
-                    policy: a.clone(),
-                    source: Box::new(source),
-                })
-            }
-        },
-        Player::Process(p) => start_process(p, &session, &spec, run, observer).map_err(|why| {
-            LeaderboardError::Process {
-                policy: p.name.clone(),
-                engine: engine_name,
-                why,
-            }
-        })?,
+    let log = crate::policy::launched::log_beside(run);
+    let session = SessionOptions {
+        budget: None,
+        spin: std::time::Duration::from_micros(50),
+        connect_timeout: None,
+        reconnect: false,
     };
+    let target = PolicyTarget {
+        robot: &spec.robot,
+        profile: &spec.profile,
+        session: &session,
+        envs: spec.envs,
+        launch_log: Some(&log),
+    };
+    let mut policy: Box<dyn Policy> =
+        registry::open_policy(&request.policy, &target, &mut |_| Ok(()), &mut |note| {
+            observer.note(note)
+        })
+        .map_err(|source| LeaderboardError::Policy {
+            policy: name.clone(),
+            engine: engine_name,
+            source: Box::new(source),
+        })?;
     let dir = RunDir::new(run);
     let options = EvalOptions {
         resume: resumable(&dir, policy.as_ref(), &spec, observer),
@@ -542,7 +501,7 @@ fn run_one(
         observer.eval_observer(),
     )
     .map_err(|source| LeaderboardError::Eval {
-        policy: name.to_string(),
+        policy: name,
         engine: engine_name,
         source: Box::new(source),
     })?;
@@ -605,11 +564,7 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
     rule.push_str("---:|\n");
     out.push_str(&rule);
     for e in entries {
-        out.push_str(&format!(
-            "| {} | {} |",
-            markdown_cell(&policy_label(&e.policy)),
-            e.engine
-        ));
+        out.push_str(&format!("| {} | {} |", markdown_cell(&e.policy), e.engine));
         for s in &settings {
             match e.summary.settings.get(s.as_str()) {
                 Some(r) => {
@@ -659,12 +614,6 @@ pub fn write_leaderboard_page(
     );
     crate::files::atomic_file::write(&path, text)?;
     Ok(path)
-}
-
-/// A policy argument as a table names it: `family (file stem)` for a network
-/// (`twist2 (twist2_1017_25k)`), the argument itself otherwise.
-pub fn policy_label(policy: &str) -> String {
-    registry::PolicyArg::parse(policy).map_or_else(|_| policy.to_string(), |arg| arg.table_label())
 }
 
 /// Text that stays one cell of a Markdown table and shows as text: `|` escaped, HTML's

@@ -18,7 +18,7 @@ use super::{engine_name, run_name, run_one, LeaderboardError, LeaderboardObserve
 use crate::eval::metrics::{mean_ci, MeanCi, BOOTSTRAP_RESAMPLES};
 use crate::eval::results::Summary;
 use crate::eval::EngineChoice;
-use crate::policy::registry;
+use crate::policy::registry::{self, PolicySource};
 use crate::sim::motion::force_graft::{first_seconds, with_forces_of};
 use crate::sim::motion::synth::{synthesize, SynthOptions};
 use crate::sim::motion::{Dataset, DatasetWriter, Sequence};
@@ -26,12 +26,12 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// Two policies trained on one clip, and the dataset of that clip.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CompliancePair {
-    /// The compliant member's policy argument (its stiffness is swept).
-    pub compliant: String,
-    /// The stiff member's policy argument.
-    pub baseline: String,
+    /// The compliant member (its stiffness is swept).
+    pub compliant: PolicySource,
+    /// The stiff member.
+    pub baseline: PolicySource,
     /// A dataset holding the clip alone.
     pub dataset: PathBuf,
 }
@@ -40,32 +40,29 @@ pub struct CompliancePair {
 impl std::str::FromStr for CompliancePair {
     type Err = String;
 
+    /// `COMPLIANT vs BASELINE@DATASET` (the dataset after the last `@`), each member
+    /// parsed as `--policy` is.
     fn from_str(text: &str) -> Result<Self, String> {
-        Self::parse(text).ok_or_else(|| format!("`{text}`: give COMPLIANT vs BASELINE@DATASET"))
+        let spelled = || format!("`{text}`: give COMPLIANT vs BASELINE@DATASET");
+        let (pair, dataset) = text.rsplit_once('@').ok_or_else(spelled)?;
+        let (compliant, baseline) = pair.split_once(" vs ").ok_or_else(spelled)?;
+        let (compliant, baseline) = (compliant.trim(), baseline.trim());
+        if compliant.is_empty() || baseline.is_empty() || dataset.is_empty() {
+            return Err(spelled());
+        }
+        let member = |m: &str| PolicySource::parse(m).map_err(|e| format!("`{text}`: {e}"));
+        Ok(Self {
+            compliant: member(compliant)?,
+            baseline: member(baseline)?,
+            dataset: PathBuf::from(dataset),
+        })
     }
 }
 
 impl CompliancePair {
-    /// `COMPLIANT vs BASELINE@DATASET` (the dataset after the last `@`).
-    pub fn parse(text: &str) -> Option<Self> {
-        let (pair, dataset) = text.rsplit_once('@')?;
-        let (compliant, baseline) = pair.split_once(" vs ")?;
-        let (compliant, baseline) = (compliant.trim(), baseline.trim());
-        (!compliant.is_empty() && !baseline.is_empty() && !dataset.is_empty()).then(|| Self {
-            compliant: compliant.to_string(),
-            baseline: baseline.to_string(),
-            dataset: PathBuf::from(dataset),
-        })
-    }
-
     /// Its name in directories and tables: `<compliant stem>-vs-<baseline stem>`.
     pub fn name(&self) -> String {
-        let stem = |p: &str| {
-            registry::PolicyArg::parse(p)
-                .ok()
-                .and_then(|arg| arg.file_stem())
-                .unwrap_or_else(|| p.to_string())
-        };
+        let stem = |p: &PolicySource| p.file_stem().unwrap_or_else(|| p.to_string());
         let raw = format!("{}-vs-{}", stem(&self.compliant), stem(&self.baseline));
         raw.chars()
             .map(|c| {
@@ -80,7 +77,7 @@ impl CompliancePair {
 }
 
 /// How the pairs run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub struct PairOptions {
     /// The compliant member's stiffness sweep, N/m (a `softmimic:` policy; none for others).
     pub stiffness_n_per_m: Vec<f64>,
@@ -118,8 +115,8 @@ impl PairOptions {
 pub struct PairMember {
     /// `baseline`, `compliant`, or `stiffness` (a value of the sweep).
     pub role: &'static str,
-    /// Its policy argument.
-    pub policy: String,
+    /// Its policy.
+    pub policy: PolicySource,
     /// The engine.
     pub engine: &'static str,
     /// The pushes run's scores.
@@ -217,7 +214,7 @@ pub const MIN_PAIR_SECONDS: f64 = 1.0;
 pub fn check_pairs(
     pairs: &[CompliancePair],
     options: &PairOptions,
-) -> Result<Vec<Vec<String>>, LeaderboardError> {
+) -> Result<Vec<Vec<PolicySource>>, LeaderboardError> {
     if pairs.is_empty() {
         return Ok(Vec::new());
     }
@@ -238,14 +235,12 @@ pub fn check_pairs(
     }
     let mut seen = std::collections::BTreeSet::new();
     for pair in pairs {
-        if !seen.insert((pair.compliant.clone(), pair.baseline.clone())) {
+        if !seen.insert((pair.compliant.to_string(), pair.baseline.to_string())) {
             return Err(data_error(&pair.name(), "given twice".into()));
         }
         let mut networks = Vec::new();
         for member in [&pair.compliant, &pair.baseline] {
-            let arg = registry::PolicyArg::parse(member)
-                .map_err(|e| data_error(&pair.name(), format!("`{member}`: {e}")))?;
-            let Some(file) = arg.file() else {
+            let Some(file) = member.file() else {
                 return Err(data_error(
                     &pair.name(),
                     format!(
@@ -275,7 +270,7 @@ pub fn check_pairs(
 /// `pairs` and `options` (checked before anything else runs, so not again here).
 pub fn run_pairs(
     pairs: &[CompliancePair],
-    sweeps: Vec<Vec<String>>,
+    sweeps: Vec<Vec<PolicySource>>,
     options: &PairOptions,
     observer: &mut dyn LeaderboardObserver,
 ) -> Result<Vec<PairResult>, LeaderboardError> {
@@ -331,10 +326,10 @@ pub fn run_pairs(
         for &engine in &options.engines {
             for (role, policy) in &players {
                 let player = Player::Argument(policy.clone());
-                observer.run_starting(index, total, policy, engine_name(engine));
+                observer.run_starting(index, total, &policy.to_string(), engine_name(engine));
                 index += 1;
                 let started = Instant::now();
-                let run = dir.join("runs").join(run_name(policy, engine));
+                let run = dir.join("runs").join(run_name(&policy.dir_label(), engine));
                 let pushes = run_one(
                     options.unchecked,
                     &player,
@@ -381,10 +376,11 @@ pub fn run_pairs(
 /// no stiffness of its own, but the default it already runs at (its `compliant` row);
 /// nothing otherwise. A stiffness the family does not take is refused before anything
 /// runs, never dropped.
-fn sweep_of(pair: &CompliancePair, options: &PairOptions) -> Result<Vec<String>, LeaderboardError> {
-    let Ok(compliant) = registry::PolicyArg::parse(&pair.compliant) else {
-        return Ok(Vec::new());
-    };
+fn sweep_of(
+    pair: &CompliancePair,
+    options: &PairOptions,
+) -> Result<Vec<PolicySource>, LeaderboardError> {
+    let compliant = &pair.compliant;
     if compliant.family().name != "softmimic" {
         return Ok(Vec::new());
     }
@@ -407,7 +403,6 @@ fn sweep_of(pair: &CompliancePair, options: &PairOptions) -> Result<Vec<String>,
         .map(|k| {
             compliant
                 .with_parameters(&format!("stiffness={k}"))
-                .map(|arg| arg.to_string())
                 .map_err(|why| data_error(&pair.name(), format!("`option.pair_stiffness`: {why}")))
         })
         .collect()
@@ -528,7 +523,7 @@ pub fn pairs_table(results: &[PairResult]) -> String {
             for m in r.members.iter().filter(|m| m.engine == engine) {
                 out.push_str(&format!(
                     "| {} ({}) | {} | {} |",
-                    super::markdown_cell(&super::policy_label(&m.policy)),
+                    super::markdown_cell(&m.policy.table_label()),
                     m.role,
                     m.stiffness().map_or_else(|| "–".into(), |k| format!("{k}")),
                     cell_text(cell(&m.pushes, "no-force"))
@@ -622,7 +617,7 @@ pub fn pairs_csv(results: &[PairResult]) -> String {
                     &text(&r.pair.name()),
                     m.engine,
                     m.role,
-                    &text(&m.policy),
+                    &text(&m.policy.to_string()),
                     &m.stiffness().map_or_else(String::new, |k| k.to_string()),
                     &text(&setting),
                     &f.to_string(),
@@ -654,20 +649,34 @@ mod tests {
 
     #[test]
     fn a_pair_parses_with_parameters_and_a_dataset() {
-        let p = CompliancePair::parse(
-            "softmimic:a/Pour-SoftMimic.onnx vs softmimic:a/Pour-Baseline.onnx@ds/pour",
-        )
-        .unwrap();
-        assert_eq!(p.compliant, "softmimic:a/Pour-SoftMimic.onnx");
-        assert_eq!(p.baseline, "softmimic:a/Pour-Baseline.onnx");
+        let p: CompliancePair =
+            "softmimic:a/Pour-SoftMimic.onnx vs softmimic:a/Pour-Baseline.onnx@ds/pour"
+                .parse()
+                .unwrap();
+        assert_eq!(p.compliant.to_string(), "softmimic:a/Pour-SoftMimic.onnx");
+        assert_eq!(p.baseline.to_string(), "softmimic:a/Pour-Baseline.onnx");
         assert_eq!(p.dataset, PathBuf::from("ds/pour"));
         assert_eq!(p.name(), "Pour-SoftMimic-vs-Pour-Baseline");
-        let p =
-            CompliancePair::parse("softmimic:S.onnx@stiffness=60 vs softmimic:B.onnx@d").unwrap();
-        assert_eq!(p.compliant, "softmimic:S.onnx@stiffness=60");
-        for bad in ["a vs b", "a@d", " vs b@d", "a vs @d", "a vs b@"] {
-            assert!(CompliancePair::parse(bad).is_none(), "{bad}");
+        let p: CompliancePair = "softmimic:S.onnx@stiffness=60 vs softmimic:B.onnx@d"
+            .parse()
+            .unwrap();
+        assert_eq!(p.compliant.to_string(), "softmimic:S.onnx@stiffness=60");
+        for bad in [
+            "a vs b",
+            "hold@d",
+            " vs b@d",
+            "hold vs @d",
+            "hold vs balance@",
+        ] {
+            let e = bad.parse::<CompliancePair>().unwrap_err();
+            assert!(
+                e.contains("give COMPLIANT vs BASELINE@DATASET"),
+                "{bad}: {e}"
+            );
         }
+        // A member is parsed where the pair is: a typo is refused there.
+        let e = "holdx vs balance@d".parse::<CompliancePair>().unwrap_err();
+        assert!(e.contains("unknown policy `holdx`"), "{e}");
     }
 
     #[test]

@@ -4,11 +4,11 @@
 //! saying why. Whoever executes tasks — the local pool, a Slurm array, a Kubernetes
 //! Indexed Job — runs this.
 
-use super::process_group::{die_with_parent, policy_command_line, shell_in_own_group, stop_group};
 use super::verify::{check_task_run, RunProblem};
 use super::{DoneRecord, Plan, SweepError, Task, TaskDir, TaskLog, TaskState};
 use crate::campaign::own_command;
 use crate::eval::results::RunDir;
+use crate::policy::launched::{die_with_parent, stop_group};
 use crate::policy::network_file::short_hash;
 use crate::sim::motion::Dataset;
 use std::path::Path;
@@ -107,8 +107,9 @@ pub fn run_task(
     let run_dir = tdir.run_dir();
     let mut eval_cmd = eval_command(exe, plan, task, &session, workers, &tdir)?;
     let mut policy: Option<Child> = None;
-    if let Some(command) = &cell.policy.command {
-        match start_policy(plan, command, &session, &tdir)? {
+    if let Some(command) = cell.policy.policy.command() {
+        let log = tdir.create_log(TaskLog::Policy)?;
+        match command.spawn(&session, log) {
             Ok(child) => policy = Some(child),
             Err(why) => return fail(why, &[]),
         }
@@ -179,7 +180,10 @@ fn eval_command(
     let eval_log = tdir.create_log(TaskLog::Eval)?;
     let log_path = tdir.log_file(TaskLog::Eval);
     let policy = &plan.cells[task.cell].policy;
-    let connect_timeout_s = policy.command.is_some().then_some(policy.connect_timeout_s);
+    let connect_timeout_s = policy
+        .policy
+        .command()
+        .map(|command| command.connect_timeout_s());
     let mut eval_cmd = Command::new(exe);
     eval_cmd.args(own_command::eval_of_request(
         &request,
@@ -197,22 +201,6 @@ fn eval_command(
         .stderr(eval_log);
     die_with_parent(&mut eval_cmd);
     Ok(eval_cmd)
-}
-
-/// Starts the cell's policy command in its own process group (so the whole group can be
-/// stopped), its output in `policy.log`; the inner `Err` says why it could not start.
-fn start_policy(
-    plan: &Plan,
-    command: &str,
-    session: &str,
-    tdir: &TaskDir,
-) -> Result<Result<Child, String>, SweepError> {
-    let line = policy_command_line(command, session)?;
-    let log = tdir.create_log(TaskLog::Policy)?;
-    Ok(shell_in_own_group(&line, &plan.workdir, log)
-        .map_err(SweepError::process("preparing the policy command"))?
-        .spawn()
-        .map_err(|e| format!("cannot start the policy command `{line}`: {e}")))
 }
 
 /// How an evaluation ended.

@@ -39,7 +39,6 @@ mod plan;
 mod planned_datasets;
 mod planning;
 mod pool;
-pub mod process_group;
 mod results_csv;
 mod scale_fill;
 mod slurm;
@@ -47,9 +46,11 @@ mod spec;
 mod status;
 mod status_report;
 mod task_dir;
-mod text;
 mod verify;
 
+pub use crate::files::log_text::{
+    create_log, log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
+};
 pub use array::compact_ranges;
 pub use attempt::{run_task, Outcome};
 pub use cells::{CellFaults, CellLatency, CellResult};
@@ -62,7 +63,7 @@ pub use k8s::{k8s_manifest_path, write_k8s_job, K8sRequest, WrittenK8sJob};
 pub use local_run::{run_sweep, LocalRun, RunFinished, RunObserver, RunProgress, RunStarting};
 pub use plan::{
     diff_plans, Cell, DatasetInfo, EngineAxis, LatencyRule, Plan, PolicyAxis, SequenceInfo, Task,
-    PLAN_FILE, PLAN_FORMAT, SESSION_POLICY,
+    PLAN_FILE, PLAN_FORMAT,
 };
 pub use planned_datasets::{changed_datasets, planned_sequences};
 pub use planning::{check_cells_load, plan_sweep, PlannedSweep};
@@ -77,9 +78,6 @@ pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
 pub use status_report::SweepStatus;
 pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_FILE};
-pub use text::{
-    create_log, log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
-};
 pub use verify::{check_task_run, CheckedCensus, RunProblem};
 
 use crate::sim::motion::DataError;
@@ -148,7 +146,7 @@ pub enum SweepError {
     },
     /// A policy command cannot be made into a shell line.
     #[error(transparent)]
-    CommandLine(#[from] process_group::CommandLineError),
+    CommandLine(#[from] crate::policy::launched::CommandLineError),
     /// The plan's robot does not resolve.
     #[error(transparent)]
     Robot(#[from] crate::policy::registry::RegistryError),
@@ -226,16 +224,6 @@ pub enum SweepError {
         policy: String,
         /// Why `eval` refuses it (boxed: it is large, and rare).
         source: Box<crate::eval::SpecError>,
-    },
-    /// A cell's policy argument does not parse.
-    #[error("cell {cell} (policy `{policy}`): {source}")]
-    CellPolicy {
-        /// The cell.
-        cell: usize,
-        /// Its policy's name.
-        policy: String,
-        /// Why (boxed: it is large, and rare).
-        source: Box<crate::policy::registry::RegistryError>,
     },
     /// A policy's network does not load.
     #[error("policy `{policy}`: {source}")]

@@ -5,6 +5,7 @@
 use super::spec::{resolve, PolicySpec, SweepSpec};
 use super::SweepError;
 use crate::eval::{parse_budget, EvalRequest, PolicyIoRules};
+use crate::policy::registry::PolicySource;
 use crate::sim::motion::{DataError, Dataset, SequenceSelection};
 use crate::sim::robot::RobotModel;
 use serde::{Deserialize, Serialize};
@@ -16,11 +17,9 @@ pub const PLAN_FILE: &str = "plan.json";
 /// refused rather than misread. 2: the robot is recorded and eval arguments are
 /// `--flag=value` (a negative value is not read as a flag). 3: the plan is sealed.
 /// 4: a task holds its evaluation as a serialized [`EvalRequest`], not `eval` arguments.
-pub const PLAN_FORMAT: u32 = 4;
-
-/// The policy argument of a task whose policy is a launched process: the only value in
-/// which [`Task::request_for`] fills in the session.
-pub const SESSION_POLICY: &str = "ipc:{session}";
+/// 5: a policy is one value ([`PolicySource`]): an argument's string, or a launched
+/// command's table (command, working directory, connect timeout).
+pub const PLAN_FORMAT: u32 = 5;
 
 /// A sweep's plan, written to `DIR/plan.json` by `sweep plan`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -80,16 +79,13 @@ pub struct Cell {
 pub struct PolicyAxis {
     /// Label in results.
     pub name: String,
-    /// `eval --policy` argument (`twist2:` paths absolute); `ipc:{session}` for commands.
-    pub policy: String,
-    /// Command launching the policy process (`{session}`, `{thorarena}` placeholders).
-    pub command: Option<String>,
+    /// Where the policy comes from: an argument (network paths absolute), or the command
+    /// a task starts (`{session}`, `{thorarena}` placeholders), in the spec's directory.
+    pub policy: PolicySource,
     /// Dynamics profile (name, or absolute .toml path).
     pub profile: String,
     /// Keypoint set.
     pub keypoints: String,
-    /// Seconds a launched policy has to connect.
-    pub connect_timeout_s: f64,
     /// `eval --unchecked`.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub unchecked: bool,
@@ -150,18 +146,18 @@ pub struct Task {
     /// Episodes this task runs.
     pub episodes: usize,
     /// The evaluation the task runs, as `eval` would build it from its flags — without
-    /// workers (the node's) or a run directory (the task's); a launched policy's session
-    /// is [`SESSION_POLICY`] until [`Task::request_for`] fills it in.
+    /// workers (the node's) or a run directory (the task's); a launched policy is its
+    /// command until [`Task::request_for`] names the session an attempt serves it.
     pub request: EvalRequest,
 }
 
 impl Task {
-    /// The task's evaluation with a launched policy's `session` filled in (the policy
-    /// argument only: a dataset or profile path spelled with `{session}` stays that path).
+    /// The task's evaluation as its `eval` process runs it: a launched policy is the
+    /// policy process on `session`, which the attempt starts beside it.
     pub fn request_for(&self, session: &str) -> EvalRequest {
         let mut request = self.request.clone();
-        if request.policy == SESSION_POLICY {
-            request.policy = format!("ipc:{session}");
+        if request.policy.command().is_some() {
+            request.policy = PolicySource::on_session(session);
         }
         request
     }
@@ -244,12 +240,10 @@ impl Plan {
         let mut cells = Vec::new();
         let mut tasks = Vec::new();
         for p in &spec.policies {
-            let policy = policy_axis(p, &workdir);
+            let policy = policy_axis(p, &workdir).map_err(invalid)?;
             // An in-process policy has no round trip to time: it runs under the rules that
             // do not time it, so no latency curve is drawn over an axis that never varied.
-            let in_process = p.command.is_none()
-                && crate::policy::registry::PolicyArg::parse(&policy.policy)
-                    .is_ok_and(|arg| arg.session().is_none());
+            let in_process = policy.policy.in_process();
             let rules: Vec<_> = spec
                 .latency_rules()
                 .into_iter()
@@ -462,34 +456,26 @@ fn check_shards(spec: &SweepSpec, durations: &[Vec<f64>]) -> Result<(), String> 
     Ok(())
 }
 
-/// The policy `p` as planned: paths made absolute against `workdir`, a launched policy's
-/// `--policy` the session placeholder, the profile defaulting to the policy's own
-/// (`registry::PolicyArg::default_profile`).
-fn policy_axis(p: &PolicySpec, workdir: &Path) -> PolicyAxis {
-    let policy = p
-        .resolved_policy(workdir)
-        .unwrap_or_else(|| SESSION_POLICY.into());
-    PolicyAxis {
+/// The policy `p` as planned: paths made absolute against `workdir`, a command run
+/// there, the profile defaulting to the policy's own (`PolicySource::default_profile`).
+fn policy_axis(p: &PolicySpec, workdir: &Path) -> Result<PolicyAxis, String> {
+    let policy = p.source(workdir)?;
+    Ok(PolicyAxis {
         name: p.label(),
-        command: p.command.clone(),
         // The resolved path: a published network's own profile is found by content.
-        profile: p.resolved_profile(workdir).unwrap_or_else(|| {
-            crate::policy::registry::PolicyArg::parse(&policy)
-                .map_or("default", |arg| arg.default_profile())
-                .to_string()
-        }),
+        profile: p
+            .resolved_profile(workdir)
+            .unwrap_or_else(|| policy.default_profile().to_string()),
         network_sha256: planned_network(&policy),
         policy,
         keypoints: p.keypoints.clone(),
-        connect_timeout_s: p.connect_timeout_s,
         unchecked: p.unchecked,
-    }
+    })
 }
 
 /// The SHA-256 of the network file `policy` names, if it names one that can be read.
-pub(super) fn planned_network(policy: &str) -> Option<String> {
-    let arg = crate::policy::registry::PolicyArg::parse(policy).ok()?;
-    let (_, network) = crate::policy::network_file::NetworkFile::read(arg.file()?).ok()?;
+pub(super) fn planned_network(policy: &PolicySource) -> Option<String> {
+    let (_, network) = crate::policy::network_file::NetworkFile::read(policy.file()?).ok()?;
     Some(network.sha256)
 }
 

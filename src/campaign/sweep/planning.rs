@@ -5,7 +5,6 @@
 
 use super::{DatasetInfo, Plan, SweepError, SweepSpec};
 use crate::eval::{EvalSpec, Setting};
-use crate::policy::registry::PolicyArg;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -93,14 +92,10 @@ pub fn check_cells_load(plan: &Plan) -> Result<(), SweepError> {
             policy: cell.policy.name.clone(),
             source: Box::new(source),
         })?;
-        if cell.policy.command.is_none() && checked.insert(format!("policy|{}", request.policy)) {
-            let arg =
-                PolicyArg::parse(&request.policy).map_err(|source| SweepError::CellPolicy {
-                    cell: cell.index,
-                    policy: cell.policy.name.clone(),
-                    source: Box::new(source),
-                })?;
-            arg.load(&spec.robot, &spec.profile)
+        if cell.policy.policy.in_process() && checked.insert(format!("policy|{}", request.policy)) {
+            request
+                .policy
+                .load(&spec.robot, &spec.profile)
                 .map_err(|source| SweepError::PolicyLoad {
                     policy: cell.policy.name.clone(),
                     source: Box::new(source),

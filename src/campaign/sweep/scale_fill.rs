@@ -79,7 +79,7 @@ pub fn finish_with_shard_runs(dir: &Path, shards: &[PathBuf]) -> Result<usize, S
         let setting = Setting::parse(&cell.setting)
             .ok_or_else(|| ScaleFillError::Setting(cell.setting.clone()))?;
         let mut header = source.clone();
-        header.policy = cell.policy.policy.clone();
+        header.policy = cell.policy.policy.family().name.to_string();
         header.settings = vec![setting.clone()];
         let tdir = TaskDir::of(dir, task.index);
         let run = RunDir::new(tdir.run_dir());

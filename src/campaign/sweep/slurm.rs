@@ -7,6 +7,7 @@
 //! (control characters, whitespace, quotes, backslash, `#`) is refused, naming the value.
 
 use super::SweepError;
+pub use crate::policy::launched::shell_quote;
 use std::path::{Path, PathBuf};
 
 /// Where `sweep slurm` writes the batch script in sweep directory `dir`.
@@ -68,19 +69,6 @@ pub fn sbatch_script(r: &SbatchRequest) -> Result<String, SweepError> {
         .collect();
     s += &format!("exec {} {}\n", shell_quote(exe), task.join(" "));
     Ok(s)
-}
-
-/// `s` as one word of a POSIX shell: bare when it is only safe characters, else in
-/// single quotes (inside which nothing is special but `'` itself).
-pub fn shell_quote(s: &str) -> String {
-    if !s.is_empty()
-        && s.chars()
-            .all(|c| c.is_ascii_alphanumeric() || "/._-+=:,".contains(c))
-    {
-        s.to_string()
-    } else {
-        format!("'{}'", s.replace('\'', "'\\''"))
-    }
 }
 
 fn unquotable(what: &str, value: &str, why: &str) -> SweepError {

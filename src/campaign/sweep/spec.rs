@@ -2,6 +2,8 @@
 //! the key named) so a typo never silently shrinks a sweep.
 
 use super::SweepError;
+use crate::policy::launched::PolicyCommand;
+use crate::policy::registry::PolicySource;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -83,12 +85,13 @@ pub struct PolicySpec {
     pub name: Option<String>,
     /// A policy argument as `eval --policy` takes it (`thorarena policies`): a built-in, or a
     /// network in process (`twist2:FILE.onnx`, `beyondmimic:FILE.onnx`, `wbc-mjlab:FILE.onnx`;
-    /// relative paths against the spec's directory).
-    pub policy: Option<String>,
+    /// relative paths against the spec's directory), parsed as the spec is read.
+    #[serde(default, deserialize_with = "policy_argument")]
+    pub policy: Option<PolicySource>,
     /// Shell command starting a policy process that joins session `{session}`;
     /// `{thorarena}` is this binary.
     pub command: Option<String>,
-    /// Dynamics profile [default: the policy's, `thorarena::policy::registry::PolicyArg::default_profile`].
+    /// Dynamics profile [default: the policy's, `thorarena::policy::registry::PolicySource::default_profile`].
     #[serde(default)]
     pub profile: Option<String>,
     /// Keypoint set.
@@ -123,6 +126,17 @@ pub struct LatencySpec {
     /// `hold`, `zero` or `fail`.
     #[serde(default = "default_miss_rule")]
     pub miss_rule: String,
+}
+
+/// A `policy = "…"` key: the argument parsed where the spec is read, refused with the
+/// registry's message (a sweep spec names a command with `command = …`, not here).
+fn policy_argument<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<PolicySource>, D::Error> {
+    let spec = String::deserialize(d)?;
+    PolicySource::parse(&spec)
+        .map(Some)
+        .map_err(serde::de::Error::custom)
 }
 
 fn one() -> usize {
@@ -254,7 +268,8 @@ impl LatencySpec {
 
 impl PolicySpec {
     /// One policy per combination of [`Self::parameters`]' values, each naming its values
-    /// in its policy argument (`FILE@stiffness=40`); itself when it has none.
+    /// in its policy argument (`FILE@stiffness=40`); itself when it has none. A parameter
+    /// the family does not declare is refused here, before anything is planned.
     pub fn expanded(&self) -> Result<Vec<PolicySpec>, String> {
         if self.parameters.is_empty() {
             return Ok(vec![self.clone()]);
@@ -262,8 +277,6 @@ impl PolicySpec {
         let Some(policy) = &self.policy else {
             return Err("`parameters` vary a policy in process (`policy = …`); a `command` takes its own arguments".into());
         };
-        let policy =
-            crate::policy::registry::PolicyArg::parse(policy).map_err(|e| e.to_string())?;
         if policy.parameters().is_some() {
             return Err(format!(
                 "`{policy}` names its parameters already: give them in `parameters` or in the argument, not both"
@@ -295,7 +308,7 @@ impl PolicySpec {
             .map(|combo| {
                 let params: Vec<String> = combo.iter().map(|(k, v)| format!("{k}={v}")).collect();
                 Ok(PolicySpec {
-                    policy: Some(policy.with_parameters(&params.join(","))?.to_string()),
+                    policy: Some(policy.with_parameters(&params.join(","))?),
                     parameters: Default::default(),
                     ..self.clone()
                 })
@@ -307,45 +320,32 @@ impl PolicySpec {
     /// `command` with `{session}`, one of them, and a usable connect timeout. Sweeps and
     /// the leaderboard's policy files hold it to the same rules.
     pub fn check(&self) -> Result<(), String> {
-        match (&self.policy, &self.command) {
-            (Some(_), Some(_)) => return Err("give `policy` or `command`, not both".into()),
-            (None, None) => {
-                return Err(
-                    "give `policy` (a built-in or a network file, e.g. twist2:FILE) or `command`"
-                        .into(),
-                )
-            }
-            (None, Some(c)) if !c.contains("{session}") => {
-                return Err(
-                    "`command` must contain {session}, the session each run serves".into(),
-                )
-            }
-            // A session served by a process nobody starts: every run would wait on the
-            // same name (and a sweep's planning, which tries each policy, with them).
-            (Some(p), None)
-                if crate::policy::registry::PolicyArg::parse(p).is_ok_and(|a| a.session().is_some()) =>
-            {
-                return Err(format!(
-                    "`policy = \"{p}\"` names a policy process no one starts: give `command` (with {{session}}) that starts it for each run"
-                ))
-            }
-            _ => {}
-        }
-        crate::policy::check_wait_s(self.connect_timeout_s, false)
-            .map_err(|why| format!("`connect_timeout_s` = {why}"))?;
-        Ok(())
+        self.source(Path::new(".")).map(|_| ())
     }
 
-    /// `policy` with a network file's path taken against `workdir` (the spec's
-    /// directory); `None` for a `command`.
-    pub fn resolved_policy(&self, workdir: &Path) -> Option<String> {
-        let policy = self.policy.as_ref()?;
-        // An argument that names no policy stays as written: planning refuses it with
-        // the registry's message.
-        Some(match crate::policy::registry::PolicyArg::parse(policy) {
-            Ok(arg) => arg.with_file_in(workdir).to_string(),
-            Err(_) => policy.clone(),
-        })
+    /// Where the policy comes from: `policy` with a network file's path taken against
+    /// `workdir` (the spec's directory), or `command` run there; `Err` when the table does
+    /// not say what to run ([`Self::check`]).
+    pub fn source(&self, workdir: &Path) -> Result<PolicySource, String> {
+        let source = match (&self.policy, &self.command) {
+            (Some(_), Some(_)) => Err("give `policy` or `command`, not both".into()),
+            (None, None) => Err(
+                "give `policy` (a built-in or a network file, e.g. twist2:FILE) or `command`"
+                    .into(),
+            ),
+            // A session served by a process nobody starts: every run would wait on the
+            // same name (and a sweep's planning, which tries each policy, with them).
+            (Some(p), None) if p.session().is_some() => Err(format!(
+                "`policy = \"{p}\"` names a policy process no one starts: give `command` (with {{session}}) that starts it for each run"
+            )),
+            (Some(p), None) => Ok(p.with_file_in(workdir)),
+            (None, Some(c)) => {
+                PolicyCommand::new(c, workdir, self.connect_timeout_s).map(PolicySource::from)
+            }
+        }?;
+        crate::policy::check_wait_s(self.connect_timeout_s, false)
+            .map_err(|why| format!("`connect_timeout_s` = {why}"))?;
+        Ok(source)
     }
 
     /// `profile` with a profile file's path taken against `workdir`; a bundled
@@ -366,8 +366,7 @@ impl PolicySpec {
             return n.clone();
         }
         match (&self.policy, &self.command) {
-            (Some(p), _) => crate::policy::registry::PolicyArg::parse(p)
-                .map_or_else(|_| p.clone(), |arg| arg.label()),
+            (Some(p), _) => p.label(),
             (None, Some(c)) => c.split_whitespace().next().unwrap_or("command").to_string(),
             (None, None) => "policy".into(),
         }

@@ -6,9 +6,11 @@
 
 use super::plan::Plan;
 use super::status::{DoneRecord, FailedRecord, TaskState};
-use super::text::{log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES};
 use super::SweepError;
 use crate::eval::EvalRequest;
+use crate::files::log_text::{
+    log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
+};
 use std::fs::File;
 use std::io::Read;
 use std::path::{Path, PathBuf};

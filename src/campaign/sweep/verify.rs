@@ -6,7 +6,7 @@
 //! its hash, settings, shard, engine, rules) and it holds every planned episode, none
 //! cut short by a policy failure.
 
-use super::{census, Census, Plan, SweepError, Task, TaskDir, SESSION_POLICY};
+use super::{census, Census, Plan, SweepError, Task, TaskDir};
 use crate::eval::results::{Coverage, ResultsError, RunDir, RunHeader};
 use crate::eval::{EpisodeRecord, EvalRequest, Setting};
 use crate::policy::network_file::short_hash;
@@ -58,17 +58,18 @@ fn header_problem(
     run: &EvalRequest,
 ) -> Option<String> {
     let cell = &plan.cells[task.cell];
-    let differs = |field: &str, got: &dyn std::fmt::Debug, planned: &dyn std::fmt::Debug| {
+    // Values as run.json writes them (`[1, 2]`, `null`), not Rust's debug text.
+    let differs = |field: &str, got: String, planned: String| {
         Some(format!(
-            "its {field} is {got:?}, cell {} (`{}`) plans {planned:?}",
+            "its {field} is {got}, cell {} (`{}`) plans {planned}",
             cell.index, cell.policy.name
         ))
     };
     // A launched policy names itself; an in-process one is named by its kind.
-    if cell.policy.policy != SESSION_POLICY {
-        let kind = cell.policy.policy.split(':').next().unwrap_or_default();
+    if let Some(arg) = cell.policy.policy.named() {
+        let kind = arg.family().name;
         if header.policy != kind {
-            return differs("policy", &header.policy, &kind);
+            return differs("policy", shown(&header.policy), shown(&kind));
         }
     }
     if let Some(planned) = &cell.policy.network_sha256 {
@@ -92,32 +93,60 @@ fn header_problem(
     let termination = run.termination;
     let io = run.io;
     if header.dataset != dataset {
-        differs("dataset", &header.dataset, &dataset)
+        differs("dataset", shown(&header.dataset), shown(&dataset))
     } else if header.dataset_sha256 != cell.dataset_sha256 {
-        differs("dataset hash", &header.dataset_sha256, &cell.dataset_sha256)
+        differs(
+            "dataset hash",
+            shown(&header.dataset_sha256),
+            shown(&cell.dataset_sha256),
+        )
     } else if header.subset.as_ref().map(|s| &s.selection)
         != (!cell.selection.is_all()).then_some(&cell.selection)
     {
-        differs("tasks/sequences", &header.subset, &cell.selection)
+        differs(
+            "tasks/sequences",
+            shown(&header.subset),
+            shown(&cell.selection),
+        )
     } else if header.sequences.len() != cell.episodes {
-        differs("sequence count", &header.sequences.len(), &cell.episodes)
+        differs(
+            "sequence count",
+            shown(&header.sequences.len()),
+            shown(&cell.episodes),
+        )
     } else if setting
         .as_ref()
         .is_none_or(|s| header.settings != [s.clone()])
     {
-        differs("settings", &header.settings, &setting)
+        differs("settings", shown(&header.settings), shown(&setting))
     } else if header.shard != run.shard {
-        differs("shard", &header.shard, &run.shard)
+        differs("shard", shown(&header.shard), shown(&run.shard))
     } else if header.keypoints != run.keypoints {
-        differs("keypoint set", &header.keypoints, &run.keypoints)
+        differs(
+            "keypoint set",
+            shown(&header.keypoints),
+            shown(&run.keypoints),
+        )
     } else if !cell.policy.profile.ends_with(".toml") && header.profile != cell.policy.profile {
-        differs("profile", &header.profile, &cell.policy.profile)
+        differs(
+            "profile",
+            shown(&header.profile),
+            shown(&cell.policy.profile),
+        )
     } else if header.io != io {
-        differs("policy I/O rules", &header.io, &io)
+        differs("policy I/O rules", shown(&header.io), shown(&io))
     } else if header.termination != termination {
-        differs("termination rule", &header.termination, &termination)
+        differs(
+            "termination rule",
+            shown(&header.termination),
+            shown(&termination),
+        )
     } else if header.engine.name() != cell.engine.engine {
-        differs("engine", &header.engine.name(), &cell.engine.engine)
+        differs(
+            "engine",
+            shown(&header.engine.name()),
+            shown(&cell.engine.engine),
+        )
     } else if cell
         .engine
         .physics_dt_s
@@ -125,14 +154,14 @@ fn header_problem(
     {
         differs(
             "physics step",
-            &header.physics_dt_s,
-            &cell.engine.physics_dt_s,
+            shown(&header.physics_dt_s),
+            shown(&cell.engine.physics_dt_s),
         )
     } else if header.planned_jobs().len() != task.episodes {
         differs(
             "planned episodes",
-            &header.planned_jobs().len(),
-            &task.episodes,
+            shown(&header.planned_jobs().len()),
+            shown(&task.episodes),
         )
     } else {
         None
@@ -193,4 +222,9 @@ impl CheckedCensus {
         v.sort_unstable();
         v
     }
+}
+
+/// `value` as run.json writes it (JSON: `[1, 2]` for a shard, `null` for none).
+fn shown<T: serde::Serialize + ?Sized>(value: &T) -> String {
+    serde_json::to_string(value).unwrap_or_else(|_| "(unwritable)".into())
 }

@@ -12,7 +12,7 @@ use crate::eval::results::{
 };
 use crate::eval::{EngineChoice, EpisodeRecord, EvalRequest, EvalSpec, SpecError};
 use crate::files::names::{check_name, NameError};
-use crate::policy::registry::{PolicyArg, PolicyChoice, RegistryError};
+use crate::policy::registry::{open_in_process, OpenPolicyError, PolicySource, RegistryError};
 use std::path::PathBuf;
 
 /// The most bootstrap resamples a comparison takes (10⁶ already pins a 95 % interval's
@@ -129,8 +129,8 @@ pub fn compare_engines(
     request: &CrosscheckRequest,
     observer: &mut dyn CrosscheckObserver,
 ) -> Result<Compared, CrosscheckError> {
-    let policy = PolicyArg::parse(&request.rapier.policy)?;
-    if policy.session().is_some() {
+    let policy = &request.rapier.policy;
+    if !policy.in_process() {
         return Err(CrosscheckError::PolicyProcess);
     }
     if !(request.divergence_s.is_finite() && request.divergence_s > 0.0) {
@@ -177,7 +177,7 @@ pub fn compare_engines(
     }
     let mut series = Vec::new();
     for (spec, run) in [&rapier, &mujoco].into_iter().zip(&runs) {
-        series.push(run_engine(request, &policy, spec, run, observer)?);
+        series.push(run_engine(request, policy, spec, run, observer)?);
     }
     let check = compare_runs(
         [&runs[0], &runs[1]],
@@ -204,7 +204,7 @@ pub fn compare_engines(
 /// One engine's evaluation into `run`, its series kept as episodes finish.
 fn run_engine(
     request: &CrosscheckRequest,
-    policy: &PolicyArg,
+    policy: &PolicySource,
     spec: &EvalSpec,
     run: &RunDir,
     observer: &mut dyn CrosscheckObserver,
@@ -217,8 +217,10 @@ fn run_engine(
         ));
     }
     // Checked in process by `compare_engines`: each engine gets its own copy.
-    let PolicyChoice::InProcess(mut policy) = policy.load(&spec.robot, &spec.profile)? else {
-        return Err(CrosscheckError::PolicyProcess);
+    let mut policy = match open_in_process(policy, &spec.robot, &spec.profile) {
+        Ok(policy) => policy,
+        Err(OpenPolicyError::Registry(e)) => return Err(e.into()),
+        Err(_) => return Err(CrosscheckError::PolicyProcess),
     };
     observer.engine_starting(spec, run, policy.name());
     let mut keeping = KeepingSeries {

@@ -7,12 +7,14 @@
 
 mod crosscheck;
 mod named_check;
+mod recording;
 
 pub use crosscheck::{
     compare_engines, Compared, CrosscheckError, CrosscheckObserver, CrosscheckRequest,
     MAX_BOOTSTRAP,
 };
 pub use named_check::{check_named_policy, PolicyCheckError, PolicyCheckRequest};
+pub use recording::{Recorded, RunRecording};
 
 use crate::eval::episode::EpisodeTrace;
 use crate::eval::results::{
@@ -40,6 +42,9 @@ pub enum BenchmarkError {
     /// The dataset of a run could not be read.
     #[error(transparent)]
     Data(#[from] DataError),
+    /// Where the run would be written.
+    #[error(transparent)]
+    Output(#[from] crate::eval::results::OutputRefused),
     /// The dataset changed since its runs ran: they would be scored against other
     /// references.
     #[error("dataset {dataset} changed since the shards ran (content hash differs)")]
@@ -275,10 +280,8 @@ pub fn evaluate(
         &spec.robot,
     ));
     header.sanity = Some(sanity(spec, policy)?);
-    let started = run.start(&header, options.resume).map_err(|e| match e {
-        e @ ResultsError::OtherConfiguration { .. } => BenchmarkError::ResumedOther(e),
-        e => e.into(),
-    })?;
+    let (mut recording, started) = RunRecording::start(run, spec, header, options.resume)?;
+    let header = recording.header();
     let finished: HashSet<_> = started.kept.iter().map(EpisodeRecord::key).collect();
     let jobs: Vec<(usize, usize)> = header
         .planned_jobs()
@@ -286,51 +289,35 @@ pub fn evaluate(
         .filter(|&job| !finished.contains(&header.job_key(job)))
         .collect();
     observer.starting(&Starting {
-        header: &header,
+        header,
         started: &started,
         to_run: jobs.len(),
     });
-    let mut appender = run.appender()?;
-    let mut write_error: Option<ResultsError> = None;
     let plan = EvalPlan::of(spec, options.trace_first_s);
     let outcome = run_eval(&plan, &spec.sequences, &jobs, policy, &mut |r, trace| {
-        if let Err(e) = appender.append(r) {
-            write_error.get_or_insert(e);
-        }
-        if let Some(trace) = trace.filter(|_| spec.traces(&r.task, &r.sequence_id)) {
-            if let Err(e) = run.write_trace(&r.key(), &trace.steps) {
-                write_error.get_or_insert(e);
-            }
-        }
+        recording.record(r, trace.map(|t| t.steps.as_slice()));
         observer.episode(r, trace);
     });
-    appender.flush()?;
-    if let Some(e) = write_error {
-        return Err(e.into());
-    }
-    let resumed_episodes = started.kept.len();
-    let mut records = started.kept;
-    records.extend(outcome.records);
     // Faults are in every record, kept or new; latency percentiles only of this attempt
     // (the run keeps no samples), which the report says when a resume kept episodes.
     let io = PolicyIoReport {
         latency: outcome.latency,
         transport: outcome.transport,
-        deadline_misses: records.iter().map(|r| r.faults.deadline_misses).sum(),
-        invalid_actions: records.iter().map(|r| r.faults.invalid_actions).sum(),
-        resumed_episodes,
+        // Summed over every record, kept or new, by `finish`.
+        deadline_misses: 0,
+        invalid_actions: 0,
+        resumed_episodes: recording.resumed_episodes(),
     };
-    let thresholds = task_thresholds(&spec.sequences, header.control_dt_s);
-    let summary = run.finish(&header, &mut records, thresholds, Some(io))?;
-    let tables = crate::report::write_run_tables(run.path(), &summary)?;
-    let cut_short = records
+    let recorded = recording.finish(Some(io), "")?;
+    let cut_short = recorded
+        .records
         .iter()
         .filter(|r| r.termination == Some(Termination::PolicyFailed))
         .count();
     Ok(Evaluated {
-        header,
-        summary,
-        tables,
+        header: recorded.header,
+        summary: recorded.summary,
+        tables: recorded.tables,
         cut_short,
         not_run: outcome.not_run,
     })
@@ -343,6 +330,19 @@ pub struct Merged {
     pub summary: Summary,
     /// `tables.md`, as written.
     pub tables: String,
+}
+
+/// `thorarena merge`: the run directories `runs`, shards of one evaluation, merged into
+/// `out` ([`merge`]) — which may replace a run there with `overwrite`, never a shard.
+pub fn merge_dirs(
+    runs: &[std::path::PathBuf],
+    out: &std::path::Path,
+    overwrite: bool,
+    robot: &RobotModel,
+) -> Result<Merged, BenchmarkError> {
+    crate::eval::results::check_dir(out, overwrite, runs)?;
+    let shards: Vec<RunDir> = runs.iter().map(RunDir::new).collect();
+    merge(&shards, &RunDir::new(out), robot)
 }
 
 /// Merges `shards`, runs of one evaluation, into `out`: the same records, scores and

@@ -6,7 +6,7 @@ use crate::eval::sanity::{
     check_policy, walking_sequence, SanityError, SanityOptions, SanityReport,
 };
 use crate::eval::EngineChoice;
-use crate::policy::registry::{self, PolicyArg, PolicyChoice, RegistryError};
+use crate::policy::registry::{self, OpenPolicyError, PolicySource, RegistryError};
 use crate::sim::motion::{DataError, Dataset};
 use crate::sim::physics::{Engine, EngineError};
 use std::path::PathBuf;
@@ -15,7 +15,7 @@ use std::path::PathBuf;
 #[derive(Debug, Clone)]
 pub struct PolicyCheckRequest {
     /// The policy, as a run names it (in process only).
-    pub policy: String,
+    pub policy: PolicySource,
     /// Its profile [default: the one a run would choose].
     pub profile: Option<String>,
     /// The dataset [default: the bundled sample].
@@ -81,7 +81,7 @@ pub enum PolicyCheckError {
 /// announcements are logged).
 pub fn check_named_policy(request: &PolicyCheckRequest) -> Result<SanityReport, PolicyCheckError> {
     let robot = registry::robot(&request.robot)?;
-    let arg = PolicyArg::parse(&request.policy)?;
+    let arg = &request.policy;
     let profile_name = request
         .profile
         .clone()
@@ -90,7 +90,7 @@ pub fn check_named_policy(request: &PolicyCheckRequest) -> Result<SanityReport, 
     // Judged only as a run would run it: `eval` refuses a profile the family contradicts.
     arg.check_profile(&profile)
         .map_err(|why| PolicyCheckError::ProfileContradicts {
-            policy: request.policy.clone(),
+            policy: request.policy.to_string(),
             why,
         })?;
     let engine = match (request.engine, &request.mjcf) {
@@ -114,8 +114,10 @@ pub fn check_named_policy(request: &PolicyCheckRequest) -> Result<SanityReport, 
         None => walking_sequence(&sequences, request.track_s)
             .ok_or_else(|| PolicyCheckError::NoSequences(dataset_dir.clone()))?,
     };
-    let PolicyChoice::InProcess(mut policy) = arg.load(&robot, &profile)? else {
-        return Err(PolicyCheckError::PolicyProcess(request.policy.clone()));
+    let mut policy = match registry::open_in_process(arg, &robot, &profile) {
+        Ok(policy) => policy,
+        Err(OpenPolicyError::Registry(e)) => return Err(e.into()),
+        Err(_) => return Err(PolicyCheckError::PolicyProcess(request.policy.to_string())),
     };
     let options = SanityOptions {
         track_s: request.track_s,

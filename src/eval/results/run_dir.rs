@@ -41,6 +41,27 @@ pub const LOCK_FILE: &str = ".writer.lock";
 #[derive(Debug)]
 pub struct RunLock {
     _file: std::fs::File,
+    /// The lock file.
+    path: PathBuf,
+    /// The run directory, and whether taking the lock made it.
+    dir: PathBuf,
+    made_dir: bool,
+}
+
+impl RunLock {
+    /// Gives the lock up, and with it — when no run was started in the directory (no
+    /// `run.json`: a DDS bridge that got no command) — the lock file, and the directory if
+    /// taking the lock made it and nothing else is in it: a command that wrote no run
+    /// leaves nothing behind.
+    pub fn release_if_unwritten(self) {
+        if self.dir.join(HEADER_FILE).exists() {
+            return;
+        }
+        let _ = std::fs::remove_file(&self.path);
+        if self.made_dir {
+            let _ = std::fs::remove_dir(&self.dir);
+        }
+    }
 }
 
 /// A run directory (it need not exist yet).
@@ -136,6 +157,7 @@ impl RunDir {
     /// so two commands given one `--out` cannot interleave their files.
     pub fn lock(&self) -> Result<RunLock, ResultsError> {
         use std::os::fd::AsRawFd;
+        let made_dir = !self.dir.exists();
         std::fs::create_dir_all(&self.dir).map_err(ResultsError::io(&self.dir))?;
         let path = self.dir.join(LOCK_FILE);
         let mut file = crate::files::no_follow::open(
@@ -166,7 +188,12 @@ impl RunDir {
             .set_len(0)
             .and_then(|()| std::io::Write::write_all(&mut file, pid.as_bytes()));
         written.map_err(ResultsError::io(&path))?;
-        Ok(RunLock { _file: file })
+        Ok(RunLock {
+            _file: file,
+            path,
+            dir: self.dir.clone(),
+            made_dir,
+        })
     }
 
     /// Whether the directory can be written: it is made if missing (and removed again if

@@ -43,6 +43,16 @@ pub enum SanityError {
     /// The tracking reference is shorter than one control step.
     #[error("the tracking reference `{0}` is shorter than one control step")]
     EmptyReference(String),
+    /// A command follower's root velocity is judged over windows longer than the clip.
+    #[error("`{clip}` lasts {duration_s:.2} s, shorter than the {window_s} s window over which a command follower's root velocity is judged: check the policy on a clip of at least {window_s} s (`option.sequence`)")]
+    TooShortToFollow {
+        /// The clip, `task/sequence`.
+        clip: String,
+        /// Its length, s.
+        duration_s: f64,
+        /// The velocity window, s.
+        window_s: f64,
+    },
 }
 
 /// The check's thresholds and durations.
@@ -220,6 +230,13 @@ pub fn check_policy(
             "{}/{}",
             tracking.task, tracking.sequence_id
         )));
+    }
+    if policy.follows_commands().is_some() && duration_s(&tracking) < following::VELOCITY_WINDOW_S {
+        return Err(SanityError::TooShortToFollow {
+            clip: format!("{}/{}", tracking.task, tracking.sequence_id),
+            duration_s: duration_s(&tracking),
+            window_s: following::VELOCITY_WINDOW_S,
+        });
     }
     let wiring = policy.wiring();
     let mut checks = vec![CheckOutcome {

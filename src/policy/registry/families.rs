@@ -1,13 +1,13 @@
 //! Every kind of policy a run can name, in one table: how it is spelled, what the user
 //! supplies, the profile it runs under when none is named and which profiles it accepts,
 //! how many environment slots a worker gives it, how it is built, and where it runs.
-//! `thorarena policies` prints it and [`super::PolicyArg`] reads every other column, so a
+//! `thorarena policies` prints it and [`super::NamedPolicy`] reads every other column, so a
 //! new family is one entry here (with its builder and profile rule, beside it in
 //! `policies.rs`).
 
 use super::parameters::Parameter;
 use super::policies;
-use super::{PolicyArg, RegistryError};
+use super::{NamedPolicy, RegistryError};
 use crate::policy::Policy;
 use crate::sim::profile::Profile;
 use crate::sim::robot::RobotModel;
@@ -34,7 +34,7 @@ pub enum Target {
 
 /// Builds a family's policy in process from its parsed argument, for `robot` under
 /// `profile` (its default pose and action mapping).
-pub type Build = fn(&PolicyArg, &RobotModel, &Profile) -> Result<Box<dyn Policy>, RegistryError>;
+pub type Build = fn(&NamedPolicy, &RobotModel, &Profile) -> Result<Box<dyn Policy>, RegistryError>;
 
 /// Whether a profile is one a family's policy runs under; `Err` says why not.
 pub type ProfileRule = fn(&Profile) -> Result<(), String>;

@@ -6,11 +6,12 @@
 
 mod client;
 mod families;
+mod named_policy;
 mod networks;
 mod open;
 mod parameters;
 mod policies;
-mod policy_arg;
+mod policy_source;
 mod suggest;
 
 pub use client::{run_named_client, ClientRequest, NamedClientError};
@@ -18,11 +19,14 @@ pub use families::{
     families_text, policy_help, profile_help, Build, PolicyFamily, ProfileRule, Runs, Target,
     NETWORK_SLOTS_PER_WORKER, POLICY_FAMILIES,
 };
+pub use named_policy::NamedPolicy;
 pub use networks::{known_network, KnownNetwork, KNOWN_NETWORKS};
-pub use open::{open_policy, serve_session, OpenPolicyError, PolicyTarget};
+pub use open::{
+    launch, open_in_process, open_policy, serve_session, OpenPolicyError, PolicyTarget,
+};
 pub use parameters::{parse_parameters, Parameter, ParameterValues};
 pub use policies::{builtin_policy, PolicyChoice};
-pub use policy_arg::PolicyArg;
+pub use policy_source::PolicySource;
 pub use suggest::{closest, did_you_mean};
 
 use crate::sim::profile::{bundled_profile_path, load_profile, Profile, ProfileError};

@@ -2,7 +2,7 @@
 //! [`super::POLICY_FAMILIES`] names: the built-in baselines, the published networks in
 //! process, and what a run holds a profile to for each.
 
-use super::{PolicyArg, RegistryError};
+use super::{NamedPolicy, RegistryError};
 use crate::policy::{
     BalanceGains, BalancePolicy, BeyondMimicPolicy, FalconPolicy, HoldPolicy, Policy, ReplayPolicy,
     SoftMimicPolicy, Twist2Policy,
@@ -17,6 +17,8 @@ pub enum PolicyChoice<'a> {
     InProcess(Box<dyn Policy>),
     /// A policy process that connects to this session (the caller serves it).
     Session(&'a str),
+    /// A policy process the caller starts with this command, on a session it serves.
+    Launched(&'a crate::policy::launched::PolicyCommand),
 }
 
 /// The built-in policy `name` (`hold`, `replay`, `balance`) around `default_pose` (the
@@ -41,7 +43,7 @@ pub fn builtin_policy(
 
 /// The builder of the built-in families (`hold`, `replay`, `balance`), by name.
 pub(super) fn builtin(
-    arg: &PolicyArg,
+    arg: &NamedPolicy,
     robot: &RobotModel,
     profile: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
@@ -49,14 +51,14 @@ pub(super) fn builtin(
         .expect("the built-in families are the built-ins")
 }
 
-/// The network file of a file family's argument (present: [`PolicyArg::parse`] refuses
+/// The network file of a file family's argument (present: [`NamedPolicy::parse`] refuses
 /// one without).
-fn file(arg: &PolicyArg) -> &std::path::Path {
+fn file(arg: &NamedPolicy) -> &std::path::Path {
     arg.file().expect("a file family's argument names its file")
 }
 
 pub(super) fn twist2(
-    a: &PolicyArg,
+    a: &NamedPolicy,
     _: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
@@ -67,7 +69,7 @@ pub(super) fn twist2(
 }
 
 pub(super) fn beyondmimic(
-    a: &PolicyArg,
+    a: &NamedPolicy,
     r: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
@@ -79,7 +81,7 @@ pub(super) fn beyondmimic(
 }
 
 pub(super) fn wbc_mjlab(
-    a: &PolicyArg,
+    a: &NamedPolicy,
     r: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
@@ -89,7 +91,7 @@ pub(super) fn wbc_mjlab(
 }
 
 pub(super) fn falcon(
-    a: &PolicyArg,
+    a: &NamedPolicy,
     _: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
@@ -97,7 +99,7 @@ pub(super) fn falcon(
 }
 
 pub(super) fn softmimic(
-    a: &PolicyArg,
+    a: &NamedPolicy,
     r: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {

@@ -233,6 +233,7 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
                           fallback: Option<&dyn Fn(usize) -> f64>,
                           allow_negative: bool|
      -> Result<Vec<f64>, ProfileError> {
+        let max = field_limit(field);
         let groups: Vec<String> = robot.joints.iter().map(|j| joint_group(&j.name)).collect();
         for key in table.keys() {
             if key != "default"
@@ -256,10 +257,21 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
                     .copied()
                     .or_else(|| fallback.map(|f| f(j)));
                 match v {
-                    Some(v) if v.is_finite() && (allow_negative || v >= 0.0) => Ok(v),
+                    Some(v) if v.is_finite() && (allow_negative || v >= 0.0) && v.abs() <= max.0 => {
+                        Ok(v)
+                    }
+                    Some(v) if v.is_finite() && (allow_negative || v >= 0.0) => Err(bad(
+                        &format!("{field}.{g}"),
+                        format!(
+                            "{} is beyond {} ({}): no actuator of a humanoid this size has it, so it is taken for a mistake",
+                            short(v),
+                            short(max.0),
+                            max.1
+                        ),
+                    )),
                     Some(v) => Err(bad(
                         &format!("{field}.{g}"),
-                        format!("must be a finite value >= 0, got {v}"),
+                        format!("must be a finite value >= 0, got {}", short(v)),
                     )),
                     None => Err(bad(
                         field,
@@ -299,6 +311,32 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
         source: file.source,
         beyondmimic: file.beyondmimic,
     })
+}
+
+/// The largest magnitude a per-joint field of a profile takes, and its unit. The G1's
+/// stiffest bundled gains are FALCON's waist at kp 300 N·m/rad (`data/profiles/falcon.toml`)
+/// and its largest motor limit 139 N·m (`data/robots/g1_29dof/robot.toml`, from
+/// Unitree's description); these bounds sit two orders of magnitude above them, so
+/// no real profile meets them while a slip of the exponent (kp 1e300) is refused before
+/// it runs, instead of being simulated and labelled with the profile's name.
+fn field_limit(field: &str) -> (f64, &'static str) {
+    match field {
+        "kp" => (1e5, "N·m/rad"),
+        "kd" => (1e4, "N·m·s/rad"),
+        "effort_limit_nm" => (1e5, "N·m"),
+        "action_scale" => (100.0, "rad per unit of action"),
+        _ => (4.0 * std::f64::consts::PI, "rad"),
+    }
+}
+
+/// `v` in at most six significant digits (`1e300`, not its three hundred).
+fn short(v: f64) -> String {
+    let text = format!("{v}");
+    if text.len() <= 12 {
+        text
+    } else {
+        format!("{v:.3e}")
+    }
 }
 
 /// `left_hip_pitch_joint` → `hip_pitch`; `waist_yaw_joint` → `waist_yaw`.

@@ -28,11 +28,24 @@ impl ImportObserver for ImportLines<'_> {
     }
 }
 
-/// The lines about a converted motion: glitch frames trimmed, the ground check.
+/// The lines about a converted motion: glitch frames trimmed, frames a force log does
+/// not cover, the ground check.
 pub fn converted_lines(seq: &Sequence, ground: Option<&GroundCheck>) -> Vec<String> {
     let mut lines = Vec::new();
     if let Some(trim) = TrimmedGlitches::in_provenance(&seq.provenance) {
         lines.push(format!("trimmed glitch frames: {}", trim.summary()));
+    }
+    for (side, key) in [
+        ("left", "left_force_frames_outside_log"),
+        ("right", "right_force_frames_outside_log"),
+    ] {
+        if let Some(outside) = seq.provenance.get(key).and_then(|v| v.as_u64()) {
+            lines.push(format!(
+                "note: the {side} force log covers {} of the motion's {} frames; the other {outside} replay no force (check `option.force_offset` if the log should cover them)",
+                (seq.n_frames() as u64).saturating_sub(outside),
+                seq.n_frames()
+            ));
+        }
     }
     if let Some(g) = ground {
         lines.push(format!(

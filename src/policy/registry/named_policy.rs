@@ -14,7 +14,7 @@ use std::path::Path;
 
 /// A parsed policy argument.
 #[derive(Debug, Clone, PartialEq)]
-pub struct PolicyArg {
+pub struct NamedPolicy {
     /// As given.
     spec: String,
     family: &'static PolicyFamily,
@@ -27,7 +27,7 @@ pub struct PolicyArg {
     values: ParameterValues,
 }
 
-impl PolicyArg {
+impl NamedPolicy {
     /// Parses `spec`; an argument that names no family, or a family without its file or
     /// session, is refused with what it probably meant.
     pub fn parse(spec: &str) -> Result<Self, RegistryError> {
@@ -62,6 +62,23 @@ impl PolicyArg {
             parameters: parameters.map(str::to_string),
             values,
         })
+    }
+
+    /// The argument of `family` with `target` after its name (a session's name; "" for a
+    /// built-in), made without a string to parse: what [`super::PolicySource::builtin`]
+    /// and [`super::PolicySource::on_session`] build.
+    pub(super) fn of_family(family: &'static PolicyFamily, target: &str) -> Self {
+        let spec = match family.target {
+            Target::Nothing => family.name.to_string(),
+            _ => format!("{}:{target}", family.name),
+        };
+        Self {
+            spec,
+            family,
+            target: target.to_string(),
+            parameters: None,
+            values: ParameterValues::new(),
+        }
     }
 
     /// The argument as given.
@@ -223,7 +240,7 @@ impl PolicyArg {
     }
 }
 
-impl std::fmt::Display for PolicyArg {
+impl std::fmt::Display for NamedPolicy {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(&self.spec)
     }
@@ -278,13 +295,13 @@ mod tests {
 
     #[test]
     fn parameters_are_not_part_of_the_file() {
-        let arg = PolicyArg::parse("softmimic:dir/a@b.onnx@stiffness=200").unwrap();
+        let arg = NamedPolicy::parse("softmimic:dir/a@b.onnx@stiffness=200").unwrap();
         assert_eq!(arg.file(), Some(Path::new("dir/a@b.onnx")));
         assert_eq!(arg.parameters(), Some("stiffness=200"));
-        let twist = PolicyArg::parse("twist2:x@y.onnx").unwrap();
+        let twist = NamedPolicy::parse("twist2:x@y.onnx").unwrap();
         assert_eq!(twist.file(), Some(Path::new("x@y.onnx")));
         assert_eq!(twist.parameters(), None);
-        let pour = PolicyArg::parse("softmimic:d/Pour-SoftMimic.onnx@stiffness=200").unwrap();
+        let pour = NamedPolicy::parse("softmimic:d/Pour-SoftMimic.onnx@stiffness=200").unwrap();
         assert_eq!(pour.label(), "softmimic:Pour-SoftMimic@stiffness=200");
         assert_eq!(
             pour.table_label(),
@@ -309,19 +326,20 @@ mod tests {
             ),
             ("softmimic:F.onnx@stiffness=5", "outside 10 to 1000 N/m"),
         ] {
-            let e = PolicyArg::parse(spec).unwrap_err().to_string();
+            let e = NamedPolicy::parse(spec).unwrap_err().to_string();
             assert!(e.contains(says), "{spec}: {e}");
         }
-        let ok = PolicyArg::parse("softmimic:F.onnx@stiffness=200,rotational_stiffness=2").unwrap();
+        let ok =
+            NamedPolicy::parse("softmimic:F.onnx@stiffness=200,rotational_stiffness=2").unwrap();
         assert_eq!(ok.parameter("rotational_stiffness"), Some(2.0));
         assert_eq!(ok.parameter("stiffness"), Some(200.0));
     }
 
     #[test]
     fn an_argument_names_its_family_and_what_it_needs() {
-        assert_eq!(PolicyArg::parse("hold").unwrap().family().name, "hold");
+        assert_eq!(NamedPolicy::parse("hold").unwrap().family().name, "hold");
         assert_eq!(
-            PolicyArg::parse("ipc:demo").unwrap().session(),
+            NamedPolicy::parse("ipc:demo").unwrap().session(),
             Some("demo")
         );
         for (spec, says) in [
@@ -334,31 +352,31 @@ mod tests {
                 "unknown policy `twist3:a.onnx` (did you mean",
             ),
         ] {
-            let e = PolicyArg::parse(spec).unwrap_err().to_string();
+            let e = NamedPolicy::parse(spec).unwrap_err().to_string();
             assert!(e.contains(says), "{spec}: {e}");
         }
     }
 
     #[test]
     fn a_relative_file_is_taken_against_a_directory_with_its_parameters() {
-        let arg = PolicyArg::parse("softmimic:n/S.onnx@stiffness=60").unwrap();
+        let arg = NamedPolicy::parse("softmimic:n/S.onnx@stiffness=60").unwrap();
         let moved = arg.with_file_in(Path::new("/specs"));
         assert_eq!(moved.as_str(), "softmimic:/specs/n/S.onnx@stiffness=60");
         assert_eq!(moved.parameters(), Some("stiffness=60"));
-        let varied = PolicyArg::parse("softmimic:S.onnx")
+        let varied = NamedPolicy::parse("softmimic:S.onnx")
             .unwrap()
             .with_parameters("stiffness=40")
             .unwrap();
         assert_eq!(varied.as_str(), "softmimic:S.onnx@stiffness=40");
         assert_eq!(varied.parameter("stiffness"), Some(40.0));
         // A sweep's axis over a parameter the family lacks is refused where it is made.
-        assert!(PolicyArg::parse("falcon:F.onnx")
+        assert!(NamedPolicy::parse("falcon:F.onnx")
             .unwrap()
             .with_parameters("stiffness=40")
             .unwrap_err()
             .contains("takes no parameters"));
         assert!(varied.with_parameters("stiffness=50").is_err());
-        assert!(PolicyArg::parse("hold")
+        assert!(NamedPolicy::parse("hold")
             .unwrap()
             .with_parameters("x=1")
             .is_err());

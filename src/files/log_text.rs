@@ -26,6 +26,20 @@ pub fn printable(s: &str) -> String {
     out
 }
 
+/// `s` as [`printable`] makes it, but for its line breaks and tabs, which a message of
+/// several lines keeps: what the terminal shows of an error quoting outside names.
+pub fn printable_lines(s: &str) -> String {
+    s.split('\n')
+        .map(|line| {
+            line.split('\t')
+                .map(printable)
+                .collect::<Vec<_>>()
+                .join("\t")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// `s` cut to at most `max` bytes on a character boundary, `…` marking a cut.
 pub fn truncated(s: &str, max: usize) -> String {
     if s.len() <= max {

@@ -1,16 +1,14 @@
 //! A policy process started for a run (a leaderboard's `[[policy]] command = …`, `bench
-//! eval --policy-command`): its shell command in its own process group, its output in a
-//! log file, connected as a [`RemotePolicy`] and stopped, group and descendants that left
-//! it, when the policy is dropped.
+//! eval --policy-command`, a request whose policy is a command): its shell command in its
+//! own process group, its output in a log file, connected as a [`RemotePolicy`] and
+//! stopped, group and descendants that left it, when the policy is dropped.
 
-use super::PolicyProcess;
-use crate::campaign::sweep::process_group::{
-    adopt_orphans, policy_command_line, shell_in_own_group, stop_adopted, stop_group,
-};
-use crate::eval::EvalSpec;
+use super::{adopt_orphans, stop_adopted, stop_group, PolicyCommand};
 use crate::policy::{
     ActOutcome, Observation, Policy, RemotePolicy, SessionOptions, TransportStats, Wiring,
 };
+use crate::sim::profile::Profile;
+use crate::sim::robot::RobotModel;
 use std::path::Path;
 use std::process::Child;
 use std::time::Duration;
@@ -24,40 +22,49 @@ pub struct LaunchedPolicy {
     child: Child,
 }
 
+/// Where a launched policy serves: the robot, the profile and the environment slots of
+/// its run, and how the session runs (its connect timeout is the command's own).
+pub struct LaunchTarget<'a> {
+    /// The robot simulated.
+    pub robot: &'a RobotModel,
+    /// The dynamics profile.
+    pub profile: &'a Profile,
+    /// How the session is served.
+    pub session: &'a SessionOptions,
+    /// Environment slots per batch.
+    pub envs: usize,
+}
+
 impl LaunchedPolicy {
-    /// Starts `process` on `session`, its output in `log`, and waits for it to connect
-    /// (at most its `connect_timeout_s`) to serve `spec`'s environments; `note` hears
-    /// the session's progress. `Err` says why not, quoting the end of its log.
+    /// Starts `command` on `session`, its output in `log`, and waits for it to connect
+    /// (at most its `connect_timeout_s`) to serve `target`; `note` hears the session's
+    /// progress. `Err` says why not, quoting the end of its log.
     pub fn start(
-        process: &PolicyProcess,
+        command: &PolicyCommand,
         session: &str,
-        spec: &EvalSpec,
+        target: &LaunchTarget,
         log: &Path,
         note: &mut dyn FnMut(&str),
     ) -> Result<Self, String> {
-        let connect_timeout = crate::policy::check_wait_s(process.connect_timeout_s, true)
+        let connect_timeout = crate::policy::check_wait_s(command.connect_timeout_s(), true)
             .map_err(|why| format!("connect_timeout_s = {why}"))?;
-        let line = policy_command_line(&process.command, session).map_err(|e| e.to_string())?;
-        let out = crate::campaign::sweep::create_log(log)
+        let line = command.line(session).map_err(|e| e.to_string())?;
+        let out = crate::files::log_text::create_log(log)
             .map_err(|e| format!("{}: {e}", log.display()))?;
         // A descendant that leaves the group (`setsid`) is adopted by this process when
         // its parent dies, and stopped with the rest.
         adopt_orphans();
-        let mut child = shell_in_own_group(&line, &process.workdir, out)
-            .and_then(|mut cmd| cmd.spawn())
-            .map_err(|e| format!("cannot start `{line}`: {e}"))?;
+        let mut child = command.spawn(session, out)?;
         let options = SessionOptions {
-            budget: None,
-            spin: Duration::from_micros(50),
             connect_timeout,
-            reconnect: false,
+            ..target.session.clone()
         };
         match RemotePolicy::serve(
             session,
-            &spec.robot,
-            &spec.profile,
+            target.robot,
+            target.profile,
             &options,
-            spec.envs,
+            target.envs,
             &mut |_| Ok(()),
             note,
         ) {
@@ -66,7 +73,7 @@ impl LaunchedPolicy {
                 // Give a process that failed a moment to finish its last words.
                 std::thread::sleep(Duration::from_millis(100));
                 stop_group(&mut child);
-                let tail = crate::campaign::sweep::log_tail(log, LOG_LINES_QUOTED);
+                let tail = crate::files::log_text::log_tail(log, LOG_LINES_QUOTED);
                 Err(format!(
                     "serving session `{session}`: {e} (command `{line}`; the end of its output, {}:\n{})",
                     log.display(),

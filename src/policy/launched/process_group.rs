@@ -1,12 +1,25 @@
-//! The processes a sweep task or a leaderboard starts beside an evaluation — a policy's
-//! shell command, the evaluation itself — are tied to the process that started them:
-//! each dies with its parent, a policy runs in its own process group so the whole group
-//! can be stopped, and what escaped the group is adopted and stopped too.
+//! The processes a run starts beside an evaluation — a policy's shell command (a sweep
+//! task, a leaderboard, `bench eval`), a sweep task's evaluation itself — are tied to the
+//! process that started them: each dies with its parent, a policy runs in its own process
+//! group so the whole group can be stopped, and what escaped the group is adopted and
+//! stopped too.
 
-use super::slurm::shell_quote;
 use std::os::unix::process::CommandExt;
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
+
+/// `s` as one word of a POSIX shell: bare when it is only safe characters, else in
+/// single quotes (inside which nothing is special but `'` itself).
+pub fn shell_quote(s: &str) -> String {
+    if !s.is_empty()
+        && s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || "/._-+=:,".contains(c))
+    {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
+}
 
 /// Why a policy command cannot be written as a shell line.
 #[derive(Debug, thiserror::Error)]
