@@ -5,6 +5,8 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+mod common;
 use thorarena::eval::EvalRequest;
 use thorarena::policy::launched::PolicyCommand;
 use thorarena::policy::registry::PolicySource;
@@ -12,15 +14,11 @@ use thorarena::policy::registry::PolicySource;
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 
 fn thorarena(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
+    // Elsewhere than the checkout: a run that is not refused writes nothing there.
+    common::run_bin(&std::env::temp_dir(), args)
 }
 
-fn error_of(o: &Output) -> String {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!o.status.success(), "expected an error: {e}");
-    assert!(!e.contains("panicked"), "a panic: {e}");
-    e
-}
+use common::failure as error_of;
 
 fn write(path: &Path, text: &str) -> PathBuf {
     std::fs::write(path, text).unwrap();
@@ -64,6 +62,7 @@ fn a_request_files_policy_is_refused_where_the_file_is_read() {
             r#"{"command": "x {session}", "workdir": "/", "connect_timeout_s": 5, "extra": 1}"#,
             "unknown field",
         ),
+        ("5", "give a policy argument as a string"),
     ] {
         let request = write(
             &tmp.path().join("request.json"),
@@ -138,6 +137,29 @@ fn a_request_may_name_a_command_the_run_starts_and_stops() {
     assert!(log.is_file(), "the command's output goes beside the run");
     let records = std::fs::read_to_string(out.join("episodes.jsonl")).unwrap();
     assert_eq!(records.lines().count(), 1, "{records}");
+    // A command that cannot start, or exits without connecting, says which it was.
+    for (command, workdir, says) in [
+        (
+            "{thorarena} client --session {session}",
+            "/nonexistent",
+            "working directory /nonexistent is not a directory",
+        ),
+        (
+            "sh -c 'exit 3' {session}",
+            "/",
+            "exited (exit status: 3) without connecting",
+        ),
+    ] {
+        let failing = write(
+            &tmp.path().join("failing.json"),
+            &format!(
+                r#"{{"policy": {{"command": "{command}", "workdir": "{workdir}", "connect_timeout_s": 2}},
+                    "settings": ["no-force"], "selection": {{"sequences": ["push_chair_001"]}}}}"#
+            ),
+        );
+        let e = error_of(&eval_request(&failing, &tmp.path().join("failed")));
+        assert!(e.contains(says), "{command}: {e}");
+    }
     // A command with nowhere to write its output is refused before it starts.
     let e = error_of(&thorarena(&[
         "eval",
@@ -207,5 +229,21 @@ fn copy_dir(from: &Path, to: &Path) {
         } else {
             std::fs::copy(entry.path(), target).unwrap();
         }
+    }
+}
+
+#[test]
+fn a_session_name_the_wire_cannot_carry_is_refused_before_anything_is_served() {
+    for args in [
+        vec!["eval", "--policy", "ipc:bad name!"],
+        vec!["serve", "--session", "", "--once"],
+        vec!["serve", "--session", &"s".repeat(65), "--once"],
+    ] {
+        let e = error_of(&thorarena(&args));
+        assert!(e.contains("1 to 64 characters"), "{args:?}: {e}");
+        assert!(
+            !e.contains("serving session"),
+            "{args:?}: served first: {e}"
+        );
     }
 }

@@ -5,25 +5,22 @@
 //! never run by the terminal.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
+
+mod common;
 
 #[path = "common/onnx_model.rs"]
 mod onnx_model;
 use onnx_model::Network;
 
-const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 const SAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
 
 fn thorarena(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().unwrap()
+    // Elsewhere than the checkout: a run that is not refused writes nothing there.
+    common::run_bin(&std::env::temp_dir(), args)
 }
 
-fn error_of(o: &Output) -> String {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!o.status.success(), "expected an error: {e}");
-    assert!(!e.contains("panicked"), "a panic: {e}");
-    e
-}
+use common::failure as error_of;
 
 /// A FALCON-shaped network ([1, 575] → [1, 29], weights `fill`) at `dir/falcon.onnx`.
 fn falcon_network(dir: &Path) -> PathBuf {

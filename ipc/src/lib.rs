@@ -28,8 +28,8 @@ pub use layout::{
     ObsBatch, ObsBatchMut, FLAG_ACTIVE, FLAG_PREVIOUS_TERMINATED, FLAG_RESET,
 };
 pub use session::{
-    process_alive, AnswersNoticed, Event, IpcError, Message, Port, TransportCause, TransportOp,
-    WaitPolicy,
+    check_session_name, process_alive, AnswersNoticed, Event, IpcError, Message, Port,
+    TransportCause, TransportOp, WaitPolicy,
 };
 pub use sim::{InputOffer, PolicyInfo, SimConfig, SimSession, StepOutcome};
 

@@ -246,15 +246,23 @@ pub(crate) struct ServiceNames {
     pub action_ready: ServiceName,
 }
 
-pub(crate) fn service_names(session: &str) -> Result<ServiceNames, IpcError> {
+/// Refuses a session name that cannot name a session's services: 1 to 64 characters
+/// from `[A-Za-z0-9_.-]`. Both sides hold a name to it before anything is served.
+pub fn check_session_name(session: &str) -> Result<(), IpcError> {
     let ok = !session.is_empty()
         && session.len() <= 64
         && session
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || "_.-".contains(c));
-    if !ok {
-        return Err(IpcError::SessionName(session.into()));
+    if ok {
+        Ok(())
+    } else {
+        Err(IpcError::SessionName(session.into()))
     }
+}
+
+pub(crate) fn service_names(session: &str) -> Result<ServiceNames, IpcError> {
+    check_session_name(session)?;
     let name = |leaf: &str| {
         ServiceName::new(&format!("thorarena/{session}/{leaf}"))
             .map_err(|_| IpcError::SessionName(session.into()))

@@ -12,7 +12,7 @@ use thorarena::policy::Policy;
 pub struct Args {
     /// Session name: policies connect to `thorarena/<session>/…` (Python:
     /// `thorarena.connect("<session>", …)`; C: `thorarena_connect`).
-    #[arg(long)]
+    #[arg(long, value_parser = thorarena::policy::registry::PolicySource::session_name)]
     pub session: String,
     /// Evaluate one policy, then exit.
     #[arg(long)]

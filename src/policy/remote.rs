@@ -64,6 +64,16 @@ pub struct SessionOptions {
 }
 
 impl SessionOptions {
+    /// How a run serves a policy process it starts itself (the leaderboard's, `bench
+    /// eval`'s): lock-step, a 50 µs spin before blocking, no reconnect; the wait for it
+    /// to connect is its command's own (`PolicyCommand::connect_timeout_s`).
+    pub const LAUNCHED: Self = Self {
+        budget: None,
+        spin: Duration::from_micros(50),
+        connect_timeout: None,
+        reconnect: false,
+    };
+
     /// Options from what a user gives: the run's latency budget (s, checked with the
     /// evaluation), the spin before blocking (µs), the connect timeout (s; 0 waits
     /// forever) and whether a failed policy may be replaced by a reconnecting one.

@@ -43,16 +43,10 @@ impl TimedPolicy {
             "thorarena-bench-eval-{}-{depth}.log",
             std::process::id()
         ));
-        let session = SessionOptions {
-            budget: None,
-            spin: Duration::from_micros(50),
-            connect_timeout: None,
-            reconnect: false,
-        };
         let target = PolicyTarget {
             robot: &spec.robot,
             profile: &spec.profile,
-            session: &session,
+            session: &SessionOptions::LAUNCHED,
             envs: spec.envs,
             launch_log: Some(&log),
         };

@@ -466,16 +466,10 @@ fn run_one(
         source: Box::new(source),
     })?;
     let log = crate::policy::launched::log_beside(run);
-    let session = SessionOptions {
-        budget: None,
-        spin: std::time::Duration::from_micros(50),
-        connect_timeout: None,
-        reconnect: false,
-    };
     let target = PolicyTarget {
         robot: &spec.robot,
         profile: &spec.profile,
-        session: &session,
+        session: &SessionOptions::LAUNCHED,
         envs: spec.envs,
         launch_log: Some(&log),
     };

@@ -72,10 +72,14 @@ impl LaunchedPolicy {
             Err(e) => {
                 // Give a process that failed a moment to finish its last words.
                 std::thread::sleep(Duration::from_millis(100));
+                let exited = match child.try_wait() {
+                    Ok(Some(status)) => format!("; it exited ({status}) without connecting"),
+                    _ => String::new(),
+                };
                 stop_group(&mut child);
                 let tail = crate::files::log_text::log_tail(log, LOG_LINES_QUOTED);
                 Err(format!(
-                    "serving session `{session}`: {e} (command `{line}`; the end of its output, {}:\n{})",
+                    "serving session `{session}`: {e}{exited} (command `{line}`; the end of its output, {}:\n{})",
                     log.display(),
                     tail.join("\n")
                 ))

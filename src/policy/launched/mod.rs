@@ -110,6 +110,12 @@ impl PolicyCommand {
     /// with this process, its output in `log`; `Err` says why it could not start.
     pub fn spawn(&self, session: &str, log: std::fs::File) -> Result<Child, String> {
         let line = self.line(session).map_err(|e| e.to_string())?;
+        if !self.workdir.is_dir() {
+            return Err(format!(
+                "cannot start the policy command `{line}`: its working directory {} is not a directory",
+                self.workdir.display()
+            ));
+        }
         shell_in_own_group(&line, &self.workdir, log)
             .and_then(|mut cmd| cmd.spawn())
             .map_err(|e| format!("cannot start the policy command `{line}`: {e}"))

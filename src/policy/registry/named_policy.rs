@@ -44,6 +44,12 @@ impl NamedPolicy {
         if family.target != Target::Nothing && target.is_empty() {
             return Err(RegistryError::UnknownPolicy(unknown_policy(spec)));
         }
+        // A session's name is held to the wire's rule here, before anything is served.
+        if family.target == Target::Session {
+            thorarena_ipc::check_session_name(target).map_err(|e| {
+                RegistryError::UnknownPolicy(format!("`{}`: {e}", spec.escape_default()))
+            })?;
+        }
         let values = match parameters {
             Some(text) => {
                 parse_parameters(family.name, family.parameters, text).map_err(|why| {

@@ -44,6 +44,12 @@ impl PolicySource {
         Some(Self::Named(NamedPolicy::of_family(family, "")))
     }
 
+    /// Session `name` as a command line gives it (`serve --session`): held to the wire's
+    /// rule (1 to 64 characters from `[A-Za-z0-9_.-]`) before anything is served.
+    pub fn session_name(name: &str) -> Result<String, thorarena_ipc::IpcError> {
+        thorarena_ipc::check_session_name(name).map(|()| name.to_string())
+    }
+
     /// The policy process that joins session `name` (`ipc:NAME`), which the run serves.
     pub fn on_session(name: &str) -> Self {
         let family = policy_family("ipc:").expect("the registry has the `ipc` family");
@@ -214,9 +220,12 @@ impl<'de> Deserialize<'de> for PolicySource {
         let value = serde_json::Value::deserialize(d)?;
         match value {
             serde_json::Value::String(spec) => Self::parse(&spec).map_err(serde::de::Error::custom),
-            other => PolicyCommand::deserialize(other)
+            table @ serde_json::Value::Object(_) => PolicyCommand::deserialize(table)
                 .map(Self::Launched)
                 .map_err(|e| serde::de::Error::custom(format!("a policy command: {e}"))),
+            other => Err(serde::de::Error::custom(format!(
+                "`policy` is {other}: give a policy argument as a string (\"balance\", \"twist2:FILE.onnx\") or a command as a table with `command`, `workdir` and `connect_timeout_s`"
+            ))),
         }
     }
 }
