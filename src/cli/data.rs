@@ -1,6 +1,7 @@
 //! `thorarena data …`: import motion files, describe, export or synthesise a dataset.
 
 use std::path::PathBuf;
+use thorarena::eval::rollout_data::import_rollouts;
 use thorarena::sim::motion::import::news::ImportLines;
 use thorarena::sim::motion::import::{import_batch, ImportBatch, SourceFormat};
 use thorarena::sim::motion::synth::{write_synthetic, SynthOptions, SynthWriteError};
@@ -18,6 +19,10 @@ pub enum DataCommand {
     Synth(SynthArgs),
     /// Export a dataset for Python users (one .npz per sequence plus index.json).
     Export(ExportArgs),
+    /// Could the robot perform each motion under its recorded forces? Per task: the
+    /// ground's centre of pressure from inverse dynamics against the feet's support, with
+    /// and without the hand forces; PHUMA/PBHC kinematic checks; force levels.
+    Check(super::data_check::CheckArgs),
 }
 
 /// Export formats.
@@ -62,6 +67,9 @@ pub enum Format {
     /// The reference motion embedded in a BeyondMimic-style tracking network (holosoma's
     /// exports), read by evaluating its motion outputs at every time step; no forces.
     OnnxMotion,
+    /// Rollout traces of `eval --trace`: the simulated root pose and joints at the control
+    /// rate, with the hand forces that acted (docs/data-check.md).
+    Rollout,
 }
 
 /// Arguments of `data import`.
@@ -157,6 +165,7 @@ pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
         DataCommand::Info(a) => info(a),
         DataCommand::Export(a) => export(a),
         DataCommand::Synth(a) => synth(a),
+        DataCommand::Check(a) => super::data_check::run(a),
     }
 }
 
@@ -172,29 +181,38 @@ fn source_format(args: &ImportArgs, robot: &RobotModel) -> anyhow::Result<Source
         Format::OnnxMotion => SourceFormat::onnx_motion_under(
             &thorarena::policy::registry::profile(&args.profile, robot)?,
         ),
+        Format::Rollout => anyhow::bail!("a rollout is no motion file"),
     })
 }
 
 fn import(args: &ImportArgs) -> anyhow::Result<()> {
     let robot = thorarena::policy::registry::robot(&args.robot)?;
-    let batch = ImportBatch {
-        inputs: args.inputs.clone(),
-        format: source_format(args, &robot)?,
-        task: args.task.clone(),
-        force_logs: args.forces.as_ref().map(|f| [f[0].clone(), f[1].clone()]),
-        force_offset_s: args.force_offset,
-        force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
-        renormalize_quaternions: args.renormalize_quaternions,
-        trim_glitches: args.trim_glitches,
-        ground_correct: args.ground_correct,
-    };
     let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
-    let ds = import_batch(
-        &args.out,
-        &robot,
-        &batch,
-        &mut ImportLines { say: &mut say },
-    )?;
+    let ds = match args.format {
+        Format::Rollout if args.forces.is_some() => {
+            anyhow::bail!("a rollout holds the forces that acted: --forces is for motion files")
+        }
+        Format::Rollout => import_rollouts(&args.inputs, &args.out, &args.task, &robot)?,
+        _ => {
+            let batch = ImportBatch {
+                inputs: args.inputs.clone(),
+                format: source_format(args, &robot)?,
+                task: args.task.clone(),
+                force_logs: args.forces.as_ref().map(|f| [f[0].clone(), f[1].clone()]),
+                force_offset_s: args.force_offset,
+                force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
+                renormalize_quaternions: args.renormalize_quaternions,
+                trim_glitches: args.trim_glitches,
+                ground_correct: args.ground_correct,
+            };
+            import_batch(
+                &args.out,
+                &robot,
+                &batch,
+                &mut ImportLines { say: &mut say },
+            )?
+        }
+    };
     let sequences = thorarena::sim::motion::plural(ds.len(), "sequence");
     eprintln!("{}: {sequences}", ds.dir.display());
     Ok(())

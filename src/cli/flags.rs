@@ -12,7 +12,7 @@ use std::sync::OnceLock;
 use thorarena::eval::EvalRequest;
 
 /// Unit suffixes of field names that their flags leave out.
-const UNIT_SUFFIXES: [&str; 3] = ["_s", "_m", "_rad"];
+const UNIT_SUFFIXES: [&str; 4] = ["_s", "_m", "_rad", "_hz"];
 
 /// `text` with every field the library names in backticks written as its flag.
 pub(crate) fn as_flags(text: &str) -> String {

@@ -7,6 +7,7 @@ mod choices;
 mod client;
 mod crosscheck;
 mod data;
+mod data_check;
 mod dds;
 mod eval;
 mod eval_run;

@@ -16,6 +16,7 @@ pub mod episode;
 pub mod metrics;
 pub mod pipeline;
 pub mod results;
+pub mod rollout_data;
 pub mod runner;
 pub mod sanity;
 

@@ -159,19 +159,16 @@ pub struct TraceContext {
     pub record: Option<EpisodeRecord>,
 }
 
-/// The largest trace file read, bytes (1 GiB: a trace is some 10 KB per control step).
-pub const MAX_TRACE_BYTES: u64 = 1 << 30;
-
 /// Reads a trace file written by `eval --trace`.
 pub fn load_trace(path: &Path) -> Result<Vec<TraceStep>, ReportError> {
-    let text = crate::files::bounded_read::read_to_string(path, "trace file", MAX_TRACE_BYTES)
-        .map_err(|source| ReportError::Io {
+    use crate::eval::results::{ResultsError, RunDir};
+    RunDir::read_trace(path).map_err(|e| match e {
+        ResultsError::Io { path, source } => ReportError::Io { path, source },
+        ResultsError::Json { path, source, .. } => ReportError::Json { path, source },
+        other => ReportError::BadTrace {
             path: path.to_path_buf(),
-            source,
-        })?;
-    serde_json::from_str(&text).map_err(|source| ReportError::Json {
-        path: path.to_path_buf(),
-        source,
+            reason: other.to_string(),
+        },
     })
 }
 

@@ -45,8 +45,8 @@ pub use output_guard::{
     check_dataset_dir, check_dir, check_file, check_files_dir, check_run_dir, OutputRefused,
 };
 pub use run_dir::{
-    RecordAppender, RunDir, RunLock, Started, CROSSCHECK_SERIES_FILE, LOCK_FILE, RUN_FILES,
-    TRACES_DIR,
+    RecordAppender, RunDir, RunLock, Started, CROSSCHECK_SERIES_FILE, LOCK_FILE, MAX_TRACE_BYTES,
+    RUN_FILES, TRACES_DIR,
 };
 pub use run_target::{free_numbered_dir, RunTarget, RunTargetError};
 pub use summary::{

@@ -20,6 +20,9 @@ use std::path::{Path, PathBuf};
 /// The directory of rollout traces, in a run directory.
 pub const TRACES_DIR: &str = "traces";
 
+/// The largest trace file read, bytes (1 GiB: a trace is some 10 KB per control step).
+pub const MAX_TRACE_BYTES: u64 = 1 << 30;
+
 /// The series `crosscheck` compares beyond the records, in each engine's run directory.
 pub const CROSSCHECK_SERIES_FILE: &str = "crosscheck-series.jsonl";
 
@@ -276,6 +279,17 @@ impl RunDir {
             source,
         })?;
         crate::files::atomic_file::write(&path, bytes).map_err(ResultsError::io(&path))
+    }
+
+    /// Reads a trace file written by [`Self::write_trace`] (or copied from one).
+    pub fn read_trace(path: &Path) -> Result<Vec<TraceStep>, ResultsError> {
+        let text = crate::files::bounded_read::read_to_string(path, "trace file", MAX_TRACE_BYTES)
+            .map_err(ResultsError::io(path))?;
+        serde_json::from_str(&text).map_err(|source| ResultsError::Json {
+            path: path.to_path_buf(),
+            line: None,
+            source,
+        })
     }
 
     /// Finishes a run: sorts `records` into schedule order and writes the scores

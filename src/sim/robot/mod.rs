@@ -1,9 +1,11 @@
 //! The robot model: joints in canonical order, bodies, keypoints and hands, loaded from
-//! `data/robots/<name>/` (a URDF plus `robot.toml`), forward kinematics on it, and the
+//! `data/robots/<name>/` (a URDF plus `robot.toml`), forward kinematics and inverse dynamics
+//! (`dynamics.rs`, recursive Newton–Euler) on it, and the
 //! model as a table for people (`describe`, printed by `thorarena robot`).
 
 mod config;
 mod describe;
+mod dynamics;
 mod error;
 mod kinematics;
 mod load;
@@ -13,6 +15,7 @@ pub use config::{
     FrameConfig, HandConfig, HandsConfig, JointConfig, KeypointSetConfig, RobotConfig,
 };
 pub use describe::describe;
+pub use dynamics::{inverse_dynamics, InverseDynamics, MotionState, PointForce};
 pub use error::RobotError;
 pub use kinematics::{
     center_of_mass, forward_kinematics, frame_pose, frame_velocity_w, keypoint_positions,

@@ -1,0 +1,363 @@
+//! `thorarena data check`: its inverse dynamics against MuJoCo's `mj_inverse`, its balance
+//! check on motions whose answer is known (standing still; standing under a hand force no
+//! one could lean against), its tables and gate on the bundled sample, and its run on the
+//! published motions (TWIST2's walks, SoftMimic's clips). The MuJoCo test counts as skipped
+//! in a build without the `mujoco` feature, the published motions' without
+//! `../shared/reference` (never in CI).
+
+use nalgebra::Isometry3;
+use std::path::Path;
+use std::process::Command;
+use thorarena::sim::motion::check::{check_dataset, check_sequence, CheckOptions};
+use thorarena::sim::motion::{Dataset, Sequence};
+use thorarena::sim::robot::{forward_kinematics, load_bundled, lowest_sole_point_z, RobotModel};
+
+mod prereq;
+#[path = "common/walks.rs"]
+mod walks;
+
+const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
+const SAMPLE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+
+fn g1() -> RobotModel {
+    load_bundled("g1_29dof").unwrap()
+}
+
+/// The root height at which the default pose stands with its soles on z = 0.
+fn standing_height(robot: &RobotModel) -> f64 {
+    let mut poses = Vec::new();
+    forward_kinematics(
+        robot,
+        &Isometry3::identity(),
+        &robot.default_pose(),
+        &mut poses,
+    );
+    -lowest_sole_point_z(robot, &poses).unwrap()
+}
+
+/// Two seconds at 50 fps of the default pose standing still, facing +x, with a constant
+/// force on both hands; each hand's calibration makes its sensor frame the world's, so
+/// `hand_force_w` is the world-frame force.
+fn standing(robot: &RobotModel, hand_force_w: [f64; 3]) -> Sequence {
+    let n = 100;
+    let z = standing_height(robot);
+    let mut poses = Vec::new();
+    let root = Isometry3::translation(0.0, 0.0, z);
+    forward_kinematics(robot, &root, &robot.default_pose(), &mut poses);
+    let sensor_in_hand = |side: usize| {
+        let frame = &robot.frames[robot.hands[side].frame];
+        let q = (poses[frame.body] * frame.body_from_frame)
+            .rotation
+            .inverse();
+        [q.w, q.i, q.j, q.k]
+    };
+    Sequence {
+        task: "stand".into(),
+        sequence_id: "still".into(),
+        fps: 50.0,
+        joint_names: robot.joints.iter().map(|j| j.name.clone()).collect(),
+        root_pos: vec![[0.0, 0.0, z]; n],
+        root_quat_wxyz: vec![[1.0, 0.0, 0.0, 0.0]; n],
+        joint_pos: vec![robot.default_pose(); n],
+        joint_vel: None,
+        force_sensor: [vec![hand_force_w; n], vec![hand_force_w; n]],
+        hand_from_sensor_wxyz: [sensor_in_hand(0), sensor_in_hand(1)],
+        force_point_hand: [[0.0; 3]; 2],
+        forces_recorded: true,
+        provenance: serde_json::json!({}),
+    }
+}
+
+#[test]
+fn standing_still_keeps_the_cop_inside_and_a_hand_force_no_lean_can_carry_pushes_it_out() {
+    let robot = g1();
+    let opts = CheckOptions::default();
+    let still = check_sequence(&standing(&robot, [0.0; 3]), &robot, &opts).unwrap();
+    assert_eq!(still.with_force.stance_frames, 98, "{still:?}");
+    assert_eq!(still.with_force.outside_share, 0.0, "{still:?}");
+    assert_eq!(still.without_force.outside_share, 0.0, "{still:?}");
+    assert!(still.with_force.friction_ratio_p95 < 1e-6, "{still:?}");
+    assert_eq!(still.kinematics.contact_share, 1.0);
+    assert!(still.kinematics.penetration_max_mm < 1e-6);
+
+    // 150 N forward on each hand with the body upright: the ground's CoP would have to sit
+    // far ahead of the toes, and friction carries 300 N against 340 N of weight only at
+    // μ ≈ 0.9.
+    let pushed = check_sequence(&standing(&robot, [150.0, 0.0, 0.0]), &robot, &opts).unwrap();
+    assert_eq!(pushed.with_force.outside_share, 1.0, "{pushed:?}");
+    assert!(pushed.with_force.outside_p95_mm > 100.0, "{pushed:?}");
+    assert_eq!(pushed.without_force.outside_share, 0.0, "{pushed:?}");
+    assert!(pushed.with_force.friction_ratio_p95 > 0.8, "{pushed:?}");
+    assert!((pushed.forces.loaded_mean_n - 150.0).abs() < 1e-9);
+    assert_eq!(pushed.forces.loaded_share, 1.0);
+}
+
+#[test]
+fn the_check_refuses_a_cutoff_that_is_no_frequency() {
+    let robot = g1();
+    let opts = CheckOptions {
+        cutoff_hz: 0.0,
+        ..CheckOptions::default()
+    };
+    let e = check_sequence(&standing(&robot, [0.0; 3]), &robot, &opts).unwrap_err();
+    assert!(e.to_string().contains("cutoff_hz"), "{e}");
+}
+
+#[test]
+fn data_check_prints_per_task_tables_writes_json_and_gates_on_max_outside() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("check");
+    let ok = Command::new(BIN)
+        .args(["data", "check", SAMPLE, "--out", out.to_str().unwrap()])
+        .args(["--max-outside", "1"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&ok.stdout);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("check.json")).unwrap()).unwrap();
+    let robot = g1();
+    let ds = Dataset::open(Path::new(SAMPLE), &robot).unwrap();
+    let tasks = json["tasks"].as_array().unwrap();
+    assert_eq!(json["sequences"].as_array().unwrap().len(), ds.len());
+    assert_eq!(json["dataset_sha256"], ds.content_hash());
+    for t in tasks {
+        let task = t["task"].as_str().unwrap();
+        assert!(
+            stdout.contains(&format!("| {task} |")),
+            "{task} not printed"
+        );
+        assert!(
+            t["with_force"]["stance_frames"].as_u64().unwrap() > 0,
+            "{t}"
+        );
+    }
+    // The library's numbers, not the file's: the same check in process.
+    let inproc = check_dataset(
+        &ds,
+        &ds.load_all().unwrap(),
+        &robot,
+        &CheckOptions::default(),
+        |_, _| {},
+    )
+    .unwrap();
+    assert_eq!(tasks.len(), inproc.tasks.len());
+    let worst = inproc
+        .tasks
+        .iter()
+        .map(|t| t.worst_outside_share())
+        .fold(0.0, f64::max);
+    let md = std::fs::read_to_string(out.join("check.md")).unwrap();
+    assert!(md.contains("by sequence"), "{md}");
+
+    // A gate just below the worst task's share fails, naming it; at it, passes.
+    let gate = |max: f64| {
+        Command::new(BIN)
+            .args(["data", "check", SAMPLE, "--max-outside", &format!("{max}")])
+            .output()
+            .unwrap()
+    };
+    if worst > 0.0 {
+        let failed = gate(worst - 1e-6);
+        assert_eq!(failed.status.code(), Some(1));
+        let err = String::from_utf8_lossy(&failed.stderr);
+        assert!(err.contains("--max-outside"), "{err}");
+    }
+    assert!(gate(worst + 1e-9).status.success());
+    let bad = gate(1.5);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("share from 0 to 1"));
+}
+
+#[test]
+fn data_check_runs_on_twist2s_walks_and_softmimics_clips() {
+    const TEST: &str = "data_check_runs_on_twist2s_walks_and_softmimics_clips";
+    let Some(twist2) = prereq::reference(TEST, "twist2") else {
+        return;
+    };
+    let Some(softmimic) = prereq::reference(TEST, "softmimic/motions") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let walks = tmp.path().join("walks");
+    walks::import_walks(&twist2, &walks);
+    let clips = tmp.path().join("softmimic");
+    let mut files: Vec<String> = std::fs::read_dir(&softmimic)
+        .unwrap()
+        .map(|e| e.unwrap().path().to_str().unwrap().to_string())
+        .filter(|p| p.ends_with(".csv"))
+        .collect();
+    files.sort();
+    let mut import = Command::new(BIN);
+    // SoftMimic's walk.csv starts with a quaternion 2 % off unit norm.
+    import.args([
+        "data",
+        "import",
+        "--format",
+        "softmimic-csv",
+        "--ground-correct",
+    ]);
+    import.arg("--renormalize-quaternions");
+    let imported = import
+        .args(&files)
+        .args(["--out", clips.to_str().unwrap(), "--task", "softmimic"])
+        .output()
+        .unwrap();
+    assert!(
+        imported.status.success(),
+        "{}",
+        String::from_utf8_lossy(&imported.stderr)
+    );
+    let robot = g1();
+    for dir in [&walks, &clips] {
+        let ds = Dataset::open(dir, &robot).unwrap();
+        let check = check_dataset(
+            &ds,
+            &ds.load_all().unwrap(),
+            &robot,
+            &CheckOptions::default(),
+            |_, _| {},
+        )
+        .unwrap();
+        for t in &check.tasks {
+            // People walking and standing are on the ground most of the time.
+            assert!(t.kinematics.contact_share > 0.7, "{}: {t:?}", dir.display());
+            assert!(t.with_force.stance_frames > 0);
+            assert!(t.with_force.outside_share.is_finite());
+            assert!(t.with_force.outside_p95_mm.is_finite());
+        }
+        println!("{}", check.markdown(false));
+    }
+}
+
+/// Our recursive Newton–Euler against MuJoCo's `mj_inverse` (contacts and every other
+/// constraint off) on the generated MJCF, at random states and accelerations: the root's
+/// generalized force (world force; moment in the root frame) and every joint torque.
+#[test]
+fn inverse_dynamics_agrees_with_mujocos_mj_inverse() {
+    if !cfg!(feature = "mujoco") {
+        prereq::skip(
+            "inverse_dynamics_agrees_with_mujocos_mj_inverse",
+            "built without the `mujoco` feature (./test.sh builds it)",
+        );
+        return;
+    }
+    #[cfg(feature = "mujoco")]
+    mj_inverse_agrees();
+}
+
+#[cfg(feature = "mujoco")]
+fn mj_inverse_agrees() {
+    use mujoco_rs::prelude::*;
+    use nalgebra::{UnitQuaternion, Vector3};
+    use rand::{RngExt, SeedableRng};
+    use thorarena::sim::robot::{inverse_dynamics, MotionState};
+    let robot = g1();
+    let settings = thorarena::sim::physics::PhysicsSettings::default();
+    let mut mj =
+        MjModel::from_xml_string(&thorarena::sim::physics::mjcf_of(&robot, &settings)).unwrap();
+    mj.opt_mut().disableflags |= MjtDisableBit::mjDSBL_CONSTRAINT as i32;
+    mj.opt_mut().gravity = settings.gravity;
+    let joint = |name: &str| {
+        let id = mj.name_to_id(MjtObjBase::mjOBJ_JOINT, name).unwrap();
+        (mj.jnt_qposadr()[id] as usize, mj.jnt_dofadr()[id] as usize)
+    };
+    let joints: Vec<(usize, usize)> = robot.joints.iter().map(|j| joint(&j.name)).collect();
+    let root = mj
+        .name_to_id(MjtObjBase::mjOBJ_BODY, &robot.bodies[0].name)
+        .unwrap();
+    let free = mj.body_jntadr()[root] as usize;
+    let (free_q, free_v) = (
+        mj.jnt_qposadr()[free] as usize,
+        mj.jnt_dofadr()[free] as usize,
+    );
+    let mut data = MjData::new(Box::new(mj));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let mut r = |scale: f64| scale * rng.random_range(-1.0..1.0);
+    let mut poses = Vec::new();
+    for trial in 0..5 {
+        let n = robot.n_joints();
+        let q: Vec<f64> = robot
+            .joints
+            .iter()
+            .map(|j| j.default_rad + 0.3 * r(1.0))
+            .collect();
+        let qd: Vec<f64> = (0..n).map(|_| r(2.0)).collect();
+        let qdd: Vec<f64> = (0..n).map(|_| r(20.0)).collect();
+        let rot = UnitQuaternion::from_euler_angles(r(0.3), r(0.3), r(3.0));
+        let pos = Vector3::new(r(1.0), r(1.0), 0.8 + r(0.1));
+        let (v, w_local) = (
+            Vector3::new(r(1.0), r(1.0), r(1.0)),
+            Vector3::new(r(1.0), r(1.0), r(1.0)),
+        );
+        let (a, alpha_local) = (
+            Vector3::new(r(5.0), r(5.0), r(5.0)),
+            Vector3::new(r(5.0), r(5.0), r(5.0)),
+        );
+        {
+            let qpos = data.qpos_mut();
+            qpos[free_q..free_q + 3].copy_from_slice(pos.as_slice());
+            let c = rot.quaternion().coords; // (x, y, z, w)
+            qpos[free_q + 3..free_q + 7].copy_from_slice(&[c.w, c.x, c.y, c.z]);
+            for (j, &(a, _)) in joints.iter().enumerate() {
+                qpos[a] = q[j];
+            }
+        }
+        {
+            let qvel = data.qvel_mut();
+            qvel[free_v..free_v + 3].copy_from_slice(v.as_slice());
+            qvel[free_v + 3..free_v + 6].copy_from_slice(w_local.as_slice());
+            for (j, &(_, d)) in joints.iter().enumerate() {
+                qvel[d] = qd[j];
+            }
+        }
+        {
+            let qacc = data.qacc_mut();
+            qacc[free_v..free_v + 3].copy_from_slice(a.as_slice());
+            qacc[free_v + 3..free_v + 6].copy_from_slice(alpha_local.as_slice());
+            for (j, &(_, d)) in joints.iter().enumerate() {
+                qacc[d] = qdd[j];
+            }
+        }
+        data.inverse();
+        let theirs = data.qfrc_inverse().to_vec();
+        let state = MotionState {
+            world_from_root: Isometry3::from_parts(pos.into(), rot),
+            root_lin_vel_w: v,
+            root_ang_vel_w: rot * w_local,
+            root_lin_acc_w: a,
+            // With ω_w = R·ω_b, dω_w/dt = R·dω_b/dt (the ω × ω term vanishes).
+            root_ang_acc_w: rot * alpha_local,
+            q: &q,
+            qd: &qd,
+            qdd: &qdd,
+        };
+        let gravity = Vector3::from(settings.gravity);
+        let ours = inverse_dynamics(&robot, &state, &gravity, &[], &mut poses);
+        let force = Vector3::new(theirs[free_v], theirs[free_v + 1], theirs[free_v + 2]);
+        let moment_b = Vector3::new(theirs[free_v + 3], theirs[free_v + 4], theirs[free_v + 5]);
+        let our_moment_b = rot.inverse() * ours.root_moment_w;
+        assert!(
+            (force - ours.root_force_w).norm() < 1e-6 * (1.0 + force.norm()),
+            "trial {trial}: root force {force:?} (MuJoCo) vs {:?}",
+            ours.root_force_w
+        );
+        assert!(
+            (moment_b - our_moment_b).norm() < 1e-6 * (1.0 + moment_b.norm()),
+            "trial {trial}: root moment {moment_b:?} (MuJoCo) vs {our_moment_b:?}"
+        );
+        for (j, &(_, d)) in joints.iter().enumerate() {
+            assert!(
+                (theirs[d] - ours.joint_torque_nm[j]).abs() < 1e-6 * (1.0 + theirs[d].abs()),
+                "trial {trial}: {} torque {} (MuJoCo) vs {}",
+                robot.joints[j].name,
+                theirs[d],
+                ours.joint_torque_nm[j]
+            );
+        }
+    }
+}
