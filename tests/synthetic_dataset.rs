@@ -20,6 +20,7 @@ fn options(per_task: usize, seed: u64, tasks: &[&str]) -> SynthOptions {
         seed,
         fps: 50.0,
         tasks: tasks.iter().map(|t| t.to_string()).collect(),
+        version: 1,
     }
 }
 

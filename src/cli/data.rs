@@ -157,6 +157,10 @@ pub struct SynthArgs {
     /// Replace a dataset already in `--out` (its manifest and the files it lists).
     #[arg(long, visible_alias = "overwrite")]
     pub force: bool,
+    /// Generator version: 1 (forces scaled below real levels, motions planned
+    /// kinematically) or 2 (real force levels, each motion balanced under its forces).
+    #[arg(long, default_value_t = thorarena::sim::motion::synth::GENERATOR_VERSION)]
+    pub generator: u32,
 }
 
 pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
@@ -248,6 +252,7 @@ fn synth(args: &SynthArgs) -> anyhow::Result<()> {
         seed: args.seed,
         fps: 50.0,
         tasks: args.tasks.clone(),
+        version: args.generator,
     };
     let started = std::time::Instant::now();
     let written = write_synthetic(&args.out, &robot, &opts, args.force, |done, total| {

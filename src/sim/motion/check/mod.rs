@@ -25,6 +25,7 @@
 //! the data claims (SOURCES.md).
 
 pub mod derivatives;
+pub mod frames;
 mod report;
 pub mod support;
 pub mod zero_phase;
@@ -32,10 +33,10 @@ pub mod zero_phase;
 pub use report::{CheckGateError, CheckWriteError, CHECK_JSON, CHECK_MARKDOWN};
 
 use crate::eval::metrics::percentile;
-use crate::sim::motion::{joint_limit_margin, Dataset, Sequence, LEFT, RIGHT};
-use crate::sim::robot::{center_of_mass, inverse_dynamics, MotionState, RobotModel};
-use derivatives::SmoothedMotion;
-use nalgebra::{Point2, Point3, Quaternion, UnitQuaternion, Vector3};
+use crate::sim::motion::{joint_limit_margin, Dataset, Sequence};
+use crate::sim::robot::RobotModel;
+use frames::frame_states;
+use nalgebra::Point2;
 use serde::Serialize;
 use support::{convex_hull, distance_outside, SolePoints, CONTACT_HEIGHT_M};
 
@@ -207,12 +208,14 @@ impl Kinematics {
     }
 }
 
-/// The hand forces, per hand-frame.
+/// The hand forces, per hand-frame, and both hands together per frame.
 #[derive(Debug, Clone, Default)]
 struct ForceSeries {
     hand_frames: usize,
     loaded_n: Vec<f64>,
     peak_n: f64,
+    both_loaded_n: Vec<f64>,
+    both_peak_n: f64,
 }
 
 /// How strong the recorded hand forces are over a sequence or a task.
@@ -226,6 +229,11 @@ pub struct ForceLevels {
     pub peak_n: f64,
     /// Share of hand-frames that are loaded.
     pub loaded_share: f64,
+    /// Both hands together (sum of the two magnitudes): mean over the frames it is above
+    /// [`LOADED_N`], N — the object's level when both hands hold it.
+    pub both_loaded_mean_n: f64,
+    /// Both hands together: the largest sum, N.
+    pub both_peak_n: f64,
 }
 
 impl ForceLevels {
@@ -237,12 +245,21 @@ impl ForceLevels {
                 .collect(),
         );
         let hand_frames: usize = series.iter().map(|s| s.hand_frames).sum();
-        Self {
-            loaded_mean_n: if loaded.is_empty() {
+        let mean = |v: &[f64]| {
+            if v.is_empty() {
                 0.0
             } else {
-                loaded.iter().sum::<f64>() / loaded.len() as f64
-            },
+                v.iter().sum::<f64>() / v.len() as f64
+            }
+        };
+        let both: Vec<f64> = series
+            .iter()
+            .flat_map(|s| s.both_loaded_n.iter().copied())
+            .collect();
+        Self {
+            both_loaded_mean_n: mean(&both),
+            both_peak_n: series.iter().map(|s| s.both_peak_n).fold(0.0, f64::max),
+            loaded_mean_n: mean(&loaded),
             loaded_p95_n: percentile(&loaded, 95.0),
             peak_n: series.iter().map(|s| s.peak_n).fold(0.0, f64::max),
             loaded_share: share(loaded.len(), hand_frames),
@@ -441,46 +458,14 @@ fn checked_soles(robot: &RobotModel, opts: &CheckOptions) -> Result<SolePoints, 
     Ok(soles)
 }
 
-/// The ground's wrench (force, moment about the world origin) → its CoP on z = 0, or
-/// `None` when the ground would have to pull.
-fn centre_of_pressure(force: &Vector3<f64>, moment_o: &Vector3<f64>) -> Option<Point2<f64>> {
-    (force.z > 0.0).then(|| Point2::new(-moment_o.y / force.z, moment_o.x / force.z))
-}
-
 fn sequence_series(
     seq: &Sequence,
     robot: &RobotModel,
     soles: &SolePoints,
     opts: &CheckOptions,
 ) -> Result<SequenceSeries, CheckError> {
-    let canonical = seq.joint_names.len() == robot.n_joints()
-        && seq
-            .joint_names
-            .iter()
-            .zip(&robot.joints)
-            .all(|(a, b)| *a == b.name);
-    if !canonical {
-        return Err(CheckError::Joints {
-            task: seq.task.clone(),
-            sequence: seq.sequence_id.clone(),
-            robot: robot.name.clone(),
-        });
-    }
-    let n = seq.n_frames();
-    if n < 5 {
-        return Err(CheckError::TooShort {
-            task: seq.task.clone(),
-            sequence: seq.sequence_id.clone(),
-            frames: n,
-        });
-    }
-    let motion = SmoothedMotion::of(seq, opts.cutoff_hz);
+    let frames = frame_states(seq, robot, soles, opts)?;
     let dt = 1.0 / seq.fps;
-    let gravity = Vector3::from(opts.gravity_w);
-    let hand_from_sensor = [LEFT, RIGHT].map(|s| {
-        let q = seq.hand_from_sensor_wxyz[s];
-        UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
-    });
     let mut with_force = BalanceSeries::default();
     let mut without_force = BalanceSeries::default();
     let mut kin = KinematicSeries {
@@ -489,98 +474,74 @@ fn sequence_series(
         ..Default::default()
     };
     let mut forces = ForceSeries::default();
-    let mut poses = Vec::new();
-    let mut previous_contacts: Option<Vec<(bool, Point3<f64>)>> = None;
-    for k in 1..n - 1 {
-        let state = MotionState {
-            world_from_root: motion.world_from_root[k],
-            root_lin_vel_w: motion.root_lin_vel_w[k],
-            root_ang_vel_w: motion.root_ang_vel_w[k],
-            root_lin_acc_w: motion.root_lin_acc_w[k],
-            root_ang_acc_w: motion.root_ang_acc_w[k],
-            q: &motion.q[k],
-            qd: &motion.qd[k],
-            qdd: &motion.qdd[k],
-        };
-        let id = inverse_dynamics(robot, &state, &gravity, &[], &mut poses);
-        let samples = soles.sample(&poses);
-        let contacts: Vec<(bool, Point3<f64>)> = samples
-            .iter()
-            .map(|s| (s.bottom_w.z <= opts.contact_height_m, s.bottom_w))
-            .collect();
-        let touching: Vec<Point2<f64>> = contacts
-            .iter()
-            .filter(|(c, _)| *c)
-            .map(|(_, p)| Point2::new(p.x, p.y))
-            .collect();
+    for (i, f) in frames.iter().enumerate() {
         // Kinematic checks.
         kin.frames += 1;
-        kin.lowest_sole_z_m = samples
+        kin.lowest_sole_z_m = f
+            .soles
             .iter()
             .map(|s| s.bottom_w.z)
             .fold(kin.lowest_sole_z_m, f64::min);
-        let all_soles: Vec<Point2<f64>> = samples
+        let all_soles: Vec<Point2<f64>> = f
+            .soles
             .iter()
             .map(|s| Point2::new(s.bottom_w.x, s.bottom_w.y))
             .collect();
-        let root = motion.world_from_root[k].translation.vector;
         kin.pelvis_outside_m.push(distance_outside(
             &convex_hull(&all_soles),
-            &Point2::new(root.x, root.y),
+            &Point2::new(f.root_w.x, f.root_w.y),
         ));
-        if (2..n - 2).contains(&k) {
-            let p = |i: usize| motion.world_from_root[i].translation.vector;
-            let jerk = (p(k + 2) - 3.0 * p(k + 1) + 3.0 * p(k) - p(k - 1)) / (dt * dt * dt);
+        if (1..frames.len().saturating_sub(2)).contains(&i) {
+            let p = |j: usize| frames[j].root_w;
+            let jerk = (p(i + 2) - 3.0 * p(i + 1) + 3.0 * p(i) - p(i - 1)) / (dt * dt * dt);
             kin.root_jerk_m_s3.push(jerk.norm());
         }
-        if let Some(before) = &previous_contacts {
-            for ((now, p), (then, q)) in contacts.iter().zip(before) {
-                if *now && *then {
-                    kin.skate_m_s
-                        .push(Vector3::new(p.x - q.x, p.y - q.y, 0.0).norm() / dt);
-                }
+        if let Some(before) = i.checked_sub(1).map(|j| &frames[j]) {
+            for (now, then) in f
+                .soles
+                .iter()
+                .zip(&before.soles)
+                .zip(f.touching.iter().zip(&before.touching))
+                .filter(|(_, (a, b))| **a && **b)
+                .map(|(p, _)| p)
+            {
+                let d = now.bottom_w - then.bottom_w;
+                kin.skate_m_s.push(d.xy().norm() / dt);
             }
         }
-        previous_contacts = Some(contacts);
-        // The recorded hand forces, in the world through the reference's hand poses.
-        let mut hand_force = Vector3::zeros();
-        let mut hand_moment_o = Vector3::zeros();
-        for s in [LEFT, RIGHT] {
-            let frame = &robot.frames[robot.hands[s].frame];
-            let world_from_hand = poses[frame.body] * frame.body_from_frame;
-            let f_sensor = Vector3::from(seq.force_sensor[s][k]);
-            let f_w = world_from_hand.rotation * (hand_from_sensor[s] * f_sensor);
-            let at = world_from_hand * Point3::from(seq.force_point_hand[s]);
-            hand_force += f_w;
-            hand_moment_o += at.coords.cross(&f_w);
-            let magnitude = f_sensor.norm();
+        let both = f.hand_force_n[0] + f.hand_force_n[1];
+        forces.both_peak_n = forces.both_peak_n.max(both);
+        if both > LOADED_N {
+            forces.both_loaded_n.push(both);
+        }
+        for magnitude in f.hand_force_n {
             forces.hand_frames += 1;
             forces.peak_n = forces.peak_n.max(magnitude);
             if magnitude > LOADED_N {
                 forces.loaded_n.push(magnitude);
             }
         }
-        if touching.is_empty() {
+        if f.support.is_empty() {
             continue;
         }
         kin.contact_frames += 1;
-        let support = convex_hull(&touching);
-        let com = center_of_mass(robot, &poses);
-        let ground_alone = (id.root_force_w, id.root_moment_about_origin_w());
-        let ground_with = (ground_alone.0 - hand_force, ground_alone.1 - hand_moment_o);
-        for ((force, moment), series) in [
-            (ground_with, &mut with_force),
-            (ground_alone, &mut without_force),
+        for (ground, series) in [
+            (f.ground_with_force, &mut with_force),
+            (f.ground_without_force, &mut without_force),
         ] {
             series.stance_frames += 1;
-            match centre_of_pressure(&force, &moment) {
+            match ground.centre_of_pressure() {
                 None => series.pulling_frames += 1,
                 Some(cop) => {
-                    series.cop_outside_m.push(distance_outside(&support, &cop));
-                    series.friction_ratio.push(force.xy().norm() / force.z);
+                    series
+                        .cop_outside_m
+                        .push(distance_outside(&f.support, &cop));
+                    series
+                        .friction_ratio
+                        .push(ground.force.xy().norm() / ground.force.z);
                     series
                         .com_cop_m
-                        .push((Point2::new(com.x, com.y) - cop).norm());
+                        .push((Point2::new(f.com_w.x, f.com_w.y) - cop).norm());
                 }
             }
         }

@@ -112,19 +112,21 @@ impl DatasetCheck {
         let _ = writeln!(s, "\n## Recorded hand forces\n");
         let _ = writeln!(
             s,
-            "| task | loaded share | mean while loaded, N | p95 while loaded, N | peak, N |"
+            "| task | loaded share | mean while loaded, N | p95 while loaded, N | peak, N | both hands: mean while loaded, N | both hands: peak, N |"
         );
-        let _ = writeln!(s, "|---|---:|---:|---:|---:|");
+        let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|");
         for t in &self.tasks {
             let f = &t.forces;
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.1} | {:.1} | {:.1} |",
+                "| {} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} |",
                 t.task,
                 pct(f.loaded_share),
                 f.loaded_mean_n,
                 f.loaded_p95_n,
-                f.peak_n
+                f.peak_n,
+                f.both_loaded_mean_n,
+                f.both_peak_n
             );
         }
         if per_sequence {

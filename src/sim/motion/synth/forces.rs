@@ -116,7 +116,78 @@ impl SensorNoise {
     }
 }
 
+/// The force levels a generator version draws from, N (per hand unless named *total*).
+///
+/// Version 1 scales the real levels down (see above). Version 2 draws them at the real
+/// levels of SOURCES.md, "Task forces": wiping presses 10–22 N per wiping hand, friction
+/// 0.3–0.5 of it, so the hand's force stays in the 5–30 N range with its ±10 % wobble; a 4–8 kg container weighs 20–40 N on each
+/// hand; a chair takes 30–50 N in total to keep moving and 60–100 N in total to break
+/// loose; a carried object shared with a partner puts 10–30 N of its weight on both hands
+/// together and the partner pushes or pulls up to 25 N, with tugs to 40 N (totals within
+/// the 10–50 N range). The motions carry them ([`super::balance`]).
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Levels {
+    /// Generator version these belong to.
+    pub version: u32,
+    /// Wiping: the table's push on a wiping hand.
+    pub press: (f64, f64),
+    /// Wiping: friction against the stroke (v1: N; v2: a fraction of the press).
+    pub friction: (f64, f64),
+    /// Lifting: the container's weight on each hand.
+    pub lift: (f64, f64),
+    /// Chairs: the sustained level (v1: per hand; v2: total of both hands).
+    pub chair_sustained: (f64, f64),
+    /// Chairs: the break-away peak (v1: per hand; v2: total of both hands).
+    pub chair_peak: (f64, f64),
+    /// Carrying: the weight share (v1: per hand; v2: total of both hands).
+    pub carry_vertical: (f64, f64),
+    /// Carrying: the partner's push or pull, amplitude (v1: per hand; v2: total).
+    pub carry_partner: (f64, f64),
+    /// Carrying: a partner's tug (v1: per hand; v2: total).
+    pub carry_tug: (f64, f64),
+}
+
+impl Levels {
+    /// The levels of generator version `version` (1 or 2).
+    pub fn of(version: u32) -> Self {
+        if version >= 2 {
+            Self {
+                version,
+                press: (10.0, 22.0),
+                friction: (0.3, 0.5),
+                lift: (20.0, 40.0),
+                chair_sustained: (30.0, 50.0),
+                chair_peak: (60.0, 100.0),
+                carry_vertical: (10.0, 30.0),
+                carry_partner: (10.0, 25.0),
+                carry_tug: (25.0, 40.0),
+            }
+        } else {
+            Self {
+                version,
+                press: (5.0, 12.0),
+                friction: (3.0, 8.0),
+                lift: (12.0, 22.0),
+                chair_sustained: (8.0, 18.0),
+                chair_peak: (30.0, 60.0),
+                carry_vertical: (5.0, 10.0),
+                carry_partner: (6.0, 10.0),
+                carry_tug: (6.0, 10.0),
+            }
+        }
+    }
+
+    /// A per-hand level from a range that version 2 gives as a total of both hands.
+    pub fn per_hand(&self, total_or_hand: f64) -> f64 {
+        if self.version >= 2 {
+            0.5 * total_or_hand
+        } else {
+            total_or_hand
+        }
+    }
+}
+
 /// A level drawn uniformly from `range` (N), kept for provenance.
-pub fn level(rng: &mut ChaCha8Rng, range: std::ops::Range<f64>) -> f64 {
-    rng.random_range(range)
+pub fn level(rng: &mut ChaCha8Rng, range: (f64, f64)) -> f64 {
+    rng.random_range(range.0..range.1)
 }

@@ -30,6 +30,7 @@
 //! `hand_from_sensor` of ±90° about the hand's x axis (opposite per side) tilted by up to
 //! 3°, so a replay that skips the calibration applies wrongly directed forces.
 
+mod balance;
 mod forces;
 mod gait;
 mod ik;
@@ -61,7 +62,12 @@ pub const TASKS: [&str; 6] = [
     "syn_carry",
 ];
 
-/// Version recorded in the provenance; bump when the same seed would give other data.
+/// The generator versions, each reproducible for its seed: 1 plans the motion
+/// kinematically with forces scaled below the real levels; 2 draws the real levels and
+/// balances each motion under its forces ([`balance`]). Recorded in the provenance.
+pub const GENERATOR_VERSIONS: [u32; 2] = [1, 2];
+
+/// The version [`SynthOptions::default`] generates.
 pub const GENERATOR_VERSION: u32 = 1;
 
 /// What to generate.
@@ -75,6 +81,8 @@ pub struct SynthOptions {
     pub fps: f64,
     /// Tasks to generate (names from [`TASKS`]); empty means all.
     pub tasks: Vec<String>,
+    /// Generator version, one of [`GENERATOR_VERSIONS`].
+    pub version: u32,
 }
 
 impl Default for SynthOptions {
@@ -84,6 +92,7 @@ impl Default for SynthOptions {
             seed: 0,
             fps: 50.0,
             tasks: Vec::new(),
+            version: GENERATOR_VERSION,
         }
     }
 }
@@ -127,6 +136,12 @@ pub fn synthesize(
 ) -> Result<Vec<Sequence>, SynthError> {
     if !(opts.fps.is_finite() && opts.fps >= 10.0) {
         return Err(SynthError::Options(format!("fps {} (need ≥ 10)", opts.fps)));
+    }
+    if !GENERATOR_VERSIONS.contains(&opts.version) {
+        return Err(SynthError::Options(format!(
+            "generator version {}: the versions are {GENERATOR_VERSIONS:?}",
+            opts.version
+        )));
     }
     let mut selected = Vec::new();
     for name in &opts.tasks {
@@ -201,15 +216,22 @@ fn sequence(
     let id = format!("{task}_{index:03}");
     let mut rng = rng_for(opts.seed, task_index, index);
     let dur = rng.random_range(10.0..30.0);
-    let plan = match task {
-        "clean_table" => tasks::clean_table(sk, &mut rng, opts.fps, dur),
-        "liftdown_water" => tasks::lift(sk, &mut rng, opts.fps, dur, false),
-        "liftup_water" => tasks::lift(sk, &mut rng, opts.fps, dur, true),
-        "pull_chair" => walking::walking(sk, &mut rng, opts.fps, dur, WalkTask::PullChair),
-        "push_chair" => walking::walking(sk, &mut rng, opts.fps, dur, WalkTask::PushChair),
-        _ => walking::walking(sk, &mut rng, opts.fps, dur, WalkTask::Carry),
+    let lv = forces::Levels::of(opts.version);
+    let fps = opts.fps;
+    let mut plan = match task {
+        "clean_table" => tasks::clean_table(sk, &mut rng, fps, dur, &lv),
+        "liftdown_water" => tasks::lift(sk, &mut rng, fps, dur, false, &lv),
+        "liftup_water" => tasks::lift(sk, &mut rng, fps, dur, true, &lv),
+        "pull_chair" => walking::walking(sk, &mut rng, fps, dur, WalkTask::PullChair, &lv),
+        "push_chair" => walking::walking(sk, &mut rng, fps, dur, WalkTask::PushChair, &lv),
+        _ => walking::walking(sk, &mut rng, fps, dur, WalkTask::Carry, &lv),
     };
-    let solved = solve::realize(robot, sk, &plan, task, &id)?;
+    let (solved, balanced) = if opts.version >= 2 {
+        let (solved, stats) = balance::balance(robot, sk, &mut plan, fps, task, &id)?;
+        (solved, Some(stats))
+    } else {
+        (solve::realize(robot, sk, &plan, task, &id)?, None)
+    };
     let cal = [calibration(&mut rng, LEFT), calibration(&mut rng, RIGHT)];
     let noise = [LEFT, RIGHT].map(|_| {
         let drift = rng.random_range(0.2..0.6);
@@ -224,6 +246,13 @@ fn sequence(
             let e = noise[side].sample(&mut rng, k as f64 / opts.fps);
             force_sensor[side].push([f_s.x + e[0], f_s.y + e[1], f_s.z + e[2]]);
         }
+    }
+    let mut provenance = json!({"generator": "thorarena synth", "version": opts.version,
+        "seed": opts.seed, "duration_s": dur, "task_params": plan.params, "ik": solved.stats});
+    if let Some(stats) = balanced {
+        // Version 1's provenance stays as it was, so its files (and hashes) do too.
+        provenance["balance"] = json!(stats);
+        provenance["force_levels"] = json!(lv);
     }
     let frames = &plan.frames;
     Ok(Sequence {
@@ -242,7 +271,6 @@ fn sequence(
         hand_from_sensor_wxyz: [wxyz(&cal[LEFT]), wxyz(&cal[RIGHT])],
         force_point_hand: [LEFT, RIGHT].map(|s| robot.hands[s].point_hand.coords.into()),
         forces_recorded: true,
-        provenance: json!({"generator": "thorarena synth", "version": GENERATOR_VERSION,
-            "seed": opts.seed, "duration_s": dur, "task_params": plan.params, "ik": solved.stats}),
+        provenance,
     })
 }

@@ -1,7 +1,7 @@
 //! The standing tasks (`clean_table`, `liftup_water`, `liftdown_water`) and the plan type
 //! every task produces: per-frame pelvis, feet, waist and hand targets plus world forces.
 
-use super::forces::{level, rc, Window, Wobble};
+use super::forces::{level, rc, Levels, Window, Wobble};
 use super::skeleton::Skeleton;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::RngExt;
@@ -64,7 +64,7 @@ pub fn hand_rest(sk: &Skeleton, side: usize) -> Vector3<f64> {
 /// circles or back-and-forth strokes separated by short pauses with the hand lifted.
 /// Forces (SOURCES.md, Task forces wiping 5–30 N, kept light per the push probe): the table pushes the hand up with
 /// 5–12 N and friction of 3–8 N opposes the stroke.
-pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64) -> Plan {
+pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, lv: &Levels) -> Plan {
     let n = n_frames(dur, fps);
     let hands_used = rng.random_range(0..3usize); // 0 left, 1 right, 2 both
     let circles = rng.random_bool(0.5);
@@ -74,8 +74,12 @@ pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64) -> P
     let (cx, cy) = (rng.random_range(0.26..0.32), rng.random_range(0.13..0.18));
     let amp = rng.random_range(0.04..0.08);
     let freq = rng.random_range(0.5..1.0);
-    let press = [level(rng, 5.0..12.0), level(rng, 5.0..12.0)];
-    let fric = [level(rng, 3.0..8.0), level(rng, 3.0..8.0)];
+    let press = [level(rng, lv.press), level(rng, lv.press)];
+    let mut fric = [level(rng, lv.friction), level(rng, lv.friction)];
+    if lv.version >= 2 {
+        // Version 2 draws friction as a fraction of the press.
+        fric = [fric[0] * press[0], fric[1] * press[1]];
+    }
     let press_wobble = [0, 1].map(|_| Wobble::new(rng, 0.1, 0.6, 0.3));
     let t_in = rng.random_range(1.0..2.0);
     let t_out = dur - rng.random_range(1.8..2.5);
@@ -161,7 +165,14 @@ pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64) -> P
 /// low surface, grasp it with both hands and stand up holding it — or the reverse. Forces
 /// (SOURCES.md, Task forces: 20–40 N per hand for a 4–5 L container, scaled down per the push probe to 12–22 N): the
 /// container's weight pulls each hand down while held, zero before grasp and after release.
-pub fn lift(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, up: bool) -> Plan {
+pub fn lift(
+    sk: &Skeleton,
+    rng: &mut ChaCha8Rng,
+    fps: f64,
+    dur: f64,
+    up: bool,
+    lv: &Levels,
+) -> Plan {
     let n = n_frames(dur, fps);
     let drop = rng.random_range(0.10..0.20);
     let pelvis_pitch = rng.random_range(0.1..0.3);
@@ -173,7 +184,7 @@ pub fn lift(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, up: bool) -
     // liftup: wait, bend, grip, rise, hold; liftdown: hold, bend, release, rise, wait.
     let t0 = 0.5 + if up { share } else { 1.0 - share } * slack;
     let (t_low, t_rise) = (t0 + t_bend, t0 + t_bend + t_grip);
-    let weight = level(rng, 12.0..22.0);
+    let weight = level(rng, lv.lift);
     let split = rng.random_range(0.45..0.55);
     let low_x = rng.random_range(0.26..0.32);
     let low_z = sk.stand_height_m - drop + rng.random_range(-0.06..0.0);

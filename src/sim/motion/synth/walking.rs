@@ -1,7 +1,7 @@
 //! The walking tasks: `push_chair` (forward), `pull_chair` (backward) and `syn_carry`
 //! (forward or backward, sometimes turning), all with both hands on the object.
 
-use super::forces::{level, pulse, rc, Window, Wobble};
+use super::forces::{level, pulse, rc, Levels, Window, Wobble};
 use super::gait::{walk, GaitParams};
 use super::skeleton::Skeleton;
 use super::tasks::{n_frames, Plan, PlanFrame};
@@ -66,7 +66,14 @@ fn gait_params(rng: &mut ChaCha8Rng, task: WalkTask, sk: &Skeleton, dur: f64) ->
 }
 
 /// Builds the plan of a walking task.
-pub fn walking(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, task: WalkTask) -> Plan {
+pub fn walking(
+    sk: &Skeleton,
+    rng: &mut ChaCha8Rng,
+    fps: f64,
+    dur: f64,
+    task: WalkTask,
+    lv: &Levels,
+) -> Plan {
     let g = gait_params(rng, task, sk, dur);
     let n = n_frames(dur, fps);
     let gait = walk(sk, &g, fps, n);
@@ -87,8 +94,8 @@ pub fn walking(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, task: Wa
     // Chair: SOURCES.md, Task forces 15–50 N sustained, 50–100 N break-away, scaled per the push probe to 8–18 N
     // and 30–60 N peaks of 0.2–0.5 s. Carry: 10–50 N (SOURCES.md, Task forces), here 5–10 N vertical plus a
     // partner's fluctuating ±10 N along the walk.
-    let sustained = [0, 1].map(|_| level(rng, 8.0..18.0));
-    let idle = level(rng, 1.0..4.0);
+    let sustained = [0, 1].map(|_| lv.per_hand(level(rng, lv.chair_sustained)));
+    let idle = level(rng, (1.0, 4.0));
     let mut peaks = vec![(
         g.start_s + rng.random_range(0.0..0.3),
         rng.random_range(0.2..0.5),
@@ -97,9 +104,9 @@ pub fn walking(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, task: Wa
         let t = rng.random_range(g.start_s + 2.0..g.end_s().max(g.start_s + 2.5));
         peaks.push((t, rng.random_range(0.2..0.5)));
     }
-    let peak_n = [0, 1].map(|_| level(rng, 30.0..60.0));
-    let vertical = [0, 1].map(|_| level(rng, 5.0..10.0));
-    let partner_amp = rng.random_range(6.0..10.0);
+    let peak_n = [0, 1].map(|_| lv.per_hand(level(rng, lv.chair_peak)));
+    let vertical = [0, 1].map(|_| lv.per_hand(level(rng, lv.carry_vertical)));
+    let partner_amp = lv.per_hand(level(rng, lv.carry_partner));
     let partner = Wobble::new(rng, 0.1, 0.5, partner_amp);
     // The partner's tugs: a second or so of a firmer push or pull.
     let tugs: Vec<(f64, f64, f64)> = (0..rng.random_range(2..5))
@@ -109,7 +116,7 @@ pub fn walking(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, task: Wa
             (
                 t,
                 rng.random_range(0.8..1.5),
-                sign * rng.random_range(6.0..10.0),
+                sign * lv.per_hand(level(rng, lv.carry_tug)),
             )
         })
         .collect();
