@@ -239,13 +239,11 @@ fn data_check_runs_on_twist2s_walks_and_softmimics_clips() {
 /// generalized force (world force; moment in the root frame) and every joint torque.
 #[test]
 fn inverse_dynamics_agrees_with_mujocos_mj_inverse() {
-    if !cfg!(feature = "mujoco") {
-        prereq::skip(
-            "inverse_dynamics_agrees_with_mujocos_mj_inverse",
-            "built without the `mujoco` feature (./test.sh builds it)",
-        );
-        return;
-    }
+    #[cfg(not(feature = "mujoco"))]
+    prereq::skip(
+        "inverse_dynamics_agrees_with_mujocos_mj_inverse",
+        "built without the `mujoco` feature (./test.sh builds it)",
+    );
     #[cfg(feature = "mujoco")]
     mj_inverse_agrees();
 }
