@@ -1,7 +1,8 @@
 //! `thorarena data check`: its inverse dynamics against MuJoCo's `mj_inverse`, its balance
 //! check on motions whose answer is known (standing still; standing under a hand force no
 //! one could lean against), its tables and gate on the bundled sample, and its run on the
-//! published motions (TWIST2's walks, SoftMimic's clips). The MuJoCo test counts as skipped
+//! published motions (TWIST2's walks, SoftMimic's clips); `--rollout`, a tracker's run without
+//! force read back per sequence. The MuJoCo test counts as skipped
 //! in a build without the `mujoco` feature, the published motions' without
 //! `../shared/reference` (never in CI).
 
@@ -171,6 +172,80 @@ fn data_check_prints_per_task_tables_writes_json_and_gates_on_max_outside() {
     let bad = gate(1.5);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("share from 0 to 1"));
+}
+
+/// `data check --rollout POLICY --out DIR`: the tracker's run of every sequence without
+/// force, read back per sequence into check.json and check.md.
+fn check_with_rollout(out: &Path, policy: &str) -> (serde_json::Value, String, String) {
+    let run = Command::new(BIN)
+        .args(["data", "check", SAMPLE, "--out", out.to_str().unwrap()])
+        .args(["--rollout", policy])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr).to_string();
+    assert!(run.status.success(), "{stderr}");
+    let json = serde_json::from_str(&std::fs::read_to_string(out.join("check.json")).unwrap());
+    let md = std::fs::read_to_string(out.join("check.md")).unwrap();
+    (json.unwrap(), md, stderr)
+}
+
+#[test]
+fn data_check_rolls_a_tracker_out_without_force_and_lists_what_it_cannot_hold() {
+    let refused = Command::new(BIN)
+        .args(["data", "check", SAMPLE, "--rollout", "replay"])
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--out"));
+
+    // Open-loop replay of the reference's joints falls: every sequence it drops is listed
+    // with why and when, and each figure is the one its run recorded.
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("check");
+    let (json, md, _) = check_with_rollout(&out, "replay");
+    let tracker = &json["tracker"];
+    let held = tracker["sequences"].as_array().unwrap();
+    let ds = Dataset::open(Path::new(SAMPLE), &g1()).unwrap();
+    assert_eq!(held.len(), ds.len());
+    let run = thorarena::eval::results::RunDir::new(out.join("rollout-replay"));
+    let log = run.read_log(&run.read_header().unwrap()).unwrap();
+    assert_eq!(log.records.len(), ds.len());
+    for (h, entry) in held.iter().zip(&ds.manifest.sequences) {
+        assert_eq!(h["sequence_id"], entry.sequence_id.as_str());
+        let record = log
+            .records
+            .iter()
+            .find(|r| r.sequence_id == entry.sequence_id && r.setting == "no-force")
+            .unwrap();
+        assert_eq!(h["survival"].as_f64().unwrap(), record.series.survival());
+        let dropped = record.series.survival() < 1.0;
+        assert_eq!(h["ended_by"].is_null(), !dropped, "{h}");
+        let line = format!("- {}/{}: ", entry.task, entry.sequence_id);
+        assert_eq!(md.contains(&line), dropped, "{line} in\n{md}");
+    }
+    assert!(md.contains("Not held"), "replay held every sequence:\n{md}");
+
+    // Run again: the tracker's run resumes with nothing left to run, the same figures.
+    let (again, _, stderr) = check_with_rollout(&out, "replay");
+    assert!(stderr.contains("0 episodes to run"), "{stderr}");
+    assert_eq!(again["tracker"], json["tracker"]);
+}
+
+/// The floor docs/data-check.md measures rests on TWIST2 holding every sample sequence
+/// without force.
+#[test]
+fn twist2_holds_every_sample_sequence_without_force() {
+    const TEST: &str = "twist2_holds_every_sample_sequence_without_force";
+    let Some(onnx) = prereq::reference(TEST, "twist2/twist2_1017_25k.onnx") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let policy = format!("twist2:{}", onnx.display());
+    let (json, md, _) = check_with_rollout(&tmp.path().join("check"), &policy);
+    for h in json["tracker"]["sequences"].as_array().unwrap() {
+        assert_eq!(h["survival"].as_f64(), Some(1.0), "{h}");
+    }
+    assert!(md.contains("Every sequence held to its end."), "{md}");
 }
 
 #[test]

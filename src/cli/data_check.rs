@@ -2,7 +2,9 @@
 //! forces (the check itself: `sim::motion::check`).
 
 use std::path::PathBuf;
-use thorarena::sim::motion::Dataset;
+use thorarena::campaign::data_check::{run_data_check, DataCheckJob};
+use thorarena::campaign::leaderboard::ProgressLines;
+use thorarena::sim::motion::check::{CheckOptions, CHECK_JSON, CHECK_MARKDOWN};
 
 /// Arguments of `data check` (definitions: docs/data-check.md).
 #[derive(Debug, clap::Args)]
@@ -22,28 +24,34 @@ pub struct CheckArgs {
     /// Cutoff of the zero-phase low-pass applied before differentiating, Hz.
     #[arg(long, default_value_t = thorarena::sim::motion::check::zero_phase::DEFAULT_CUTOFF_HZ)]
     pub cutoff: f64,
+    /// A tracker run in process (as `eval --policy` takes it, e.g. `twist2:FILE.onnx`)
+    /// on every sequence without force, into OUT/rollout-NAME (resumed when run again):
+    /// the sequences it cannot hold are listed. Needs --out.
+    #[arg(long, value_name = "POLICY", value_parser = thorarena::policy::registry::PolicySource::parse, requires = "out")]
+    pub rollout: Option<thorarena::policy::registry::PolicySource>,
+    /// Engine of the tracker's rollouts.
+    #[arg(long, value_enum, default_value = "rapier")]
+    pub engine: super::choices::EngineArg,
 }
 
-/// `data check`: the tables printed, the files written, the gate applied.
+/// `data check`: the library checks (and rolls out, and writes); the tables printed, the
+/// gate applied.
 pub(super) fn run(args: &CheckArgs) -> anyhow::Result<()> {
-    use thorarena::sim::motion::check::{check_dataset, CheckOptions, CHECK_JSON, CHECK_MARKDOWN};
-    if let Some(out) = &args.out {
-        thorarena::eval::results::check_dir(out, false, std::slice::from_ref(&args.dataset))?;
-    }
-    let robot = thorarena::policy::registry::robot(&args.robot)?;
-    let ds = Dataset::open(&args.dataset, &robot)?;
-    let opts = CheckOptions {
-        cutoff_hz: args.cutoff,
-        ..CheckOptions::default()
+    let job = DataCheckJob {
+        dataset: args.dataset.clone(),
+        robot: args.robot.clone(),
+        options: CheckOptions {
+            cutoff_hz: args.cutoff,
+            ..CheckOptions::default()
+        },
+        out: args.out.clone(),
+        tracker: args.rollout.clone(),
+        engine: args.engine.into(),
     };
-    let started = std::time::Instant::now();
-    let check = check_dataset(&ds, &ds.load_all()?, &robot, &opts, |done, total| {
-        eprint!("\rchecked {done}/{total} sequences")
-    })?;
-    eprintln!(" in {:.1} s", started.elapsed().as_secs_f64());
+    let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
+    let check = run_data_check(&job, &mut ProgressLines::new(&mut say))?;
     print!("{}", check.markdown(false));
     if let Some(out) = &args.out {
-        check.write(out)?;
         eprintln!("{}: {CHECK_MARKDOWN}, {CHECK_JSON}", out.display());
     }
     args.max_outside.map_or(Ok(()), |max| check.gate(max))?;

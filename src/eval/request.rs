@@ -19,6 +19,16 @@ pub enum EngineChoice {
     Mujoco,
 }
 
+impl EngineChoice {
+    /// The engine's name, as `--engine` takes it and tables print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Rapier => "rapier",
+            Self::Mujoco => "mujoco",
+        }
+    }
+}
+
 /// An evaluation as asked for, in plain values; every field is checked by
 /// [`super::EvalSpec::load`]. `eval` builds one from its flags; a sweep task stores one in the
 /// plan (serialized: JSON, every field named, an unknown one refused) and hands it to its

@@ -301,7 +301,7 @@ fn run_name(base: &str, engine: EngineChoice) -> String {
             }
         })
         .collect();
-    format!("{clean}-{}", engine_name(engine))
+    format!("{clean}-{}", engine.name())
 }
 
 /// Refuses, before the first run, what would otherwise fail late or overwrite a run: an
@@ -316,7 +316,7 @@ fn check_names(
         if engines[..i].contains(e) {
             return Err(LeaderboardError::Names(format!(
                 "`option.engines` names {} twice",
-                engine_name(*e)
+                e.name()
             )));
         }
     }
@@ -364,13 +364,6 @@ fn check_out(out: &Path) -> Result<(), LeaderboardError> {
     Ok(())
 }
 
-fn engine_name(engine: EngineChoice) -> &'static str {
-    match engine {
-        EngineChoice::Rapier => "rapier",
-        EngineChoice::Mujoco => "mujoco",
-    }
-}
-
 /// Runs every (policy, engine) of `request`, resuming runs already started, engine by
 /// engine in the order given.
 pub fn run_leaderboard(
@@ -399,7 +392,7 @@ pub fn run_leaderboard(
     let mut entries = Vec::new();
     for &engine in &request.engines {
         for (player, dataset, own_clip) in &runs {
-            let engine_name = engine_name(engine);
+            let engine_name = engine.name();
             let name = run_name(&player.dir_label(), engine);
             let run = request.out.join("runs").join(if *own_clip {
                 format!("{name}-own-clip")
@@ -435,6 +428,21 @@ pub fn run_leaderboard(
     Ok(entries)
 }
 
+/// One evaluation of an in-process policy on `dataset` into `run`, checked and resumed as
+/// the leaderboard's own runs are (a run there of another network starts again): how
+/// `data check --rollout` runs its tracker.
+pub fn run_in_process(
+    source: &PolicySource,
+    dataset: &Path,
+    settings: &[String],
+    engine: EngineChoice,
+    run: &Path,
+    observer: &mut dyn LeaderboardObserver,
+) -> Result<Summary, LeaderboardError> {
+    let player = Player::Argument(source.clone());
+    run_one(false, &player, dataset, settings, engine, run, observer)
+}
+
 fn run_one(
     unchecked: bool,
     player: &Player,
@@ -445,7 +453,7 @@ fn run_one(
     observer: &mut dyn LeaderboardObserver,
 ) -> Result<Summary, LeaderboardError> {
     let name = player.name();
-    let engine_name = engine_name(engine);
+    let engine_name = engine.name();
     let (source, profile) = match player {
         Player::Argument(a) if a.in_process() => (a.clone(), None),
         Player::Argument(a) => return Err(LeaderboardError::NotInProcess(a.to_string())),

@@ -13,7 +13,7 @@
 //! episodes; with four values they are wide, and they say only how much the difference
 //! depends on where the push comes from.
 
-use super::{engine_name, run_name, run_one, LeaderboardError, LeaderboardObserver, Player};
+use super::{run_name, run_one, LeaderboardError, LeaderboardObserver, Player};
 // `check_out` refuses an output directory holding a dataset or a run.
 use crate::eval::metrics::{mean_ci, MeanCi, BOOTSTRAP_RESAMPLES};
 use crate::eval::results::Summary;
@@ -326,7 +326,7 @@ pub fn run_pairs(
         for &engine in &options.engines {
             for (role, policy) in &players {
                 let player = Player::Argument(policy.clone());
-                observer.run_starting(index, total, &policy.to_string(), engine_name(engine));
+                observer.run_starting(index, total, &policy.to_string(), engine.name());
                 index += 1;
                 let started = Instant::now();
                 let run = dir.join("runs").join(run_name(&policy.dir_label(), engine));
@@ -351,7 +351,7 @@ pub fn run_pairs(
                 members.push(PairMember {
                     role,
                     policy: policy.clone(),
-                    engine: engine_name(engine),
+                    engine: engine.name(),
                     pushes,
                     force_log,
                     wall_s: started.elapsed().as_secs_f64(),

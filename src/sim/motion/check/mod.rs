@@ -26,6 +26,7 @@
 
 pub mod derivatives;
 pub mod frames;
+pub mod held;
 mod report;
 pub mod support;
 pub mod zero_phase;
@@ -348,6 +349,9 @@ pub struct DatasetCheck {
     pub tasks: Vec<CheckSummary>,
     /// Per sequence, in the dataset's order.
     pub sequences: Vec<CheckSummary>,
+    /// A named tracker's rollouts without force, when asked for (`data check --rollout`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tracker: Option<held::TrackerHeld>,
 }
 
 /// Why a dataset cannot be checked.
@@ -427,6 +431,7 @@ pub fn check_dataset(
             .zip(&series)
             .map(|(q, s)| CheckSummary::pooled(&q.task, Some(q.sequence_id.clone()), &[s], opts))
             .collect(),
+        tracker: None,
     })
 }
 

@@ -129,6 +129,10 @@ impl DatasetCheck {
                 f.both_peak_n
             );
         }
+        if let Some(tracker) = &self.tracker {
+            let tasks: Vec<&str> = self.tasks.iter().map(|t| t.task.as_str()).collect();
+            s.push_str(&tracker.markdown(&tasks));
+        }
         if per_sequence {
             for t in &self.tasks {
                 let _ = writeln!(s, "\n## {} by sequence\n", t.task);

@@ -1,0 +1,187 @@
+//! `thorarena data check` as one job: the dataset checked (`sim::motion::check`), and with
+//! a tracker named, every sequence rolled out by it without force — an ordinary `eval` run
+//! into the output directory, resumed when the command runs again — so the check can say
+//! which sequences a good tracker cannot hold with no force on it.
+
+use crate::campaign::leaderboard::{
+    run_in_process, LeaderboardError, LeaderboardObserver, ProgressLines,
+};
+use crate::eval::results::{check_dir, OutputRefused, ResultsError, RunDir};
+use crate::eval::EngineChoice;
+use crate::policy::registry::{self, PolicySource, RegistryError};
+use crate::sim::motion::check::held::{SequenceHeld, TrackerHeld};
+use crate::sim::motion::check::{
+    check_dataset, CheckError, CheckOptions, CheckWriteError, DatasetCheck,
+};
+use crate::sim::motion::{DataError, Dataset};
+use std::path::PathBuf;
+
+/// The setting the tracker's rollouts run under.
+pub const ROLLOUT_SETTING: &str = "no-force";
+
+/// A data check as asked for.
+#[derive(Debug, Clone)]
+pub struct DataCheckJob {
+    /// Dataset directory.
+    pub dataset: PathBuf,
+    /// Robot name or directory.
+    pub robot: String,
+    /// How the motions are checked.
+    pub options: CheckOptions,
+    /// Where `check.md`, `check.json` and the tracker's run go (none: nothing written).
+    pub out: Option<PathBuf>,
+    /// A tracker (in process) whose rollouts without force join the check; needs `out`.
+    pub tracker: Option<PolicySource>,
+    /// Engine of the tracker's rollouts.
+    pub engine: EngineChoice,
+}
+
+/// Why a data check could not be made, or did not pass.
+#[derive(Debug, thiserror::Error)]
+pub enum DataCheckError {
+    /// The robot is unknown.
+    #[error(transparent)]
+    Robot(#[from] RegistryError),
+    /// The output directory is refused.
+    #[error(transparent)]
+    Output(#[from] OutputRefused),
+    /// The dataset could not be read.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// The motions could not be checked.
+    #[error(transparent)]
+    Check(#[from] CheckError),
+    /// The check's files could not be written.
+    #[error(transparent)]
+    Write(#[from] CheckWriteError),
+    /// The tracker's run would have nowhere to go.
+    #[error("`option.rollout` runs an evaluation, kept for `view` and reruns: give `option.out`")]
+    RolloutNeedsOut,
+    /// The tracker's run failed.
+    #[error("the tracker's rollouts: {0}")]
+    Rollout(#[from] Box<LeaderboardError>),
+    /// The tracker's run could not be read back.
+    #[error("reading the tracker's run: {0}")]
+    RolloutRead(#[from] ResultsError),
+    /// A sequence the tracker's run does not hold.
+    #[error("the tracker's run {run} has no `{ROLLOUT_SETTING}` episode of {task}/{sequence}")]
+    RolloutMissing {
+        /// The run directory.
+        run: String,
+        /// Task.
+        task: String,
+        /// Sequence id.
+        sequence: String,
+    },
+}
+
+/// What a data check says while it runs.
+pub trait DataCheckObserver {
+    /// `done` of `total` sequences checked.
+    fn checked(&mut self, done: usize, total: usize);
+    /// The observer of the tracker's run.
+    fn rollouts(&mut self) -> &mut dyn LeaderboardObserver;
+}
+
+/// Progress as lines: the sequences checked at each tenth, then the tracker's run as the
+/// leaderboard says its runs.
+impl DataCheckObserver for ProgressLines<'_> {
+    fn checked(&mut self, done: usize, total: usize) {
+        if done == total || done.is_multiple_of((total / 10).max(1)) {
+            self.note(&format!("checked {done}/{total} sequences"));
+        }
+    }
+
+    fn rollouts(&mut self) -> &mut dyn LeaderboardObserver {
+        self
+    }
+}
+
+/// Runs `job`: the check, the tracker's rollouts when asked, and the files when `out` is
+/// given. The gate (`DatasetCheck::gate`) is the caller's, after it has shown the check.
+pub fn run_data_check(
+    job: &DataCheckJob,
+    observer: &mut dyn DataCheckObserver,
+) -> Result<DatasetCheck, DataCheckError> {
+    if job.tracker.is_some() && job.out.is_none() {
+        return Err(DataCheckError::RolloutNeedsOut);
+    }
+    if let Some(out) = &job.out {
+        check_dir(out, false, std::slice::from_ref(&job.dataset))?;
+    }
+    let robot = registry::robot(&job.robot)?;
+    let ds = Dataset::open(&job.dataset, &robot)?;
+    let mut check = check_dataset(&ds, &ds.load_all()?, &robot, &job.options, |d, t| {
+        observer.checked(d, t)
+    })?;
+    if let (Some(tracker), Some(out)) = (&job.tracker, &job.out) {
+        check.tracker = Some(rollouts(
+            job,
+            tracker,
+            &out.join(format!("rollout-{}", tracker.dir_label())),
+            &check,
+            observer,
+        )?);
+    }
+    if let Some(out) = &job.out {
+        check.write(out)?;
+    }
+    Ok(check)
+}
+
+/// The tracker's run of every sequence without force into `run`, read back per sequence in
+/// the check's order.
+fn rollouts(
+    job: &DataCheckJob,
+    tracker: &PolicySource,
+    run: &std::path::Path,
+    check: &DatasetCheck,
+    observer: &mut dyn DataCheckObserver,
+) -> Result<TrackerHeld, DataCheckError> {
+    let settings = [ROLLOUT_SETTING.to_string()];
+    run_in_process(
+        tracker,
+        &job.dataset,
+        &settings,
+        job.engine,
+        run,
+        observer.rollouts(),
+    )
+    .map_err(Box::new)?;
+    let dir = RunDir::new(run);
+    let log = dir.read_log(&dir.read_header()?)?;
+    let sequences = check
+        .sequences
+        .iter()
+        .map(|q| {
+            let id = q.sequence_id.clone().unwrap_or_default();
+            let record = log
+                .records
+                .iter()
+                .rev()
+                .find(|r| r.task == q.task && r.sequence_id == id && r.setting == ROLLOUT_SETTING)
+                .ok_or_else(|| DataCheckError::RolloutMissing {
+                    run: run.display().to_string(),
+                    task: q.task.clone(),
+                    sequence: id.clone(),
+                })?;
+            Ok(SequenceHeld {
+                task: q.task.clone(),
+                sequence_id: id,
+                survival: record.series.survival(),
+                ended_by: record.termination.map(|t| {
+                    serde_json::to_value(t)
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_string))
+                        .unwrap_or_else(|| format!("{t:?}"))
+                }),
+            })
+        })
+        .collect::<Result<Vec<_>, DataCheckError>>()?;
+    Ok(TrackerHeld {
+        policy: tracker.to_string(),
+        engine: job.engine.name().to_string(),
+        run: run.display().to_string(),
+        sequences,
+    })
+}
