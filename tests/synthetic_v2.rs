@@ -1,9 +1,8 @@
 //! The synthetic dataset's generator version 2 (`data synth --generator 2`): forces at the
 //! real levels SOURCES.md cites ("Task forces"), motions that carry them — one sequence
 //! of each task (seed 3) keeps the ground's centre of pressure inside the support with the
-//! forces acting, at the floor `data check` finds on motion the simulator produced
-//! (docs/data-check.md, "The floor"; the whole dataset is not yet there for the chair
-//! tasks, docs/data-check.md, "Synthetic dataset v2") — and deterministic per seed. Version 1 stays as it
+//! forces acting and without them, at the floor `data check` finds on motion the simulator
+//! produced (docs/data-check.md, "The floor") — and deterministic per seed. Version 1 stays as it
 //! was: `tests/synthetic_dataset.rs` regenerates the committed sample bit for bit.
 
 use std::sync::OnceLock;
@@ -50,22 +49,25 @@ fn checked() -> &'static (RobotModel, Vec<(Sequence, CheckSummary)>) {
 }
 
 #[test]
-fn every_task_balances_under_its_forces_at_the_rollout_floor() {
+fn every_task_balances_with_its_forces_and_without_them_at_the_rollout_floor() {
     let (_, checked) = checked();
     assert_eq!(checked.len(), TASKS.len());
     for (s, c) in checked {
-        let w = &c.with_force;
-        assert!(w.stance_frames > 0, "{}", s.sequence_id);
-        assert!(
-            w.outside_share <= FLOOR_OUTSIDE_SHARE && w.outside_p95_mm <= FLOOR_OUTSIDE_P95_MM,
-            "{}: {:.1} % of stance frames outside, p95 {:.0} mm (floor {:.1} %, {FLOOR_OUTSIDE_P95_MM} mm)",
-            s.sequence_id,
-            100.0 * w.outside_share,
-            w.outside_p95_mm,
-            100.0 * FLOOR_OUTSIDE_SHARE
-        );
-        assert_eq!(w.pulling_share, 0.0, "{}", s.sequence_id);
-        assert_eq!(w.friction_over_share, 0.0, "{}", s.sequence_id);
+        // The benchmark replays each motion with its forces and without them: it must be
+        // performable both ways.
+        for (setting, b) in [("force", &c.with_force), ("no force", &c.without_force)] {
+            assert!(b.stance_frames > 0, "{}", s.sequence_id);
+            assert!(
+                b.outside_share <= FLOOR_OUTSIDE_SHARE && b.outside_p95_mm <= FLOOR_OUTSIDE_P95_MM,
+                "{} ({setting}): {:.1} % of stance frames outside, p95 {:.0} mm (floor {:.1} %, {FLOOR_OUTSIDE_P95_MM} mm)",
+                s.sequence_id,
+                100.0 * b.outside_share,
+                b.outside_p95_mm,
+                100.0 * FLOOR_OUTSIDE_SHARE
+            );
+            assert_eq!(b.pulling_share, 0.0, "{} ({setting})", s.sequence_id);
+        }
+        assert_eq!(c.with_force.friction_over_share, 0.0, "{}", s.sequence_id);
         assert_eq!(s.provenance["version"], 2);
     }
 }

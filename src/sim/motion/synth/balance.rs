@@ -1,7 +1,7 @@
 //! Closing the loop between a plan and the data check (generator version 2): plan, solve
 //! to joints, check the ground's centre of pressure against the feet's support with the
-//! hand forces acting, shift the pelvis (and the body with it) where the CoP is outside,
-//! repeat.
+//! hand forces acting and without them (the benchmark replays both), shift the pelvis (and
+//! the body with it) where either CoP is outside, repeat.
 //!
 //! The shift comes from the cart-table model of the whole body: a horizontal CoM offset
 //! `Δ(t)` moves the CoP by `Δ − (z/g)·Δ̈` (z the CoM height), so to move the CoP by `−e(t)`
@@ -105,9 +105,27 @@ fn signed_distance(hull: &[Point2<f64>], x: &Point2<f64>) -> f64 {
     -inside
 }
 
-/// Per frame, how far the CoP must move (toward the support's centre) to sit
-/// [`MARGIN_M`] inside it; zero where it already does, where no foot is down, or where the
-/// ground would have to pull. Also the largest distance outside.
+/// How far `cop` must move (toward the support's centre) to sit [`MARGIN_M`] inside
+/// `support`, and its signed distance from it (negative inside).
+fn move_inside(support: &[Point2<f64>], cop: &Point2<f64>) -> (Vector2<f64>, f64) {
+    let sd = signed_distance(support, cop);
+    if sd + MARGIN_M <= 0.0 {
+        return (Vector2::zeros(), sd);
+    }
+    let centre = support.iter().map(|p| p.coords).sum::<Vector2<f64>>() / support.len() as f64;
+    let away = cop.coords - centre;
+    let along = away.norm();
+    if along <= 1e-9 {
+        return (Vector2::zeros(), sd);
+    }
+    (away / along * (sd + MARGIN_M).min(along), sd)
+}
+
+/// Per frame, how far the body's CoP must move to sit [`MARGIN_M`] inside the support
+/// both with the hand forces acting and without them (the benchmark replays the motion
+/// both ways): the sum of the two moves, so that where they disagree the shift settles
+/// between them. Zero where both already sit inside, where no foot is down, or where the
+/// ground would have to pull. Also the largest distance outside, with force or without.
 fn cop_errors(
     robot: &RobotModel,
     seq: &Sequence,
@@ -119,23 +137,16 @@ fn cop_errors(
     let mut errors = vec![Vector2::zeros(); seq.n_frames()];
     let mut worst: f64 = 0.0;
     for f in &frames {
-        let Some(cop) = f.ground_with_force.centre_of_pressure() else {
-            continue;
-        };
         if f.support.is_empty() {
             continue;
         }
-        let sd = signed_distance(&f.support, &cop);
-        worst = worst.max(sd);
-        if sd + MARGIN_M <= 0.0 {
-            continue;
-        }
-        let centre =
-            f.support.iter().map(|p| p.coords).sum::<Vector2<f64>>() / f.support.len() as f64;
-        let away = cop.coords - centre;
-        let along = away.norm();
-        if along > 1e-9 {
-            errors[f.frame] = away / along * (sd + MARGIN_M).min(along);
+        for ground in [&f.ground_with_force, &f.ground_without_force] {
+            let Some(cop) = ground.centre_of_pressure() else {
+                continue;
+            };
+            let (error, sd) = move_inside(&f.support, &cop);
+            worst = worst.max(sd);
+            errors[f.frame] += error;
         }
     }
     Ok((errors, worst))
