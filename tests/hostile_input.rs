@@ -299,13 +299,13 @@ fn an_edited_or_planted_data_cache_is_never_used() {
 fn a_failed_record_write_is_reported_naming_the_file_once() {
     // A file-size limit (SIGXFSZ ignored, so the write fails with EFBIG) stands in for a
     // full disk: run.json (2 KB) fits under 64 KiB, the appended record log (some 120 KB
-    // per episode here) does not. A link to /dev/full no longer can: output files are
+    // per episode here: `hold` stands through the sample's clips without force) does not. A link to /dev/full no longer can: output files are
     // never opened through a link (`tests/planted_links.rs`). Whole files' failure mid-way
     // is `tests/one_writer.rs`'.
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("run");
     let cmd = format!(
-        "trap '' XFSZ; ulimit -f 64; exec {} eval --dataset {SAMPLE} --policy hold --settings force --shard 0/6 --out {}",
+        "trap '' XFSZ; ulimit -f 64; exec {} eval --dataset {SAMPLE} --policy hold --settings no-force --shard 0/6 --out {}",
         env!("CARGO_BIN_EXE_thorarena"),
         out.display()
     );

@@ -1,13 +1,17 @@
 //! The synthetic dataset generator: every generated sequence is a valid G1 motion (joints
 //! inside their limits with margin, stance feet flat, on the ground and not sliding, feet
 //! apart, hands outside the torso), its forces stay in the calibrated per-task ranges and
-//! its sensor calibration is not the identity; generation is deterministic per seed and
-//! per sequence; and the committed `data/sample` regenerates bit for bit and loads.
+//! its sensor calibration is not the identity (all for generator version 1; version 2:
+//! `tests/synthetic_v2.rs`); generation is deterministic per seed and per sequence; the
+//! committed `data/sample` (version 2) regenerates bit for bit and loads, and version 1
+//! still makes the sample it made, to its hash.
 
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 use std::path::Path;
 use std::sync::OnceLock;
-use thorarena::sim::motion::synth::{synthesize, write_synthetic, SynthOptions, TASKS};
+use thorarena::sim::motion::synth::{
+    synthesize, write_synthetic, SynthOptions, GENERATOR_VERSION, TASKS,
+};
 use thorarena::sim::motion::{Dataset, Sequence, MANIFEST};
 use thorarena::sim::robot::{forward_kinematics, frame_pose, Geometry, RobotModel};
 
@@ -290,8 +294,13 @@ fn unknown_tasks_are_rejected() {
 fn the_committed_sample_regenerates_bit_identically_and_loads() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
     let dir = tempfile::tempdir().unwrap();
-    // What `data synth --per-task 2 --seed 0` writes.
-    write_synthetic(dir.path(), &g1(), &options(2, 0, &[]), false, |_, _| {}).unwrap();
+    // What `data synth --per-task 2 --seed 0` writes (generator version 2, the default).
+    let sample = SynthOptions {
+        version: GENERATOR_VERSION,
+        ..options(2, 0, &[])
+    };
+    assert_eq!(GENERATOR_VERSION, 2);
+    write_synthetic(dir.path(), &g1(), &sample, false, |_, _| {}).unwrap();
     let manifest = std::fs::read(root.join(MANIFEST)).unwrap();
     assert_eq!(
         manifest,
@@ -308,6 +317,19 @@ fn the_committed_sample_regenerates_bit_identically_and_loads() {
     }
     let seqs = ds.load_all().unwrap();
     assert!(seqs.iter().all(|s| s.forces_recorded && s.fps == 50.0));
+}
+
+/// Version 1 stays reproducible, so runs made on it keep verifying against their dataset
+/// hash: `data synth --per-task 2 --seed 0 --generator 1` gives the sample committed
+/// before version 2 became the default, to its content hash.
+#[test]
+fn version_1_regenerates_the_sample_it_made_to_its_hash() {
+    const V1_SAMPLE_SHA256: &str =
+        "e8f2a4d2cd27e373327f3f6d370192e5f9b04da608ccbc98e55ef2d7c382374d";
+    let dir = tempfile::tempdir().unwrap();
+    let (ds, _) =
+        write_synthetic(dir.path(), &g1(), &options(2, 0, &[]), false, |_, _| {}).unwrap();
+    assert_eq!(ds.content_hash(), V1_SAMPLE_SHA256);
 }
 
 #[test]

@@ -157,8 +157,9 @@ pub struct SynthArgs {
     /// Replace a dataset already in `--out` (its manifest and the files it lists).
     #[arg(long, visible_alias = "overwrite")]
     pub force: bool,
-    /// Generator version: 1 (forces scaled below real levels, motions planned
-    /// kinematically) or 2 (real force levels, each motion balanced under its forces).
+    /// Generator version: 2 (real force levels, each motion balanced with its forces and
+    /// without them) or 1 (forces scaled below real levels, motions planned kinematically;
+    /// reproduces datasets made before version 2 bit for bit).
     #[arg(long, default_value_t = thorarena::sim::motion::synth::GENERATOR_VERSION)]
     pub generator: u32,
 }

@@ -71,7 +71,7 @@ pub const TASKS: [&str; 6] = [
 pub const GENERATOR_VERSIONS: [u32; 2] = [1, 2];
 
 /// The version [`SynthOptions::default`] generates.
-pub const GENERATOR_VERSION: u32 = 1;
+pub const GENERATOR_VERSION: u32 = 2;
 
 /// What to generate.
 #[derive(Debug, Clone)]
