@@ -120,3 +120,54 @@ fn version_2_is_deterministic_and_differs_from_version_1() {
     let e = synthesize(&robot, &unknown, |_, _| {}).unwrap_err();
     assert!(e.to_string().contains("generator version 3"), "{e}");
 }
+
+/// Version 2 draws a person per sequence (`sim/motion/synth/style.rs`): the sequences of
+/// a task stand wider or narrower, staggered or square, and share a load unevenly between
+/// the hands — measured by `data check`'s style, not read back from the draw. Version 1's
+/// sequences all stand the same way.
+#[test]
+fn version_2_sequences_differ_in_style_and_version_1_stand_alike() {
+    let robot = g1();
+    let styles = |version: u32| -> Vec<_> {
+        let opts = SynthOptions {
+            version,
+            ..v2(6, 5, &["liftup_water"])
+        };
+        synthesize(&robot, &opts, |_, _| {})
+            .unwrap()
+            .iter()
+            .map(|s| {
+                let c = check_sequence(s, &robot, &CheckOptions::default()).unwrap();
+                (
+                    s.provenance.clone(),
+                    c.style.expect("a sequence row has a style"),
+                )
+            })
+            .collect()
+    };
+    let spread = |xs: &[f64]| {
+        xs.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - xs.iter().copied().fold(f64::INFINITY, f64::min)
+    };
+    let v2_styles = styles(2);
+    let width: Vec<f64> = v2_styles.iter().map(|(_, s)| s.stance_width_m).collect();
+    let stagger: Vec<f64> = v2_styles.iter().map(|(_, s)| s.stagger_m).collect();
+    let left: Vec<f64> = v2_styles
+        .iter()
+        .map(|(_, s)| s.left_share.unwrap())
+        .collect();
+    assert!(spread(&width) > 0.02, "stance widths {width:?}");
+    assert!(spread(&stagger) > 0.02, "staggers {stagger:?}");
+    assert!(spread(&left) > 0.05, "left hands' shares {left:?}");
+    for (provenance, _) in &v2_styles {
+        assert!(provenance["style"]["tempo"].is_f64(), "{provenance}");
+    }
+    let v1_styles = styles(1);
+    let width: Vec<f64> = v1_styles.iter().map(|(_, s)| s.stance_width_m).collect();
+    let stagger: Vec<f64> = v1_styles.iter().map(|(_, s)| s.stagger_m).collect();
+    assert!(spread(&width) < 1e-3, "version 1's stance widths {width:?}");
+    assert!(
+        stagger.iter().all(|s| s.abs() < 1e-3),
+        "version 1's staggers {stagger:?}"
+    );
+}

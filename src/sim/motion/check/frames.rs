@@ -45,6 +45,8 @@ pub struct FrameState {
     pub support: Vec<Point2<f64>>,
     /// Root position, m.
     pub root_w: Vector3<f64>,
+    /// Root heading: the yaw of its x axis about the world z axis, rad.
+    pub root_heading_rad: f64,
     /// Whole-body centre of mass, m.
     pub com_w: Point3<f64>,
     /// What the ground must supply with the recorded hand forces acting.
@@ -141,6 +143,10 @@ pub fn frame_states(
             touching,
             support: convex_hull(&points),
             root_w: motion.world_from_root[k].translation.vector,
+            root_heading_rad: {
+                let x_w = motion.world_from_root[k].rotation * Vector3::x();
+                x_w.y.atan2(x_w.x)
+            },
             com_w: center_of_mass(robot, &poses),
             ground_with_force: Wrench {
                 force: alone.force - hands.force,

@@ -23,11 +23,16 @@
 //! **Force levels** per task: the mean hand force while loaded (more than
 //! [`LOADED_N`] on that hand) and the peaks, so the levels can be compared with the ranges
 //! the data claims (SOURCES.md).
+//!
+//! **Style** per sequence ([`style`]): speed, turning, stance width and stagger, squat
+//! depth, handedness, how a hold's force builds and trembles — shown per task as
+//! distributions over its sequences, a data card's numbers.
 
 pub mod derivatives;
 pub mod frames;
 pub mod held;
 mod report;
+pub mod style;
 pub mod support;
 pub mod zero_phase;
 
@@ -275,6 +280,7 @@ struct SequenceSeries {
     without_force: BalanceSeries,
     kinematics: KinematicSeries,
     forces: ForceSeries,
+    style: style::SequenceStyle,
 }
 
 /// The check of one sequence, or of a task's sequences pooled frame by frame.
@@ -297,6 +303,10 @@ pub struct CheckSummary {
     pub kinematics: Kinematics,
     /// Recorded hand force levels.
     pub forces: ForceLevels,
+    /// The sequence's style (a sequence's row only; a task's is in
+    /// [`DatasetCheck::styles`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub style: Option<style::SequenceStyle>,
 }
 
 impl CheckSummary {
@@ -306,6 +316,10 @@ impl CheckSummary {
         series: &[&SequenceSeries],
         opts: &CheckOptions,
     ) -> Self {
+        let style = match series {
+            [one] if sequence_id.is_some() => Some(one.style.clone()),
+            _ => None,
+        };
         Self {
             task: task.to_string(),
             sequence_id,
@@ -323,6 +337,7 @@ impl CheckSummary {
                 &series.iter().map(|s| &s.kinematics).collect::<Vec<_>>(),
             ),
             forces: ForceLevels::pooled(&series.iter().map(|s| &s.forces).collect::<Vec<_>>()),
+            style,
         }
     }
 
@@ -349,6 +364,8 @@ pub struct DatasetCheck {
     pub tasks: Vec<CheckSummary>,
     /// Per sequence, in the dataset's order.
     pub sequences: Vec<CheckSummary>,
+    /// Per task, its sequences' styles as distributions (a data card's numbers).
+    pub styles: Vec<style::TaskStyle>,
     /// A named tracker's rollouts without force, when asked for (`data check --rollout`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tracker: Option<held::TrackerHeld>,
@@ -430,6 +447,18 @@ pub fn check_dataset(
             .iter()
             .zip(&series)
             .map(|(q, s)| CheckSummary::pooled(&q.task, Some(q.sequence_id.clone()), &[s], opts))
+            .collect(),
+        styles: tasks
+            .iter()
+            .map(|task| {
+                let of_task: Vec<&style::SequenceStyle> = seqs
+                    .iter()
+                    .zip(&series)
+                    .filter(|(q, _)| q.task == *task)
+                    .map(|(_, s)| &s.style)
+                    .collect();
+                style::TaskStyle::of(task, &of_task)
+            })
             .collect(),
         tracker: None,
     })
@@ -557,5 +586,6 @@ fn sequence_series(
         without_force,
         kinematics: kin,
         forces,
+        style: style::SequenceStyle::of(&frames, seq.fps),
     })
 }

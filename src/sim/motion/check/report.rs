@@ -68,7 +68,7 @@ fn balance_table(s: &mut String, rows: &[&CheckSummary], name: &str) {
 }
 
 impl DatasetCheck {
-    /// The per-task tables (balance, kinematics, force levels) as Markdown; with
+    /// The per-task tables (balance, kinematics, force levels, style) as Markdown; with
     /// `per_sequence`, a balance table per task follows with one row per sequence.
     pub fn markdown(&self, per_sequence: bool) -> String {
         let mut s = String::new();
@@ -129,6 +129,7 @@ impl DatasetCheck {
                 f.both_peak_n
             );
         }
+        s.push_str(&super::style::markdown(&self.styles));
         if let Some(tracker) = &self.tracker {
             let tasks: Vec<&str> = self.tasks.iter().map(|t| t.task.as_str()).collect();
             s.push_str(&tracker.markdown(&tasks));

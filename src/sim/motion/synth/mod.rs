@@ -36,6 +36,7 @@ mod gait;
 mod ik;
 mod skeleton;
 mod solve;
+mod style;
 mod tasks;
 mod walking;
 mod write;
@@ -304,14 +305,24 @@ fn sequence(
     let mut rng = rng_for(opts.seed, task_index, index, attempt);
     let dur = rng.random_range(10.0..30.0);
     let lv = forces::Levels::of(opts.version);
+    let st = if opts.version >= 2 {
+        style::Style::draw(&mut rng_for(
+            opts.seed ^ style::STYLE_STREAM,
+            task_index,
+            index,
+            attempt,
+        ))
+    } else {
+        style::Style::neutral()
+    };
     let fps = opts.fps;
     let mut plan = match task {
-        "clean_table" => tasks::clean_table(sk, &mut rng, fps, dur, &lv),
-        "liftdown_water" => tasks::lift(sk, &mut rng, fps, dur, false, &lv),
-        "liftup_water" => tasks::lift(sk, &mut rng, fps, dur, true, &lv),
-        "pull_chair" => walking::walking(sk, &mut rng, fps, dur, WalkTask::PullChair, &lv),
-        "push_chair" => walking::walking(sk, &mut rng, fps, dur, WalkTask::PushChair, &lv),
-        _ => walking::walking(sk, &mut rng, fps, dur, WalkTask::Carry, &lv),
+        "clean_table" => tasks::clean_table(sk, &mut rng, fps, dur, &lv, &st),
+        "liftdown_water" => tasks::lift(sk, &mut rng, fps, dur, false, &lv, &st),
+        "liftup_water" => tasks::lift(sk, &mut rng, fps, dur, true, &lv, &st),
+        "pull_chair" => walking::walking(sk, &mut rng, fps, dur, WalkTask::PullChair, &lv, &st),
+        "push_chair" => walking::walking(sk, &mut rng, fps, dur, WalkTask::PushChair, &lv, &st),
+        _ => walking::walking(sk, &mut rng, fps, dur, WalkTask::Carry, &lv, &st),
     };
     let (solved, balanced) = if opts.version >= 2 {
         let (solved, stats) = balance::balance(robot, sk, &mut plan, fps, task, &id)?;
@@ -340,6 +351,7 @@ fn sequence(
         // Version 1's provenance stays as it was, so its files (and hashes) do too.
         provenance["balance"] = json!(stats);
         provenance["force_levels"] = json!(lv);
+        provenance["style"] = json!(st);
     }
     let frames = &plan.frames;
     Ok(Sequence {

@@ -69,8 +69,12 @@ pub fn realize(
         residual_m: residual,
     };
     for (k, f) in plan.frames.iter().enumerate() {
+        // The waist is set, not solved: a style's bend can ask more than its joint allows,
+        // so it is held inside the limits with the IK's own margin.
         for (j, v) in sk.waist.iter().zip(f.waist) {
-            q[*j] = v;
+            let joint = &robot.joints[*j];
+            let m = params.limit_margin_rad;
+            q[*j] = v.clamp(joint.lower_rad + m, joint.upper_rad - m);
         }
         for side in 0..2 {
             let target = Target {

@@ -3,6 +3,7 @@
 
 use super::forces::{level, rc, Levels, Window, Wobble};
 use super::skeleton::Skeleton;
+use super::style::Style;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -60,27 +61,42 @@ pub fn hand_rest(sk: &Skeleton, side: usize) -> Vector3<f64> {
     sk.hand_default[side] + Vector3::new(0.0, 0.0, sk.stand_height_m)
 }
 
+/// The most a hand presses and rubs a table with while wiping, N (SOURCES.md, "Task
+/// forces": wiping 5–30 N).
+const WIPE_MAX_N: f64 = 30.0;
+
 /// `clean_table`: standing, wiping with one or both hands on a table in front; bouts of
 /// circles or back-and-forth strokes separated by short pauses with the hand lifted.
 /// Forces (SOURCES.md, Task forces wiping 5–30 N, kept light per the push probe): the table pushes the hand up with
 /// 5–12 N and friction of 3–8 N opposes the stroke.
-pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, lv: &Levels) -> Plan {
+pub fn clean_table(
+    sk: &Skeleton,
+    rng: &mut ChaCha8Rng,
+    fps: f64,
+    dur: f64,
+    lv: &Levels,
+    style: &Style,
+) -> Plan {
     let n = n_frames(dur, fps);
-    let hands_used = rng.random_range(0..3usize); // 0 left, 1 right, 2 both
+    let mut hands_used = rng.random_range(0..3usize); // 0 left, 1 right, 2 both
+                                                      // One hand wipes: a person uses the dominant one.
+    if let (0 | 1, Some(d)) = (hands_used, style.dominant()) {
+        hands_used = d;
+    }
     let circles = rng.random_bool(0.5);
-    let waist_pitch = rng.random_range(0.15..0.35);
+    let waist_pitch = style.waist_pitch(rng.random_range(0.15..0.35));
     let drop = rng.random_range(0.0..0.04);
     let table_z = sk.stand_height_m + rng.random_range(-0.06..0.0);
     let (cx, cy) = (rng.random_range(0.26..0.32), rng.random_range(0.13..0.18));
     let amp = rng.random_range(0.04..0.08);
-    let freq = rng.random_range(0.5..1.0);
-    let press = [level(rng, lv.press), level(rng, lv.press)];
+    let freq = rng.random_range(0.5..1.0) * style.tempo;
+    let press = [0, 1].map(|s| level(rng, lv.press) * style.hand_scale(s));
     let mut fric = [level(rng, lv.friction), level(rng, lv.friction)];
     if lv.version >= 2 {
         // Version 2 draws friction as a fraction of the press.
         fric = [fric[0] * press[0], fric[1] * press[1]];
     }
-    let press_wobble = [0, 1].map(|_| Wobble::new(rng, 0.1, 0.6, 0.3));
+    let press_wobble = [0, 1].map(|_| Wobble::new(rng, 0.1, 0.6, 0.3 * style.tremble));
     let t_in = rng.random_range(1.0..2.0);
     let t_out = dur - rng.random_range(1.8..2.5);
     // Wiping bouts between reaching in and pulling back, with pauses between them.
@@ -92,7 +108,7 @@ pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, lv: 
             let pause = rng.random_range(0.6f64..1.2).min(0.4 * span);
             Window {
                 on,
-                rise: rng.random_range(0.2..0.5),
+                rise: rng.random_range(0.2..0.5) * style.build,
                 off: on + span - pause - 0.4,
                 fall: rng.random_range(0.2..0.4),
             }
@@ -136,7 +152,10 @@ pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, lv: 
             let f = if active(s) {
                 let speed = vel.norm().max(0.05);
                 let p = press[s] * (1.0 + press_wobble[s].at(t));
-                Vector3::new(0.0, 0.0, p) - vel / speed * fric[s]
+                let f = Vector3::new(0.0, 0.0, p) - vel / speed * fric[s];
+                // A strong hand trembling hard could pass what people wipe with: held at
+                // the cited top (v1's forces never reach it).
+                f * (WIPE_MAX_N / f.norm()).min(1.0)
             } else {
                 Vector3::zeros()
             };
@@ -144,7 +163,7 @@ pub fn clean_table(sk: &Skeleton, rng: &mut ChaCha8Rng, fps: f64, dur: f64, lv: 
         }
         frames.push(PlanFrame {
             pelvis: pelvis(sk, -0.02 * bend, drop * bend, 0.0),
-            feet: stance_feet(sk),
+            feet: style.stance_feet(sk),
             waist: [0.0, 0.0, waist_pitch * bend],
             hands,
         });
@@ -172,27 +191,31 @@ pub fn lift(
     dur: f64,
     up: bool,
     lv: &Levels,
+    style: &Style,
 ) -> Plan {
     let n = n_frames(dur, fps);
     let drop = rng.random_range(0.10..0.20);
-    let pelvis_pitch = rng.random_range(0.1..0.3);
-    let waist_pitch = rng.random_range(0.2..0.45);
+    let pelvis_pitch = style.pelvis_pitch(rng.random_range(0.1..0.3));
+    let waist_pitch = style.waist_pitch(rng.random_range(0.2..0.45));
     let back = rng.random_range(0.02..0.06);
-    let (t_bend, t_grip) = (rng.random_range(1.5..2.5), rng.random_range(0.3..0.6));
+    let (t_bend, t_grip) = (
+        rng.random_range(1.5..2.5) / style.tempo,
+        rng.random_range(0.3..0.6) * style.build,
+    );
     let slack = dur - 2.0 * t_bend - t_grip - 1.0;
     let share = rng.random_range(0.2..0.4);
     // liftup: wait, bend, grip, rise, hold; liftdown: hold, bend, release, rise, wait.
     let t0 = 0.5 + if up { share } else { 1.0 - share } * slack;
     let (t_low, t_rise) = (t0 + t_bend, t0 + t_bend + t_grip);
     let weight = level(rng, lv.lift);
-    let split = rng.random_range(0.45..0.55);
+    let split = rng.random_range(0.45..0.55) + style.left_bias();
     let low_x = rng.random_range(0.26..0.32);
     let low_z = sk.stand_height_m - drop + rng.random_range(-0.06..0.0);
     let half = rng.random_range(0.12..0.16);
     let carry = Vector3::new(
         rng.random_range(0.22..0.28),
         half,
-        sk.stand_height_m + rng.random_range(0.02..0.1),
+        sk.stand_height_m + rng.random_range(0.02..0.1) + style.hand_height_m,
     );
     let wob = [0, 1, 2].map(|_| Wobble::new(rng, 0.1, 0.5, 1.0));
     let grip = Window {
@@ -224,7 +247,8 @@ pub fn lift(
         let held = grip.at(t);
         // Extra pull while the container is accelerated upward or braked downward.
         let accel = 0.15 * (std::f64::consts::PI * ((t - t_rise) / t_bend).clamp(0.0, 1.0)).sin();
-        let total = weight * (1.0 + 0.08 * wob[2].at(t) + if up { accel } else { 0.0 });
+        let total =
+            weight * (1.0 + 0.08 * style.tremble * wob[2].at(t) + if up { accel } else { 0.0 });
         for (s, f) in force_world.iter_mut().enumerate() {
             let share = if s == 0 { split } else { 1.0 - split };
             let lateral = if s == 0 { -1.0 } else { 1.0 } * 0.8;
@@ -232,7 +256,7 @@ pub fn lift(
         }
         frames.push(PlanFrame {
             pelvis: pelvis(sk, -back * bend, drop * bend, pelvis_pitch * bend),
-            feet: stance_feet(sk),
+            feet: style.stance_feet(sk),
             waist: [0.0, 0.0, waist_pitch * bend],
             hands,
         });

@@ -4,6 +4,7 @@
 use super::forces::{level, pulse, rc, Levels, Window, Wobble};
 use super::gait::{walk, GaitParams};
 use super::skeleton::Skeleton;
+use super::style::Style;
 use super::tasks::{n_frames, Plan, PlanFrame};
 use nalgebra::Vector3;
 use rand::RngExt;
@@ -21,7 +22,13 @@ pub enum WalkTask {
     Carry,
 }
 
-fn gait_params(rng: &mut ChaCha8Rng, task: WalkTask, sk: &Skeleton, dur: f64) -> GaitParams {
+fn gait_params(
+    rng: &mut ChaCha8Rng,
+    task: WalkTask,
+    sk: &Skeleton,
+    dur: f64,
+    style: &Style,
+) -> GaitParams {
     let direction = match task {
         WalkTask::PushChair => 1.0,
         WalkTask::PullChair => -1.0,
@@ -36,16 +43,19 @@ fn gait_params(rng: &mut ChaCha8Rng, task: WalkTask, sk: &Skeleton, dur: f64) ->
     // Backward steps are shorter, as people's are. Forward steps stop short of 0.3 m: the
     // trailing foot stays flat (no heel-off), and beyond ~0.27 m its ankle reaches the
     // dorsiflexion limit (−0.87 rad) for some pelvis heights.
-    let step_length_m = if direction > 0.0 {
-        rng.random_range(0.15..0.26)
-    } else {
-        rng.random_range(0.15..0.22)
-    };
+    let step_length_m = style.step_length(
+        if direction > 0.0 {
+            rng.random_range(0.15..0.26)
+        } else {
+            rng.random_range(0.15..0.22)
+        },
+        direction,
+    );
     let turn = match task {
         WalkTask::Carry if rng.random_bool(0.6) => rng.random_range(-0.12..0.12),
         _ => rng.random_range(-0.03..0.03),
     };
-    let step_period_s = rng.random_range(0.7..0.9);
+    let step_period_s = rng.random_range(0.7..0.9) / style.tempo;
     let start_s = rng.random_range(1.8..2.6);
     let stop_s = rng.random_range(1.8..2.6);
     let n_steps = (((dur - start_s - stop_s) / step_period_s).floor() as usize).max(4);
@@ -61,7 +71,7 @@ fn gait_params(rng: &mut ChaCha8Rng, task: WalkTask, sk: &Skeleton, dur: f64) ->
         height_m: sk.stand_height_m - rng.random_range(0.01..0.03),
         bob_m: rng.random_range(0.005..0.015),
         sway_m: rng.random_range(0.01..0.025),
-        half_width_m: sk.foot_y_m + rng.random_range(-0.01..0.01),
+        half_width_m: sk.foot_y_m + rng.random_range(-0.01..0.01) + style.width_m,
     }
 }
 
@@ -73,8 +83,9 @@ pub fn walking(
     dur: f64,
     task: WalkTask,
     lv: &Levels,
+    style: &Style,
 ) -> Plan {
-    let g = gait_params(rng, task, sk, dur);
+    let g = gait_params(rng, task, sk, dur, style);
     let n = n_frames(dur, fps);
     let gait = walk(sk, &g, fps, n);
     let chair = task != WalkTask::Carry;
@@ -82,32 +93,34 @@ pub fn walking(
     let grip = Vector3::new(
         rng.random_range(0.24..0.3),
         rng.random_range(if chair { 0.17..0.21 } else { 0.13..0.17 }),
-        sk.stand_height_m + rng.random_range(0.0..0.1),
+        sk.stand_height_m + rng.random_range(0.0..0.1) + style.hand_height_m,
     );
-    let waist_pitch = rng.random_range(0.0..0.12);
+    let waist_pitch = style.waist_pitch(rng.random_range(0.0..0.12));
     let hold = Window {
         on: g.start_s - rng.random_range(1.3..1.7),
-        rise: rng.random_range(0.2..0.6),
+        rise: rng.random_range(0.2..0.6) * style.build,
         off: g.end_s() + rng.random_range(0.2..0.6),
-        fall: rng.random_range(0.2..0.6),
+        fall: rng.random_range(0.2..0.6) * style.build,
     };
     // Chair: SOURCES.md, Task forces 15–50 N sustained, 50–100 N break-away, scaled per the push probe to 8–18 N
     // and 30–60 N peaks of 0.2–0.5 s. Carry: 10–50 N (SOURCES.md, Task forces), here 5–10 N vertical plus a
     // partner's fluctuating ±10 N along the walk.
-    let sustained = [0, 1].map(|_| lv.per_hand(level(rng, lv.chair_sustained)));
+    let sustained =
+        [0, 1].map(|s| lv.per_hand(level(rng, lv.chair_sustained)) * style.hand_scale(s));
     let idle = level(rng, (1.0, 4.0));
     let mut peaks = vec![(
         g.start_s + rng.random_range(0.0..0.3),
-        rng.random_range(0.2..0.5),
+        rng.random_range(0.2..0.5) * style.break_width,
     )];
     if rng.random_bool(0.5) {
         let t = rng.random_range(g.start_s + 2.0..g.end_s().max(g.start_s + 2.5));
-        peaks.push((t, rng.random_range(0.2..0.5)));
+        peaks.push((t, rng.random_range(0.2..0.5) * style.break_width));
     }
-    let peak_n = [0, 1].map(|_| lv.per_hand(level(rng, lv.chair_peak)));
-    let vertical = [0, 1].map(|_| lv.per_hand(level(rng, lv.carry_vertical)));
+    let peak_n = [0, 1].map(|s| lv.per_hand(level(rng, lv.chair_peak)) * style.hand_scale(s));
+    let vertical = [0, 1].map(|s| lv.per_hand(level(rng, lv.carry_vertical)) * style.hand_scale(s));
     let partner_amp = lv.per_hand(level(rng, lv.carry_partner));
     let partner = Wobble::new(rng, 0.1, 0.5, partner_amp);
+    let tremble = style.tremble;
     // The partner's tugs: a second or so of a firmer push or pull.
     let tugs: Vec<(f64, f64, f64)> = (0..rng.random_range(2..5))
         .map(|_| {
@@ -142,20 +155,20 @@ pub fn walking(
             f[s] = if chair {
                 let gait_ripple =
                     1.0 + 0.25 * (2.0 * std::f64::consts::PI * t / g.step_period_s).sin();
-                let base =
-                    (sustained[s] * gf.walking * gait_ripple + idle) * (1.0 + 0.1 * wob[2].at(t));
+                let base = (sustained[s] * gf.walking * gait_ripple + idle)
+                    * (1.0 + 0.1 * tremble * wob[2].at(t));
                 // A break-away peak replaces the sustained level, it does not add to it.
                 let p = peaks
                     .iter()
                     .map(|&(t0, w)| pulse(t, t0, w))
                     .fold(0.0, f64::max);
                 let along = base + (peak_n[s] - base).max(0.0) * p;
-                -gf.dir_world * along + lateral * wob[s].at(t) - Vector3::z() * 1.5
+                -gf.dir_world * along + lateral * (tremble * wob[s].at(t)) - Vector3::z() * 1.5
             } else {
                 let tug: f64 = tugs.iter().map(|&(t0, w, a)| a * pulse(t, t0, w)).sum();
                 gf.pelvis.rotation * Vector3::x() * (partner.at(t) + tug)
-                    - Vector3::z() * vertical[s] * (1.0 + 0.1 * wob[2].at(t))
-                    + lateral * 1.5 * wob[s].at(t)
+                    - Vector3::z() * vertical[s] * (1.0 + 0.1 * tremble * wob[2].at(t))
+                    + lateral * 1.5 * (tremble * wob[s].at(t))
             } * contact;
         }
         force_world[0].push(f[0]);
