@@ -66,12 +66,6 @@ pub struct TraceArgs {
 
 /// `sim trace`: the scenario run open loop, printed as one JSON object.
 pub(super) fn trace(args: &TraceArgs) -> anyhow::Result<()> {
-    anyhow::ensure!(
-        args.dt > 0.0 && args.dt <= 0.05,
-        "--dt must be in (0, 0.05] s, got {}",
-        args.dt
-    );
-    anyhow::ensure!(args.iterations >= 1, "--iterations must be at least 1");
     let model = Arc::new(thorarena::policy::registry::robot(&args.robot)?);
     let settings = PhysicsSettings {
         dt_s: args.dt,
@@ -79,7 +73,8 @@ pub(super) fn trace(args: &TraceArgs) -> anyhow::Result<()> {
         pd_form: args.pd.into(),
         ..PhysicsSettings::default()
     };
-    let trace = run_scenario(model, args.scenario.into(), settings);
+    let trace = run_scenario(model, args.scenario.into(), settings)
+        .map_err(|e| anyhow::anyhow!(super::flags::as_flags(&e.to_string())))?;
     let mut out = std::io::stdout().lock();
     serde_json::to_writer(&mut out, &trace)?;
     writeln!(out)?;

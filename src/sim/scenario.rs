@@ -161,12 +161,29 @@ fn pos_quat(p: &Isometry3<f64>) -> ([f64; 3], [f64; 4]) {
     ([t.x, t.y, t.z], [r.w, r.i, r.j, r.k])
 }
 
+/// Why a scenario cannot run with the settings given.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    /// The physics step is not positive, or longer than the 50 ms a trace can resolve.
+    #[error("`option.dt_s` must be in (0, 0.05] s, got {0}")]
+    PhysicsStep(f64),
+    /// The solver would not iterate at all.
+    #[error("`option.iterations` must be at least 1")]
+    NoSolverIterations,
+}
+
 /// Runs a scenario on the rapier backend and records the trajectory.
 pub fn run_scenario(
     model: Arc<RobotModel>,
     scenario: Scenario,
     settings: PhysicsSettings,
-) -> Trace {
+) -> Result<Trace, ScenarioError> {
+    if !(settings.dt_s > 0.0 && settings.dt_s <= 0.05) {
+        return Err(ScenarioError::PhysicsStep(settings.dt_s));
+    }
+    if settings.solver_iterations == 0 {
+        return Err(ScenarioError::NoSolverIterations);
+    }
     let setup = scenario.setup(&model, settings);
     let mut physics =
         RapierPhysics::new(model.clone(), setup.settings.clone(), setup.gains.clone());
@@ -213,5 +230,5 @@ pub fn run_scenario(
         trace.root_pos.push(p);
         trace.root_quat_wxyz.push(r);
     }
-    trace
+    Ok(trace)
 }

@@ -8,7 +8,7 @@
 
 use super::frames::FrameState;
 use super::zero_phase::low_pass_zero_phase;
-use super::LOADED_N;
+use super::{sorted, LOADED_N};
 use crate::eval::metrics::percentile;
 use serde::Serialize;
 
@@ -302,11 +302,6 @@ fn mean(v: &[f64]) -> Option<f64> {
 fn median(v: Vec<f64>) -> Option<f64> {
     let v = sorted(v);
     (!v.is_empty()).then(|| percentile(&v, 50.0))
-}
-
-fn sorted(mut v: Vec<f64>) -> Vec<f64> {
-    v.sort_by(f64::total_cmp);
-    v
 }
 
 #[cfg(test)]
