@@ -22,7 +22,7 @@ fn balance_rust_policy_against_rust_server_matches_in_process_bit_for_bit() {
     let want = in_process("balance", dir.path());
     let s = session("balance");
     let run = over_ipc(&s, dir.path(), || rust_client(&s, "balance", &[]));
-    assert_eq!(episodes(&run), want);
+    assert_same_records(&episodes(&run), &want);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
     let io = &summary["policy_io"];
@@ -53,7 +53,7 @@ fn replay_python_policy_against_rust_server_matches_in_process_bit_for_bit() {
             .spawn()
             .unwrap()
     });
-    assert_eq!(episodes(&run), want);
+    assert_same_records(&episodes(&run), &want);
 }
 
 #[test]
@@ -74,7 +74,7 @@ fn replay_cpp_policy_against_rust_server_matches_in_process_bit_for_bit() {
             .spawn()
             .unwrap()
     });
-    assert_eq!(episodes(&run), want);
+    assert_same_records(&episodes(&run), &want);
 }
 
 #[test]
@@ -143,7 +143,7 @@ fn a_crashed_simulator_leaves_nothing_that_blocks_the_next_run() {
     crashed.kill().unwrap(); // SIGKILL: no cleanup at all
     crashed.wait().unwrap();
     let run = over_ipc(&s, dir.path(), || rust_client(&s, "hold", &[]));
-    assert_eq!(episodes(&run), want);
+    assert_same_records(&episodes(&run), &want);
 }
 
 #[test]
@@ -293,7 +293,7 @@ fn measured_latency_delays_actions_in_simulated_time_and_ignored_latency_does_no
     let slow = ["--delay-ms", "6", "--delay-at-step", "0"];
     let s = session("slow-ignored");
     let run = over_ipc(&s, dir.path(), || rust_client(&s, "replay", &slow));
-    assert_eq!(episodes(&run), want, "lock-step: latency costs nothing");
+    assert_same_records(&episodes(&run), &want); // lock-step: latency costs nothing
 
     let s = session("slow-measured");
     let out = dir.path().join(&s);
@@ -330,5 +330,5 @@ fn serve_evaluates_the_policy_that_connects() {
     let client = rust_client(&s, "hold", &[]);
     finished(serve, "serve --once");
     finished(client, "policy");
-    assert_eq!(episodes(&root.join("hold-sample-1")), want);
+    assert_same_records(&episodes(&root.join("hold-sample-1")), &want);
 }

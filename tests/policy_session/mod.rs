@@ -62,6 +62,18 @@ pub fn episodes(run: &Path) -> String {
     std::fs::read_to_string(run.join("episodes.jsonl")).unwrap()
 }
 
+/// Two runs hold the same records, bit for bit. `episodes.jsonl` is appended in the order
+/// episodes finish, and with two workers that order is the scheduler's (a busy machine
+/// finished `push_chair_001` before `push_chair_000` in one run and not in the other):
+/// the records are compared as a set, never the file's line order.
+pub fn assert_same_records(got: &str, want: &str) {
+    let (got, want) = (sorted_lines(got), sorted_lines(want));
+    assert_eq!(got.len(), want.len(), "number of records");
+    for (g, w) in got.iter().zip(&want) {
+        assert_eq!(g, w);
+    }
+}
+
 pub fn sorted_lines(s: &str) -> Vec<String> {
     let mut v: Vec<String> = s.lines().map(str::to_string).collect();
     v.sort();
