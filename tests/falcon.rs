@@ -9,7 +9,9 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::process::Command;
 use thorarena::policy::falcon::commands::Commands;
 use thorarena::policy::falcon::observation::{frame, History, OBS_LEN};
-use thorarena::policy::falcon::{FalconPolicy, DEFAULT_POSE};
+use thorarena::policy::falcon::{
+    FalconPolicy, DEFAULT_POSE, MOTOR_POS_LOWER_RAD, MOTOR_POS_UPPER_RAD,
+};
 use thorarena::policy::Observation;
 use thorarena::sim::physics::RootState;
 
@@ -94,8 +96,12 @@ fn the_observation_matches_the_deploy_formulas_at_two_hand_made_steps() {
     let golden = numbers("observation_step2.txt");
     assert_eq!(golden.len(), OBS_LEN);
     let ours = golden_input();
-    // The three oldest frames are the zeros the deploy starts from.
-    assert!(golden[..345].iter().all(|v| *v == 0.0));
+    // The four oldest frames are step 1's, repeated as an episode's history starts; a
+    // zero-filled start (the deploy's buffer at process start) would fail here.
+    for k in 0..4 {
+        assert_eq!(golden[k * 115..(k + 1) * 115], golden[345..460]);
+    }
+    assert!(golden[..115].iter().any(|v| *v != 0.0));
     for (i, (o, g)) in ours.iter().zip(&golden).enumerate() {
         assert!(
             (f64::from(*o) - g).abs() < 1e-7,
@@ -123,6 +129,49 @@ fn the_released_network_gives_the_numpy_forward_pass_actions() {
             (f64::from(*a) - g).abs() < 1e-5,
             "action {i}: ours {a}, numpy {g}"
         );
+    }
+}
+
+/// The deploy's targets for the golden step-2 output (`targets_step2.txt`: clip ±100,
+/// legs and waist at default + 0.25 · a, arms at the reference + 0.25 · a, then the motor
+/// limits), reached through the adapter's raw actions and the `falcon` profile; and a
+/// target past a motor limit stops at it, as `loco_manip.py:137-138` clips it.
+#[test]
+fn the_adapter_gives_the_deploys_targets_clipped_to_the_motor_limits() {
+    const TEST: &str = "the_adapter_gives_the_deploys_targets_clipped_to_the_motor_limits";
+    let Some(onnx) = prereq::reference(TEST, "falcon/g1_29dof_falcon.onnx") else {
+        return;
+    };
+    let robot = common::g1();
+    let profile = thorarena::policy::registry::profile("falcon", &robot).unwrap();
+    let policy = FalconPolicy::load(&onnx, &profile).unwrap();
+    let out: Vec<f32> = numbers("actions_step2.txt")
+        .iter()
+        .map(|a| *a as f32)
+        .collect();
+    let mut upper = [0.0; 14];
+    upper[0] = 0.2; // step 2's ref_upper (the other arm references are the default pose: 0)
+    let mut raw = vec![0.0; 29];
+    policy.raw_actions(&out, &upper, &mut raw);
+    let mut targets = vec![0.0; 29];
+    profile.targets_from_action(&raw, &mut targets);
+    let golden = numbers("targets_step2.txt");
+    for (c, (t, g)) in targets.iter().zip(&golden).enumerate() {
+        assert!((t - g).abs() < 1e-6, "joint {c}: ours {t}, deploy {g}");
+    }
+
+    // Far past every limit: each joint stops at the deploy's motor limit.
+    for sign in [1.0f32, -1.0] {
+        policy.raw_actions(&[sign * 100.0; 29], &[sign as f64 * 10.0; 14], &mut raw);
+        profile.targets_from_action(&raw, &mut targets);
+        let limits = if sign > 0.0 {
+            MOTOR_POS_UPPER_RAD
+        } else {
+            MOTOR_POS_LOWER_RAD
+        };
+        for (c, (t, l)) in targets.iter().zip(&limits).enumerate() {
+            assert!((t - l).abs() < 1e-9, "joint {c}: target {t}, limit {l}");
+        }
     }
 }
 

@@ -546,8 +546,12 @@ fn walk_run_headers(dir: &Path) -> Vec<serde_json::Value> {
     out
 }
 
-/// Case C of the golden script: GMTWalkStand-SoftMimic on `walk.csv` at t = 0.02 s (the
-/// deploy's first step), the robot on the reference pose at rest. The reference terms come
+/// Case C of the golden script: GMTWalkStand-SoftMimic on `walk.csv` at the deploy's first
+/// step, whose motion counter has advanced once (reference time 0.02 s), against the
+/// adapter at an episode's first step (t = 0): the two agree only because the adapter reads
+/// its reference one control step ahead as the deploy does (read at t = 0, the reference
+/// joints differ from the golden's by more than the test allows: checked first). The robot
+/// is on the reference pose at rest. The reference terms come
 /// from ThorArena's own reference (the imported clip, interpolated), the golden's from the
 /// deploy's motion library (forward differences at 30 fps, its soft contact labels), so
 /// each term is held to what the two constructions can share: joints, height and gravity
@@ -576,7 +580,22 @@ fn the_1159_observation_matches_the_deploy_formulas_on_a_walk() {
     );
     let seq = Dataset::open(&ds, &common::g1()).unwrap().load(0).unwrap();
     let reference = thorarena::sim::motion::Reference::new(&seq);
-    let t = 0.02;
+    let t = 0.0;
+    let golden = numbers("observation_c_walk.txt");
+    // The golden's newest reference_dof_pos frame (history starts 3 + 3 + 29 · 3 · 3 in)
+    // against the reference at the robot's own clock: a walk moves enough in 0.02 s for a
+    // one-step lag to fail the 1e-4 below.
+    let ref_at = 3 * (3 + 3 + 29 * 3) + 2 * 29;
+    let lagging = reference.sample(t);
+    let lag = ISAAC_FROM_CANONICAL
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| (lagging.joint_pos[c] - golden[ref_at + i]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        lag > 1e-3,
+        "the walk's first 0.02 s moves a joint by only {lag} rad"
+    );
     let mut policy = load(&onnx, DEFAULT_STIFFNESS);
     assert_eq!(policy.layout(), Layout::Track);
     let frames: Vec<_> = policy
@@ -596,7 +615,6 @@ fn the_1159_observation_matches_the_deploy_formulas_on_a_walk() {
     let mut actions = vec![vec![0.0; 29]];
     policy.act(std::slice::from_ref(&obs), &mut actions);
     let ours = &policy.last_inputs()[0];
-    let golden = numbers("observation_c_walk.txt");
     assert_eq!(ours.len(), golden.len());
     // Index ranges of the terms (history part: 3 frames each).
     let mut at = 0;

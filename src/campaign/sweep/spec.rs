@@ -105,7 +105,7 @@ pub struct PolicySpec {
     #[serde(default)]
     pub unchecked: bool,
     /// A policy parameter as an axis: each value becomes a policy of its own
-    /// (`parameters = { stiffness = [40, 200, 800] }` on a `softmimic:` network runs
+    /// (`parameters = { stiffness = [40, 200, 600] }` on a `softmimic:` network runs
     /// `softmimic:FILE@stiffness=40`, …); several keys give every combination.
     #[serde(default)]
     pub parameters: std::collections::BTreeMap<String, Vec<f64>>,

@@ -17,7 +17,12 @@
 //! | `command_stand` | 1 (walk) when the window moves, with hysteresis ([`STAND_HYSTERESIS`]) | 1 = walk, 0 = stance |
 //! | `command_base_height` | 0.75 m walking; the reference pelvis height standing | 0.75; 0.50–0.75 |
 //! | `command_waist_dofs` | (0, 0, 0) walking; (reference waist yaw, 0, 0) standing | yaw ±1 in stance only; roll, pitch 0 |
-//! | `ref_upper_dof_pos` | the reference's 14 arm joints one control step ahead | retargeted AMASS arms |
+//! | `ref_upper_dof_pos` | the reference's 14 arm joints one control step ahead, wrists included | retargeted AMASS arms |
+//!
+//! The wrists: training passes the retargeted motion's wrist angles; the deploy zeroes the
+//! six wrist references only when its own upper-body IK controller writes the arms
+//! (`loco_manip.py:104-121`, a teleoperation mode the benchmark has no use for). A
+//! reference motion has wrists, so the adapter passes them as training does.
 //!
 //! In stance the velocities are zero, as training multiplies them by the stand flag.
 

@@ -43,6 +43,76 @@ pub const ACTION_SCALE: f64 = 0.25;
 pub const ACTION_CLIP: f64 = 100.0;
 /// Control period, s (`rl_rate` 50 Hz, `loco_manip.py:21`).
 pub const CONTROL_DT_S: f64 = 0.02;
+/// The deploy clips every joint target to these before sending it (`loco_manip.py:137-138`,
+/// `motor_pos_lower_limit_list` / `motor_pos_upper_limit_list`, `g1_29dof_falcon.yaml:217-230`),
+/// rad, canonical order. They are the G1's joint ranges except the waist's roll and pitch
+/// (±0.52) and matter where a stiff joint would otherwise be driven into its stop: the
+/// ankle roll (±0.2618) and the waist at kp 300.
+#[allow(clippy::approx_constant)] // the deploy's numbers as its config writes them
+pub const MOTOR_POS_LOWER_RAD: [f64; N_JOINTS] = [
+    -2.5307,
+    -0.5236,
+    -2.7576,
+    -0.087267,
+    -0.87267,
+    -0.2618, //
+    -2.5307,
+    -2.9671,
+    -2.7576,
+    -0.087267,
+    -0.87267,
+    -0.2618, //
+    -2.618,
+    -0.52,
+    -0.52, //
+    -3.0892,
+    -1.5882,
+    -2.618,
+    -1.0472,
+    -1.972222054,
+    -1.61443,
+    -1.61443, //
+    -3.0892,
+    -2.2515,
+    -2.618,
+    -1.0472,
+    -1.972222054,
+    -1.61443,
+    -1.61443,
+];
+/// Upper bounds of [`MOTOR_POS_LOWER_RAD`], rad.
+#[allow(clippy::approx_constant)] // as above
+pub const MOTOR_POS_UPPER_RAD: [f64; N_JOINTS] = [
+    2.8798,
+    2.9671,
+    2.7576,
+    2.8798,
+    0.5236,
+    0.2618, //
+    2.8798,
+    0.5236,
+    2.7576,
+    2.8798,
+    0.5236,
+    0.2618, //
+    2.618,
+    0.52,
+    0.52, //
+    2.6704,
+    2.2515,
+    2.618,
+    2.0944,
+    1.972222054,
+    1.61443,
+    1.61443, //
+    2.6704,
+    1.5882,
+    2.618,
+    2.0944,
+    1.972222054,
+    1.61443,
+    1.61443,
+];
 
 /// Why the policy could not be loaded.
 #[derive(Debug, thiserror::Error)]
@@ -126,9 +196,28 @@ impl FalconPolicy {
         self.plans.run_on(&self.plan, input, 1)
     }
 
-    /// The raw action (under the profile's mapping) that puts arm joint `c` at `target`.
+    /// The raw action (under the profile's mapping) that puts joint `c` at `target`.
     fn raw_for_target(&self, c: usize, target: f64) -> f64 {
         (target - self.profile_offset[c]) / self.profile_scale[c]
+    }
+
+    /// The raw actions handed to the simulator for one network output, as the deploy turns
+    /// an output into targets (`loco_manip.py:86-138`): clipped to ±[`ACTION_CLIP`]; the
+    /// legs and waist at the profile's offset + scale · a, the arms at `upper_command` +
+    /// 0.25 · a (the residual); every target clipped to the motor limits; then expressed
+    /// as the raw action that gives that target under the profile. Under FALCON's own
+    /// profile the targets are the deploy's.
+    pub fn raw_actions(&self, network_out: &[f32], upper_command: &[f64; 14], out: &mut [f64]) {
+        for (c, (o, a)) in out.iter_mut().zip(network_out).enumerate() {
+            let a = f64::from(*a).clamp(-ACTION_CLIP, ACTION_CLIP);
+            let target = if UPPER.contains(&c) {
+                upper_command[c - UPPER.start] + ACTION_SCALE * a
+            } else {
+                self.profile_offset[c] + self.profile_scale[c] * a
+            };
+            let target = target.clamp(MOTOR_POS_LOWER_RAD[c], MOTOR_POS_UPPER_RAD[c]);
+            *o = self.raw_for_target(c, target);
+        }
     }
 }
 
@@ -238,12 +327,7 @@ impl Policy for FalconPolicy {
                     for (last, o) in slot.last_raw.iter_mut().zip(&out) {
                         *last = f64::from(*o).clamp(-ACTION_CLIP, ACTION_CLIP);
                     }
-                    action.copy_from_slice(&slot.last_raw);
-                    for (k, c) in UPPER.enumerate() {
-                        // target = reference arm joint + 0.25 · a, as default + 0.25 · a'.
-                        let target = cmd.upper[k] + ACTION_SCALE * action[c];
-                        action[c] = self.raw_for_target(c, target);
-                    }
+                    self.raw_actions(&out, &cmd.upper, action);
                 }
                 None => action.fill(f64::NAN),
             }

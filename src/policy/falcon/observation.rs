@@ -1,7 +1,13 @@
 //! FALCON's 575-float observation: five frames of 115, oldest first, each frame its terms
 //! in alphabetical order times their scales — the deploy sorts the term names
 //! (`sim2real/rl_policy/base_policy.py:279-282`), the history shifts one frame per step
-//! (`base_policy.py:291-300`) and starts as zeros (`base_policy.py:106-109`).
+//! (`base_policy.py:291-300`). An episode's history starts as its first frame repeated:
+//! the deploy zeroes its buffer once, at process start (`base_policy.py:106-109`), then
+//! runs the network on every loop while the robot stands in its start posture
+//! (`loco_manip.py`: `rl_inference` before the ready/policy branch), so by the first step
+//! it acts on, the history holds frames of that posture; training never clears it
+//! between commands either. Zeros would show the network four frames of zero gravity
+//! and a zero height command, a state neither ever produced.
 //!
 //! ```text
 //! offset  term                 width  scale (cfg:278-293)
@@ -84,13 +90,15 @@ impl Default for History {
 
 impl History {
     /// Drops the oldest frame, appends `frame`, and writes the observation into `out`
-    /// ([`OBS_LEN`] floats). An episode's first step starts from zeros, as the deploy does.
+    /// ([`OBS_LEN`] floats). An episode's first step fills every frame with `frame` (the
+    /// module's doc says why).
     pub fn push_into(&mut self, frame: [f64; FRAME_LEN], episode_starts: bool, out: &mut [f32]) {
         if episode_starts {
-            self.frames.iter_mut().for_each(|f| f.fill(0.0));
+            self.frames.iter_mut().for_each(|f| *f = frame);
+        } else {
+            self.frames.rotate_left(1);
+            self.frames[HISTORY - 1] = frame;
         }
-        self.frames.rotate_left(1);
-        self.frames[HISTORY - 1] = frame;
         for (row, f) in out.chunks_exact_mut(FRAME_LEN).zip(&self.frames) {
             for (o, v) in row.iter_mut().zip(f) {
                 *o = *v as f32;

@@ -49,6 +49,9 @@ pub const FUTURE_STEPS: [usize; 20] = [
 ];
 /// The future frames' spacing, s (`future_dt`).
 pub const FUTURE_DT_S: f64 = 0.02;
+/// How far ahead of the robot's clock the deploy samples its reference "now", s: one
+/// control step ([`Layout::reference_offsets_s`]).
+pub const DEPLOY_LEAD_S: f64 = 0.02;
 /// Width of one reference frame's terms: joints, xy velocity, yaw rate, height, gravity,
 /// contacts.
 const REFERENCE_TERMS: [usize; 6] = [N_JOINTS, 2, 1, 1, 3, 2];
@@ -108,13 +111,17 @@ impl Layout {
         t
     }
 
-    /// The reference offsets it reads, s: now, then the future frames (none for
-    /// [`Layout::Stand`], which observes no reference).
+    /// The reference offsets it reads, s: the deploy's "now", then the future frames
+    /// (none for [`Layout::Stand`], which observes no reference). The deploy's "now" is
+    /// one control step ahead of the robot's clock: its motion sensor advances its counter
+    /// before it samples (`deploy/sensors/wholeexo_sensor.py:206-237`), once per
+    /// observation, so at the n-th step it acts on it reads the motion at (n + 1) · 0.02 s.
     pub fn reference_offsets_s(self) -> Vec<f64> {
         match self {
             Self::Stand => vec![0.0],
             Self::Track => std::iter::once(0.0)
                 .chain(FUTURE_STEPS.iter().map(|&k| k as f64 * FUTURE_DT_S))
+                .map(|offset| DEPLOY_LEAD_S + offset)
                 .collect(),
         }
     }
