@@ -74,7 +74,11 @@ fn every_task_balances_with_its_forces_and_without_them_at_the_rollout_floor() {
 
 /// SOURCES.md, "Task forces": wiping 5–30 N on a hand; lifting 20–40 N per hand; a chair
 /// 15–50 N sustained and 50–100 N to break loose, both hands together; carrying 10–50 N,
-/// both hands together.
+/// both hands together. Peaks are held to the range's top plus the force sensor's noise
+/// (σ 0.3 N and a drift up to 0.6 N per axis: [`SENSOR_NOISE_N`] a hand).
+/// What the synthetic force sensor's noise may add to a hand's force, N.
+const SENSOR_NOISE_N: f64 = 2.0;
+
 #[test]
 fn force_levels_fall_in_the_cited_real_ranges() {
     let (_, checked) = checked();
@@ -88,6 +92,7 @@ fn force_levels_fall_in_the_cited_real_ranges() {
             }
             "liftup_water" | "liftdown_water" => {
                 assert!((20.0..=40.0).contains(&f.loaded_mean_n), "{id}: {f:?}");
+                assert!(f.peak_n <= 40.0 + SENSOR_NOISE_N, "{id}: {f:?}");
             }
             "pull_chair" | "push_chair" => {
                 assert!((15.0..=50.0).contains(&f.both_loaded_mean_n), "{id}: {f:?}");
@@ -95,7 +100,7 @@ fn force_levels_fall_in_the_cited_real_ranges() {
             }
             _ => {
                 assert!((10.0..=50.0).contains(&f.both_loaded_mean_n), "{id}: {f:?}");
-                assert!(f.both_peak_n <= 60.0, "{id}: {f:?}");
+                assert!(f.both_peak_n <= 50.0 + 2.0 * SENSOR_NOISE_N, "{id}: {f:?}");
             }
         }
     }

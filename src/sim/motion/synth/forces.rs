@@ -123,8 +123,9 @@ impl SensorNoise {
 /// 0.3–0.5 of it, so the hand's force stays in the 5–30 N range with its ±10 % wobble; a 4–8 kg container weighs 20–40 N on each
 /// hand; a chair takes 30–50 N in total to keep moving and 60–100 N in total to break
 /// loose; a carried object shared with a partner puts 10–30 N of its weight on both hands
-/// together and the partner pushes or pulls up to 25 N, with tugs to 40 N (totals within
-/// the 10–50 N range). The motions carry them ([`super::balance`]).
+/// together and the partner pushes or pulls up to 25 N, with tugs to 40 N, each hand's force
+/// held at 25 N so the two stay within the 10–50 N range; a lifting hand holds at most 40 N.
+/// The motions carry them ([`super::balance`]).
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct Levels {
     /// Generator version these belong to.
@@ -145,6 +146,13 @@ pub struct Levels {
     pub carry_partner: (f64, f64),
     /// Carrying: a partner's tug (v1: per hand; v2: total).
     pub carry_tug: (f64, f64),
+    /// Lifting: the most one hand holds, N (v2: the cited 40 N per hand). A dominant hand's
+    /// share of a heavy container, with the lift's acceleration, would pass it: the excess
+    /// goes to the other hand, up to the same bound. None in v1, whose forces never reach it.
+    pub lift_hand_max: Option<f64>,
+    /// Carrying: the most one hand's force reaches, N (v2: 25 N, so both hands stay within
+    /// the cited 10–50 N while a tug meets the partner's push). None in v1.
+    pub carry_hand_max: Option<f64>,
 }
 
 impl Levels {
@@ -161,6 +169,8 @@ impl Levels {
                 carry_vertical: (10.0, 30.0),
                 carry_partner: (10.0, 25.0),
                 carry_tug: (25.0, 40.0),
+                lift_hand_max: Some(40.0),
+                carry_hand_max: Some(25.0),
             }
         } else {
             Self {
@@ -173,6 +183,8 @@ impl Levels {
                 carry_vertical: (5.0, 10.0),
                 carry_partner: (6.0, 10.0),
                 carry_tug: (6.0, 10.0),
+                lift_hand_max: None,
+                carry_hand_max: None,
             }
         }
     }
@@ -187,7 +199,33 @@ impl Levels {
     }
 }
 
+/// Two hands' loads `want` (N, left and right) with neither above `max`: what one hand
+/// cannot hold goes to the other, up to the same bound (the total is kept while it fits
+/// in two hands).
+pub fn shared_within(want: [f64; 2], max: Option<f64>) -> [f64; 2] {
+    let Some(m) = max else { return want };
+    [
+        (want[0] + (want[1] - m).max(0.0)).min(m),
+        (want[1] + (want[0] - m).max(0.0)).min(m),
+    ]
+}
+
 /// A level drawn uniformly from `range` (N), kept for provenance.
 pub fn level(rng: &mut ChaCha8Rng, range: (f64, f64)) -> f64 {
     rng.random_range(range.0..range.1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shared_within;
+
+    #[test]
+    fn a_hand_over_its_bound_passes_the_excess_to_the_other_up_to_the_same_bound() {
+        assert_eq!(shared_within([50.0, 20.0], None), [50.0, 20.0]);
+        assert_eq!(shared_within([30.0, 20.0], Some(40.0)), [30.0, 20.0]);
+        assert_eq!(shared_within([50.0, 20.0], Some(40.0)), [40.0, 30.0]);
+        assert_eq!(shared_within([20.0, 55.0], Some(40.0)), [35.0, 40.0]);
+        // More than both hands can hold: each at the bound.
+        assert_eq!(shared_within([60.0, 30.0], Some(40.0)), [40.0, 40.0]);
+    }
 }

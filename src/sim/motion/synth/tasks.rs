@@ -182,8 +182,9 @@ pub fn clean_table(
 
 /// `liftup_water` (`up = true`) and `liftdown_water`: squat and bend to a container on a
 /// low surface, grasp it with both hands and stand up holding it — or the reverse. Forces
-/// (SOURCES.md, Task forces: 20–40 N per hand for a 4–5 L container, scaled down per the push probe to 12–22 N): the
-/// container's weight pulls each hand down while held, zero before grasp and after release.
+/// (SOURCES.md, Task forces: 20–40 N per hand for a 4–5 L container; version 1 scaled down
+/// per the push probe to 12–22 N): the container's weight pulls each hand down while held,
+/// zero before grasp and after release, no hand above [`super::forces::Levels::lift_hand_max`].
 pub fn lift(
     sk: &Skeleton,
     rng: &mut ChaCha8Rng,
@@ -249,10 +250,13 @@ pub fn lift(
         let accel = 0.15 * (std::f64::consts::PI * ((t - t_rise) / t_bend).clamp(0.0, 1.0)).sin();
         let total =
             weight * (1.0 + 0.08 * style.tremble * wob[2].at(t) + if up { accel } else { 0.0 });
+        let load = super::forces::shared_within(
+            [2.0 * split * total, 2.0 * (1.0 - split) * total],
+            lv.lift_hand_max,
+        );
         for (s, f) in force_world.iter_mut().enumerate() {
-            let share = if s == 0 { split } else { 1.0 - split };
             let lateral = if s == 0 { -1.0 } else { 1.0 } * 0.8;
-            f.push(Vector3::new(0.5 * wob[1].at(t), lateral, -2.0 * share * total) * held);
+            f.push(Vector3::new(0.5 * wob[1].at(t), lateral, -load[s]) * held);
         }
         frames.push(PlanFrame {
             pelvis: pelvis(sk, -back * bend, drop * bend, pelvis_pitch * bend),

@@ -102,9 +102,9 @@ pub fn walking(
         off: g.end_s() + rng.random_range(0.2..0.6),
         fall: rng.random_range(0.2..0.6) * style.build,
     };
-    // Chair: SOURCES.md, Task forces 15–50 N sustained, 50–100 N break-away, scaled per the push probe to 8–18 N
-    // and 30–60 N peaks of 0.2–0.5 s. Carry: 10–50 N (SOURCES.md, Task forces), here 5–10 N vertical plus a
-    // partner's fluctuating ±10 N along the walk.
+    // Chair: SOURCES.md, Task forces 15–50 N sustained, 50–100 N break-away, in peaks of
+    // 0.2–0.5 s. Carry: 10–50 N, a share of the weight plus a partner's fluctuating push or
+    // pull along the walk and a few tugs. Each version's levels: `forces::Levels`.
     let sustained =
         [0, 1].map(|s| lv.per_hand(level(rng, lv.chair_sustained)) * style.hand_scale(s));
     let idle = level(rng, (1.0, 4.0));
@@ -166,9 +166,14 @@ pub fn walking(
                 -gf.dir_world * along + lateral * (tremble * wob[s].at(t)) - Vector3::z() * 1.5
             } else {
                 let tug: f64 = tugs.iter().map(|&(t0, w, a)| a * pulse(t, t0, w)).sum();
-                gf.pelvis.rotation * Vector3::x() * (partner.at(t) + tug)
+                let f = gf.pelvis.rotation * Vector3::x() * (partner.at(t) + tug)
                     - Vector3::z() * vertical[s] * (1.0 + 0.1 * tremble * wob[2].at(t))
-                    + lateral * 1.5 * (tremble * wob[s].at(t))
+                    + lateral * 1.5 * (tremble * wob[s].at(t));
+                // A tug on top of the partner's push: held at the hand's bound.
+                match lv.carry_hand_max {
+                    Some(max) => f * (max / f.norm().max(1e-9)).min(1.0),
+                    None => f,
+                }
             } * contact;
         }
         force_world[0].push(f[0]);
