@@ -364,6 +364,17 @@ fn falcon_and_a_compliant_pair_on_the_leaderboard_equal_separate_eval_runs() {
         table.contains("StaticStand-SoftMimic, stiffness=300"),
         "{table}"
     );
+    // Pushes on both hands held for the clip are no SoftMimic training event: marked, with
+    // what its training was; FALCON without force replays nothing to mark.
+    assert!(
+        table.contains(" † |") && table.contains("`softmimic`: events on one wrist at a time"),
+        "{table}"
+    );
+    let falcon_row = table
+        .lines()
+        .find(|l| l.starts_with("| falcon (g1_29dof_falcon) | rapier |"))
+        .unwrap();
+    assert!(!falcon_row.contains('†'), "{falcon_row}");
 
     // FATS of FALCON's row: a separate eval's.
     let board = summary(&out.join("runs/falcon-g1_29dof_falcon-rapier"));

@@ -4,11 +4,16 @@
 
 use super::{
     check_pairs, load_policy_file, run_leaderboard, run_pairs, synthetic_dataset,
-    write_leaderboard_outputs, CompliancePair, LeaderboardError, LeaderboardObserver,
+    write_leaderboard_outputs, CompliancePair, Entry, LeaderboardError, LeaderboardObserver,
     LeaderboardOutputs, LeaderboardRequest, OutputsError, OwnClip, PageHeader, PairOptions,
+    TaskForceSpans,
 };
-use crate::eval::EngineChoice;
+use crate::eval::{EngineChoice, EvalRequest};
+use crate::policy::registry::{self, RegistryError};
 use crate::report::{Page, ReportError, WebBundle};
+use crate::sim::motion::check::{check_dataset, CheckError, CheckOptions, HandForceSpan};
+use crate::sim::motion::Dataset;
+use std::path::Path;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -55,6 +60,38 @@ pub enum LeaderboardJobError {
     /// The tables, page or reports could not be written.
     #[error(transparent)]
     Outputs(#[from] OutputsError),
+    /// The robot the dataset's forces are checked on.
+    #[error("the robot to check the dataset's forces on: {0}")]
+    Robot(#[from] RegistryError),
+    /// Where the dataset's forces point could not be measured.
+    #[error("measuring where the dataset's forces point (for the cells outside a policy's training): {0}")]
+    ForceSpans(#[from] CheckError),
+}
+
+/// Per task, where `dataset`'s recorded forces point (`data check`'s spans), when a general
+/// entry's family has a force envelope to judge them against; empty otherwise.
+fn task_force_spans(
+    dataset: &Path,
+    entries: &[Entry],
+) -> Result<TaskForceSpans, LeaderboardJobError> {
+    let judged = entries.iter().any(|e| {
+        !e.own_clip
+            && e.trained_forces
+                .holds_hand_forces(&HandForceSpan::default())
+                .is_some()
+    });
+    if !judged {
+        return Ok(TaskForceSpans::new());
+    }
+    let robot = registry::robot(&EvalRequest::default().robot)?;
+    let ds = Dataset::open(dataset, &robot).map_err(CheckError::from)?;
+    let seqs = ds.load_all().map_err(CheckError::from)?;
+    let check = check_dataset(&ds, &seqs, &robot, &CheckOptions::default(), |_, _| {})?;
+    Ok(check
+        .tasks
+        .iter()
+        .map(|t| (t.task.clone(), t.forces.span))
+        .collect())
 }
 
 /// Runs `job`, resuming the runs a previous attempt left, and writes its outputs.
@@ -115,8 +152,9 @@ pub fn run_leaderboard_job(
         command: &job.command,
         wall_s: started.elapsed().as_secs_f64(),
     };
+    let spans = task_force_spans(&dataset, &entries)?;
     let script = bundle.script(Page::Report)?;
     Ok(write_leaderboard_outputs(
-        &job.out, &entries, &pairs, &header, &script,
+        &job.out, &entries, &pairs, &spans, &header, &script,
     )?)
 }

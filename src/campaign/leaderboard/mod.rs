@@ -16,6 +16,7 @@ use crate::eval::{EngineChoice, EvalRequest, EvalSpec, SpecError};
 use crate::policy::launched::PolicyCommand;
 use crate::policy::registry::{self, OpenPolicyError, PolicySource, PolicyTarget};
 use crate::policy::{Policy, SessionOptions};
+use crate::sim::motion::check::HandForceSpan;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -242,6 +243,8 @@ pub struct Entry {
     pub summary: Summary,
     /// Wall time of this invocation's part of it, s (0 for a run already complete).
     pub wall_s: f64,
+    /// The forces its family was trained with (a policy process's are unknown).
+    pub trained_forces: crate::policy::registry::TrainedForces,
 }
 
 /// Hears the leaderboard's progress.
@@ -422,6 +425,10 @@ pub fn run_leaderboard(
                 run,
                 summary,
                 wall_s: started.elapsed().as_secs_f64(),
+                trained_forces: match player {
+                    Player::Argument(a) => a.family().trained_forces,
+                    Player::Process(_) => crate::policy::registry::TrainedForces::Unknown,
+                },
             });
         }
     }
@@ -538,11 +545,46 @@ fn resumable(
     false
 }
 
+/// Per task, where the dataset's recorded hand forces point (`data check`'s
+/// [`HandForceSpan`]): what a FATS cell is judged against for a policy trained with a
+/// force curriculum.
+pub type TaskForceSpans = std::collections::BTreeMap<String, HandForceSpan>;
+
+/// The tasks of `entry`'s setting `setting` whose replayed forces (the spans scaled by the
+/// setting's coefficient) lie outside what its family was trained with; empty when the
+/// family has nothing to judge or the setting replays no force.
+/// Each with what lies outside (`push_chair (61 N horizontal walking, above 40)`).
+pub fn tasks_outside_training(entry: &Entry, setting: &str, spans: &TaskForceSpans) -> Vec<String> {
+    let Some(coefficient) = entry
+        .summary
+        .header
+        .settings
+        .iter()
+        .find(|s| s.name == setting)
+        .map(|s| s.coefficient)
+    else {
+        return Vec::new();
+    };
+    if coefficient == 0.0 {
+        return Vec::new();
+    }
+    spans
+        .iter()
+        .filter_map(|(task, span)| {
+            let why = entry
+                .trained_forces
+                .outside_hand_forces(&span.scaled(coefficient))?;
+            (!why.is_empty()).then(|| format!("{task} ({})", why.join("; ")))
+        })
+        .collect()
+}
+
 /// The leaderboard as one Markdown table: per (policy, engine), FATS with its 95 %
 /// interval, survival and keypoint error under each setting of the runs (the first
 /// entry's, in its order), and the wall time. Give it the general entries, or the
-/// own-clip ones.
-pub fn leaderboard_table(entries: &[&Entry]) -> String {
+/// own-clip ones. A FATS cell some of whose tasks replay forces outside the policy's
+/// training (`spans`) is marked †, and a note under the table names those tasks.
+pub fn leaderboard_table(entries: &[&Entry], spans: &TaskForceSpans) -> String {
     let settings: Vec<String> = entries
         .first()
         .map(|e| {
@@ -565,6 +607,7 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
     out.push_str(" wall time |\n");
     rule.push_str("---:|\n");
     out.push_str(&rule);
+    let mut notes: Vec<String> = Vec::new();
     for e in entries {
         out.push_str(&format!("| {} | {} |", markdown_cell(&e.policy), e.engine));
         for s in &settings {
@@ -575,8 +618,25 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
                         .map_or(" (n/a: one episode per task)".to_string(), |[lo, hi]| {
                             format!(" ({lo:.1}–{hi:.1})")
                         });
+                    let outside = tasks_outside_training(e, s, spans);
+                    let mark = if outside.is_empty() {
+                        ""
+                    } else {
+                        let note = format!(
+                            "{} under `{s}`: {} of {} tasks replay forces outside what it was trained with: {}. Its training: {}",
+                            markdown_cell(&e.policy),
+                            outside.len(),
+                            r.tasks.len(),
+                            outside.join(", "),
+                            e.trained_forces.describe()
+                        );
+                        if !notes.contains(&note) {
+                            notes.push(note);
+                        }
+                        " †"
+                    };
                     out.push_str(&format!(
-                        " {:.1}{ci} | {:.3} | {:.1} |",
+                        " {:.1}{ci}{mark} | {:.3} | {:.1} |",
                         r.average.fats, r.average.survival, r.average.kp_mm
                     ));
                 }
@@ -584,6 +644,9 @@ pub fn leaderboard_table(entries: &[&Entry]) -> String {
             }
         }
         out.push_str(&format!(" {} |\n", minutes(e.wall_s)));
+    }
+    for note in notes {
+        out.push_str(&format!("\n† {note}.\n"));
     }
     out
 }

@@ -5,7 +5,7 @@
 //! single-clip ones, engines labelled when they differ).
 
 use super::pairs::{pairs_table, write_pair_files, PairResult};
-use super::{leaderboard_table, write_leaderboard_page, Entry};
+use super::{leaderboard_table, write_leaderboard_page, Entry, TaskForceSpans};
 use crate::report::{
     label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, ReportError,
     WrittenReport,
@@ -54,18 +54,24 @@ pub enum OutputsError {
     Report(#[from] ReportError),
 }
 
-/// The tables of `entries` and `pairs`, each group under its heading.
-pub fn leaderboard_tables(entries: &[Entry], pairs: &[PairResult]) -> String {
+/// The tables of `entries` and `pairs`, each group under its heading; `spans`, where the
+/// general dataset's forces point per task, marks the general entries' cells outside
+/// their policies' training.
+pub fn leaderboard_tables(
+    entries: &[Entry],
+    pairs: &[PairResult],
+    spans: &TaskForceSpans,
+) -> String {
     let general: Vec<&Entry> = entries.iter().filter(|e| !e.own_clip).collect();
     let own: Vec<&Entry> = entries.iter().filter(|e| e.own_clip).collect();
     let mut parts = Vec::new();
     if !general.is_empty() {
-        parts.push(leaderboard_table(&general));
+        parts.push(leaderboard_table(&general, spans));
     }
     if !own.is_empty() {
         parts.push(format!(
             "Single-clip policies, each on its own clip:\n\n{}",
-            leaderboard_table(&own)
+            leaderboard_table(&own, &TaskForceSpans::new())
         ));
     }
     if !pairs.is_empty() {
@@ -83,6 +89,7 @@ pub fn write_leaderboard_outputs(
     out: &Path,
     entries: &[Entry],
     pairs: &[PairResult],
+    spans: &TaskForceSpans,
     header: &PageHeader,
     script: &str,
 ) -> Result<LeaderboardOutputs, OutputsError> {
@@ -90,7 +97,7 @@ pub fn write_leaderboard_outputs(
         let path = path.to_path_buf();
         move |source| OutputsError::Io { path, source }
     };
-    let tables = leaderboard_tables(entries, pairs);
+    let tables = leaderboard_tables(entries, pairs, spans);
     let pair_files = if pairs.is_empty() {
         None
     } else {

@@ -9,15 +9,17 @@
 //! bootstrap 95 % intervals over the push directions.
 //!
 //! A single clip is deterministic: one episode per setting. The intervals therefore
-//! resample the four directions of one magnitude (or all sixteen pushes), not repeated
-//! episodes; with four values they are wide, and they say only how much the difference
-//! depends on where the push comes from.
+//! resample the four directions of one magnitude (for all pushes, the directions within
+//! each magnitude), not repeated episodes: they are not confidence intervals of a
+//! population, they say how much the difference depends on where the push comes from. The
+//! tables label them so.
 
 use super::{run_name, run_one, LeaderboardError, LeaderboardObserver, Player};
 // `check_out` refuses an output directory holding a dataset or a run.
-use crate::eval::metrics::{mean_ci, MeanCi, BOOTSTRAP_RESAMPLES};
+use crate::eval::metrics::{stratified_mean_ci, MeanCi, BOOTSTRAP_RESAMPLES};
 use crate::eval::results::Summary;
 use crate::eval::EngineChoice;
+use crate::policy::registry::TrainedForces;
 use crate::policy::registry::{self, PolicySource};
 use crate::sim::motion::force_graft::{first_seconds, with_forces_of};
 use crate::sim::motion::synth::{synthesize, SynthOptions};
@@ -437,9 +439,9 @@ impl PairResult {
             .collect()
     }
 
-    /// Every push setting.
-    fn all_pushes(&self) -> Vec<String> {
-        self.push_settings[1..].to_vec()
+    /// Every push setting, grouped by magnitude (the strata of the "all pushes" column).
+    fn all_pushes(&self) -> Vec<Vec<String>> {
+        self.push_n.iter().map(|n| self.settings_of(*n)).collect()
     }
 
     /// The baseline and the compliant member on `engine`.
@@ -453,21 +455,31 @@ impl PairResult {
     }
 
     /// The paired differences (compliant − baseline) of (FATS, survival, keypoint error)
-    /// over `settings`, each with its bootstrap interval.
-    fn differences(&self, engine: &str, settings: &[String]) -> Option<[MeanCi; 3]> {
+    /// over `strata` of settings: the mean over strata of each stratum's mean, with a
+    /// bootstrap interval that resamples settings within each stratum. One stratum of one
+    /// magnitude's directions says how much the difference depends on the push's direction;
+    /// the magnitudes as strata keep every resample's mix of magnitudes (resampling sixteen
+    /// pushes freely would let a resample hold only the 50 N ones).
+    fn differences(&self, engine: &str, strata: &[Vec<String>]) -> Option<[MeanCi; 3]> {
         let (base, soft) = self.pair_on(engine)?;
-        let mut d: [Vec<f64>; 3] = Default::default();
-        for s in settings {
-            let (b, c) = if s == "force" {
-                (cell(&base.force_log, s)?, cell(&soft.force_log, s)?)
-            } else {
-                (cell(&base.pushes, s)?, cell(&soft.pushes, s)?)
-            };
+        let mut d: [Vec<Vec<f64>>; 3] = Default::default();
+        for settings in strata {
+            let mut within: [Vec<f64>; 3] = Default::default();
+            for s in settings {
+                let (b, c) = if s == "force" {
+                    (cell(&base.force_log, s)?, cell(&soft.force_log, s)?)
+                } else {
+                    (cell(&base.pushes, s)?, cell(&soft.pushes, s)?)
+                };
+                for k in 0..3 {
+                    within[k].push(c[k] - b[k]);
+                }
+            }
             for k in 0..3 {
-                d[k].push(c[k] - b[k]);
+                d[k].push(std::mem::take(&mut within[k]));
             }
         }
-        Some(d.map(|v| mean_ci(&v, BOOTSTRAP_RESAMPLES, 0)))
+        Some(d.map(|groups| stratified_mean_ci(&groups, BOOTSTRAP_RESAMPLES, 0)))
     }
 }
 
@@ -520,40 +532,70 @@ pub fn pairs_table(results: &[PairResult]) -> String {
             out.push_str(" force log | wall time |\n");
             rule.push_str("---:|---:|\n");
             out.push_str(&rule);
+            let mut outside_of: Vec<String> = Vec::new();
             for m in r.members.iter().filter(|m| m.engine == engine) {
-                out.push_str(&format!(
+                let trained = m.policy.family().trained_forces;
+                let mut mark = |inside: Option<bool>| {
+                    if inside == Some(false) {
+                        let note = format!("`{}`: {}", m.policy.family().name, trained.describe());
+                        if !outside_of.contains(&note) {
+                            outside_of.push(note);
+                        }
+                        " †"
+                    } else {
+                        ""
+                    }
+                };
+                let mut line = format!(
                     "| {} ({}) | {} | {} |",
                     super::markdown_cell(&m.policy.table_label()),
                     m.role,
                     m.stiffness().map_or_else(|| "–".into(), |k| format!("{k}")),
                     cell_text(cell(&m.pushes, "no-force"))
-                ));
+                );
                 for n in &r.push_n {
-                    out.push_str(&format!(
-                        " {} |",
-                        cell_text(mean_over(&m.pushes, &r.settings_of(*n)))
+                    // Every push acts on both hands for the whole clip.
+                    let inside = trained.holds_push(*n, r.seconds, true, m.stiffness(), false);
+                    line.push_str(&format!(
+                        " {}{} |",
+                        cell_text(mean_over(&m.pushes, &r.settings_of(*n))),
+                        mark(inside)
                     ));
                 }
-                out.push_str(&format!(
-                    " {} | {} |\n",
+                let log_inside = match trained {
+                    // A continuous history on both hands is no single-wrist event.
+                    TrainedForces::WristEvents { .. } => Some(false),
+                    _ => None,
+                };
+                line.push_str(&format!(
+                    " {}{} | {} |\n",
                     cell_text(cell(&m.force_log, "force")),
+                    mark(log_inside),
                     super::minutes(m.wall_s)
                 ));
+                out.push_str(&line);
             }
             out.push('\n');
+            if !outside_of.is_empty() {
+                out.push_str(&format!(
+                    "† outside the forces the member's family was trained with, shown as measured: {}.\n\n",
+                    outside_of.join("; ")
+                ));
+            }
             out.push_str("| compliant − baseline | no force |");
             let mut rule = String::from("|---|---:|");
             for n in &r.push_n {
-                out.push_str(&format!(" {n} N (95 % CI) |"));
+                out.push_str(&format!(" {n} N (over directions) |"));
                 rule.push_str("---:|");
             }
-            out.push_str(" all pushes (95 % CI) | force log |\n");
+            out.push_str(" all pushes (over directions, by magnitude) | force log |\n");
             rule.push_str("---:|---:|\n");
             out.push_str(&rule);
-            let mut columns: Vec<Vec<String>> = vec![vec!["no-force".into()]];
-            columns.extend(r.push_n.iter().map(|n| r.settings_of(*n)));
+            let one = |s: &str| vec![vec![s.to_string()]];
+            let mut columns: Vec<Vec<Vec<String>>> = vec![one("no-force")];
+            columns.extend(r.push_n.iter().map(|n| vec![r.settings_of(*n)]));
             columns.push(r.all_pushes());
-            columns.push(vec!["force".into()]);
+            columns.push(one("force"));
             for (k, (what, digits)) in [
                 ("Δ FATS", 1),
                 ("Δ survival", 3),

@@ -7,6 +7,7 @@
 
 use super::parameters::Parameter;
 use super::policies;
+use super::trained_forces::{TrainedForces, FALCON_FORCES, SOFTMIMIC_FORCES};
 use super::{NamedPolicy, RegistryError};
 use crate::policy::Policy;
 use crate::sim::profile::Profile;
@@ -68,6 +69,9 @@ pub struct PolicyFamily {
     /// A file to name when the argument lacks one (`twist2_1017_25k.onnx, TWIST2's
     /// released checkpoint`), for the error message.
     pub example: Option<&'static str>,
+    /// The forces its networks were trained with on the robot: tables mark the cells
+    /// outside them.
+    pub trained_forces: TrainedForces,
 }
 
 impl std::fmt::Debug for PolicyFamily {
@@ -146,6 +150,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::any_profile,
         parameters: &[],
         example: None,
+        trained_forces: TrainedForces::Untrained,
     },
     PolicyFamily {
         name: "replay",
@@ -160,6 +165,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::any_profile,
         parameters: &[],
         example: None,
+        trained_forces: TrainedForces::Untrained,
     },
     PolicyFamily {
         name: "balance",
@@ -174,6 +180,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::any_profile,
         parameters: &[],
         example: None,
+        trained_forces: TrainedForces::Untrained,
     },
     PolicyFamily {
         name: "twist2",
@@ -188,6 +195,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::twist2_profile,
         parameters: &[],
         example: Some("twist2_1017_25k.onnx, TWIST2's released checkpoint"),
+        trained_forces: TrainedForces::Blind,
     },
     PolicyFamily {
         name: "beyondmimic",
@@ -202,6 +210,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::beyondmimic_profile,
         parameters: &[],
         example: Some("policy.onnx, an mjlab or holosoma G1 export"),
+        trained_forces: TrainedForces::Unknown,
     },
     PolicyFamily {
         name: "wbc-mjlab",
@@ -216,6 +225,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::wbc_mjlab_profile,
         parameters: &[],
         example: Some("wbc_g1_policy.onnx, wbc-mjlab's general G1 tracker"),
+        trained_forces: TrainedForces::Blind,
     },
     PolicyFamily {
         name: "falcon",
@@ -230,6 +240,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::falcon_profile,
         parameters: &[],
         example: Some("g1_29dof_falcon.onnx, FALCON's released G1 network"),
+        trained_forces: FALCON_FORCES,
     },
     PolicyFamily {
         name: "softmimic",
@@ -244,6 +255,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::softmimic_profile,
         parameters: &SOFTMIMIC_PARAMETERS,
         example: Some("StaticStand-SoftMimic.onnx@stiffness=60, a SoftMimic network and its stiffness in N/m"),
+        trained_forces: SOFTMIMIC_FORCES,
     },
     PolicyFamily {
         name: "ipc",
@@ -258,6 +270,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         profile_rule: policies::any_profile,
         parameters: &[],
         example: None,
+        trained_forces: TrainedForces::Unknown,
     },
 ];
 
@@ -312,6 +325,10 @@ pub fn families_text() -> String {
             "| `{}` | {} | {} | `{}` | {runs} |\n",
             f.spelling, f.what, f.supplies, f.profile
         );
+    }
+    text += "\nForces in training (tables mark a cell whose forces lie outside them):\n\n| family | trained with |\n|---|---|\n";
+    for f in &POLICY_FAMILIES {
+        text += &format!("| `{}` | {} |\n", f.name, f.trained_forces.describe());
     }
     text += "\nPublished networks known by content (SHA-256): each runs under its own profile when no `option.profile` is named, whatever the file is called.\n\n| file | profile | source |\n|---|---|---|\n";
     for n in &super::KNOWN_NETWORKS {

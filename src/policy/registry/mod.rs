@@ -13,6 +13,7 @@ mod parameters;
 mod policies;
 mod policy_source;
 mod suggest;
+mod trained_forces;
 
 pub use client::{run_named_client, ClientRequest, NamedClientError};
 pub use families::{
@@ -28,6 +29,7 @@ pub use parameters::{parse_parameters, Parameter, ParameterValues};
 pub use policies::{builtin_policy, PolicyChoice};
 pub use policy_source::PolicySource;
 pub use suggest::{closest, did_you_mean};
+pub use trained_forces::{TrainedForces, FALCON_FORCES, MEASURED_TOLERANCE_N, SOFTMIMIC_FORCES};
 
 use crate::sim::profile::{bundled_profile_path, load_profile, Profile, ProfileError};
 use crate::sim::robot::{RobotError, RobotModel};

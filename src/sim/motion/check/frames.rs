@@ -55,6 +55,10 @@ pub struct FrameState {
     pub ground_without_force: Wrench,
     /// Magnitude of each recorded hand force, N.
     pub hand_force_n: [f64; 2],
+    /// Each recorded hand force in the world, through the reference's hand pose, N.
+    pub hand_force_w: [Vector3<f64>; 2],
+    /// The root's horizontal speed, m/s.
+    pub root_speed_xy_m_s: f64,
 }
 
 /// The sequence's frames `1..n−1` (the ends have no acceleration). The sequence must hold
@@ -123,6 +127,7 @@ pub fn frame_states(
             moment_o: Vector3::zeros(),
         };
         let mut hand_force_n = [0.0; 2];
+        let mut hand_force_w = [Vector3::zeros(); 2];
         for s in [LEFT, RIGHT] {
             let frame = &robot.frames[robot.hands[s].frame];
             let world_from_hand = poses[frame.body] * frame.body_from_frame;
@@ -132,6 +137,7 @@ pub fn frame_states(
             hands.force += f_w;
             hands.moment_o += at.coords.cross(&f_w);
             hand_force_n[s] = f_sensor.norm();
+            hand_force_w[s] = f_w;
         }
         let alone = Wrench {
             force: id.root_force_w,
@@ -154,6 +160,8 @@ pub fn frame_states(
             },
             ground_without_force: alone,
             hand_force_n,
+            hand_force_w,
+            root_speed_xy_m_s: motion.root_lin_vel_w[k].xy().norm(),
         });
     }
     Ok(out)

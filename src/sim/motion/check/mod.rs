@@ -42,7 +42,7 @@ use crate::eval::metrics::percentile;
 use crate::sim::motion::{joint_limit_margin, Dataset, Sequence};
 use crate::sim::robot::RobotModel;
 use frames::frame_states;
-use nalgebra::Point2;
+use nalgebra::{Point2, Vector3};
 use serde::Serialize;
 use support::{convex_hull, distance_outside, SolePoints, CONTACT_HEIGHT_M};
 
@@ -222,6 +222,62 @@ struct ForceSeries {
     peak_n: f64,
     both_loaded_n: Vec<f64>,
     both_peak_n: f64,
+    span: HandForceSpan,
+}
+
+/// Where the recorded hand forces point in the world, per hand, through the reference's
+/// hand poses: what a policy trained with a force curriculum is judged against
+/// (`policy::registry::TrainedForces`). Walking: the root's horizontal speed above
+/// 0.1 m/s, the style's threshold.
+#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+pub struct HandForceSpan {
+    /// Largest horizontal force on a hand while the root walks, N.
+    pub horizontal_walking_max_n: f64,
+    /// Largest horizontal force on a hand while the root stands, N.
+    pub horizontal_standing_max_n: f64,
+    /// Lowest and highest vertical force on a hand, N (z up).
+    pub vertical_n: (f64, f64),
+}
+
+impl HandForceSpan {
+    /// Widened to hold force `f_w` (N, world) with the root walking or not.
+    fn add(&mut self, f_w: &Vector3<f64>, walking: bool) {
+        let h = f_w.xy().norm();
+        if walking {
+            self.horizontal_walking_max_n = self.horizontal_walking_max_n.max(h);
+        } else {
+            self.horizontal_standing_max_n = self.horizontal_standing_max_n.max(h);
+        }
+        self.vertical_n = (self.vertical_n.0.min(f_w.z), self.vertical_n.1.max(f_w.z));
+    }
+
+    /// The span of both.
+    fn union(self, other: Self) -> Self {
+        Self {
+            horizontal_walking_max_n: self
+                .horizontal_walking_max_n
+                .max(other.horizontal_walking_max_n),
+            horizontal_standing_max_n: self
+                .horizontal_standing_max_n
+                .max(other.horizontal_standing_max_n),
+            vertical_n: (
+                self.vertical_n.0.min(other.vertical_n.0),
+                self.vertical_n.1.max(other.vertical_n.1),
+            ),
+        }
+    }
+
+    /// Scaled by a setting's force coefficient (≥ 0).
+    pub fn scaled(self, coefficient: f64) -> Self {
+        Self {
+            horizontal_walking_max_n: self.horizontal_walking_max_n * coefficient,
+            horizontal_standing_max_n: self.horizontal_standing_max_n * coefficient,
+            vertical_n: (
+                self.vertical_n.0 * coefficient,
+                self.vertical_n.1 * coefficient,
+            ),
+        }
+    }
 }
 
 /// How strong the recorded hand forces are over a sequence or a task.
@@ -240,6 +296,8 @@ pub struct ForceLevels {
     pub both_loaded_mean_n: f64,
     /// Both hands together: the largest sum, N.
     pub both_peak_n: f64,
+    /// Where the forces point in the world, per hand.
+    pub span: HandForceSpan,
 }
 
 impl ForceLevels {
@@ -269,6 +327,9 @@ impl ForceLevels {
             loaded_p95_n: percentile(&loaded, 95.0),
             peak_n: series.iter().map(|s| s.peak_n).fold(0.0, f64::max),
             loaded_share: share(loaded.len(), hand_frames),
+            span: series
+                .iter()
+                .fold(HandForceSpan::default(), |a, s| a.union(s.span)),
         }
     }
 }
@@ -547,6 +608,10 @@ fn sequence_series(
         forces.both_peak_n = forces.both_peak_n.max(both);
         if both > LOADED_N {
             forces.both_loaded_n.push(both);
+        }
+        let walking = f.root_speed_xy_m_s > style::MOVING_M_S;
+        for f_w in &f.hand_force_w {
+            forces.span.add(f_w, walking);
         }
         for magnitude in f.hand_force_n {
             forces.hand_frames += 1;

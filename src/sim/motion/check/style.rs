@@ -22,7 +22,7 @@ const MIN_HOLD_S: f64 = 0.5;
 /// The build-up ends when the force first reaches this share of its hold's peak.
 const RISE_SHARE: f64 = 0.8;
 /// The root moves when its horizontal speed is above this, m/s.
-const MOVING_M_S: f64 = 0.1;
+pub(super) const MOVING_M_S: f64 = 0.1;
 
 /// One sequence's style: how fast and how straight it walks, how it stands, how deep it
 /// squats, which hand does the work and how its force builds and trembles.
