@@ -11,6 +11,18 @@
 //! profile maps every action as default + 0.25 · a, so the adapter adds the arms'
 //! reference offset to the raw action it hands on, and keeps the network's own output for
 //! the `actions` term.
+//!
+//! **Joint order.** FALCON's config (`sim2real/config/robot/g1_29dof_falcon.yaml`,
+//! LeCAR-Lab/FALCON 25ad085) labels its first hip joints `hip_yaw, hip_roll, hip_pitch`,
+//! but everything at those indices is in the canonical pitch/roll/yaw order: the
+//! default-angle comments (`cfg:153-156`, index 0 `left_hip_pitch_joint` at −0.1 rad), the
+//! position limits (`cfg:217`: index 0 [−2.5307, 2.8798] is the URDF's hip pitch, index 2
+//! [−2.7576, 2.7576] its hip yaw), the identity motor map (`cfg:38-48`) and the training
+//! robot's `dof_names`. The output is the lower-body actor (canonical 0–14), then the
+//! upper-body one (15–28), read from the ONNX graph. So network index i is canonical joint
+//! i and the adapter permutes nothing; `tests/falcon.rs` fails on a swap through its
+//! golden actions. The score stays FATS: a command follower's keypoint error includes the
+//! drift its commands leave uncorrected.
 
 pub mod commands;
 pub mod observation;
