@@ -49,6 +49,7 @@ fn run(
         force_coefficient: 1.0,
         push_n: 0.0,
         push_heading_deg: None,
+        disturbance: None,
         reference_offsets_s: policy.reference_offsets_s(),
     };
     let settings = PhysicsSettings {
@@ -211,6 +212,9 @@ impl thorarena::sim::physics::Physics for DivergingPhysics {
     fn time_s(&self) -> f64 {
         self.inner.time_s()
     }
+    fn set_payloads(&mut self, payloads: &[thorarena::sim::physics::PointMass]) {
+        self.inner.set_payloads(payloads);
+    }
     fn contact_count(&self) -> usize {
         self.inner.contact_count()
     }
@@ -233,6 +237,7 @@ fn a_diverging_simulation_ends_the_episode_as_physics_diverged_without_nan() {
         force_coefficient: 1.0,
         push_n: 0.0,
         push_heading_deg: None,
+        disturbance: None,
         reference_offsets_s: vec![0.0],
     };
     let settings = PhysicsSettings {
@@ -288,6 +293,7 @@ fn a_push_with_a_direction_turns_with_the_references_initial_heading() {
             force_coefficient: 0.0,
             push_n: 10.0,
             push_heading_deg: heading,
+            disturbance: None,
             reference_offsets_s: vec![0.0],
         };
         let settings = PhysicsSettings {

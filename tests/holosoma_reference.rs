@@ -243,6 +243,7 @@ fn the_python_beyondmimic_adapter_builds_the_same_observations_and_actions() {
         force_coefficient: 0.0,
         push_n: 0.0,
         push_heading_deg: None,
+        disturbance: None,
         reference_offsets_s: offsets.clone(),
     };
     let steps = dump::record_episode(

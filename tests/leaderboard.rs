@@ -333,7 +333,7 @@ fn falcon_and_a_compliant_pair_on_the_leaderboard_equal_separate_eval_runs() {
             "--per-task",
             "1",
             "--settings",
-            "no-force",
+            "no-force,payload:6",
         ])
         .args(["--policy", &format!("falcon:{}", falcon.display())])
         .args([
@@ -370,11 +370,20 @@ fn falcon_and_a_compliant_pair_on_the_leaderboard_equal_separate_eval_runs() {
         table.contains(" † |") && table.contains("`softmimic`: events on one wrist at a time"),
         "{table}"
     );
+    // FALCON without force replays nothing to mark; 6 kg at each wrist weighs 59 N, beyond
+    // the 50 N down of its curriculum: marked, with the reason.
     let falcon_row = table
         .lines()
         .find(|l| l.starts_with("| falcon (g1_29dof_falcon) | rapier |"))
         .unwrap();
-    assert!(!falcon_row.contains('†'), "{falcon_row}");
+    let cells: Vec<&str> = falcon_row.split('|').collect();
+    assert!(!cells[3].contains('†'), "no-force: {falcon_row}");
+    assert!(cells[6].contains('†'), "payload: {falcon_row}");
+    assert!(
+        table.contains("under `payload:6:hand=both`: its disturbance lies outside")
+            && table.contains("59 N down, beyond 50"),
+        "{table}"
+    );
 
     // FATS of FALCON's row: a separate eval's.
     let board = summary(&out.join("runs/falcon-g1_29dof_falcon-rapier"));

@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Point3, Vector3};
 use std::sync::Arc;
 use thorarena::sim::physics::{
     legged_gym_gains, standing_default_pose, standing_gains, ContactMode, ExternalForce, PdForm,
-    PdGains, Physics, PhysicsSettings, PhysicsState, ResetState, RootState,
+    PdGains, Physics, PhysicsSettings, PhysicsState, PointMass, ResetState, RootState,
 };
 use thorarena::sim::robot::{self, RobotModel};
 

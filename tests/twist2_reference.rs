@@ -192,6 +192,7 @@ fn the_python_twist2_adapter_builds_the_same_observations_and_actions() {
         force_coefficient: 1.0,
         push_n: 0.0,
         push_heading_deg: None,
+        disturbance: None,
         reference_offsets_s: offsets.clone(),
     };
     let steps = dump::record_episode(

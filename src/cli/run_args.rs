@@ -59,7 +59,12 @@ pub struct RunArgs {
     /// `push:<N>` (no replay; a constant world +x push of N newtons on each hand, ramped
     /// in over 1 s — the sensitivity probe of SOURCES.md, TWIST2 in MuJoCo), or `push:<N>@<deg>` with the
     /// push turned by deg from the reference's initial heading (`push:20@90`: from the
-    /// robot's right).
+    /// robot's right), or a disturbance instead of the recorded forces:
+    /// `event:<N>[@<deg>][:hand=..][:up=..][:start=..][:ramp=..][:hold=..][:release=..]`
+    /// (a ramp–hold–release on one hand or both, SoftMimic's training shape),
+    /// `impulse:<N>-<N>[:on=torso|hands][:dur=..][:every=<s>-<s>][:seed=..]` (seeded random
+    /// pushes), `payload:<kg>[:hand=..]` (a mass held at the wrists). docs/forces.md has
+    /// every field and default.
     /// [default: force,no-force; no-force alone on a dataset without force logs].
     #[arg(long, value_delimiter = ',')]
     pub settings: Vec<String>,

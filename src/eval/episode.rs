@@ -6,6 +6,7 @@ use crate::eval::metrics::{keypoint_error_m, reanchor, EpisodeSeries};
 use crate::eval::{reference_steps, EpisodeRecord, PolicyFault, PolicyFaults, Setting};
 use crate::eval::{Termination, TerminationRule};
 use crate::policy::Observation;
+use crate::sim::disturbance::{ActiveDisturbance, Disturbance};
 use crate::sim::feet::{FeetMeter, FootContact};
 use crate::sim::motion::{Reference, ReferenceFrame, Sequence};
 use crate::sim::physics::{Physics, PhysicsState, ResetState, RootState};
@@ -87,6 +88,8 @@ pub struct EpisodeSetup<'a> {
     /// … at this angle, degrees counter-clockwise about z, from the reference's initial
     /// heading (90: towards the robot's left, i.e. a push from its right).
     pub push_heading_deg: Option<f64>,
+    /// Events, impulses or payloads put on the robot (`None`: none).
+    pub disturbance: Option<Disturbance>,
     /// Reference offsets the policy asked for, s.
     pub reference_offsets_s: Vec<f64>,
 }
@@ -110,6 +113,7 @@ impl<'a> EpisodeSetup<'a> {
             force_coefficient: setting.coefficient,
             push_n: setting.push_n,
             push_heading_deg: setting.push_heading_deg,
+            disturbance: setting.disturbance.clone(),
             reference_offsets_s,
         }
     }
@@ -166,6 +170,10 @@ impl<'a> Episode<'a> {
             world_from_root.translation.vector.z += (-low).max(0.0);
         }
         physics.set_gains(&setup.profile.gains);
+        physics.set_payloads(&match &setup.disturbance {
+            Some(Disturbance::Payload(p)) => p.point_masses(robot),
+            _ => Vec::new(),
+        });
         physics.reset(&ResetState {
             root: RootState {
                 world_from_root,
@@ -181,8 +189,7 @@ impl<'a> Episode<'a> {
         physics.read_state(&mut state);
         Self {
             setup,
-            replay: ForceReplay::new(robot, seq, setup.force_coefficient)
-                .with_push(push_direction(setup, &reference) * setup.push_n),
+            replay: replay_of(setup, seq, &reference),
             torso_frame: robot.frame_index("torso_link").unwrap_or(0),
             reference,
             step: 0,
@@ -519,15 +526,29 @@ impl<'a> Episode<'a> {
     }
 }
 
-/// The unit direction of a setup's push: world +x, or its angle from the reference's
-/// heading at t = 0 (the yaw of the root's x axis).
-fn push_direction(setup: &EpisodeSetup, reference: &Reference) -> Vector3<f64> {
-    let Some(deg) = setup.push_heading_deg else {
-        return Vector3::x();
-    };
+/// The forces `setup` puts on an episode of `seq`: the replay, the push, the disturbance.
+fn replay_of(setup: &EpisodeSetup, seq: &Sequence, reference: &Reference) -> ForceReplay {
     let x = reference.sample(0.0).world_from_root.rotation * Vector3::x();
-    let yaw = x.y.atan2(x.x) + deg.to_radians();
-    Vector3::new(yaw.cos(), yaw.sin(), 0.0)
+    let heading_rad = x.y.atan2(x.x);
+    let push_direction = match setup.push_heading_deg {
+        None => Vector3::x(),
+        Some(deg) => {
+            let yaw = heading_rad + deg.to_radians();
+            Vector3::new(yaw.cos(), yaw.sin(), 0.0)
+        }
+    };
+    let replay = ForceReplay::new(setup.robot, seq, setup.force_coefficient)
+        .with_push(push_direction * setup.push_n);
+    match &setup.disturbance {
+        Some(d) => replay.with_disturbance(ActiveDisturbance::new(
+            d,
+            setup.robot,
+            heading_rad,
+            &seq.sequence_id,
+            reference.duration_s(),
+        )),
+        None => replay,
+    }
 }
 
 /// Every number of the state is finite (a diverged simulation is not).

@@ -1,9 +1,12 @@
-//! A force setting of an evaluation: replayed recorded forces under a coefficient, or a
-//! constant push; every sequence runs once per setting.
+//! A force setting of an evaluation: replayed recorded forces under a coefficient, a
+//! constant push, or a disturbance (force events, random impulses, payloads); every
+//! sequence runs once per setting.
 
+use crate::sim::disturbance::Disturbance;
 use serde::{Deserialize, Serialize};
 
-/// A force setting: a name, the replay coefficient, and an optional constant push.
+/// A force setting: a name, the replay coefficient, and an optional constant push or
+/// disturbance.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
     /// `force`, `no-force`, `coef-<x>`, `push-<N>` or `push-<N>@<deg>`.
@@ -19,6 +22,10 @@ pub struct Setting {
     /// heading (`push:<N>@<deg>`; 90: from the robot's right); `None`: world +x.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub push_heading_deg: Option<f64>,
+    /// Force events, random impulses or payloads instead of the recorded forces
+    /// (`event:…`, `impulse:…`, `payload:…`; coefficient 0, no push).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub disturbance: Option<Disturbance>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -39,6 +46,19 @@ impl Setting {
         self.coefficient == other.coefficient
             && self.push_n == other.push_n
             && heading(self) == heading(other)
+            && self.disturbance == other.disturbance
+    }
+
+    /// The replay coefficient of a setting that only replays recorded forces (`force`,
+    /// `no-force`, a coefficient): `None` for a push or a disturbance.
+    pub fn replay_only(&self) -> Option<f64> {
+        (self.push_n == 0.0 && self.disturbance.is_none()).then_some(self.coefficient)
+    }
+
+    /// The push per hand of a setting that only pushes (`push:<N>`, `no-force` as a push
+    /// of 0): `None` for a replay or a disturbance.
+    pub fn push_only(&self) -> Option<f64> {
+        (self.coefficient == 0.0 && self.disturbance.is_none()).then_some(self.push_n)
     }
 
     /// Largest |replay coefficient| accepted: ten times the recorded forces is already
@@ -51,26 +71,40 @@ impl Setting {
     /// Why `s` is no setting [`Self::parse`] takes, naming it (cut short when long, so
     /// a number of three hundred digits is not echoed whole).
     pub fn refusal(s: &str) -> String {
-        let shown: String = s.chars().take(40).collect();
+        let shown: String = s.chars().take(80).collect();
         let cut = if shown.len() < s.len() { "…" } else { "" };
+        let shown = shown.escape_default();
+        if let Some(Err(why)) = Disturbance::parse(s) {
+            let why: String = why.chars().take(120).collect();
+            return format!("`{shown}{cut}`: {why} ({})", Disturbance::SYNTAX);
+        }
         format!(
-            "`{}{cut}` is not force, no-force, a replay coefficient within ±{} or push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360",
-            shown.escape_default(),
+            "`{shown}{cut}` is not force, no-force, a replay coefficient within ±{}, push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360, or a disturbance ({})",
             Self::MAX_COEFFICIENT,
-            Self::MAX_PUSH_N
+            Self::MAX_PUSH_N,
+            Disturbance::SYNTAX
         )
     }
 
     /// Parses `force`, `no-force`, a replay coefficient (|c| ≤ [`Self::MAX_COEFFICIENT`]),
-    /// or `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]) with an optional `@<deg>` direction from
-    /// the reference's initial heading (−360 ≤ deg ≤ 360).
+    /// `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]) with an optional `@<deg>` direction from
+    /// the reference's initial heading (−360 ≤ deg ≤ 360), or a disturbance
+    /// ([`Disturbance::SYNTAX`]; named by its canonical spelling).
     pub fn parse(s: &str) -> Option<Self> {
         let plain = |name: String, coefficient: f64| Self {
             name,
             coefficient,
             push_n: 0.0,
             push_heading_deg: None,
+            disturbance: None,
         };
+        if let Some(d) = Disturbance::parse(s) {
+            let d = d.ok()?;
+            return Some(Self {
+                disturbance: Some(d.clone()),
+                ..plain(d.name(), 0.0)
+            });
+        }
         match s {
             "force" => Some(plain("force".into(), 1.0)),
             "no-force" => Some(plain("no-force".into(), 0.0)),
@@ -100,6 +134,7 @@ impl Setting {
                         coefficient: 0.0,
                         push_n: n,
                         push_heading_deg: deg,
+                        disturbance: None,
                     });
                 }
                 other

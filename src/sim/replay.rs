@@ -1,7 +1,9 @@
 //! Force replay: a recorded sensor-frame hand force becomes a world-frame force on the
 //! simulated hand — sensor → hand (the sequence's calibration) → world (the hand's pose in
 //! the simulation at that physics step) × a coefficient (1 = force setting, 0 = no force).
+//! A constant push or a [`crate::sim::disturbance`] adds its own world-frame forces.
 
+use crate::sim::disturbance::ActiveDisturbance;
 use crate::sim::motion::{Reference, Sequence, LEFT, RIGHT};
 use crate::sim::physics::{ExternalForce, Physics};
 use crate::sim::robot::RobotModel;
@@ -32,6 +34,8 @@ pub struct ForceReplay {
     application: [(usize, Point3<f64>); 2],
     /// Per side: the hand frame in its body frame.
     body_from_hand: [Isometry3<f64>; 2],
+    /// Events or impulses added to the hands (and the torso).
+    disturbance: Option<ActiveDisturbance>,
 }
 
 impl ForceReplay {
@@ -58,7 +62,15 @@ impl ForceReplay {
             hand_from_sensor: [l.0, r.0],
             application: [l.1, r.1],
             body_from_hand: [l.2, r.2],
+            disturbance: None,
         }
+    }
+
+    /// Adds a disturbance's forces (events on the hands, impulses on the hands or the
+    /// torso; a payload acts through the bodies' mass, not here).
+    pub fn with_disturbance(mut self, disturbance: ActiveDisturbance) -> Self {
+        self.disturbance = Some(disturbance);
+        self
     }
 
     /// Adds a constant world-frame push on each hand (ramped in over [`PUSH_RAMP_S`]).
@@ -77,6 +89,10 @@ impl ForceReplay {
     ) -> [Vector3<f64>; 2] {
         let f = reference.sample(t_s).force_sensor;
         let push = self.push_w * (t_s / PUSH_RAMP_S).clamp(0.0, 1.0);
+        let disturbance = self
+            .disturbance
+            .as_ref()
+            .map_or([Vector3::zeros(); 2], |d| d.hand_forces_w(t_s));
         [LEFT, RIGHT].map(|s| {
             let world_from_hand = world_from_body[self.application[s].0] * self.body_from_hand[s];
             world_force(
@@ -85,11 +101,13 @@ impl ForceReplay {
                 &f[s],
                 self.coefficient,
             ) + push
+                + disturbance[s]
         })
     }
 
     /// Sets the hand forces for the coming physics step: the reference at the physics
-    /// clock's current time, rotated by the current hand poses. Call before every step.
+    /// clock's current time, rotated by the current hand poses, and a disturbance's torso
+    /// force. Call before every step. Returns the hand forces.
     pub fn apply(
         &self,
         physics: &mut dyn Physics,
@@ -102,6 +120,17 @@ impl ForceReplay {
             physics.set_external_force(ExternalForce {
                 body,
                 force_w: forces[s],
+                point_b,
+            });
+        }
+        if let Some((body, point_b, force_w)) = self
+            .disturbance
+            .as_ref()
+            .and_then(|d| d.torso_force_w(physics.time_s()))
+        {
+            physics.set_external_force(ExternalForce {
+                body,
+                force_w,
                 point_b,
             });
         }

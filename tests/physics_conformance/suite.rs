@@ -603,3 +603,55 @@ fn hybrid_pd_is_stable_at_5_ms_where_explicit_pd_is_not() {
         "explicit PD should go unstable at 5 ms, max arm joint speed {explicit} rad/s"
     );
 }
+
+/// The ground's vertical force on a robot standing still in its default pose holding
+/// `payloads` (set on `p`, then reset), averaged over its fourth second (the sag of the
+/// first seconds settled), N.
+fn standing_ground_force_n(p: &mut dyn Physics, payloads: &[PointMass]) -> f64 {
+    let m = p.model().clone();
+    p.set_payloads(payloads);
+    let start = standing_default_pose(&m);
+    p.reset(&start);
+    p.set_targets(&start.q);
+    let mut contacts = Vec::new();
+    let (mut sum, mut n) = (0.0, 0);
+    for k in 0..4000 {
+        p.step();
+        if k >= 3000 {
+            p.ground_contacts(&mut contacts);
+            sum += contacts.iter().map(|c| c.normal_n).sum::<f64>();
+            n += 1;
+        }
+    }
+    sum / n as f64
+}
+
+#[test]
+fn a_payload_of_m_kg_weighs_m_g_at_each_hand_holding_it() {
+    let m = g1();
+    let g = PhysicsSettings::default().gravity[2].abs();
+    let at_hand = |side: usize, mass_kg: f64| {
+        let hand = &m.hands[side];
+        let frame = &m.frames[hand.frame];
+        PointMass {
+            body: frame.body,
+            mass_kg,
+            point_b: frame.body_from_frame * hand.point_hand,
+        }
+    };
+    let mut p = backend(&m, PhysicsSettings::default(), standing_gains(&m));
+    let p = p.as_mut();
+    let bare = standing_ground_force_n(p, &[]);
+    assert!(
+        (bare - m.total_mass_kg() * g).abs() < 0.01 * bare,
+        "standing still, the ground carries the robot: {bare} N vs {} N",
+        m.total_mass_kg() * g
+    );
+    let one = standing_ground_force_n(p, &[at_hand(0, 3.0)]) - bare;
+    let both = standing_ground_force_n(p, &[at_hand(0, 2.0), at_hand(1, 2.0)]) - bare;
+    assert!((one - 3.0 * g).abs() < 0.3, "3 kg in the left hand adds {one} N");
+    assert!((both - 4.0 * g).abs() < 0.3, "2 kg in each hand adds {both} N");
+    // Set back to none on the same engine, the next reset carries the robot alone again.
+    let cleared = standing_ground_force_n(p, &[]);
+    assert!((cleared - bare).abs() < 1e-6);
+}

@@ -554,17 +554,21 @@ pub type TaskForceSpans = std::collections::BTreeMap<String, HandForceSpan>;
 /// setting's coefficient) lie outside what its family was trained with; empty when the
 /// family has nothing to judge or the setting replays no force.
 /// Each with what lies outside (`push_chair (61 N horizontal walking, above 40)`).
+/// A disturbance setting (`event:…`, `impulse:…`, `payload:…`) is judged once for every
+/// task (`every task (…)`).
 pub fn tasks_outside_training(entry: &Entry, setting: &str, spans: &TaskForceSpans) -> Vec<String> {
-    let Some(coefficient) = entry
-        .summary
-        .header
-        .settings
-        .iter()
-        .find(|s| s.name == setting)
-        .map(|s| s.coefficient)
-    else {
+    let header = &entry.summary.header;
+    let Some(found) = header.settings.iter().find(|s| s.name == setting) else {
         return Vec::new();
     };
+    if let Some(d) = &found.disturbance {
+        let stiffness = header.policy_parameters.get("stiffness_n_per_m").copied();
+        return match entry.trained_forces.outside_disturbance(d, stiffness) {
+            Some(why) if !why.is_empty() => vec![format!("every task ({})", why.join("; "))],
+            _ => Vec::new(),
+        };
+    }
+    let coefficient = found.coefficient;
     if coefficient == 0.0 {
         return Vec::new();
     }
@@ -622,11 +626,24 @@ pub fn leaderboard_table(entries: &[&Entry], spans: &TaskForceSpans) -> String {
                     let mark = if outside.is_empty() {
                         ""
                     } else {
+                        let which = if e
+                            .summary
+                            .header
+                            .settings
+                            .iter()
+                            .any(|h| h.name == *s && h.disturbance.is_some())
+                        {
+                            "its disturbance lies outside what it was trained with on".to_string()
+                        } else {
+                            format!(
+                                "{} of {} tasks replay forces outside what it was trained with:",
+                                outside.len(),
+                                r.tasks.len()
+                            )
+                        };
                         let note = format!(
-                            "{} under `{s}`: {} of {} tasks replay forces outside what it was trained with: {}. Its training: {}",
+                            "{} under `{s}`: {which} {}. Its training: {}",
                             markdown_cell(&e.policy),
-                            outside.len(),
-                            r.tasks.len(),
                             outside.join(", "),
                             e.trained_forces.describe()
                         );

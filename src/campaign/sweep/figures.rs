@@ -18,12 +18,12 @@ pub fn sweep_title(plan: &Plan) -> String {
         .collect();
     let setting_noun = if settings
         .iter()
-        .all(|s| s.as_ref().is_some_and(|s| s.push_n == 0.0))
+        .all(|s| s.as_ref().is_some_and(|s| s.replay_only().is_some()))
     {
         ("force coefficient", "force coefficients")
     } else if settings
         .iter()
-        .all(|s| s.as_ref().is_some_and(|s| s.coefficient == 0.0))
+        .all(|s| s.as_ref().is_some_and(|s| s.push_only().is_some()))
     {
         ("push", "pushes")
     } else {
@@ -293,16 +293,12 @@ fn curve_lines(
 
 /// A force-replay cell's coefficient (not a push).
 fn coefficient_of(c: &Cell) -> Option<f64> {
-    crate::eval::Setting::parse(&c.setting)
-        .filter(|s| s.push_n == 0.0)
-        .map(|s| s.coefficient)
+    crate::eval::Setting::parse(&c.setting).and_then(|s| s.replay_only())
 }
 
 /// A push cell's force per hand, N.
 fn push_of(c: &Cell) -> Option<f64> {
-    crate::eval::Setting::parse(&c.setting)
-        .filter(|s| s.coefficient == 0.0)
-        .map(|s| s.push_n)
+    crate::eval::Setting::parse(&c.setting).and_then(|s| s.push_only())
 }
 
 /// A measured-latency cell's budget, ms.

@@ -258,6 +258,7 @@ pub fn check_policy(
         force_coefficient: 0.0,
         push_n: 0.0,
         push_heading_deg: None,
+        disturbance: None,
         reference_offsets_s: policy.reference_offsets_s(),
     };
     let stand = standing_reference(robot, profile, options.stand_s);

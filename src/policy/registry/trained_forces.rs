@@ -1,8 +1,10 @@
 //! The forces a family's networks were trained with on the robot: a policy scored under a
 //! force its training never showed it is measured off its distribution, and every table
 //! says so where it happens ([`TrainedForces::holds_push`],
-//! [`TrainedForces::holds_hand_forces`]), shown, never hidden.
+//! [`TrainedForces::holds_hand_forces`], [`TrainedForces::outside_disturbance`]), shown,
+//! never hidden.
 
+use crate::sim::disturbance::{Disturbance, Hands, ImpulseTarget};
 use crate::sim::motion::check::HandForceSpan;
 
 /// What a family saw on its hands in training.
@@ -30,6 +32,8 @@ pub enum TrainedForces {
     /// Force events on one wrist at a time (SoftMimic): a ramp, a hold, a release; the
     /// force bounded by the commanded stiffness times a largest yield and by a cap.
     WristEvents {
+        /// Shortest and longest ramp of an event, s.
+        ramp_s: (f64, f64),
         /// Longest hold of an event, s.
         hold_max_s: f64,
         /// Largest displacement the force may ask of the wrist, m (F ≤ k · this).
@@ -50,6 +54,7 @@ pub const FALCON_FORCES: TrainedForces = TrainedForces::HandCurriculum {
 
 /// SoftMimic's force events.
 pub const SOFTMIMIC_FORCES: TrainedForces = TrainedForces::WristEvents {
+    ramp_s: (0.1, 2.0),
     hold_max_s: 1.0,
     yield_max_m: 0.7,
     force_max_n: 140.0,
@@ -76,12 +81,14 @@ impl TrainedForces {
                 vertical_n.0, vertical_n.1
             ),
             Self::WristEvents {
+                ramp_s,
                 hold_max_s,
                 yield_max_m,
                 force_max_n,
                 source,
             } => format!(
-                "events on one wrist at a time, held at most {hold_max_s} s, F ≤ stiffness × {yield_max_m} m and ≤ {force_max_n} N ({source})"
+                "events on one wrist at a time, ramped over {} to {} s, held at most {hold_max_s} s, F ≤ stiffness × {yield_max_m} m and ≤ {force_max_n} N ({source})",
+                ramp_s.0, ramp_s.1
             ),
         }
     }
@@ -167,6 +174,113 @@ impl TrainedForces {
             Self::WristEvents { .. } => Some(vec!["both hands, continuously".into()]),
         }
     }
+
+    /// What in disturbance `d` lies outside the training, one phrase each; empty when all
+    /// of it lies inside, `None` with nothing to judge. `stiffness_n_per_m` is a
+    /// [`TrainedForces::WristEvents`] family's commanded stiffness. A curriculum family is
+    /// judged as if the whole episode walked, except that a horizontal force is named as
+    /// trained only while walking (every motion stands at its start); a payload by its
+    /// weight (the curriculum's forces have no inertia, and a payload's is not judged).
+    pub fn outside_disturbance(
+        &self,
+        d: &Disturbance,
+        stiffness_n_per_m: Option<f64>,
+    ) -> Option<Vec<String>> {
+        match *self {
+            Self::Untrained | Self::Blind | Self::Unknown => None,
+            Self::HandCurriculum {
+                horizontal_max_n,
+                vertical_n,
+                ..
+            } => {
+                let mut why = Vec::new();
+                let mut judge = |horizontal_n: f64, vertical: (f64, f64)| {
+                    if horizontal_n > 1e-6 {
+                        why.push(if horizontal_n > horizontal_max_n {
+                            format!("{horizontal_n:.0} N horizontal, above {horizontal_max_n}")
+                        } else {
+                            format!("{horizontal_n:.0} N horizontal, trained only while walking")
+                        });
+                    }
+                    if vertical.0 < vertical_n.0 {
+                        why.push(format!(
+                            "{:.0} N down, beyond {}",
+                            -vertical.0, -vertical_n.0
+                        ));
+                    }
+                    if vertical.1 > vertical_n.1 {
+                        why.push(format!("{:.0} N up, above {}", vertical.1, vertical_n.1));
+                    }
+                };
+                match d {
+                    Disturbance::Event(e) => {
+                        let up = e.up_deg.to_radians();
+                        let v = e.force_n * up.sin();
+                        judge(e.force_n * up.cos(), (v.min(0.0), v.max(0.0)));
+                    }
+                    Disturbance::Impulses(i) => {
+                        if i.target == ImpulseTarget::Torso {
+                            why.push("pushes on the torso, never in training".into());
+                        } else {
+                            judge(i.force_n[1], (0.0, 0.0));
+                        }
+                    }
+                    Disturbance::Payload(p) => judge(0.0, (-p.mass_kg * 9.81, 0.0)),
+                }
+                Some(why)
+            }
+            Self::WristEvents {
+                ramp_s,
+                hold_max_s,
+                yield_max_m,
+                force_max_n,
+                ..
+            } => {
+                let bound =
+                    stiffness_n_per_m.map_or(force_max_n, |k| (k * yield_max_m).min(force_max_n));
+                let mut why = Vec::new();
+                let mut judge_force = |f: f64| {
+                    if f > bound {
+                        why.push(format!("{f:.0} N, above {bound:.0}"));
+                    }
+                };
+                match d {
+                    Disturbance::Event(e) => {
+                        judge_force(e.force_n);
+                        if e.hands == Hands::Both {
+                            why.push("both hands at once".into());
+                        }
+                        if e.hold_s > hold_max_s {
+                            why.push(format!("held {} s, above {hold_max_s}", e.hold_s));
+                        }
+                        for (what, t) in [("ramped", e.ramp_s), ("released", e.release_s)] {
+                            if t < ramp_s.0 || t > ramp_s.1 {
+                                why.push(format!(
+                                    "{what} over {t} s, outside {} to {}",
+                                    ramp_s.0, ramp_s.1
+                                ));
+                            }
+                        }
+                    }
+                    Disturbance::Impulses(i) => {
+                        if i.target == ImpulseTarget::Torso {
+                            why.push("pushes on the torso, never in training".into());
+                        } else {
+                            judge_force(i.force_n[1]);
+                            why.push(format!(
+                                "steps, where training ramps over {} to {} s",
+                                ramp_s.0, ramp_s.1
+                            ));
+                        }
+                    }
+                    Disturbance::Payload(_) => {
+                        why.push(format!("a load held the whole episode, where training holds at most {hold_max_s} s"));
+                    }
+                }
+                Some(why)
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -203,6 +317,53 @@ mod tests {
             ..carry
         };
         assert_eq!(FALCON_FORCES.holds_hand_forces(&wipe), Some(false));
+    }
+
+    #[test]
+    fn disturbances_are_judged_against_each_envelope() {
+        let d = |s: &str| Disturbance::parse(s).unwrap().unwrap();
+        // SoftMimic: one wrist, ramped 0.5 s, held 1 s, 30 N at 60 N/m (bound 42 N): inside.
+        let inside = d("event:30:hand=right:ramp=0.5:hold=1");
+        assert_eq!(
+            SOFTMIMIC_FORCES.outside_disturbance(&inside, Some(60.0)),
+            Some(vec![])
+        );
+        let why = SOFTMIMIC_FORCES
+            .outside_disturbance(&d("event:50:hand=both:ramp=0:hold=3"), Some(60.0))
+            .unwrap();
+        assert_eq!(why.len(), 5, "{why:?}"); // force, both hands, hold, ramp, release
+        assert!(!SOFTMIMIC_FORCES
+            .outside_disturbance(&d("payload:1"), None)
+            .unwrap()
+            .is_empty());
+        assert!(!SOFTMIMIC_FORCES
+            .outside_disturbance(&d("impulse:20:on=hands"), None)
+            .unwrap()
+            .is_empty());
+        // FALCON: a 2 kg payload weighs 19.6 N, inside −50…5 N; 6 kg does not.
+        assert_eq!(
+            FALCON_FORCES.outside_disturbance(&d("payload:2"), None),
+            Some(vec![])
+        );
+        assert_eq!(
+            FALCON_FORCES
+                .outside_disturbance(&d("payload:6"), None)
+                .unwrap()
+                .len(),
+            1
+        );
+        // A straight-down event inside the vertical range; any horizontal one is named.
+        assert_eq!(
+            FALCON_FORCES.outside_disturbance(&d("event:30:up=-90"), None),
+            Some(vec![])
+        );
+        let why = FALCON_FORCES
+            .outside_disturbance(&d("event:30"), None)
+            .unwrap();
+        assert!(why[0].contains("only while walking"), "{why:?}");
+        assert!(TrainedForces::Blind
+            .outside_disturbance(&inside, None)
+            .is_none());
     }
 
     #[test]

@@ -13,6 +13,7 @@ mod gains;
 mod mjcf;
 #[cfg(feature = "mujoco")]
 mod mujoco;
+mod payload;
 mod rapier;
 mod settings;
 mod state;
@@ -22,6 +23,7 @@ pub use gains::{armature_derived_gains, legged_gym_gains, standing_gains};
 pub use mjcf::mjcf_of;
 #[cfg(feature = "mujoco")]
 pub use mujoco::{MujocoError, MujocoPhysics, MUJOCO_VERSION};
+pub use payload::{Inertial, PointMass};
 pub use rapier::{standing_default_pose, RapierPhysics};
 pub use settings::{ContactMode, PdForm, PhysicsSettings};
 pub use state::{ExternalForce, GroundContact, PdGains, PhysicsState, ResetState, RootState};
@@ -61,6 +63,12 @@ pub trait Physics {
 
     /// Removes every external force.
     fn clear_external_forces(&mut self);
+
+    /// Sets the point masses the bodies hold (a payload's weight and inertia, nothing
+    /// else), replacing any set before; they take effect at the next [`Physics::reset`]
+    /// and hold until changed, across resets. A payload on the root body is refused
+    /// (panics): its frame is the floating base's.
+    fn set_payloads(&mut self, payloads: &[PointMass]);
 
     /// Advances one physics step.
     fn step(&mut self);

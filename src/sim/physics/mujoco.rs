@@ -18,12 +18,15 @@
 //! loaded at run time must be `MUJOCO_VERSION`; the run names a user's MJCF by its SHA-256
 //! (`Engine::mujoco_on`).
 
+use super::payload::{Inertial, PointMass};
 use super::settings::{PdForm, PhysicsSettings};
 use super::state::{ExternalForce, GroundContact, PdGains, PhysicsState, ResetState, RootState};
 use super::Physics;
 use crate::sim::robot::RobotModel;
 use mujoco_rs::prelude::*;
-use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{
+    Isometry3, Matrix3, Point3, Quaternion, Rotation3, Translation3, UnitQuaternion, Vector3,
+};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -96,6 +99,23 @@ pub struct MujocoPhysics {
     /// in QACC"): it then resets the state itself, which must not pass for physics — the
     /// state reads as not finite, so the episode ends as `physics_diverged`.
     unstable: bool,
+    /// Point masses to fold into their bodies at the next reset (`Physics::set_payloads`),
+    /// and whether the model's inertials must be rewritten for them.
+    payloads: Vec<PointMass>,
+    payloads_changed: bool,
+    /// Every MuJoCo body's inertial as loaded (mass, `ipos`, `iquat`, diagonal inertia,
+    /// `sameframe`), restored before payloads are folded in again.
+    loaded_inertials: Vec<LoadedInertial>,
+}
+
+/// A MuJoCo body's inertial as the file gave it.
+#[derive(Debug, Clone, Copy)]
+struct LoadedInertial {
+    mass: f64,
+    ipos: [f64; 3],
+    iquat: [f64; 4],
+    inertia: [f64; 3],
+    sameframe: MjtSameFrame,
 }
 
 // SAFETY: `MjData<Box<MjModel>>` owns both the model and the data, and is `Send` by the
@@ -147,6 +167,15 @@ impl MujocoPhysics {
             opt.gravity = settings.gravity;
         }
         let n = model.n_joints();
+        let loaded_inertials = (0..mj.body_mass().len())
+            .map(|b| LoadedInertial {
+                mass: mj.body_mass()[b],
+                ipos: mj.body_ipos()[b],
+                iquat: mj.body_iquat()[b],
+                inertia: mj.body_inertia()[b],
+                sameframe: mj.body_sameframe()[b],
+            })
+            .collect();
         let data = MjData::new(Box::new(mj));
         let mut physics = Self {
             targets: model.default_pose(),
@@ -161,11 +190,65 @@ impl MujocoPhysics {
             idx,
             mjcf: label,
             unstable: false,
+            payloads: Vec::new(),
+            payloads_changed: false,
+            loaded_inertials,
         };
         physics.set_gains(&gains);
         let state = super::rapier::standing_default_pose(&physics.model);
         physics.reset(&state);
         Ok(physics)
+    }
+
+    /// Rewrites the inertials of the bodies holding payloads (every other body back to its
+    /// loaded inertial), then MuJoCo's derived constants (`mj_setConst`: subtree masses,
+    /// inverse weights) for them. A body's loaded inertial is read from the model (a user's
+    /// MJCF may differ from the robot model); the combined inertia is diagonalized again,
+    /// as MuJoCo keeps a principal frame (`iquat`) and diagonal (`inertia`).
+    fn fold_in_payloads(&mut self) {
+        // SAFETY: only inertial values change, no size or structure of the model; the data
+        // is reset right after (`reset`), and `mj_setConst` recomputes what derives from them.
+        let mj = unsafe { self.data.model_mut() };
+        for (b, l) in self.loaded_inertials.iter().enumerate() {
+            mj.body_mass_mut()[b] = l.mass;
+            mj.body_ipos_mut()[b] = l.ipos;
+            mj.body_iquat_mut()[b] = l.iquat;
+            mj.body_inertia_mut()[b] = l.inertia;
+            mj.body_sameframe_mut()[b] = l.sameframe;
+        }
+        for (i, &b) in self.idx.bodies.iter().enumerate() {
+            let held: Vec<&PointMass> = self.payloads.iter().filter(|p| p.body == i).collect();
+            if held.is_empty() {
+                continue;
+            }
+            let l = self.loaded_inertials[b];
+            let q = UnitQuaternion::from_quaternion(Quaternion::new(
+                l.iquat[0], l.iquat[1], l.iquat[2], l.iquat[3],
+            ));
+            let r = q.to_rotation_matrix();
+            let own = Inertial {
+                mass_kg: l.mass,
+                com_b: Vector3::from(l.ipos),
+                inertia_kgm2: r.matrix()
+                    * Matrix3::from_diagonal(&Vector3::from(l.inertia))
+                    * r.matrix().transpose(),
+            };
+            let loaded = own.with_point_masses(held);
+            let eigen = loaded.inertia_kgm2.symmetric_eigen();
+            let mut axes = eigen.eigenvectors;
+            if axes.determinant() < 0.0 {
+                axes.column_mut(2).neg_mut();
+            }
+            let principal =
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(axes));
+            mj.body_mass_mut()[b] = loaded.mass_kg;
+            mj.body_ipos_mut()[b] = loaded.com_b.into();
+            mj.body_iquat_mut()[b] = [principal.w, principal.i, principal.j, principal.k];
+            mj.body_inertia_mut()[b] = eigen.eigenvalues.into();
+            mj.body_sameframe_mut()[b] = MjtSameFrame::mjSAMEFRAME_NONE;
+        }
+        self.data.set_const();
+        self.payloads_changed = false;
     }
 
     /// The MJCF simulated (`<generated from …>` for the generated one).
@@ -331,6 +414,9 @@ impl Physics for MujocoPhysics {
         let n = self.model.n_joints();
         assert_eq!(state.q.len(), n, "reset q length");
         assert_eq!(state.qd.len(), n, "reset qd length");
+        if self.payloads_changed {
+            self.fold_in_payloads();
+        }
         // mj_resetData: nothing of the previous episode (warm starts, contacts) survives,
         // and its warning counters start from zero.
         self.data.reset();
@@ -411,6 +497,19 @@ impl Physics for MujocoPhysics {
 
     fn clear_external_forces(&mut self) {
         self.external.clear();
+    }
+
+    fn set_payloads(&mut self, payloads: &[PointMass]) {
+        for p in payloads {
+            assert!(
+                p.body != 0 && p.body < self.model.bodies.len(),
+                "payload body index"
+            );
+        }
+        if self.payloads != payloads {
+            self.payloads = payloads.to_vec();
+            self.payloads_changed = true;
+        }
     }
 
     fn step(&mut self) {

@@ -391,7 +391,7 @@ pub fn compare_push_levels(
 ) -> Vec<SettingComparison> {
     let level_of = |name: &str| -> Option<f64> {
         let s = settings.iter().find(|s| s.name == name)?;
-        (s.coefficient == 0.0).then_some(s.push_n.abs())
+        s.push_only().map(f64::abs)
     };
     let mut levels: Vec<f64> = pairs.iter().filter_map(|p| level_of(&p.setting)).collect();
     levels.sort_by(f64::total_cmp);
@@ -399,7 +399,7 @@ pub fn compare_push_levels(
     let label = |n: f64| {
         let directions = settings
             .iter()
-            .filter(|s| s.coefficient == 0.0 && s.push_n.abs() == n)
+            .filter(|s| s.push_only().map(f64::abs) == Some(n))
             .count();
         format!(
             "{n} N ({directions} setting{})",

@@ -1,9 +1,10 @@
 //! Building a rapier world holding one robot as a multibody.
 
 use super::convert::{pose_to_rapier, vec_to_rapier};
+use crate::sim::physics::payload::{Inertial, PointMass};
 use crate::sim::physics::settings::{ContactMode, PdForm, PhysicsSettings};
 use crate::sim::physics::state::{PdGains, ResetState};
-use crate::sim::robot::{forward_kinematics, Body, Geometry, RobotModel};
+use crate::sim::robot::{forward_kinematics, Geometry, RobotModel};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rapier3d::prelude::*;
 
@@ -41,13 +42,15 @@ pub(super) fn build_world(
     settings: &PhysicsSettings,
     gains: &PdGains,
     state: &ResetState,
+    payloads: &[PointMass],
 ) -> World {
     let mut world = empty_world(settings);
     let ground = insert_ground(&mut world, settings);
     let root_com_b = model.bodies[0].com_b;
     let root_shift =
         Isometry3::from_parts(Translation3::from(root_com_b), UnitQuaternion::identity());
-    let (bodies, robot_colliders) = insert_bodies(&mut world, model, settings, state, root_shift);
+    let (bodies, robot_colliders) =
+        insert_bodies(&mut world, model, settings, state, root_shift, payloads);
     let joint_handles = insert_joints(&mut world, model, settings, &bodies, root_shift);
     let (multibody, links) = settle_multibody(&mut world, bodies[0], &joint_handles);
     let mb = world
@@ -105,6 +108,7 @@ fn insert_bodies(
     settings: &PhysicsSettings,
     state: &ResetState,
     root_shift: Isometry3<f64>,
+    payloads: &[PointMass],
 ) -> (Vec<RigidBodyHandle>, Vec<RobotCollider>) {
     let mut world_from_body = Vec::new();
     forward_kinematics(
@@ -116,10 +120,12 @@ fn insert_bodies(
     let mut bodies = Vec::with_capacity(model.bodies.len());
     let mut robot_colliders = Vec::new();
     for (i, body) in model.bodies.iter().enumerate() {
+        let inertial =
+            Inertial::of(body).with_point_masses(payloads.iter().filter(|p| p.body == i && i != 0));
         let (pose, local_com) = if i == 0 {
             (world_from_body[0] * root_shift, Vector3::zeros())
         } else {
-            (world_from_body[i], body.com_b)
+            (world_from_body[i], inertial.com_b)
         };
         let builder = if i == 0 && settings.fixed_base {
             RigidBodyBuilder::fixed()
@@ -130,7 +136,7 @@ fn insert_bodies(
             builder
                 .pose(pose_to_rapier(&pose))
                 .can_sleep(false)
-                .additional_mass_properties(mass_properties(body, &local_com)),
+                .additional_mass_properties(mass_properties(&inertial, &local_com)),
         );
         let body_shift = if i == 0 {
             root_shift.inverse()
@@ -160,9 +166,10 @@ fn insert_bodies(
     (bodies, robot_colliders)
 }
 
-/// The body's mass and inertia, with its centre of mass at `local_com` in the rigid body's
-/// frame (colliders get zero density: the model's inertials are the whole mass).
-fn mass_properties(body: &Body, local_com: &Vector3<f64>) -> MassProperties {
+/// The body's mass and inertia (its payloads included), with its centre of mass at
+/// `local_com` in the rigid body's frame (colliders get zero density: the model's inertials
+/// are the whole mass).
+fn mass_properties(body: &Inertial, local_com: &Vector3<f64>) -> MassProperties {
     let inertia = body.inertia_kgm2.map(|x| x as f32);
     MassProperties::with_inertia_matrix(
         vec_to_rapier(local_com),

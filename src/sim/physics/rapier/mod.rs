@@ -4,6 +4,7 @@
 mod build;
 mod convert;
 
+use super::payload::PointMass;
 use super::settings::{PdForm, PhysicsSettings};
 use super::state::{ExternalForce, GroundContact, PdGains, PhysicsState, ResetState, RootState};
 use super::Physics;
@@ -26,6 +27,8 @@ pub struct RapierPhysics {
     /// Added to the PD torques before their clamp, N·m (`Physics::set_feedforward`).
     feedforward_nm: Vec<f64>,
     external: Vec<ExternalForce>,
+    /// Point masses folded into their bodies at each reset (`Physics::set_payloads`).
+    payloads: Vec<PointMass>,
     applied_torque_nm: Vec<f64>,
     world: World,
     time_s: f64,
@@ -40,12 +43,13 @@ impl RapierPhysics {
         assert_eq!(gains.kd.len(), n, "kd length");
         assert_eq!(gains.effort_limit_nm.len(), n, "effort length");
         let state = standing_default_pose(&model);
-        let world = build_world(&model, &settings, &gains, &state);
+        let world = build_world(&model, &settings, &gains, &state, &[]);
         Self {
             targets: state.q.clone(),
             feedforward_nm: vec![0.0; n],
             applied_torque_nm: vec![0.0; n],
             external: Vec::new(),
+            payloads: Vec::new(),
             model,
             settings,
             gains,
@@ -115,7 +119,13 @@ impl Physics for RapierPhysics {
         assert_eq!(state.qd.len(), n, "reset qd length");
         // A fresh world: no contact cache or solver warm start leaks between episodes, so an
         // episode's result never depends on what ran before it in the same slot.
-        self.world = build_world(&self.model, &self.settings, &self.gains, state);
+        self.world = build_world(
+            &self.model,
+            &self.settings,
+            &self.gains,
+            state,
+            &self.payloads,
+        );
         self.external.clear();
         self.applied_torque_nm.fill(0.0);
         self.time_s = 0.0;
@@ -159,6 +169,16 @@ impl Physics for RapierPhysics {
 
     fn clear_external_forces(&mut self) {
         self.external.clear();
+    }
+
+    fn set_payloads(&mut self, payloads: &[PointMass]) {
+        for p in payloads {
+            assert!(
+                p.body != 0 && p.body < self.model.bodies.len(),
+                "payload body index"
+            );
+        }
+        self.payloads = payloads.to_vec();
     }
 
     fn step(&mut self) {
