@@ -65,6 +65,7 @@ fn standing(robot: &RobotModel, hand_force_w: [f64; 3]) -> Sequence {
         hand_from_sensor_wxyz: [sensor_in_hand(0), sensor_in_hand(1)],
         force_point_hand: [[0.0; 3]; 2],
         forces_recorded: true,
+        force_frame: Default::default(),
         provenance: serde_json::json!({}),
     }
 }

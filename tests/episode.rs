@@ -100,6 +100,37 @@ fn holding_the_pose_tracks_a_standing_reference_and_survives() {
 }
 
 #[test]
+fn a_reference_sliding_away_counts_in_the_global_keypoint_error_not_the_reanchored_one() {
+    let robot = Arc::new(g1());
+    let profile = default_profile(&robot);
+    let mut seq = standing_sequence(&robot);
+    // From 0.5 s on, the reference root slides along x at 0.2 m/s, its pose unchanged
+    // until the elbow bends; the robot (at rest: the reference starts still), holding its
+    // pose, stays where it started.
+    for (k, p) in seq.root_pos.iter_mut().enumerate() {
+        p[0] += 0.2 * (k as f64 / seq.fps - 0.5).max(0.0);
+    }
+    let (series, end) = run(&robot, &profile, &seq, &mut HoldPolicy);
+    assert_eq!(end, None);
+    assert_eq!(series.kp_err_global_m.len(), series.kp_err_m.len());
+    // Past 0.8 s the reference is centimetres away and the elbow not yet bent: the
+    // re-anchored error stays that of a pose held, the global one follows the drift.
+    for k in 40..50 {
+        let (global, anchored, drift) = (
+            series.kp_err_global_m[k],
+            series.kp_err_m[k],
+            series.root_drift_m[k],
+        );
+        assert!(drift > 0.03, "step {k}: the reference only {drift} m away");
+        assert!(anchored < 0.01, "step {k}: re-anchored {anchored} m");
+        assert!(
+            (global - drift).abs() < 0.015,
+            "step {k}: global {global} m with the reference {drift} m away"
+        );
+    }
+}
+
+#[test]
 fn a_reference_far_above_the_robot_terminates_on_torso_height() {
     let robot = Arc::new(g1());
     let profile = default_profile(&robot);

@@ -5,7 +5,7 @@
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::f64::consts::FRAC_PI_2;
 use std::sync::Arc;
-use thorarena::sim::motion::Reference;
+use thorarena::sim::motion::{ForceFrame, Reference};
 use thorarena::sim::physics::{
     standing_default_pose, standing_gains, ContactMode, Physics, PhysicsSettings, PhysicsState,
     RapierPhysics,
@@ -50,6 +50,37 @@ fn replayed_forces_use_the_simulated_hand_pose_and_the_sequence_calibration() {
     // Right: (0, 1, 2) turned 180° about x → (0, −1, −2) in the hand frame.
     let expected_r = hand(1).rotation * Vector3::new(0.0, -1.0, -2.0);
     assert!((r - expected_r).norm() < 1e-9, "{r:?} vs {expected_r:?}");
+}
+
+#[test]
+fn a_grafted_world_frame_history_keeps_its_direction_when_the_hand_rotates() {
+    let robot = g1();
+    let mut seq = sample_sequence(&robot, "s");
+    let stand = standing_default_pose(&robot);
+    let mut poses = Vec::new();
+    forward_kinematics(&robot, &stand.root.world_from_root, &stand.q, &mut poses);
+    // The same robot with both wrists rolled by 1 rad: the hands point elsewhere.
+    let mut rolled_q = stand.q.clone();
+    for j in ["left_wrist_roll_joint", "right_wrist_roll_joint"] {
+        rolled_q[robot.joint_index(j).unwrap()] += 1.0;
+    }
+    let mut rolled = Vec::new();
+    forward_kinematics(&robot, &stand.root.world_from_root, &rolled_q, &mut rolled);
+    let forces = |seq: &thorarena::sim::motion::Sequence, poses: &[Isometry3<f64>]| {
+        let replay = ForceReplay::new(&robot, seq, 0.5);
+        replay.forces_at(&Reference::new(seq), 0.5, poses)
+    };
+    // In the sensor frame the force turns with the hand …
+    let (a, b) = (forces(&seq, &poses), forces(&seq, &rolled));
+    assert!((a[0] - b[0]).norm() > 1.0, "{a:?} vs {b:?}");
+    // … in the world frame it does not: the stored vector × the coefficient, as it is.
+    seq.force_frame = ForceFrame::World;
+    let (a, b) = (forces(&seq, &poses), forces(&seq, &rolled));
+    assert_eq!(a, b);
+    assert!(
+        (a[0] - Vector3::new(15.0, 0.0, -5.0) * 0.5).norm() < 1e-9,
+        "{a:?}"
+    );
 }
 
 #[test]

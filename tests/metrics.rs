@@ -16,6 +16,7 @@ fn series(errors: &[f64], forces: &[f64], steps_ref: usize) -> EpisodeSeries {
         total_force_n: forces.to_vec(),
         power_w: forces.iter().map(|f| 100.0 + f).collect(),
         root_drift_m: vec![0.1; errors.len()],
+        kp_err_global_m: errors.iter().map(|e| e * 2.0).collect(),
         steps_ref,
     }
 }
@@ -195,4 +196,34 @@ fn a_task_of_one_episode_has_no_fats_spread() {
     assert!((tasks[1].diagnostics.fats_std - 25.0).abs() < 1e-12);
     // The average over tasks is over those where it is defined.
     assert!((overall.fats_std - 25.0).abs() < 1e-12);
+}
+
+#[test]
+fn the_global_keypoint_error_is_pooled_like_the_others_and_undefined_when_not_recorded() {
+    let th = |_: &str| TH;
+    // Global errors 2× the re-anchored ones (`series`): RMS over the pooled steps.
+    let eps = vec![
+        (
+            "a".to_string(),
+            "1".to_string(),
+            series(&[0.01; 4], &[0.0; 4], 4),
+        ),
+        (
+            "a".to_string(),
+            "2".to_string(),
+            series(&[0.02; 2], &[0.0; 2], 4),
+        ),
+    ];
+    let (_, tasks, overall) = aggregate(&eps, &th);
+    let rms = ((4.0 * 0.02f64.powi(2) + 2.0 * 0.04f64.powi(2)) / 6.0).sqrt() * 1e3;
+    assert!((tasks[0].diagnostics.global_kp_mm - rms).abs() < 1e-9);
+    assert!((tasks[0].diagnostics.global_kp_mm - 2.0 * tasks[0].diagnostics.kp_mm).abs() < 1e-9);
+    assert_eq!(overall.global_kp_mm, tasks[0].diagnostics.global_kp_mm);
+    // A record written before the global error was recorded has none: undefined, not 0.
+    let mut old = eps.clone();
+    for e in &mut old {
+        e.2.kp_err_global_m.clear();
+    }
+    let (_, tasks, _) = aggregate(&old, &th);
+    assert!(tasks[0].diagnostics.global_kp_mm.is_nan());
 }

@@ -42,6 +42,7 @@ fn record(task: &str, id: &str, setting: &str, steps: usize, err_m: f64) -> Epis
             total_force_n: (0..steps).map(force).collect(),
             power_w: (0..steps).map(|k| 100.0 + force(k)).collect(),
             root_drift_m: vec![0.01; steps],
+            kp_err_global_m: (0..steps).map(err).collect(),
             steps_ref: 30,
         },
     }

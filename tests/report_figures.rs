@@ -46,6 +46,7 @@ fn write_run(dir: &Path, policy: &str, err_m: f64, fall: usize) {
                     total_force_n: (0..steps).map(force).collect(),
                     power_w: vec![100.0; steps],
                     root_drift_m: vec![0.01; steps],
+                    kp_err_global_m: Vec::new(),
                     steps_ref: 30,
                 },
             });

@@ -149,6 +149,7 @@ fn a_bad_record_is_an_error_naming_file_and_line_for_every_reader() {
                 "total_force_n",
                 "power_w",
                 "root_drift_m",
+                "kp_err_global_m",
             ] {
                 r[3]["series"][c] = serde_json::json!([]);
             }

@@ -48,7 +48,12 @@ pub struct Args {
     /// Push magnitudes per hand of the pairs, N, comma separated.
     #[arg(long, value_delimiter = ',', default_value = "10,20,30,50")]
     pub pair_pushes: Vec<f64>,
-    /// Push directions of the pairs, degrees from the clip's initial heading.
+    /// Force events of the pairs on the right wrist, N, comma separated: ramped over 0.5 s
+    /// from the second second, held 1 s, released over 0.5 s — inside SoftMimic's training
+    /// (one wrist, ramps of 0.1–2 s, holds of 0.5–1 s) up to stiffness × 0.7 m.
+    #[arg(long, value_delimiter = ',', default_value = "10,20,30")]
+    pub pair_events: Vec<f64>,
+    /// Push (and event) directions of the pairs, degrees from the clip's initial heading.
     #[arg(
         long,
         value_delimiter = ',',
@@ -102,6 +107,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
             seconds: args.pair_seconds,
             push_n: args.pair_pushes.clone(),
             push_headings_deg: args.pair_headings.clone(),
+            event_n: args.pair_events.clone(),
             force_task: args.pair_force_task.clone(),
             ..PairOptions::default() // engines, output and checking: the job's
         },

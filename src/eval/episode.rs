@@ -397,6 +397,9 @@ impl<'a> Episode<'a> {
             .kp_err_lower_m
             .push(keypoint_error_m(&anchored[u..], &robot_w[u..]));
         self.series
+            .kp_err_global_m
+            .push(keypoint_error_m(&reference_w, &robot_w));
+        self.series
             .total_force_n
             .push(frame.force_sensor[0].norm() + frame.force_sensor[1].norm());
         self.series.power_w.push(power_w);

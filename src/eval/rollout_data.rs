@@ -106,6 +106,7 @@ pub fn rollout_sequence(
             .any(|s| s.hand_force_w.iter().flatten().any(|f| *f != 0.0)),
         force_sensor,
         hand_from_sensor_wxyz: [[1.0, 0.0, 0.0, 0.0]; 2],
+        force_frame: Default::default(),
         force_point_hand: [[0.0; 3]; 2],
         provenance: serde_json::json!({
             "format": "rollout",

@@ -1,10 +1,12 @@
 //! Force replay: a recorded sensor-frame hand force becomes a world-frame force on the
 //! simulated hand — sensor → hand (the sequence's calibration) → world (the hand's pose in
 //! the simulation at that physics step) × a coefficient (1 = force setting, 0 = no force).
-//! A constant push or a [`crate::sim::disturbance`] adds its own world-frame forces.
+//! A history stored in the world frame ([`ForceFrame::World`], a grafted one) is replayed
+//! as it is. A constant push or a [`crate::sim::disturbance`] adds its own world-frame
+//! forces.
 
 use crate::sim::disturbance::ActiveDisturbance;
-use crate::sim::motion::{Reference, Sequence, LEFT, RIGHT};
+use crate::sim::motion::{ForceFrame, Reference, Sequence, LEFT, RIGHT};
 use crate::sim::physics::{ExternalForce, Physics};
 use crate::sim::robot::RobotModel;
 use nalgebra::{Isometry3, Point3, Quaternion, UnitQuaternion, Vector3};
@@ -36,6 +38,8 @@ pub struct ForceReplay {
     body_from_hand: [Isometry3<f64>; 2],
     /// Events or impulses added to the hands (and the torso).
     disturbance: Option<ActiveDisturbance>,
+    /// The frame the sequence's forces are in: a world-frame history skips the hand pose.
+    frame: ForceFrame,
 }
 
 impl ForceReplay {
@@ -63,6 +67,7 @@ impl ForceReplay {
             application: [l.1, r.1],
             body_from_hand: [l.2, r.2],
             disturbance: None,
+            frame: seq.force_frame,
         }
     }
 
@@ -94,14 +99,20 @@ impl ForceReplay {
             .as_ref()
             .map_or([Vector3::zeros(); 2], |d| d.hand_forces_w(t_s));
         [LEFT, RIGHT].map(|s| {
-            let world_from_hand = world_from_body[self.application[s].0] * self.body_from_hand[s];
-            world_force(
-                &world_from_hand,
-                &self.hand_from_sensor[s],
-                &f[s],
-                self.coefficient,
-            ) + push
-                + disturbance[s]
+            let recorded = match self.frame {
+                ForceFrame::Sensor => {
+                    let world_from_hand =
+                        world_from_body[self.application[s].0] * self.body_from_hand[s];
+                    world_force(
+                        &world_from_hand,
+                        &self.hand_from_sensor[s],
+                        &f[s],
+                        self.coefficient,
+                    )
+                }
+                ForceFrame::World => f[s] * self.coefficient,
+            };
+            recorded + push + disturbance[s]
         })
     }
 

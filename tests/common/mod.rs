@@ -50,6 +50,7 @@ pub fn sample_sequence(robot: &RobotModel, id: &str) -> Sequence {
         hand_from_sensor_wxyz: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]],
         force_point_hand: [[0.0; 3], [0.01, 0.0, 0.0]],
         forces_recorded: true,
+        force_frame: Default::default(),
         provenance: json!({"format": "test"}),
     }
 }

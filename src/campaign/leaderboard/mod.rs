@@ -604,9 +604,9 @@ pub fn leaderboard_table(entries: &[&Entry], spans: &TaskForceSpans) -> String {
     let mut rule = String::from("|---|---|");
     for s in &settings {
         out.push_str(&format!(
-            " FATS {s} (95 % CI) | survival {s} | keypoint error {s} (mm) |"
+            " FATS {s} (95 % CI) | survival {s} | keypoint error {s} (mm) | global keypoint error {s} (mm) |"
         ));
-        rule.push_str("---:|---:|---:|");
+        rule.push_str("---:|---:|---:|---:|");
     }
     out.push_str(" wall time |\n");
     rule.push_str("---:|\n");
@@ -652,12 +652,17 @@ pub fn leaderboard_table(entries: &[&Entry], spans: &TaskForceSpans) -> String {
                         }
                         " †"
                     };
+                    let global = if r.average.global_kp_mm.is_finite() {
+                        format!("{:.1}", r.average.global_kp_mm)
+                    } else {
+                        "–".into()
+                    };
                     out.push_str(&format!(
-                        " {:.1}{ci}{mark} | {:.3} | {:.1} |",
+                        " {:.1}{ci}{mark} | {:.3} | {:.1} | {global} |",
                         r.average.fats, r.average.survival, r.average.kp_mm
                     ));
                 }
-                None => out.push_str(" – | – | – |"),
+                None => out.push_str(" – | – | – | – |"),
             }
         }
         out.push_str(&format!(" {} |\n", minutes(e.wall_s)));

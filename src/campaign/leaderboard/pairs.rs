@@ -87,8 +87,11 @@ pub struct PairOptions {
     pub seconds: f64,
     /// Push magnitudes per hand, N.
     pub push_n: Vec<f64>,
-    /// Push directions, degrees from the clip's initial heading.
+    /// Push directions, degrees from the clip's initial heading (also the events').
     pub push_headings_deg: Vec<f64>,
+    /// Force event magnitudes on the right wrist, N: SoftMimic's training shape
+    /// ([`PAIR_EVENT`]), from every direction.
+    pub event_n: Vec<f64>,
     /// The synthetic task whose first sequence's forces are grafted onto the clip.
     pub force_task: String,
     /// Engines.
@@ -99,13 +102,29 @@ pub struct PairOptions {
     pub unchecked: bool,
 }
 
+/// The shape of a pair's force events, after `event:<N>@<deg>`: one wrist (the right),
+/// ramped over 0.5 s from the second second, held 1 s, released over 0.5 s — inside the
+/// events SoftMimic was trained with (one wrist, ramps of 0.1–2 s, holds of 0.5–1 s).
+pub const PAIR_EVENT: &str = "hand=right:start=2:ramp=0.5:hold=1:release=0.5";
+
+/// The event setting of magnitude `n` from direction `heading_deg`.
+fn event_setting(n: f64, heading_deg: f64) -> String {
+    format!("event:{n}@{heading_deg}:{PAIR_EVENT}")
+}
+
 impl PairOptions {
-    /// The settings of the push runs: no force, then every magnitude from every direction.
+    /// The settings of the push runs: no force, then every push magnitude from every
+    /// direction, then every event magnitude from every direction.
     pub fn push_settings(&self) -> Vec<String> {
         let mut s = vec!["no-force".to_string()];
         for n in &self.push_n {
             for h in &self.push_headings_deg {
                 s.push(format!("push:{n}@{h}"));
+            }
+        }
+        for n in &self.event_n {
+            for h in &self.push_headings_deg {
+                s.push(event_setting(*n, *h));
             }
         }
         s
@@ -157,6 +176,8 @@ pub struct PairResult {
     pub push_n: Vec<f64>,
     /// Push directions, degrees.
     pub push_headings_deg: Vec<f64>,
+    /// Event magnitudes on the right wrist, N.
+    pub event_n: Vec<f64>,
     /// Every member on every engine, engine by engine.
     pub members: Vec<PairMember>,
 }
@@ -230,8 +251,8 @@ pub fn check_pairs(
     for setting in options.push_settings() {
         if crate::eval::Setting::parse(&setting).is_none() {
             return Err(all(format!(
-                "`{setting}` (from `option.pair_pushes` and `option.pair_headings`) is no setting `eval` takes: a push is finite, at most {} N, from -360 to 360 degrees",
-                crate::eval::Setting::MAX_PUSH_N
+                "`{setting}` (from `option.pair_pushes`, `option.pair_events` and `option.pair_headings`) is no setting `eval` takes: {}",
+                crate::eval::Setting::refusal(&setting)
             )));
         }
     }
@@ -314,7 +335,7 @@ pub fn run_pairs(
         }
         let full = ds.load(0).map_err(|e| data_error(&name, e.to_string()))?;
         let clip = first_seconds(&full, options.seconds);
-        let grafted = with_forces_of(&clip, &source);
+        let grafted = with_forces_of(&robot, &clip, &source);
         let dir = options.out.join("pairs").join(&name);
         let (clip_dir, graft_dir) = (dir.join("clip"), dir.join("force-log"));
         one_sequence_dataset(&name, &clip_dir, &clip, &robot)?;
@@ -368,6 +389,7 @@ pub fn run_pairs(
             push_settings: settings.clone(),
             push_n: options.push_n.clone(),
             push_headings_deg: options.push_headings_deg.clone(),
+            event_n: options.event_n.clone(),
             members,
         });
     }
@@ -444,6 +466,19 @@ impl PairResult {
         self.push_n.iter().map(|n| self.settings_of(*n)).collect()
     }
 
+    /// The event settings of magnitude `n`, one per direction.
+    fn events_of(&self, n: f64) -> Vec<String> {
+        self.push_headings_deg
+            .iter()
+            .map(|h| event_setting(n, *h))
+            .collect()
+    }
+
+    /// Every event setting, grouped by magnitude.
+    fn all_events(&self) -> Vec<Vec<String>> {
+        self.event_n.iter().map(|n| self.events_of(*n)).collect()
+    }
+
     /// The baseline and the compliant member on `engine`.
     fn pair_on(&self, engine: &str) -> Option<(&PairMember, &PairMember)> {
         let find = |role| {
@@ -516,7 +551,7 @@ pub fn pairs_table(results: &[PairResult]) -> String {
         };
         for engine in engines {
             out.push_str(&format!(
-                "**{}** on {} ({:.1} s of it), {engine}; pushes per hand from {} degrees off the clip's initial heading; force log: the hand forces of synthetic {} replayed on the clip (looped), not a recording of this motion. Cells: FATS · survival · keypoint error (mm); a push column averages its directions.\n\n",
+                "**{}** on {} ({:.1} s of it), {engine}; pushes per hand and events on the right wrist (`{PAIR_EVENT}`) from {} degrees off the clip's initial heading; force log: the hand forces of synthetic {} replayed on the clip (looped, in the world frame), not a recording of this motion. Cells: FATS · survival · keypoint error (mm); a push or event column averages its directions.\n\n",
                 r.pair.name(),
                 r.clip,
                 r.seconds,
@@ -527,6 +562,10 @@ pub fn pairs_table(results: &[PairResult]) -> String {
             let mut rule = String::from("|---|---:|---:|");
             for n in &r.push_n {
                 out.push_str(&format!(" {n} N |"));
+                rule.push_str("---:|");
+            }
+            for n in &r.event_n {
+                out.push_str(&format!(" event {n} N |"));
                 rule.push_str("---:|");
             }
             out.push_str(" force log | wall time |\n");
@@ -562,6 +601,19 @@ pub fn pairs_table(results: &[PairResult]) -> String {
                         mark(inside)
                     ));
                 }
+                for n in &r.event_n {
+                    // Every direction of an event has the same envelope verdict.
+                    let inside =
+                        crate::sim::disturbance::Disturbance::parse(&event_setting(*n, 0.0))
+                            .and_then(Result::ok)
+                            .and_then(|d| trained.outside_disturbance(&d, m.stiffness()))
+                            .map(|why| why.is_empty());
+                    line.push_str(&format!(
+                        " {}{} |",
+                        cell_text(mean_over(&m.pushes, &r.events_of(*n))),
+                        mark(inside)
+                    ));
+                }
                 let log_inside = match trained {
                     // A continuous history on both hands is no single-wrist event.
                     TrainedForces::WristEvents { .. } => Some(false),
@@ -588,13 +640,27 @@ pub fn pairs_table(results: &[PairResult]) -> String {
                 out.push_str(&format!(" {n} N (over directions) |"));
                 rule.push_str("---:|");
             }
-            out.push_str(" all pushes (over directions, by magnitude) | force log |\n");
-            rule.push_str("---:|---:|\n");
+            out.push_str(" all pushes (over directions, by magnitude) |");
+            rule.push_str("---:|");
+            for n in &r.event_n {
+                out.push_str(&format!(" event {n} N (over directions) |"));
+                rule.push_str("---:|");
+            }
+            if !r.event_n.is_empty() {
+                out.push_str(" all events (over directions, by magnitude) |");
+                rule.push_str("---:|");
+            }
+            out.push_str(" force log |\n");
+            rule.push_str("---:|\n");
             out.push_str(&rule);
             let one = |s: &str| vec![vec![s.to_string()]];
             let mut columns: Vec<Vec<Vec<String>>> = vec![one("no-force")];
             columns.extend(r.push_n.iter().map(|n| vec![r.settings_of(*n)]));
             columns.push(r.all_pushes());
+            columns.extend(r.event_n.iter().map(|n| vec![r.events_of(*n)]));
+            if !r.event_n.is_empty() {
+                columns.push(r.all_events());
+            }
             columns.push(one("force"));
             for (k, (what, digits)) in [
                 ("Δ FATS", 1),
@@ -728,6 +794,7 @@ mod tests {
             seconds: 10.0,
             push_n: vec![10.0, 50.0],
             push_headings_deg: vec![0.0, 90.0],
+            event_n: vec![20.0],
             force_task: "push_chair".into(),
             engines: vec![],
             out: PathBuf::new(),
@@ -740,8 +807,18 @@ mod tests {
                 "push:10@0",
                 "push:10@90",
                 "push:50@0",
-                "push:50@90"
+                "push:50@90",
+                "event:20@0:hand=right:start=2:ramp=0.5:hold=1:release=0.5",
+                "event:20@90:hand=right:start=2:ramp=0.5:hold=1:release=0.5",
             ]
+        );
+        // Inside SoftMimic's events at its default stiffness (60 N/m: up to 42 N).
+        let d = crate::sim::disturbance::Disturbance::parse(&o.push_settings()[5])
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            crate::policy::registry::SOFTMIMIC_FORCES.outside_disturbance(&d, Some(60.0)),
+            Some(vec![])
         );
         for s in o.push_settings() {
             assert!(crate::eval::Setting::parse(&s).is_some(), "{s}");

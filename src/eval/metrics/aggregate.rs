@@ -44,6 +44,14 @@ pub struct Diagnostics {
     /// Mean root drift, m.
     #[serde(deserialize_with = "nan_if_null")]
     pub root_drift_m: f64,
+    /// Keypoint RMSE without re-anchoring (drift included), mm; NaN for a run recorded
+    /// before it was (its summary has none).
+    #[serde(default = "nan", deserialize_with = "nan_if_null")]
+    pub global_kp_mm: f64,
+}
+
+fn nan() -> f64 {
+    f64::NAN
 }
 
 /// Reads a number written by serde_json, which writes NaN (an undefined diagnostic) as
@@ -109,6 +117,7 @@ pub fn aggregate(
         let mut all = Pool::default();
         let mut regime = [Pool::default(), Pool::default(), Pool::default()];
         let (mut upper, mut lower) = (Pool::default(), Pool::default());
+        let mut global = Pool::default();
         let mut power = [(0.0f64, 0usize); 3];
         let mut task_scores = Vec::new();
         let mut drift = 0.0;
@@ -122,6 +131,7 @@ pub fn aggregate(
             }
             s.kp_err_upper_m.iter().for_each(|e| upper.add(*e));
             s.kp_err_lower_m.iter().for_each(|e| lower.add(*e));
+            s.kp_err_global_m.iter().for_each(|e| global.add(*e));
             let score = score_episode(s, &th);
             drift += score.mean_root_drift_m;
             task_scores.push(score.clone());
@@ -166,6 +176,7 @@ pub fn aggregate(
                         .sqrt()
                 },
                 root_drift_m: drift / n,
+                global_kp_mm: 1e3 * global.rmse(),
             },
         });
     }
@@ -199,5 +210,6 @@ fn average_over_tasks(tasks: &[TaskSummary]) -> Diagnostics {
         lower_kp_mm: avg(|d| d.lower_kp_mm),
         fats_std: avg(|d| d.fats_std),
         root_drift_m: avg(|d| d.root_drift_m),
+        global_kp_mm: avg(|d| d.global_kp_mm),
     }
 }

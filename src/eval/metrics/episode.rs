@@ -22,6 +22,11 @@ pub struct EpisodeSeries {
     pub power_w: Vec<f64>,
     /// Horizontal distance between robot and reference root, m.
     pub root_drift_m: Vec<f64>,
+    /// Keypoint error without re-anchoring — the reference keypoints where the reference
+    /// puts them in the world, drift included — m (trackers are judged both ways in the
+    /// field). Empty in records written before it was recorded.
+    #[serde(default)]
+    pub kp_err_global_m: Vec<f64>,
     /// Control steps of the reference (`T_ref`).
     pub steps_ref: usize,
 }

@@ -56,7 +56,10 @@ impl RunHeader {
             ("root_drift_m", &series.root_drift_m),
         ];
         let steps = series.kp_err_m.len();
-        for (column, values) in columns {
+        // Recorded since the global error was: absent (empty) in older records.
+        let global: Option<(&str, &[f64])> = (!series.kp_err_global_m.is_empty())
+            .then_some(("kp_err_global_m", series.kp_err_global_m.as_slice()));
+        for (column, values) in columns.into_iter().chain(global) {
             if values.len() != steps {
                 return bad(format!(
                     "{column} has {} values, kp_err_m {steps}: one value per recorded step",

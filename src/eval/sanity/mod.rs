@@ -432,6 +432,7 @@ pub fn standing_reference(robot: &RobotModel, profile: &Profile, seconds: f64) -
         hand_from_sensor_wxyz: [[1.0, 0.0, 0.0, 0.0]; 2],
         force_point_hand: [[0.0; 3]; 2],
         forces_recorded: false,
+        force_frame: Default::default(),
         provenance: serde_json::json!({"format": "thorarena-sanity-stand"}),
     }
 }

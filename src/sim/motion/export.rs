@@ -27,7 +27,8 @@ pub fn export_npz(
         write_sequence_npz(&seq, &path)?;
         index.push(json!({
             "file": rel, "task": seq.task, "sequence_id": seq.sequence_id, "fps": seq.fps,
-            "frames": seq.n_frames(), "forces_recorded": seq.forces_recorded, "provenance": seq.provenance,
+            "frames": seq.n_frames(), "forces_recorded": seq.forces_recorded,
+            "force_frame": seq.force_frame, "provenance": seq.provenance,
         }));
         written.push(path);
         progress(i + 1, ds.len());
@@ -38,14 +39,14 @@ pub fn export_npz(
         "robot": ds.manifest.robot,
         "joint_names": ds.manifest.joint_names,
         "quaternion": "wxyz",
-        "force_frame": "sensor",
+        "force_frame": "per sequence: sensor (each hand's sensor frame), or world (a grafted history, world axes of the sequence's own reference)",
         "arrays": {
             "fps": "[] float64, Hz",
             "root_pos": "[T,3] float32, m, world, z up",
             "root_quat_wxyz": "[T,4] float32",
             "joint_pos": "[T,J] float32, rad, order = joint_names",
             "joint_vel": "[T,J] float32, rad/s (only if recorded)",
-            "force_left_sensor": "[T,3] float32, N, force on the hand, sensor frame",
+            "force_left_sensor": "[T,3] float32, N, force on the hand, in the sequence's force_frame",
             "force_right_sensor": "[T,3] float32, N",
             "hand_from_sensor_wxyz": "[2,4] float64, left then right",
             "force_point_hand": "[2,3] float64, m, hand frame",

@@ -9,7 +9,7 @@
 //! (interpolation, differences, kinematics) runs in f64.
 
 use super::error::{bad, DataError};
-use super::sequence::{Sequence, LEFT, RIGHT};
+use super::sequence::{ForceFrame, Sequence, LEFT, RIGHT};
 use safetensors::{Dtype, SafeTensors, View};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -32,6 +32,9 @@ struct SequenceMeta {
     hand_from_sensor_wxyz: [[f64; 4]; 2],
     force_point_hand: [[f64; 3]; 2],
     forces_recorded: bool,
+    /// Left out for sensor-frame forces, so every file written before it is unchanged.
+    #[serde(default, skip_serializing_if = "ForceFrame::is_sensor")]
+    force_frame: ForceFrame,
     provenance: serde_json::Value,
 }
 
@@ -102,6 +105,7 @@ pub fn encode_sequence(seq: &Sequence, file: &Path) -> Result<Vec<u8>, DataError
         hand_from_sensor_wxyz: seq.hand_from_sensor_wxyz,
         force_point_hand: seq.force_point_hand,
         forces_recorded: seq.forces_recorded,
+        force_frame: seq.force_frame,
         provenance: seq.provenance.clone(),
     };
     let meta_json =
@@ -210,6 +214,7 @@ pub fn decode_sequence(bytes: &[u8], file: &Path) -> Result<Sequence, DataError>
         hand_from_sensor_wxyz: meta.hand_from_sensor_wxyz,
         force_point_hand: meta.force_point_hand,
         forces_recorded: meta.forces_recorded,
+        force_frame: meta.force_frame,
         provenance: meta.provenance,
     };
     seq.validate(file)?;

@@ -53,4 +53,4 @@ pub use reference::{
     ReferenceFrame, GROUND_SHIFT_KEY,
 };
 pub use selection::{SelectionError, SequenceSelection, Subset};
-pub use sequence::{Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};
+pub use sequence::{ForceFrame, Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};

@@ -11,10 +11,31 @@ pub const LEFT: usize = 0;
 /// See [`LEFT`].
 pub const RIGHT: usize = 1;
 
+/// The frame a sequence's hand forces are stored in.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ForceFrame {
+    /// Each hand's sensor frame: replayed through the simulated hand's pose at each step,
+    /// so the force turns with the hand, as a held object's reaction does.
+    #[default]
+    Sensor,
+    /// The world frame of the sequence's own reference: replayed as it is, whatever the
+    /// simulated hand does.
+    World,
+}
+
+impl ForceFrame {
+    /// True for [`ForceFrame::Sensor`] (the default, left out of files).
+    pub fn is_sensor(&self) -> bool {
+        *self == Self::Sensor
+    }
+}
+
 /// A reference motion with the two hand forces recorded with it, at its own frame rate.
 ///
 /// Frames are uniformly spaced at `fps`; frame `k` is at `k / fps` seconds. Hand forces are
-/// what the environment exerts on the robot's hand, in each hand's sensor frame.
+/// what the environment exerts on the robot's hand, in each hand's sensor frame
+/// (or, for a grafted history, the world's: [`ForceFrame`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sequence {
     /// Task name (e.g. `push_chair`).
@@ -33,8 +54,12 @@ pub struct Sequence {
     pub joint_pos: Vec<Vec<f64>>,
     /// Joint velocities, rad/s, if the source had them.
     pub joint_vel: Option<Vec<Vec<f64>>>,
-    /// Left and right hand force in the sensor frame, N; one per frame each.
+    /// Left and right hand force, N, in each hand's sensor frame (or in the world, when
+    /// `force_frame` says so); one per frame each.
     pub force_sensor: [Vec<[f64; 3]>; 2],
+    /// The frame `force_sensor` is in: the sensors' (a recording), or the world's (a force
+    /// history grafted from another motion, which keeps its direction whatever the hands do).
+    pub force_frame: ForceFrame,
     /// Per side rotation from sensor to hand frame (w, x, y, z).
     pub hand_from_sensor_wxyz: [[f64; 4]; 2],
     /// Per side force application point in the hand frame, m.

@@ -6,7 +6,7 @@
 use super::derivatives::SmoothedMotion;
 use super::support::{convex_hull, SolePoints, SoleSample};
 use super::{CheckError, CheckOptions};
-use crate::sim::motion::{Sequence, LEFT, RIGHT};
+use crate::sim::motion::{ForceFrame, Sequence, LEFT, RIGHT};
 use crate::sim::robot::{center_of_mass, inverse_dynamics, MotionState, RobotModel};
 use nalgebra::{Point2, Point3, Quaternion, UnitQuaternion, Vector3};
 
@@ -132,7 +132,10 @@ pub fn frame_states(
             let frame = &robot.frames[robot.hands[s].frame];
             let world_from_hand = poses[frame.body] * frame.body_from_frame;
             let f_sensor = Vector3::from(seq.force_sensor[s][k]);
-            let f_w = world_from_hand.rotation * (hand_from_sensor[s] * f_sensor);
+            let f_w = match seq.force_frame {
+                ForceFrame::Sensor => world_from_hand.rotation * (hand_from_sensor[s] * f_sensor),
+                ForceFrame::World => f_sensor,
+            };
             let at = world_from_hand * Point3::from(seq.force_point_hand[s]);
             hands.force += f_w;
             hands.moment_o += at.coords.cross(&f_w);

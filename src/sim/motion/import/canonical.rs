@@ -102,6 +102,7 @@ pub fn to_sequence(
         hand_from_sensor_wxyz: [hand_quat(LEFT), hand_quat(RIGHT)],
         force_point_hand: [point(LEFT), point(RIGHT)],
         forces_recorded,
+        force_frame: Default::default(),
         provenance: Value::Object(provenance),
     };
     seq.validate(source)

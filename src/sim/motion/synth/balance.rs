@@ -84,6 +84,7 @@ fn as_sequence(robot: &RobotModel, plan: &Plan, solved: &Solved, fps: f64) -> Se
         hand_from_sensor_wxyz: [[1.0, 0.0, 0.0, 0.0]; 2],
         force_point_hand: [LEFT, RIGHT].map(|s| robot.hands[s].point_hand.coords.into()),
         forces_recorded: true,
+        force_frame: Default::default(),
         provenance: serde_json::Value::Null,
     }
 }

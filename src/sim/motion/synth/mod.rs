@@ -370,6 +370,7 @@ fn sequence(
         hand_from_sensor_wxyz: [wxyz(&cal[LEFT]), wxyz(&cal[RIGHT])],
         force_point_hand: [LEFT, RIGHT].map(|s| robot.hands[s].point_hand.coords.into()),
         forces_recorded: true,
+        force_frame: Default::default(),
         provenance,
     })
 }
