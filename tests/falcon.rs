@@ -173,6 +173,31 @@ fn the_adapter_gives_the_deploys_targets_clipped_to_the_motor_limits() {
             assert!((t - l).abs() < 1e-9, "joint {c}: target {t}, limit {l}");
         }
     }
+
+    // The ablation `@arm_residual=0`: the arms at their commanded joints, the legs and
+    // waist as the network says; and it is a parameter `run.json` records.
+    let ablated = FalconPolicy::load(&onnx, &profile)
+        .unwrap()
+        .with_arm_residual_scale(0.0);
+    ablated.raw_actions(&out, &upper, &mut raw);
+    profile.targets_from_action(&raw, &mut targets);
+    for c in 15..29 {
+        assert!(
+            (targets[c] - upper[c - 15]).abs() < 1e-9,
+            "arm joint {c}: {} vs commanded {}",
+            targets[c],
+            upper[c - 15]
+        );
+    }
+    for (c, (t, g)) in targets.iter().zip(&golden).enumerate().take(15) {
+        assert!((t - g).abs() < 1e-6, "joint {c}: ours {t}, deploy {g}");
+    }
+    use thorarena::policy::Policy;
+    assert_eq!(ablated.parameters(), vec![("arm_residual_scale", 0.0)]);
+    assert!(
+        policy.parameters().is_empty(),
+        "as trained: nothing new named"
+    );
 }
 
 #[test]

@@ -238,7 +238,7 @@ fn parameters_a_family_does_not_take_are_refused_before_anything_runs() {
     for (policy, says) in [
         (
             format!("falcon:{}@stiffness=5", f.display()),
-            "`falcon` takes no parameters",
+            "`falcon` has no parameter `stiffness`",
         ),
         (
             format!("twist2:{}@stiffness=5", f.display()),
@@ -503,6 +503,6 @@ fn a_sweep_axis_over_a_parameter_the_family_lacks_is_refused_at_plan_time() {
         "--out",
         dir.to_str().unwrap(),
     ]));
-    assert!(e.contains("`falcon` takes no parameters"), "{e}");
+    assert!(e.contains("`falcon` has no parameter `stiffness`"), "{e}");
     assert!(!dir.join("plan.json").exists());
 }

@@ -44,7 +44,7 @@ fn a_request_files_policy_is_refused_where_the_file_is_read() {
         (r#""holdx""#, "unknown policy `holdx`"),
         (
             r#""falcon:F.onnx@stiffness=5""#,
-            "`falcon` takes no parameters",
+            "`falcon` has no parameter `stiffness`",
         ),
         (
             r#""softmimic:F.onnx@stiffness=100,stiffness=200""#,

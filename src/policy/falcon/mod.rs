@@ -163,6 +163,10 @@ pub struct FalconPolicy {
     profile_scale: Vec<f64>,
     /// What the profile contradicts in FALCON's own wiring.
     disagreements: Vec<String>,
+    /// Scale of the arms' residual as applied (1: as trained; 0: the arms held at their
+    /// commanded joints, the ablation `falcon:F.onnx@arm_residual=0`). The `actions` term
+    /// of the observation keeps the network's own output either way.
+    arm_residual_scale: f64,
     slots: Vec<Slot>,
     input: Vec<f32>,
     last_inputs: Vec<Vec<f32>>,
@@ -192,10 +196,18 @@ impl FalconPolicy {
             profile_offset: profile.action_offset_rad.clone(),
             profile_scale: profile.action_scale.clone(),
             disagreements: disagreements(profile),
+            arm_residual_scale: 1.0,
             slots: Vec::new(),
             input: vec![0.0; OBS_LEN],
             last_inputs: Vec::new(),
         })
+    }
+
+    /// The same policy applying `scale` × the arms' residual (1: as trained; 0: the arms
+    /// held at their commanded joints — an ablation, not FALCON as deployed).
+    pub fn with_arm_residual_scale(mut self, scale: f64) -> Self {
+        self.arm_residual_scale = scale;
+        self
     }
 
     /// The network's inputs of the last `act`, one per observation (for tests).
@@ -216,14 +228,15 @@ impl FalconPolicy {
     /// The raw actions handed to the simulator for one network output, as the deploy turns
     /// an output into targets (`loco_manip.py:86-138`): clipped to ±[`ACTION_CLIP`]; the
     /// legs and waist at the profile's offset + scale · a, the arms at `upper_command` +
-    /// 0.25 · a (the residual); every target clipped to the motor limits; then expressed
+    /// 0.25 · a (the residual, × the arm residual scale, 1 unless ablated); every target
+    /// clipped to the motor limits; then expressed
     /// as the raw action that gives that target under the profile. Under FALCON's own
     /// profile the targets are the deploy's.
     pub fn raw_actions(&self, network_out: &[f32], upper_command: &[f64; 14], out: &mut [f64]) {
         for (c, (o, a)) in out.iter_mut().zip(network_out).enumerate() {
             let a = f64::from(*a).clamp(-ACTION_CLIP, ACTION_CLIP);
             let target = if UPPER.contains(&c) {
-                upper_command[c - UPPER.start] + ACTION_SCALE * a
+                upper_command[c - UPPER.start] + ACTION_SCALE * a * self.arm_residual_scale
             } else {
                 self.profile_offset[c] + self.profile_scale[c] * a
             };
@@ -265,6 +278,16 @@ impl Policy for FalconPolicy {
         Some("root velocity, heading and base height, arm joints")
     }
 
+    /// The arm residual's scale when ablated (as trained, 1, it is no parameter, so runs
+    /// of FALCON as deployed name nothing new).
+    fn parameters(&self) -> Vec<(&'static str, f64)> {
+        if self.arm_residual_scale == 1.0 {
+            Vec::new()
+        } else {
+            vec![("arm_residual_scale", self.arm_residual_scale)]
+        }
+    }
+
     fn sanity_exempt(&self) -> Option<&'static str> {
         None
     }
@@ -304,6 +327,7 @@ impl Policy for FalconPolicy {
                         profile_offset: self.profile_offset.clone(),
                         profile_scale: self.profile_scale.clone(),
                         disagreements: self.disagreements.clone(),
+                        arm_residual_scale: self.arm_residual_scale,
                         slots: Vec::new(),
                         input: vec![0.0; OBS_LEN],
                         last_inputs: Vec::new(),

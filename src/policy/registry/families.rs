@@ -135,6 +135,14 @@ pub const SOFTMIMIC_PARAMETERS: [Parameter; 2] = {
     ]
 };
 
+/// FALCON's one parameter: an ablation of its arms' residual.
+pub const FALCON_PARAMETERS: [Parameter; 1] = [Parameter {
+    name: "arm_residual",
+    unit: "×",
+    range: (0.0, 1.0),
+    what: "scale of the arms' residual on their commanded joints; default 1 (as trained), 0 holds the arms at the reference (an ablation)",
+}];
+
 /// Every policy family, built-ins first.
 pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
     PolicyFamily {
@@ -229,7 +237,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
     },
     PolicyFamily {
         name: "falcon",
-        spelling: "falcon:FILE.onnx",
+        spelling: "falcon:FILE.onnx[@arm_residual=X]",
         what: "FALCON's force-adaptive loco-manipulation policy (RSS 2025), a command follower: velocity, height, stand and waist commands derived from the reference, arms residual on it",
         supplies: "the network file (g1_29dof_falcon.onnx of LeCAR-Lab/FALCON)",
         profile: "falcon",
@@ -238,7 +246,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
         target: Target::File,
         build: Some(policies::falcon),
         profile_rule: policies::falcon_profile,
-        parameters: &[],
+        parameters: &FALCON_PARAMETERS,
         example: Some("g1_29dof_falcon.onnx, FALCON's released G1 network"),
         trained_forces: FALCON_FORCES,
     },

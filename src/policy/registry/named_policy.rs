@@ -319,7 +319,10 @@ mod tests {
     #[test]
     fn parameters_are_held_to_the_family_declaration() {
         for (spec, says) in [
-            ("falcon:F.onnx@stiffness=5", "`falcon` takes no parameters"),
+            (
+                "falcon:F.onnx@stiffness=5",
+                "`falcon` has no parameter `stiffness`",
+            ),
             ("twist2:F.onnx@stiffness=5", "`twist2` takes no parameters"),
             ("wbc-mjlab:F.onnx@x=1", "`wbc-mjlab` takes no parameters"),
             (
@@ -376,7 +379,7 @@ mod tests {
         assert_eq!(varied.as_str(), "softmimic:S.onnx@stiffness=40");
         assert_eq!(varied.parameter("stiffness"), Some(40.0));
         // A sweep's axis over a parameter the family lacks is refused where it is made.
-        assert!(NamedPolicy::parse("falcon:F.onnx")
+        assert!(NamedPolicy::parse("twist2:F.onnx")
             .unwrap()
             .with_parameters("stiffness=40")
             .unwrap_err()

@@ -95,7 +95,10 @@ pub(super) fn falcon(
     _: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
-    Ok(Box::new(FalconPolicy::load(file(a), p)?))
+    let scale = a.parameter("arm_residual").unwrap_or(1.0);
+    Ok(Box::new(
+        FalconPolicy::load(file(a), p)?.with_arm_residual_scale(scale),
+    ))
 }
 
 pub(super) fn softmimic(
