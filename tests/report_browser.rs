@@ -372,7 +372,10 @@ fn report_and_viewer_render_in_headless_chromium() {
     // 12 episodes × 2 settings × 2 runs in the scatter plot.
     assert_eq!(r["points"]["scatter-tracking-survival"], 48, "{context}");
     assert_eq!(r["tables"]["fats-table"], 7, "six tasks and the average");
-    assert_eq!(r["tables"]["diagnostics-table"], 10);
+    assert_eq!(
+        r["tables"]["diagnostics-table"], 11,
+        "the paper's ten rows and Global KP"
+    );
     assert_eq!(r["tables"]["policy-io-table"], 2);
     assert_eq!(
         r["warning_box"], 0,

@@ -89,7 +89,12 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
                     .to_string(),
                 setting: cell.setting.clone(),
                 force_coefficient: setting.as_ref().map(|s| s.coefficient),
-                push_n: setting.as_ref().map(|s| s.push_n),
+                // Empty for a disturbance (`event:…`, `impulse:…`, `payload:…`): no push,
+                // and not a push of 0 either; the setting column names it.
+                push_n: setting
+                    .as_ref()
+                    .filter(|s| s.disturbance.is_none())
+                    .map(|s| s.push_n),
                 latency_rule: cell.latency.name.clone(),
                 budget: cell.latency.budget.clone(),
                 latency_mode: cell.latency.mode.clone(),
