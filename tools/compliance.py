@@ -32,26 +32,11 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from g1_keypoints import DEFAULT_KEYPOINT_BODIES
+
 WRIST = {"right": "right_wrist_yaw_link", "left": "left_wrist_yaw_link"}
 
-# The bundled robot's keypoint sets (data/robots/g1_29dof/robot.toml), upper then lower.
-KEYPOINT_SETS = {
-    "default": [
-        "torso_link",
-        "left_shoulder_roll_link",
-        "right_shoulder_roll_link",
-        "left_elbow_link",
-        "right_elbow_link",
-        "left_wrist_yaw_link",
-        "right_wrist_yaw_link",
-        "left_hip_roll_link",
-        "right_hip_roll_link",
-        "left_knee_link",
-        "right_knee_link",
-        "left_ankle_roll_link",
-        "right_ankle_roll_link",
-    ],
-}
+KEYPOINT_SETS = {"default": list(DEFAULT_KEYPOINT_BODIES)}
 
 
 class ComplianceError(Exception):

@@ -76,6 +76,7 @@ from typing import Any
 import mujoco
 import numpy as np
 import numpy.typing as npt
+from g1_keypoints import DEFAULT_KEYPOINT_BODIES
 from holosoma_policy import (
     Array,
     Policy,
@@ -138,21 +139,7 @@ OBS_ORDERS = {
 }
 ROOT_BODY = "pelvis"
 TORSO_BODY = "torso_link"  # robot.py: motion={"body_name_ref": ["torso_link"]}
-KEYPOINT_BODIES = (
-    "torso_link",
-    "left_shoulder_roll_link",
-    "right_shoulder_roll_link",
-    "left_elbow_link",
-    "right_elbow_link",
-    "left_wrist_yaw_link",
-    "right_wrist_yaw_link",
-    "left_hip_roll_link",
-    "right_hip_roll_link",
-    "left_knee_link",
-    "right_knee_link",
-    "left_ankle_roll_link",
-    "right_ankle_roll_link",
-)
+KEYPOINT_BODIES = DEFAULT_KEYPOINT_BODIES
 FOOT_BODIES = ("left_ankle_roll_link", "right_ankle_roll_link")
 FLOOR_GEOM = "floor"
 MAX_TORSO_HEIGHT_ERROR_M = 0.25  # src/eval/episode.rs, TerminationRule::default

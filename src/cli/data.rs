@@ -1,9 +1,9 @@
 //! `thorarena data …`: import motion files, describe, export or synthesise a dataset.
 
 use std::path::PathBuf;
-use thorarena::eval::rollout_data::import_rollouts;
+use thorarena::eval::rollout_data::{import_data, DataImport};
 use thorarena::sim::motion::import::news::ImportLines;
-use thorarena::sim::motion::import::{import_batch, ImportBatch, SourceFormat};
+use thorarena::sim::motion::import::{ImportBatch, SourceFormat};
 use thorarena::sim::motion::synth::{write_synthetic, SynthOptions, SynthWriteError};
 use thorarena::sim::motion::{describe, Dataset};
 use thorarena::sim::robot::RobotModel;
@@ -192,32 +192,28 @@ fn source_format(args: &ImportArgs, robot: &RobotModel) -> anyhow::Result<Source
 
 fn import(args: &ImportArgs) -> anyhow::Result<()> {
     let robot = thorarena::policy::registry::robot(&args.robot)?;
-    let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
-    let ds = match args.format {
+    let what = match args.format {
         Format::Rollout if args.forces.is_some() => {
             anyhow::bail!("a rollout holds the forces that acted: --forces is for motion files")
         }
-        Format::Rollout => import_rollouts(&args.inputs, &args.out, &args.task, &robot)?,
-        _ => {
-            let batch = ImportBatch {
-                inputs: args.inputs.clone(),
-                format: source_format(args, &robot)?,
-                task: args.task.clone(),
-                force_logs: args.forces.as_ref().map(|f| [f[0].clone(), f[1].clone()]),
-                force_offset_s: args.force_offset,
-                force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
-                renormalize_quaternions: args.renormalize_quaternions,
-                trim_glitches: args.trim_glitches,
-                ground_correct: args.ground_correct,
-            };
-            import_batch(
-                &args.out,
-                &robot,
-                &batch,
-                &mut ImportLines { say: &mut say },
-            )?
-        }
+        Format::Rollout => DataImport::Rollouts {
+            traces: args.inputs.clone(),
+            task: args.task.clone(),
+        },
+        _ => DataImport::Motions(ImportBatch {
+            inputs: args.inputs.clone(),
+            format: source_format(args, &robot)?,
+            task: args.task.clone(),
+            force_logs: args.forces.as_ref().map(|f| [f[0].clone(), f[1].clone()]),
+            force_offset_s: args.force_offset,
+            force_sign: if args.flip_force_sign { -1.0 } else { 1.0 },
+            renormalize_quaternions: args.renormalize_quaternions,
+            trim_glitches: args.trim_glitches,
+            ground_correct: args.ground_correct,
+        }),
     };
+    let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
+    let ds = import_data(&args.out, &robot, &what, &mut ImportLines { say: &mut say })?;
     let sequences = thorarena::sim::motion::plural(ds.len(), "sequence");
     eprintln!("{}: {sequences}", ds.dir.display());
     Ok(())

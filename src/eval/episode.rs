@@ -8,7 +8,7 @@ use crate::eval::{Termination, TerminationRule};
 use crate::policy::Observation;
 use crate::sim::disturbance::{ActiveDisturbance, Disturbance};
 use crate::sim::feet::{FeetMeter, FootContact};
-use crate::sim::motion::{Reference, ReferenceFrame, Sequence};
+use crate::sim::motion::{heading_rad, Reference, ReferenceFrame, Sequence};
 use crate::sim::physics::{Physics, PhysicsState, ResetState, RootState};
 use crate::sim::profile::Profile;
 use crate::sim::replay::ForceReplay;
@@ -531,8 +531,7 @@ impl<'a> Episode<'a> {
 
 /// The forces `setup` puts on an episode of `seq`: the replay, the push, the disturbance.
 fn replay_of(setup: &EpisodeSetup, seq: &Sequence, reference: &Reference) -> ForceReplay {
-    let x = reference.sample(0.0).world_from_root.rotation * Vector3::x();
-    let heading_rad = x.y.atan2(x.x);
+    let heading_rad = heading_rad(&reference.sample(0.0).world_from_root.rotation);
     let push_direction = match setup.push_heading_deg {
         None => Vector3::x(),
         Some(deg) => {

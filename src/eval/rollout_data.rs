@@ -145,3 +145,45 @@ pub fn import_rollouts(
     }
     Ok(writer.finish()?)
 }
+
+/// What `thorarena data import` reads into a dataset: motion files of one format with
+/// their force logs, or rollout traces, whose forces are the ones that acted.
+#[derive(Debug, Clone)]
+pub enum DataImport {
+    /// Motion files ([`crate::sim::motion::import::import_batch`]).
+    Motions(crate::sim::motion::import::ImportBatch),
+    /// Traces of `eval --trace` ([`import_rollouts`]), all under `task`.
+    Rollouts {
+        /// The trace files.
+        traces: Vec<PathBuf>,
+        /// The task they are filed under.
+        task: String,
+    },
+}
+
+/// Why a `data import` failed.
+#[derive(Debug, thiserror::Error)]
+pub enum DataImportError {
+    /// Motion files.
+    #[error(transparent)]
+    Motions(#[from] crate::sim::motion::import::BatchError),
+    /// Rollout traces.
+    #[error(transparent)]
+    Rollouts(#[from] RolloutError),
+}
+
+/// Writes `what` into the dataset `out` (created, or appended to), telling `observer` about
+/// each motion file; all or nothing.
+pub fn import_data(
+    out: &Path,
+    robot: &RobotModel,
+    what: &DataImport,
+    observer: &mut dyn crate::sim::motion::import::ImportObserver,
+) -> Result<Dataset, DataImportError> {
+    Ok(match what {
+        DataImport::Motions(batch) => {
+            crate::sim::motion::import::import_batch(out, robot, batch, observer)?
+        }
+        DataImport::Rollouts { traces, task } => import_rollouts(traces, out, task, robot)?,
+    })
+}

@@ -156,18 +156,7 @@ impl TrainedForces {
                         span.horizontal_standing_max_n
                     ));
                 }
-                if span.vertical_n.0 < vertical_n.0 - tol {
-                    why.push(format!(
-                        "{:.0} N down, beyond {}",
-                        -span.vertical_n.0, -vertical_n.0
-                    ));
-                }
-                if span.vertical_n.1 > vertical_n.1 + tol {
-                    why.push(format!(
-                        "{:.0} N up, above {}",
-                        span.vertical_n.1, vertical_n.1
-                    ));
-                }
+                vertical_outside(span.vertical_n, vertical_n, tol, &mut why);
                 Some(why)
             }
             // A history on both hands for seconds on end is no event on one wrist.
@@ -202,15 +191,7 @@ impl TrainedForces {
                             format!("{horizontal_n:.0} N horizontal, trained only while walking")
                         });
                     }
-                    if vertical.0 < vertical_n.0 {
-                        why.push(format!(
-                            "{:.0} N down, beyond {}",
-                            -vertical.0, -vertical_n.0
-                        ));
-                    }
-                    if vertical.1 > vertical_n.1 {
-                        why.push(format!("{:.0} N up, above {}", vertical.1, vertical_n.1));
-                    }
+                    vertical_outside(vertical, vertical_n, 0.0, &mut why);
                 };
                 match d {
                     Disturbance::Event(e) => {
@@ -280,6 +261,17 @@ impl TrainedForces {
                 Some(why)
             }
         }
+    }
+}
+
+/// Adds to `why` what of the vertical force span `vertical` (N, z up: lowest, highest)
+/// lies outside the trained `range` by more than `tol`.
+fn vertical_outside(vertical: (f64, f64), range: (f64, f64), tol: f64, why: &mut Vec<String>) {
+    if vertical.0 < range.0 - tol {
+        why.push(format!("{:.0} N down, beyond {}", -vertical.0, -range.0));
+    }
+    if vertical.1 > range.1 + tol {
+        why.push(format!("{:.0} N up, above {}", vertical.1, range.1));
     }
 }
 

@@ -5,7 +5,7 @@
 //! its id and provenance: it is not a recording of that motion under that force. A grafted
 //! history is stored and replayed in the world frame (see [`with_forces_of`]).
 
-use super::{ForceFrame, Sequence, LEFT, RIGHT};
+use super::{heading_rad, ForceFrame, Sequence, LEFT, RIGHT};
 use crate::sim::robot::{forward_kinematics, RobotModel};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
@@ -39,8 +39,7 @@ pub fn with_forces_of(robot: &RobotModel, motion: &Sequence, forces: &Sequence) 
     let source_duration = forces.duration_s();
     let heading_from_world = |q: [f64; 4]| {
         let r = UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]));
-        let x = r * Vector3::x();
-        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), -x.y.atan2(x.x))
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), -heading_rad(&r))
     };
     // Per source frame: each hand's force in its motion's heading frame.
     let mut poses = Vec::new();

@@ -49,8 +49,8 @@ pub use glitch::{
     MAX_HUMAN_ROOT_SPEED_M_PER_S,
 };
 pub use reference::{
-    correct_ground, ground_check, reference_keypoints, shift_root_height, GroundCheck, Reference,
-    ReferenceFrame, GROUND_SHIFT_KEY,
+    correct_ground, ground_check, heading_rad, reference_keypoints, shift_root_height, GroundCheck,
+    Reference, ReferenceFrame, GROUND_SHIFT_KEY,
 };
 pub use selection::{SelectionError, SequenceSelection, Subset};
 pub use sequence::{ForceFrame, Sequence, LEFT, QUAT_NORM_TOLERANCE, RIGHT};

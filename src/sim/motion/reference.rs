@@ -13,6 +13,13 @@ use crate::sim::robot::{
 };
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
+/// The heading of a root orientation: the yaw of its x axis in the ground plane, rad
+/// (counter-clockwise from world +x). Unlike the z of the z-y-x angles it ignores roll.
+pub fn heading_rad(world_from_root: &UnitQuaternion<f64>) -> f64 {
+    let x = world_from_root * Vector3::x();
+    x.y.atan2(x.x)
+}
+
 /// One instant of a reference.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReferenceFrame {

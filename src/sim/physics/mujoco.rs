@@ -500,12 +500,7 @@ impl Physics for MujocoPhysics {
     }
 
     fn set_payloads(&mut self, payloads: &[PointMass]) {
-        for p in payloads {
-            assert!(
-                p.body != 0 && p.body < self.model.bodies.len(),
-                "payload body index"
-            );
-        }
+        PointMass::check_bodies(payloads, self.model.bodies.len());
         if self.payloads != payloads {
             self.payloads = payloads.to_vec();
             self.payloads_changed = true;

@@ -21,6 +21,16 @@ pub struct PointMass {
     pub point_b: Point3<f64>,
 }
 
+impl PointMass {
+    /// Panics unless every payload is held by a body of a model of `n_bodies`, not its
+    /// root (the rule of [`super::Physics::set_payloads`], shared by the backends).
+    pub(crate) fn check_bodies(payloads: &[Self], n_bodies: usize) {
+        for p in payloads {
+            assert!(p.body != 0 && p.body < n_bodies, "payload body index");
+        }
+    }
+}
+
 /// A body's mass properties: mass, centre of mass and inertia about it, body axes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Inertial {

@@ -6,7 +6,7 @@
 use super::derivatives::SmoothedMotion;
 use super::support::{convex_hull, SolePoints, SoleSample};
 use super::{CheckError, CheckOptions};
-use crate::sim::motion::{ForceFrame, Sequence, LEFT, RIGHT};
+use crate::sim::motion::{heading_rad, ForceFrame, Sequence, LEFT, RIGHT};
 use crate::sim::robot::{center_of_mass, inverse_dynamics, MotionState, RobotModel};
 use nalgebra::{Point2, Point3, Quaternion, UnitQuaternion, Vector3};
 
@@ -152,10 +152,7 @@ pub fn frame_states(
             touching,
             support: convex_hull(&points),
             root_w: motion.world_from_root[k].translation.vector,
-            root_heading_rad: {
-                let x_w = motion.world_from_root[k].rotation * Vector3::x();
-                x_w.y.atan2(x_w.x)
-            },
+            root_heading_rad: heading_rad(&motion.world_from_root[k].rotation),
             com_w: center_of_mass(robot, &poses),
             ground_with_force: Wrench {
                 force: alone.force - hands.force,

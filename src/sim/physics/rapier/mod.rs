@@ -172,12 +172,7 @@ impl Physics for RapierPhysics {
     }
 
     fn set_payloads(&mut self, payloads: &[PointMass]) {
-        for p in payloads {
-            assert!(
-                p.body != 0 && p.body < self.model.bodies.len(),
-                "payload body index"
-            );
-        }
+        PointMass::check_bodies(payloads, self.model.bodies.len());
         self.payloads = payloads.to_vec();
     }
 
