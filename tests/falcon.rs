@@ -7,7 +7,7 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::process::Command;
-use thorarena::policy::falcon::commands::Commands;
+use thorarena::policy::falcon::commands::{CommandRules, Commands};
 use thorarena::policy::falcon::observation::{frame, History, OBS_LEN};
 use thorarena::policy::falcon::{
     FalconPolicy, DEFAULT_POSE, MOTOR_POS_LOWER_RAD, MOTOR_POS_UPPER_RAD,
@@ -198,6 +198,21 @@ fn the_adapter_gives_the_deploys_targets_clipped_to_the_motor_limits() {
         policy.parameters().is_empty(),
         "as trained: nothing new named"
     );
+    // Training's command rules, each an exception undone, are parameters too.
+    let ruled = FalconPolicy::load(&onnx, &profile)
+        .unwrap()
+        .with_command_rules(CommandRules {
+            min_speed_m_s: 0.2,
+            yaw_feedforward: 0.0,
+            hold_s: CommandRules::BENCHMARK.hold_s,
+        });
+    assert_eq!(
+        ruled.parameters(),
+        vec![
+            ("command_min_speed_m_s", 0.2),
+            ("command_yaw_feedforward", 0.0)
+        ]
+    );
 }
 
 #[test]
@@ -228,4 +243,66 @@ fn policy_check_passes_on_the_bundled_walk_and_the_network_does_the_work() {
             "{check}: {stdout}"
         );
     }
+}
+
+#[test]
+fn an_eval_marks_the_cells_outside_falcons_force_curriculum_in_its_own_tables() {
+    const TEST: &str = "an_eval_marks_the_cells_outside_falcons_force_curriculum_in_its_own_tables";
+    let Some(onnx) = prereq::reference(TEST, "falcon/g1_29dof_falcon.onnx") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("run");
+    let root = env!("CARGO_MANIFEST_DIR");
+    // The sample's chair pushes reach 50–65 N horizontal while walking; FALCON's
+    // curriculum stops at 40. Without force nothing is judged.
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args([
+            "eval",
+            "--dataset",
+            &format!("{root}/data/sample"),
+            "--policy",
+            &format!("falcon:{}", onnx.display()),
+            "--tasks",
+            "push_chair",
+            "--settings",
+            "force,no-force",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let run: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    let why = run["outside_training"]["force"]["push_chair"]
+        .as_str()
+        .unwrap_or_else(|| panic!("run.json: {}", run["outside_training"]));
+    assert!(why.contains("horizontal walking, above 40"), "{why}");
+    assert!(run["outside_training"].get("no-force").is_none());
+    let tables = std::fs::read_to_string(out.join("tables.md")).unwrap();
+    let row = tables
+        .lines()
+        .find(|l| l.starts_with("| push_chair |"))
+        .unwrap_or_else(|| panic!("{tables}"));
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    let header = tables
+        .lines()
+        .find(|l| l.starts_with("| Task |"))
+        .unwrap_or_else(|| panic!("{tables}"));
+    let columns: Vec<&str> = header.split('|').map(str::trim).collect();
+    let at = |setting: &str| {
+        let name = format!("FATS ({setting}), mean of episodes");
+        columns.iter().position(|c| *c == name).unwrap()
+    };
+    assert!(cells[at("force")].ends_with(" †"), "{row}");
+    assert!(!cells[at("no-force")].contains('†'), "{row}");
+    assert!(
+        tables.contains(&format!("- `force`, push_chair: {why}")),
+        "{tables}"
+    );
+    assert!(
+        tables.contains("Its training: a curriculum on both hands"),
+        "{tables}"
+    );
 }

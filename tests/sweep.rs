@@ -718,6 +718,9 @@ fn a_sweep_of_some_tasks_runs_and_records_only_those() {
     assert!(col("fats").parse::<f64>().unwrap() > 0.0);
     assert_eq!((col("fats_ci95_low"), col("fats_ci95_high")), ("", ""));
     assert!(col("kp_error_mm").parse::<f64>().unwrap() > 1.0, "in mm");
+    assert!(col("global_kp_mm").parse::<f64>().unwrap() > 1.0, "in mm");
+    // A built-in baseline has no force training to be outside of.
+    assert_eq!(col("outside_training"), "");
     // A name the dataset does not hold fails at planning, not in every task.
     let bad = tmp.path().join("bad-spec");
     std::fs::create_dir_all(&bad).unwrap();

@@ -22,6 +22,7 @@ pub mod sanity;
 
 mod episode_record;
 mod latency;
+mod outside_training;
 mod request;
 mod rules;
 mod sanity_record;
@@ -32,6 +33,9 @@ mod thresholds;
 
 pub use episode_record::{EpisodeKey, EpisodeRecord, PolicyFault, PolicyFaults, Termination};
 pub use latency::{LatencyRecorder, LatencySummary};
+pub use outside_training::{
+    outside_training, setting_outside, OutsideTraining, SettingOutside, TaskForceSpans,
+};
 pub use request::{parse_shard, EngineChoice, EvalRequest, RequestFileError};
 pub use rules::{check_budget_s, parse_budget, short_number, Budget, MAX_BUDGET, MIN_BUDGET};
 pub use rules::{LatencyMode, MissRule, PolicyIoRules, TerminationRule};

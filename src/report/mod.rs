@@ -48,7 +48,8 @@ pub use style::{jitter, PolicyColors, DASHES, MARKERS, PALETTE, SURVIVAL_JITTER}
 pub use svg::{figure_svg, svg_figures, SvgFigure};
 pub use tables::{
     all_tasks, columns, comparison_markdown, diagnostics_multi_table, diagnostics_table,
-    fats_table, task_fats_table, DiagnosticRow, NumberRow, NumberTable, DIAGNOSTIC_ROWS,
+    fats_table, outside_training_note, task_fats_table, DiagnosticRow, NumberRow, NumberTable,
+    DIAGNOSTIC_ROWS,
 };
 
 use std::path::PathBuf;

@@ -2,7 +2,7 @@
 //! what part of the plan the run holds, the paper's two tables and the policy's I/O — made
 //! from the run's [`Summary`], so it always says what `summary.json` says.
 
-use super::{diagnostics_table, task_fats_table};
+use super::{diagnostics_table, outside_training_note, task_fats_table};
 use crate::eval::results::{
     PolicyIoReport, ResultsError, RunHeader, SettingResults, Summary, TABLES_FILE,
 };
@@ -59,9 +59,16 @@ pub fn run_tables(summary: &Summary) -> String {
     } else {
         ""
     };
+    // A run marks cells only when its policy's family was known at its start, by the name
+    // a family's policies run under.
+    let trained = crate::policy::registry::POLICY_FAMILIES
+        .iter()
+        .find(|f| f.name == header.policy)
+        .map_or(String::new(), |f| f.trained_forces.describe());
     let mut tables = format!(
-        "{title}\n\n## Task-level FATS\n\n{}{no_interval}\n## Diagnostics (averaged over tasks)\n\n{}",
-        task_fats_table(&results, &intervals),
+        "{title}\n\n## Task-level FATS\n\n{}{no_interval}{}\n## Diagnostics (averaged over tasks)\n\n{}",
+        task_fats_table(&results, &intervals, &header.outside_training),
+        outside_training_note(&header.outside_training, &trained),
         diagnostics_table(&results)
     );
     if let Some(io) = &summary.policy_io {

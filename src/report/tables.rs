@@ -65,10 +65,13 @@ fn format_number(v: f64, decimals: usize, suffix: &str) -> String {
 pub const DIAGNOSTICS_NOTE: &str = "Each number is computed per task, then averaged over tasks. Per task: FATS and survival are means over its episodes; KP rows are the RMS of the keypoint error over its control steps (all its episodes pooled; low/high: steps of that force regime), with the reference re-anchored at the robot's root, except Global KP, which keeps the reference where it is in the world (drift included; – for a run recorded before it was); ρ = low / high KP RMS; η = mean power in high-force steps over low-force steps; FATS Std is the population standard deviation of its episode scores (– where every task has one episode); – marks a number that is undefined.";
 
 /// Task-level FATS (mean episode score per task), one column per setting; under the
-/// average, its bootstrap 95 % interval where `intervals` has the setting.
+/// average, its bootstrap 95 % interval where `intervals` has the setting. A cell
+/// `outside` names (setting, task) is marked †: its load lies outside the policy's
+/// training ([`outside_training_note`] says what).
 pub fn task_fats_table(
     results: &SettingResults,
     intervals: &std::collections::BTreeMap<String, [f64; 2]>,
+    outside: &crate::eval::OutsideTraining,
 ) -> String {
     let settings: Vec<&String> = results.keys().collect();
     let mut tasks: Vec<&str> = results
@@ -96,7 +99,12 @@ pub fn task_fats_table(
                     .0
                     .iter()
                     .find(|t| t.task == *task)
-                    .map_or("–".into(), |t| format!("{:.2}", t.diagnostics.fats))
+                    .map_or("–".into(), |t| {
+                        let mark = outside
+                            .get(*k)
+                            .is_some_and(|cells| cells.contains_key(*task));
+                        format!("{:.2}{}", t.diagnostics.fats, if mark { " †" } else { "" })
+                    })
             })
             .collect();
         let _ = writeln!(s, "| {task} | {} |", cells.join(" | "));
@@ -120,6 +128,33 @@ pub fn task_fats_table(
             "| 95 % interval (bootstrap over episodes within tasks) | {} |",
             ci.join(" | ")
         );
+    }
+    s
+}
+
+/// The note under a table with † cells: per setting, the tasks outside the policy's
+/// training and what lies outside; empty when none is.
+pub fn outside_training_note(outside: &crate::eval::OutsideTraining, trained: &str) -> String {
+    if outside.is_empty() {
+        return String::new();
+    }
+    let mut s = String::from(
+        "\n† The load of these cells lies outside what the policy's family was trained with: the score is of the network off its distribution.\n",
+    );
+    for (setting, cells) in outside {
+        let mut by_reason: std::collections::BTreeMap<&str, Vec<&str>> = Default::default();
+        for (task, why) in cells {
+            by_reason
+                .entry(why.as_str())
+                .or_default()
+                .push(task.as_str());
+        }
+        for (why, tasks) in by_reason {
+            let _ = writeln!(s, "- `{setting}`, {}: {why}", tasks.join(", "));
+        }
+    }
+    if !trained.is_empty() {
+        let _ = writeln!(s, "\nIts training: {trained}.");
     }
     s
 }
@@ -162,6 +197,9 @@ pub struct NumberRow {
     pub suffix: &'static str,
     /// Printed in bold (the average row).
     pub bold: bool,
+    /// Per column, whether the cell's load lies outside what its policy's family was
+    /// trained with: † after the number in Markdown and HTML (empty: none is).
+    pub outside_training: Vec<bool>,
 }
 
 /// A table of numbers with one column per (run, setting): the multi-run form of the
@@ -208,6 +246,16 @@ pub fn fats_table(runs: &[Run]) -> NumberTable {
                         .filter(|v| !v.is_nan())
                 })
                 .collect(),
+            outside_training: cols
+                .iter()
+                .map(|(i, s)| {
+                    runs[*i]
+                        .header
+                        .outside_training
+                        .get(s)
+                        .is_some_and(|tasks| tasks.contains_key(&task))
+                })
+                .collect(),
             name: task,
             decimals: 2,
             suffix: "",
@@ -223,6 +271,7 @@ pub fn fats_table(runs: &[Run]) -> NumberTable {
         decimals: 2,
         suffix: "",
         bold: true,
+        outside_training: Vec::new(),
     });
     NumberTable {
         corner: "Task".into(),
@@ -249,6 +298,7 @@ pub fn diagnostics_multi_table(runs: &[Run]) -> NumberTable {
                 decimals: r.decimals,
                 suffix: r.suffix,
                 bold: false,
+                outside_training: Vec::new(),
             })
             .collect(),
     }
@@ -267,9 +317,15 @@ pub fn all_tasks(runs: &[Run]) -> Vec<String> {
 }
 
 impl NumberRow {
-    fn cell(&self, v: Option<f64>) -> String {
-        v.map_or("–".into(), |v| {
-            format_number(v, self.decimals, self.suffix)
+    /// Column `c`'s value as printed, † when it lies outside the policy's training.
+    fn cell(&self, c: usize) -> String {
+        let mark = if self.outside_training.get(c).copied().unwrap_or(false) {
+            " †"
+        } else {
+            ""
+        };
+        self.values[c].map_or("–".into(), |v| {
+            format!("{}{mark}", format_number(v, self.decimals, self.suffix))
         })
     }
 }
@@ -281,7 +337,7 @@ impl NumberTable {
         let _ = writeln!(s, "|---|{}", "---:|".repeat(self.columns.len()));
         for r in &self.rows {
             let bold = |c: String| if r.bold { format!("**{c}**") } else { c };
-            let cells: Vec<String> = r.values.iter().map(|v| bold(r.cell(*v))).collect();
+            let cells: Vec<String> = (0..r.values.len()).map(|c| bold(r.cell(c))).collect();
             let _ = writeln!(s, "| {} | {} |", bold(r.name.clone()), cells.join(" | "));
         }
         s
@@ -321,8 +377,8 @@ impl NumberTable {
         for r in &self.rows {
             let class = if r.bold { " class=\"total\"" } else { "" };
             let _ = write!(s, "<tr{class}><th>{}</th>", escape(&r.name));
-            for v in &r.values {
-                let _ = write!(s, "<td>{}</td>", escape(&r.cell(*v)));
+            for c in 0..r.values.len() {
+                let _ = write!(s, "<td>{}</td>", escape(&r.cell(c)));
             }
             s += "</tr>";
         }
@@ -378,8 +434,23 @@ pub fn comparison_markdown(
             md += &format!(">\n> - {}\n", w.message);
         }
     }
+    let outside: String = runs
+        .iter()
+        .filter(|r| !r.header.outside_training.is_empty())
+        .map(|r| {
+            let trained = crate::policy::registry::POLICY_FAMILIES
+                .iter()
+                .find(|f| f.name == r.header.policy)
+                .map_or(String::new(), |f| f.trained_forces.describe());
+            format!(
+                "\n{}:{}",
+                r.label,
+                outside_training_note(&r.header.outside_training, &trained)
+            )
+        })
+        .collect();
     md += &format!(
-        "\n## Task-level FATS\n\n{}\n## Diagnostics (averaged over tasks)\n\n{}",
+        "\n## Task-level FATS\n\n{}{outside}\n## Diagnostics (averaged over tasks)\n\n{}",
         fats_table(runs).markdown(),
         diagnostics_multi_table(runs).markdown()
     );

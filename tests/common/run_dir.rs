@@ -47,6 +47,7 @@ pub fn header(policy: &str) -> RunHeader {
         network_kernels: None,
         policy_parameters: Default::default(),
         identity: None,
+        outside_training: Default::default(),
     }
 }
 

@@ -16,7 +16,6 @@ use crate::eval::{EngineChoice, EvalRequest, EvalSpec, SpecError};
 use crate::policy::launched::PolicyCommand;
 use crate::policy::registry::{self, OpenPolicyError, PolicySource, PolicyTarget};
 use crate::policy::{Policy, SessionOptions};
-use crate::sim::motion::check::HandForceSpan;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -548,39 +547,27 @@ fn resumable(
 /// Per task, where the dataset's recorded hand forces point (`data check`'s
 /// [`HandForceSpan`]): what a FATS cell is judged against for a policy trained with a
 /// force curriculum.
-pub type TaskForceSpans = std::collections::BTreeMap<String, HandForceSpan>;
+pub type TaskForceSpans = crate::eval::TaskForceSpans;
 
-/// The tasks of `entry`'s setting `setting` whose replayed forces (the spans scaled by the
-/// setting's coefficient) lie outside what its family was trained with; empty when the
-/// family has nothing to judge or the setting replays no force.
-/// Each with what lies outside (`push_chair (61 N horizontal walking, above 40)`).
-/// A disturbance setting (`event:…`, `impulse:…`, `payload:…`) is judged once for every
-/// task (`every task (…)`).
+/// The tasks of `entry`'s setting `setting` whose load lies outside what its family was
+/// trained with (`eval::setting_outside`, the judgement every run's `tables.md` makes);
+/// empty when the family has nothing to judge or the setting replays no force.
+/// Each with what lies outside (`push_chair (61 N horizontal walking, above 40)`); a
+/// disturbance or a push is judged once for every task (`every task (…)`).
 pub fn tasks_outside_training(entry: &Entry, setting: &str, spans: &TaskForceSpans) -> Vec<String> {
     let header = &entry.summary.header;
     let Some(found) = header.settings.iter().find(|s| s.name == setting) else {
         return Vec::new();
     };
-    if let Some(d) = &found.disturbance {
-        let stiffness = header.policy_parameters.get("stiffness_n_per_m").copied();
-        return match entry.trained_forces.outside_disturbance(d, stiffness) {
-            Some(why) if !why.is_empty() => vec![format!("every task ({})", why.join("; "))],
-            _ => Vec::new(),
-        };
+    let stiffness = header.policy_parameters.get("stiffness_n_per_m").copied();
+    match crate::eval::setting_outside(&entry.trained_forces, found, stiffness, spans) {
+        crate::eval::SettingOutside::Inside => Vec::new(),
+        crate::eval::SettingOutside::EveryTask(why) => vec![format!("every task ({why})")],
+        crate::eval::SettingOutside::Tasks(tasks) => tasks
+            .into_iter()
+            .map(|(task, why)| format!("{task} ({why})"))
+            .collect(),
     }
-    let coefficient = found.coefficient;
-    if coefficient == 0.0 {
-        return Vec::new();
-    }
-    spans
-        .iter()
-        .filter_map(|(task, span)| {
-            let why = entry
-                .trained_forces
-                .outside_hand_forces(&span.scaled(coefficient))?;
-            (!why.is_empty()).then(|| format!("{task} ({})", why.join("; ")))
-        })
-        .collect()
 }
 
 /// The leaderboard as one Markdown table: per (policy, engine), FATS with its 95 %

@@ -42,7 +42,10 @@ pub struct ResultsRow {
     fats_ci95_low: Option<f64>,
     fats_ci95_high: Option<f64>,
     survival: Option<f64>,
+    /// Re-anchored at the robot's root, as FATS scores it.
     kp_error_mm: Option<f64>,
+    /// Not re-anchored: the reference where it is in the world, drift included.
+    global_kp_mm: Option<f64>,
     low_kp_mm: Option<f64>,
     high_kp_mm: Option<f64>,
     robustness_rho: Option<f64>,
@@ -50,6 +53,10 @@ pub struct ResultsRow {
     upper_kp_mm: Option<f64>,
     lower_kp_mm: Option<f64>,
     fats_std: Option<f64>,
+    /// The tasks whose load lies outside what the policy's family was trained with, `;`
+    /// between them (`run.json`'s `outside_training`); empty when none does.
+    #[serde(serialize_with = "crate::files::names::csv_text::serialize")]
+    outside_training: String,
     latency_p50_us: Option<f64>,
     latency_p99_us: Option<f64>,
     latency_p999_us: Option<f64>,
@@ -109,6 +116,7 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
                 fats_ci95_high: ci.and_then(|c| finite(c[1])),
                 survival: d(|d| d.survival),
                 kp_error_mm: d(|d| d.kp_mm),
+                global_kp_mm: d(|d| d.global_kp_mm),
                 low_kp_mm: d(|d| d.low_kp_mm),
                 high_kp_mm: d(|d| d.high_kp_mm),
                 robustness_rho: d(|d| d.robustness),
@@ -116,6 +124,13 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
                 upper_kp_mm: d(|d| d.upper_kp_mm),
                 lower_kp_mm: d(|d| d.lower_kp_mm),
                 fats_std: d(|d| d.fats_std),
+                outside_training: r
+                    .as_ref()
+                    // A cell runs one setting: its marks are the run's only ones.
+                    .and_then(|r| r.summary.header.outside_training.values().next())
+                    .map_or(String::new(), |tasks| {
+                        tasks.keys().cloned().collect::<Vec<_>>().join(";")
+                    }),
                 latency_p50_us: latency.map(|l| l.p50_us),
                 latency_p99_us: latency.map(|l| l.p99_us),
                 latency_p999_us: latency.map(|l| l.p999_us),

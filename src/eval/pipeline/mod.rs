@@ -52,6 +52,10 @@ pub enum BenchmarkError {
         /// The dataset directory.
         dataset: String,
     },
+    /// Where the dataset's forces point could not be measured (for the cells outside the
+    /// forces the policy's family was trained with).
+    #[error("measuring where the dataset's forces point (to mark the cells outside the policy's training): {0}")]
+    ForceSpans(#[from] crate::sim::motion::check::CheckError),
     /// The sanity check could not run.
     #[error("the sanity check could not run: {0}")]
     Sanity(#[from] SanityError),
@@ -279,6 +283,20 @@ pub fn evaluate(
         &spec.profile,
         &spec.robot,
     ));
+    if let Some(family) = spec
+        .policy
+        .as_ref()
+        .and_then(|p| p.named())
+        .map(|n| n.family())
+    {
+        header.outside_training = crate::eval::outside_training(
+            &family.trained_forces,
+            &spec.settings,
+            header.policy_parameters.get("stiffness_n_per_m").copied(),
+            &spec.sequences,
+            &spec.robot,
+        )?;
+    }
     header.sanity = Some(sanity(spec, policy)?);
     let (mut recording, started) = RunRecording::start(run, spec, header, options.resume)?;
     let header = recording.header();

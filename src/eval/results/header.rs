@@ -96,6 +96,13 @@ pub struct RunHeader {
     /// reports say ("network not recorded") and which joins no run that has one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identity: Option<PolicyIdentity>,
+    /// The cells whose load lies outside what the policy's family was trained with, per
+    /// setting and task, with what lies outside (`eval::outside_training`): judged when
+    /// the run starts, so that every table made from it marks them. Empty for a family
+    /// with nothing to judge (force-blind, unknown, a built-in). Derived from the policy,
+    /// settings and dataset, which the run's identity already holds.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub outside_training: crate::eval::OutsideTraining,
 }
 
 impl RunHeader {
@@ -124,6 +131,7 @@ impl RunHeader {
             network_kernels: None,
             policy_parameters: Default::default(),
             identity: None,
+            outside_training: Default::default(),
         }
     }
 

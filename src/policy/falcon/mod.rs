@@ -30,7 +30,7 @@ pub mod observation;
 use super::batch_plans::BatchPlans;
 use super::{ActOutcome, Observation, Policy, Wiring};
 use crate::sim::profile::Profile;
-use commands::UPPER;
+use commands::{CommandRules, UPPER};
 use observation::{History, N_JOINTS, OBS_LEN};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -148,8 +148,9 @@ struct Slot {
     history: History,
     /// The network's last output, clipped (the `actions` term).
     last_raw: Vec<f64>,
-    /// The stand flag of the last step (`None` before an episode's first).
-    walking: Option<bool>,
+    /// The command sample in force and the step it was taken at (`None` before an
+    /// episode's first step).
+    held: Option<(commands::Sample, usize)>,
 }
 
 /// FALCON in process.
@@ -167,6 +168,9 @@ pub struct FalconPolicy {
     /// commanded joints, the ablation `falcon:F.onnx@arm_residual=0`). The `actions` term
     /// of the observation keeps the network's own output either way.
     arm_residual_scale: f64,
+    /// How the commands keep or leave training's distribution (as on the board unless
+    /// ablated).
+    command_rules: CommandRules,
     slots: Vec<Slot>,
     input: Vec<f32>,
     last_inputs: Vec<Vec<f32>>,
@@ -197,6 +201,7 @@ impl FalconPolicy {
             profile_scale: profile.action_scale.clone(),
             disagreements: disagreements(profile),
             arm_residual_scale: 1.0,
+            command_rules: CommandRules::BENCHMARK,
             slots: Vec::new(),
             input: vec![0.0; OBS_LEN],
             last_inputs: Vec::new(),
@@ -207,6 +212,13 @@ impl FalconPolicy {
     /// held at their commanded joints — an ablation, not FALCON as deployed).
     pub fn with_arm_residual_scale(mut self, scale: f64) -> Self {
         self.arm_residual_scale = scale;
+        self
+    }
+
+    /// The same policy under other command rules (an ablation of the adapter's
+    /// exceptions to training's command distribution).
+    pub fn with_command_rules(mut self, rules: CommandRules) -> Self {
+        self.command_rules = rules;
         self
     }
 
@@ -278,14 +290,25 @@ impl Policy for FalconPolicy {
         Some("root velocity, heading and base height, arm joints")
     }
 
-    /// The arm residual's scale when ablated (as trained, 1, it is no parameter, so runs
-    /// of FALCON as deployed name nothing new).
+    /// What differs from FALCON on the board — the arm residual's scale, the command
+    /// rules — so that runs of FALCON as benchmarked name nothing new.
     fn parameters(&self) -> Vec<(&'static str, f64)> {
-        if self.arm_residual_scale == 1.0 {
-            Vec::new()
-        } else {
-            vec![("arm_residual_scale", self.arm_residual_scale)]
-        }
+        let b = CommandRules::BENCHMARK;
+        let r = &self.command_rules;
+        [
+            ("arm_residual_scale", self.arm_residual_scale, 1.0),
+            ("command_min_speed_m_s", r.min_speed_m_s, b.min_speed_m_s),
+            (
+                "command_yaw_feedforward",
+                r.yaw_feedforward,
+                b.yaw_feedforward,
+            ),
+            ("command_hold_s", r.hold_s, b.hold_s),
+        ]
+        .into_iter()
+        .filter(|(_, value, default)| value != default)
+        .map(|(name, value, _)| (name, value))
+        .collect()
     }
 
     fn sanity_exempt(&self) -> Option<&'static str> {
@@ -328,6 +351,7 @@ impl Policy for FalconPolicy {
                         profile_scale: self.profile_scale.clone(),
                         disagreements: self.disagreements.clone(),
                         arm_residual_scale: self.arm_residual_scale,
+                        command_rules: self.command_rules,
                         slots: Vec::new(),
                         input: vec![0.0; OBS_LEN],
                         last_inputs: Vec::new(),
@@ -352,8 +376,21 @@ impl Policy for FalconPolicy {
                     ..Slot::default()
                 };
             }
-            let cmd = commands::commands(&obs.root, &obs.reference, slot.walking);
-            slot.walking = Some(cmd.stand > 0.5);
+            let hold_steps = (self.command_rules.hold_s / CONTROL_DT_S).round() as usize;
+            let sample = match slot.held {
+                Some((held, at)) if obs.step < at + hold_steps.max(1) => held,
+                before => {
+                    let s = commands::sample(
+                        &obs.root,
+                        &obs.reference,
+                        before.map(|(h, _)| h.walking),
+                        &self.command_rules,
+                    );
+                    slot.held = Some((s, obs.step));
+                    s
+                }
+            };
+            let cmd = commands::commands(&obs.root, &obs.reference, &sample);
             let frame = observation::frame(obs, &DEFAULT_POSE, &slot.last_raw, &cmd);
             slot.history.push_into(frame, starts, &mut self.input);
             self.last_inputs[row].clone_from(&self.input);

@@ -135,13 +135,34 @@ pub const SOFTMIMIC_PARAMETERS: [Parameter; 2] = {
     ]
 };
 
-/// FALCON's one parameter: an ablation of its arms' residual.
-pub const FALCON_PARAMETERS: [Parameter; 1] = [Parameter {
-    name: "arm_residual",
-    unit: "×",
-    range: (0.0, 1.0),
-    what: "scale of the arms' residual on their commanded joints; default 1 (as trained), 0 holds the arms at the reference (an ablation)",
-}];
+/// FALCON's parameters: ablations of its arms' residual and of the three ways the
+/// benchmark's commands leave training's distribution (`policy::falcon::commands`).
+pub const FALCON_PARAMETERS: [Parameter; 4] = [
+    Parameter {
+        name: "arm_residual",
+        unit: "×",
+        range: (0.0, 1.0),
+        what: "scale of the arms' residual on their commanded joints; default 1 (as trained), 0 holds the arms at the reference (an ablation)",
+    },
+    Parameter {
+        name: "min_speed",
+        unit: "m/s",
+        range: (0.0, 1.0),
+        what: "velocity commands at or under this speed are zeroed; default 0, training 0.2",
+    },
+    Parameter {
+        name: "yaw_ff",
+        unit: "×",
+        range: (0.0, 1.0),
+        what: "scale of the reference's yaw rate fed forward on the heading feedback; default 1, training 0",
+    },
+    Parameter {
+        name: "hold",
+        unit: "s",
+        range: (0.0, 10.0),
+        what: "a command sample is held this long (heading feedback and arms still every step); default 0 (every step), training 10",
+    },
+];
 
 /// Every policy family, built-ins first.
 pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
@@ -237,7 +258,7 @@ pub const POLICY_FAMILIES: [PolicyFamily; 9] = [
     },
     PolicyFamily {
         name: "falcon",
-        spelling: "falcon:FILE.onnx[@arm_residual=X]",
+        spelling: "falcon:FILE.onnx[@arm_residual=X,min_speed=V,yaw_ff=X,hold=S]",
         what: "FALCON's force-adaptive loco-manipulation policy (RSS 2025), a command follower: velocity, height, stand and waist commands derived from the reference, arms residual on it",
         supplies: "the network file (g1_29dof_falcon.onnx of LeCAR-Lab/FALCON)",
         profile: "falcon",

@@ -95,9 +95,18 @@ pub(super) fn falcon(
     _: &RobotModel,
     p: &Profile,
 ) -> Result<Box<dyn Policy>, RegistryError> {
+    use crate::policy::falcon::commands::CommandRules;
     let scale = a.parameter("arm_residual").unwrap_or(1.0);
+    let b = CommandRules::BENCHMARK;
+    let rules = CommandRules {
+        min_speed_m_s: a.parameter("min_speed").unwrap_or(b.min_speed_m_s),
+        yaw_feedforward: a.parameter("yaw_ff").unwrap_or(b.yaw_feedforward),
+        hold_s: a.parameter("hold").unwrap_or(b.hold_s),
+    };
     Ok(Box::new(
-        FalconPolicy::load(file(a), p)?.with_arm_residual_scale(scale),
+        FalconPolicy::load(file(a), p)?
+            .with_arm_residual_scale(scale)
+            .with_command_rules(rules),
     ))
 }
 

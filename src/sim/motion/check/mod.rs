@@ -43,7 +43,7 @@ use crate::sim::motion::{joint_limit_margin, Dataset, Sequence};
 use crate::sim::robot::RobotModel;
 use frames::frame_states;
 use nalgebra::{Point2, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use support::{convex_hull, distance_outside, SolePoints, CONTACT_HEIGHT_M};
 
 /// A hand carries a load when its force is above this, N.
@@ -229,7 +229,7 @@ struct ForceSeries {
 /// hand poses: what a policy trained with a force curriculum is judged against
 /// (`policy::registry::TrainedForces`). Walking: the root's horizontal speed above
 /// 0.1 m/s, the style's threshold.
-#[derive(Debug, Clone, Copy, Default, Serialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq)]
 pub struct HandForceSpan {
     /// Largest horizontal force on a hand while the root walks, N.
     pub horizontal_walking_max_n: f64,
@@ -464,6 +464,24 @@ pub enum CheckError {
     /// Reading the dataset failed.
     #[error(transparent)]
     Data(#[from] crate::sim::motion::DataError),
+}
+
+/// Per task, where `seqs`' recorded hand forces point (the spans [`check_dataset`]
+/// reports, under the default options): what a run judges its cells against when its
+/// policy's family was trained with forces (`eval::outside_training`).
+pub fn task_force_spans(
+    seqs: &[Sequence],
+    robot: &RobotModel,
+) -> Result<std::collections::BTreeMap<String, HandForceSpan>, CheckError> {
+    let opts = CheckOptions::default();
+    let soles = checked_soles(robot, &opts)?;
+    let mut spans = std::collections::BTreeMap::<String, HandForceSpan>::new();
+    for seq in seqs {
+        let span = sequence_series(seq, robot, &soles, &opts)?.forces.span;
+        let task = spans.entry(seq.task.clone()).or_default();
+        *task = task.union(span);
+    }
+    Ok(spans)
 }
 
 /// Checks every sequence of `ds` (loaded in `seqs`), calling `progress(done, total)` after
