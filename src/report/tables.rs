@@ -456,3 +456,29 @@ pub fn comparison_markdown(
     );
     md
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cell_outside_training_is_marked_in_markdown_and_html_and_not_in_csv() {
+        let table = NumberTable {
+            corner: "Task".into(),
+            columns: vec!["FATS: a (force)".into(), "FATS: a (no-force)".into()],
+            rows: vec![NumberRow {
+                name: "push_chair".into(),
+                values: vec![Some(70.0), Some(80.0)],
+                decimals: 2,
+                suffix: "",
+                bold: false,
+                outside_training: vec![true, false],
+            }],
+        };
+        assert!(table
+            .markdown()
+            .contains("| push_chair | 70.00 † | 80.00 |"));
+        assert!(table.html("t").contains("<td>70.00 †</td><td>80.00</td>"));
+        assert!(table.csv().contains("push_chair,70,80"));
+    }
+}
