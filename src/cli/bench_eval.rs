@@ -113,9 +113,8 @@ pub struct SweepArgs {
     pub plan_tasks: usize,
 }
 
-/// `bench sweep`: the library times each round and hands over each line as it is
-/// measured.
-/// `bench sweep`: a sweep's overhead against `eval`, and planning at scale.
+/// `bench sweep`: a sweep's overhead against `eval`, and planning at scale; the library
+/// times each round and hands over each line as it is measured.
 pub(super) fn sweep(args: &SweepArgs) -> anyhow::Result<()> {
     let bench = SweepBench {
         exe: std::env::current_exe()?,

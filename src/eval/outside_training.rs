@@ -87,10 +87,7 @@ pub fn outside_training(
     sequences: &[Sequence],
     robot: &RobotModel,
 ) -> Result<OutsideTraining, CheckError> {
-    if trained
-        .outside_hand_forces(&HandForceSpan::default())
-        .is_none()
-    {
+    if !trained.has_envelope() {
         return Ok(OutsideTraining::new());
     }
     let replays = settings

@@ -61,10 +61,7 @@ pub fn run_tables(summary: &Summary) -> String {
     };
     // A run marks cells only when its policy's family was known at its start, by the name
     // a family's policies run under.
-    let trained = crate::policy::registry::POLICY_FAMILIES
-        .iter()
-        .find(|f| f.name == header.policy)
-        .map_or(String::new(), |f| f.trained_forces.describe());
+    let trained = super::tables::family_training(&header.policy);
     let mut tables = format!(
         "{title}\n\n## Task-level FATS\n\n{}{no_interval}{}\n## Diagnostics (averaged over tasks)\n\n{}",
         task_fats_table(&results, &intervals, &header.outside_training),

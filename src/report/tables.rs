@@ -132,6 +132,15 @@ pub fn task_fats_table(
     s
 }
 
+/// What the family a run's policy is named by was trained with (empty for a name no
+/// family has): the last line of [`outside_training_note`].
+pub(super) fn family_training(policy: &str) -> String {
+    crate::policy::registry::POLICY_FAMILIES
+        .iter()
+        .find(|f| f.name == policy)
+        .map_or(String::new(), |f| f.trained_forces.describe())
+}
+
 /// The note under a table with † cells: per setting, the tasks outside the policy's
 /// training and what lies outside; empty when none is.
 pub fn outside_training_note(outside: &crate::eval::OutsideTraining, trained: &str) -> String {
@@ -438,14 +447,13 @@ pub fn comparison_markdown(
         .iter()
         .filter(|r| !r.header.outside_training.is_empty())
         .map(|r| {
-            let trained = crate::policy::registry::POLICY_FAMILIES
-                .iter()
-                .find(|f| f.name == r.header.policy)
-                .map_or(String::new(), |f| f.trained_forces.describe());
             format!(
                 "\n{}:{}",
                 r.label,
-                outside_training_note(&r.header.outside_training, &trained)
+                outside_training_note(
+                    &r.header.outside_training,
+                    &family_training(&r.header.policy)
+                )
             )
         })
         .collect();

@@ -66,6 +66,12 @@ pub const SOFTMIMIC_FORCES: TrainedForces = TrainedForces::WristEvents {
 pub const MEASURED_TOLERANCE_N: f64 = 2.0;
 
 impl TrainedForces {
+    /// Whether there is an envelope to judge a load against (a family trained with
+    /// forces of a known shape).
+    pub fn has_envelope(&self) -> bool {
+        !matches!(self, Self::Untrained | Self::Blind | Self::Unknown)
+    }
+
     /// One line for `thorarena policies` and the tables' notes.
     pub fn describe(&self) -> String {
         match self {
