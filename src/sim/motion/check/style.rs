@@ -37,6 +37,9 @@ pub struct SequenceStyle {
     pub moving_share: f64,
     /// Mean absolute yaw rate of the root over the frames it moves, deg/s.
     pub turn_deg_s: f64,
+    /// 90th percentile of the absolute yaw rate over the frames it moves: how sharp its
+    /// corners are, where the mean says how much of the way it turns, deg/s.
+    pub turn_p90_deg_s: f64,
     /// Mean lateral distance between the two feet in the root's heading frame, over frames
     /// with both feet on the ground, m.
     pub stance_width_m: f64,
@@ -100,6 +103,11 @@ impl SequenceStyle {
             speed_p90_m_s: percentile(&sorted(speeds.clone()), 90.0),
             moving_share: moving.len() as f64 / speeds.len().max(1) as f64,
             turn_deg_s: mean(&turns).unwrap_or(0.0),
+            turn_p90_deg_s: if turns.is_empty() {
+                0.0
+            } else {
+                percentile(&sorted(turns), 90.0)
+            },
             stance_width_m: mean(&widths).unwrap_or(0.0),
             stagger_m: mean(&staggers).unwrap_or(0.0),
             root_height_range_m: if n > 0 { hi - lo } else { 0.0 },
@@ -149,6 +157,8 @@ pub struct TaskStyle {
     pub moving_share: Option<Spread>,
     /// See [`SequenceStyle::turn_deg_s`].
     pub turn_deg_s: Option<Spread>,
+    /// See [`SequenceStyle::turn_p90_deg_s`].
+    pub turn_p90_deg_s: Option<Spread>,
     /// See [`SequenceStyle::stance_width_m`].
     pub stance_width_m: Option<Spread>,
     /// See [`SequenceStyle::stagger_m`].
@@ -180,6 +190,7 @@ impl TaskStyle {
             speed_p90_m_s: all(|s| s.speed_p90_m_s),
             moving_share: all(|s| s.moving_share),
             turn_deg_s: of_moving(|s| s.turn_deg_s),
+            turn_p90_deg_s: of_moving(|s| s.turn_p90_deg_s),
             stance_width_m: all(|s| s.stance_width_m),
             stagger_m: all(|s| s.stagger_m),
             root_height_range_m: all(|s| s.root_height_range_m),
@@ -207,17 +218,18 @@ pub fn markdown(styles: &[TaskStyle]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "\n## Style: median (10th–90th percentile) over each task's sequences\n\n| task | speed while moving, m/s | speed p90, m/s | moving, % | turning, deg/s | stance width, cm | stagger standing, cm | root height range, cm | left hand's share | force build-up, s | tremble, % |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "\n## Style: median (10th–90th percentile) over each task's sequences\n\n| task | speed while moving, m/s | speed p90, m/s | moving, % | turning, deg/s | turning p90, deg/s | stance width, cm | stagger standing, cm | root height range, cm | left hand's share | force build-up, s | tremble, % |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for t in styles {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             t.task,
             cell(&t.speed_mean_m_s, 1.0, 2),
             cell(&t.speed_p90_m_s, 1.0, 2),
             cell(&t.moving_share, 100.0, 0),
             cell(&t.turn_deg_s, 1.0, 1),
+            cell(&t.turn_p90_deg_s, 1.0, 1),
             cell(&t.stance_width_m, 100.0, 1),
             cell(&t.stagger_m, 100.0, 1),
             cell(&t.root_height_range_m, 100.0, 1),

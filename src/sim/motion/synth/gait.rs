@@ -1,7 +1,12 @@
 //! Walking: footholds, swing-foot arcs and the pelvis trajectory, kinematic only.
 //!
 //! A stance foot is exactly its foothold (flat, on the ground, not sliding); a swing foot
-//! travels on a smooth arc with zero velocity at lift-off and touch-down and stays flat.
+//! travels on a smooth arc with zero velocity at lift-off and touch-down and lands flat.
+//! With a roll-off ([`GaitParams::roll_off_rad`], version 2, walking forward) the trailing
+//! foot rolls through double support about its toe's edge, so the sole points it still
+//! stands on neither lift nor slide, and levels out again in the first half of its swing:
+//! the trailing ankle no longer caps the step where it meets its dorsiflexion limit with a
+//! flat foot.
 //! The pelvis follows the midpoint of the feet, piecewise linear in time between step
 //! ends, then smoothed by a moving average one step period wide: that gives a gentle
 //! start and stop and a constant speed in between. Leg IK turns this into joint angles.
@@ -36,6 +41,28 @@ pub struct GaitParams {
     pub sway_m: f64,
     /// Lateral distance of each ankle from the path centre, m.
     pub half_width_m: f64,
+    /// Pitch of the trailing foot about its toe when it lifts, rad: 0 keeps it flat
+    /// (version 1, and walking backward).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub roll_off_rad: f64,
+    /// A sharper turn within the bout (version 2): a corner taken in a few steps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turn_bout: Option<TurnBout>,
+}
+
+/// Steps `first ..< first + steps` each turn by `rad_per_step` more.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct TurnBout {
+    /// The first turning step (1 is the bout's first step).
+    pub first: usize,
+    /// How many steps turn.
+    pub steps: usize,
+    /// Heading change each of them adds, rad (positive turns left).
+    pub rad_per_step: f64,
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
 }
 
 /// Kinematic targets of one frame.
@@ -89,6 +116,12 @@ fn footholds(sk: &Skeleton, p: &GaitParams) -> Vec<[Foothold; 2]> {
     for i in 1..=p.n_steps {
         if i < p.n_steps {
             yaw += p.turn_per_step_rad;
+            if let Some(b) = p
+                .turn_bout
+                .filter(|b| (b.first..b.first + b.steps).contains(&i))
+            {
+                yaw += b.rad_per_step;
+            }
             c += rot2(yaw) * Vector2::new(p.direction * p.step_length_m, 0.0);
         }
         let side = swing_side(p, i);
@@ -153,17 +186,28 @@ pub fn walk(sk: &Skeleton, p: &GaitParams, fps: f64, n_frames: usize) -> Vec<Gai
     }
     let half = (0.5 * p.step_period_s * fps).round() as usize;
     let [xs, ys, yaws, walking] = raw.map(|r| moving_average(&r, half));
-    let foot_pose = |h: &Foothold, lift: f64| {
-        Isometry3::from_parts(
+    let foot_pose = |h: &Foothold, lift: f64, roll: f64| {
+        let yaw = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), h.yaw);
+        let flat = Isometry3::from_parts(
             Translation3::new(h.pos.x, h.pos.y, sk.ankle_height_m + lift),
-            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), h.yaw) * sk.foot_rot,
-        )
+            yaw * sk.foot_rot,
+        );
+        if roll == 0.0 {
+            return flat;
+        }
+        // Pitch about the toe's edge across the foot (the foot's lateral axis): a positive
+        // angle about it turns the toe down and lifts the heel.
+        let pivot = flat * nalgebra::Point3::from(sk.toe_m);
+        let lateral = nalgebra::Unit::new_normalize(yaw * Vector3::y());
+        let pitch = UnitQuaternion::from_axis_angle(&lateral, roll);
+        let about = Translation3::from(pivot.coords);
+        about * pitch * about.inverse() * flat
     };
     (0..n_frames)
         .map(|k| {
             let t = k as f64 / fps;
             let mut feet_h = holds[after(t)];
-            let (mut lift, mut sway, mut phase) = ([0.0; 2], 0.0, None);
+            let (mut lift, mut roll, mut sway, mut phase) = ([0.0; 2], [0.0; 2], 0.0, None);
             if let Some((i, f)) = step_of(t) {
                 feet_h = holds[i - 1];
                 let side = swing_side(p, i);
@@ -175,6 +219,13 @@ pub fn walk(sk: &Skeleton, p: &GaitParams, fps: f64, n_frames: usize) -> Vec<Gai
                     yaw: a.yaw + (b.yaw - a.yaw) * s,
                 };
                 lift[side] = p.lift_m * 16.0 * phi * phi * (1.0 - phi) * (1.0 - phi);
+                // Rolls up through double support, levels out by mid-swing.
+                roll[side] = p.roll_off_rad
+                    * if f < DOUBLE_SUPPORT {
+                        smooth5(f / DOUBLE_SUPPORT)
+                    } else {
+                        1.0 - smooth5(phi / 0.5)
+                    };
                 // Toward the stance foot (the other side) during the swing.
                 let toward = if side == 0 { -1.0 } else { 1.0 };
                 sway = toward * p.sway_m * (std::f64::consts::PI * phi).sin();
@@ -187,7 +238,7 @@ pub fn walk(sk: &Skeleton, p: &GaitParams, fps: f64, n_frames: usize) -> Vec<Gai
             let rot = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), yaw);
             GaitFrame {
                 pelvis: Isometry3::from_parts(Translation3::new(xy.x, xy.y, z), rot),
-                feet: [0, 1].map(|s| foot_pose(&feet_h[s], lift[s])),
+                feet: [0, 1].map(|s| foot_pose(&feet_h[s], lift[s], roll[s])),
                 walking: walking[k],
                 dir_world: rot * Vector3::new(p.direction, 0.0, 0.0),
             }

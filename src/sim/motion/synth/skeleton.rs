@@ -26,6 +26,9 @@ pub struct Skeleton {
     pub foot_y_m: f64,
     /// Ankle-roll frame forward offset from the pelvis in the default pose, m.
     pub foot_x_m: f64,
+    /// Centre of the front sole points (the toe's edge) in the ankle-roll frame, m: a
+    /// foot rolling off its toe pitches about the line across the foot through it.
+    pub toe_m: Vector3<f64>,
     /// Hand positions in the pelvis frame in the default pose, m.
     pub hand_default: [Vector3<f64>; 2],
     /// Body whose origin is the shoulder centre (shoulder-pitch link), per side.
@@ -68,6 +71,7 @@ impl Skeleton {
         ];
         let ankle = frame_pose(robot, &poses, ankles[0]);
         let legs = ankles.map(|f| chain_to_root(robot, f, |j| waist.contains(&j)));
+        let toe_m = toe_edge(robot, &poses, ankles[0], &ankle)?;
         let hands = [robot.hands[0].frame, robot.hands[1].frame];
         let arms = hands.map(|f| chain_to_root(robot, f, |j| waist.contains(&j)));
         if legs.iter().chain(&arms).any(|c| c.joints.len() < 4) {
@@ -118,10 +122,46 @@ impl Skeleton {
             foot_rot: ankle.rotation,
             foot_y_m: ankle.translation.vector.y.abs(),
             foot_x_m: ankle.translation.vector.x,
+            toe_m,
             hand_default,
             shoulder_body,
             reach_m: 0.9 * reach,
             arm_nominal,
         })
     }
+}
+
+/// The toe's edge of a foot's sole in its ankle frame `ankle_frame` (posed at `ankle`):
+/// the mean centre of the sole shapes ahead of their middle, with y zeroed, so the edge
+/// is a line across the foot through that point.
+fn toe_edge(
+    robot: &RobotModel,
+    poses: &[Isometry3<f64>],
+    ankle_frame: usize,
+    ankle: &Isometry3<f64>,
+) -> Result<Vector3<f64>, SynthError> {
+    let body = robot.frames[ankle_frame].body;
+    let centres: Vec<Vector3<f64>> = robot.bodies[body]
+        .shapes
+        .iter()
+        .filter(|s| s.is_sole)
+        .map(|s| {
+            let world = poses[body] * (s.body_from_shape * nalgebra::Point3::origin());
+            (ankle.inverse() * world).coords
+        })
+        .collect();
+    let (lo, hi) = centres
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), c| {
+            (lo.min(c.x), hi.max(c.x))
+        });
+    if centres.len() < 2 || hi - lo < 0.05 {
+        return Err(SynthError::Robot(
+            "the ankle's foot has no sole points spanning toe and heel".into(),
+        ));
+    }
+    let front: Vec<_> = centres.iter().filter(|c| c.x > 0.5 * (lo + hi)).collect();
+    let mut toe = front.iter().fold(Vector3::zeros(), |a, c| a + *c) / front.len() as f64;
+    toe.y = 0.0;
+    Ok(toe)
 }

@@ -32,8 +32,8 @@ pub struct Style {
     pub dominance: f64,
     /// Speed of movement: steps and bends take 1/tempo of their drawn time (0.8–1.25).
     pub tempo: f64,
-    /// Step length scale (0.85–1.15), capped where the trailing ankle would reach its
-    /// dorsiflexion limit ([`MAX_STEP_FORWARD_M`], [`MAX_STEP_BACKWARD_M`]).
+    /// Step length scale (0.85–1.15), capped where the legs leave their workspace even
+    /// with the trailing foot rolling off ([`MAX_STEP_FORWARD_M`], [`MAX_STEP_BACKWARD_M`]).
     pub stride: f64,
     /// Added to the half-width between the feet, standing and walking, m (−0.015–0.04).
     pub width_m: f64,
@@ -54,9 +54,10 @@ pub struct Style {
     pub break_width: f64,
 }
 
-/// The longest forward step the generator plans, m (its trailing foot stays flat).
-pub const MAX_STEP_FORWARD_M: f64 = 0.26;
-/// The longest backward step, m.
+/// The longest forward step a style stretches a drawn one to, m: the trailing foot rolls
+/// off its toe (a flat one meets its ankle's dorsiflexion limit near 0.27 m).
+pub const MAX_STEP_FORWARD_M: f64 = 0.38;
+/// The longest backward step, m (the feet stay flat walking backward).
 pub const MAX_STEP_BACKWARD_M: f64 = 0.22;
 
 impl Style {

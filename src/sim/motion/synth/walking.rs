@@ -2,7 +2,7 @@
 //! (forward or backward, sometimes turning), all with both hands on the object.
 
 use super::forces::{level, pulse, rc, Levels, Window, Wobble};
-use super::gait::{walk, GaitParams};
+use super::gait::{walk, GaitParams, TurnBout};
 use super::skeleton::Skeleton;
 use super::style::Style;
 use super::tasks::{n_frames, Plan, PlanFrame};
@@ -28,6 +28,7 @@ fn gait_params(
     sk: &Skeleton,
     dur: f64,
     style: &Style,
+    version: u32,
 ) -> GaitParams {
     let direction = match task {
         WalkTask::PushChair => 1.0,
@@ -40,6 +41,9 @@ fn gait_params(
             }
         }
     };
+    if version >= 2 {
+        return gait_params_v2(rng, task, sk, dur, style, direction);
+    }
     // Backward steps are shorter, as people's are. Forward steps stop short of 0.3 m: the
     // trailing foot stays flat (no heel-off), and beyond ~0.27 m its ankle reaches the
     // dorsiflexion limit (−0.87 rad) for some pelvis heights.
@@ -72,6 +76,72 @@ fn gait_params(
         bob_m: rng.random_range(0.005..0.015),
         sway_m: rng.random_range(0.01..0.025),
         half_width_m: sk.foot_y_m + rng.random_range(-0.01..0.01) + style.width_m,
+        roll_off_rad: 0.0,
+        turn_bout: None,
+    }
+}
+
+/// Version 2's walking: forward, the trailing foot rolls off its toe, so steps and
+/// cadence come nearer people's (SOURCES.md, "Walking": people's free cadence is near
+/// 0.55 s a step; TWIST2's G1-retargeted walks move at 0.7 m/s), and a bout may take a
+/// corner.
+fn gait_params_v2(
+    rng: &mut ChaCha8Rng,
+    task: WalkTask,
+    sk: &Skeleton,
+    dur: f64,
+    style: &Style,
+    direction: f64,
+) -> GaitParams {
+    let step_length_m = style.step_length(
+        if direction > 0.0 {
+            rng.random_range(0.22..0.36)
+        } else {
+            rng.random_range(0.15..0.22)
+        },
+        direction,
+    );
+    let step_period_s = rng.random_range(0.5..0.75) / style.tempo;
+    let turn = rng.random_range(-0.03..0.03);
+    let start_s = rng.random_range(1.8..2.6);
+    let stop_s = rng.random_range(1.8..2.6);
+    let n_steps = (((dur - start_s - stop_s) / step_period_s).floor() as usize).max(4);
+    // A corner: most carries, some chair pushes and pulls; 30–90° in 3–6 steps.
+    let corner = match task {
+        WalkTask::Carry => 0.6,
+        _ => 0.3,
+    };
+    let turn_bout = (n_steps >= 8 && rng.random_bool(corner)).then(|| {
+        let steps = rng.random_range(3..7usize).min(n_steps - 3);
+        let angle = rng.random_range(30f64..90.0).to_radians();
+        let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        TurnBout {
+            first: rng.random_range(2..n_steps - steps),
+            steps,
+            rad_per_step: sign * angle / steps as f64,
+        }
+    });
+    GaitParams {
+        direction,
+        step_length_m,
+        step_period_s,
+        lift_m: rng.random_range(0.05..0.08),
+        n_steps,
+        turn_per_step_rad: turn,
+        start_s,
+        left_first: rng.random_bool(0.5),
+        height_m: sk.stand_height_m - rng.random_range(0.01..0.03),
+        bob_m: rng.random_range(0.005..0.015),
+        sway_m: rng.random_range(0.01..0.025),
+        half_width_m: sk.foot_y_m + rng.random_range(-0.01..0.01) + style.width_m,
+        // Backward, the feet stay flat: rolling the leading foot off its heel left the legs
+        // out of reach at the first steps of a pull (most draws failed their IK).
+        roll_off_rad: if direction > 0.0 {
+            rng.random_range(0.25..0.5)
+        } else {
+            0.0
+        },
+        turn_bout,
     }
 }
 
@@ -85,7 +155,7 @@ pub fn walking(
     lv: &Levels,
     style: &Style,
 ) -> Plan {
-    let g = gait_params(rng, task, sk, dur, style);
+    let g = gait_params(rng, task, sk, dur, style, lv.version);
     let n = n_frames(dur, fps);
     let gait = walk(sk, &g, fps, n);
     let chair = task != WalkTask::Carry;
