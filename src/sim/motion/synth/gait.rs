@@ -245,3 +245,81 @@ pub fn walk(sk: &Skeleton, p: &GaitParams, fps: f64, n_frames: usize) -> Vec<Gai
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Point3;
+
+    fn params(direction: f64, roll_off_rad: f64, turn_bout: Option<TurnBout>) -> GaitParams {
+        GaitParams {
+            direction,
+            step_length_m: 0.34,
+            step_period_s: 0.6,
+            lift_m: 0.06,
+            n_steps: 12,
+            turn_per_step_rad: 0.0,
+            start_s: 1.0,
+            left_first: true,
+            height_m: 0.75,
+            bob_m: 0.01,
+            sway_m: 0.02,
+            half_width_m: 0.12,
+            roll_off_rad,
+            turn_bout,
+        }
+    }
+
+    #[test]
+    fn a_rolling_foot_keeps_its_toe_edge_on_the_ground_and_lifts_its_heel() {
+        let robot = crate::sim::robot::load_bundled("g1_29dof").unwrap();
+        let sk = Skeleton::new(&robot).unwrap();
+        let fps = 50.0;
+        let p = params(1.0, 0.4, None);
+        let frames = walk(&sk, &p, fps, 500);
+        // Step 3's double support: the swinging side rolls about its toe's edge.
+        let (step, side) = (3, swing_side(&p, 3));
+        let at = |f: f64| ((p.start_s + (step as f64 - 1.0 + f) * p.step_period_s) * fps) as usize;
+        let (k0, k1) = (at(0.0) + 1, at(DOUBLE_SUPPORT) - 1);
+        let toe = |k: usize| frames[k].feet[side] * Point3::from(sk.toe_m);
+        let heel = |k: usize| frames[k].feet[side] * Point3::new(-0.05, 0.0, sk.toe_m.z);
+        for k in k0..=k1 {
+            assert!(
+                (toe(k) - toe(k0)).norm() < 1e-9,
+                "frame {k}: the toe's edge moved"
+            );
+            assert!((toe(k).z - (sk.ankle_height_m + sk.toe_m.z)).abs() < 1e-9);
+        }
+        assert!(
+            heel(k1).z - heel(k0).z > 0.03,
+            "the heel rose {} m",
+            heel(k1).z - heel(k0).z
+        );
+        // It lands flat: the foot's orientation at the next foothold is yaw only.
+        let land = at(1.0) - 1;
+        let tilt = (frames[land].feet[side].rotation * sk.foot_rot.inverse()).euler_angles();
+        assert!(tilt.0.abs() < 1e-6 && tilt.1.abs() < 1e-6, "{tilt:?}");
+    }
+
+    #[test]
+    fn version_1s_gait_never_rolls_and_a_corner_turns_the_heading_by_its_angle() {
+        let robot = crate::sim::robot::load_bundled("g1_29dof").unwrap();
+        let sk = Skeleton::new(&robot).unwrap();
+        let flat = walk(&sk, &params(1.0, 0.0, None), 50.0, 500);
+        for f in &flat {
+            for foot in &f.feet {
+                let tilt = (foot.rotation * sk.foot_rot.inverse()).euler_angles();
+                assert!(tilt.0.abs() < 1e-9 && tilt.1.abs() < 1e-9);
+            }
+        }
+        let bout = TurnBout {
+            first: 4,
+            steps: 3,
+            rad_per_step: 0.3,
+        };
+        let turned = walk(&sk, &params(1.0, 0.4, Some(bout)), 50.0, 500);
+        let yaw = |f: &GaitFrame| f.pelvis.rotation.euler_angles().2;
+        let turn = yaw(turned.last().unwrap()) - yaw(flat.last().unwrap());
+        assert!((turn - 0.9).abs() < 1e-6, "turned {turn} rad");
+    }
+}
