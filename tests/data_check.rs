@@ -435,3 +435,130 @@ fn mj_inverse_agrees() {
         }
     }
 }
+
+/// `file` rewritten with `force_left_sensor`'s element `index` set to `value` (written with
+/// safetensors directly: the writer refuses such a force), and the manifest's checksum
+/// updated, so only the force bound can refuse it.
+fn plant_force(dataset: &Path, file: &str, index: usize, value: f32) {
+    let path = dataset.join(file);
+    let bytes = std::fs::read(&path).unwrap();
+    let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+    let (_, header) = safetensors::SafeTensors::read_metadata(&bytes).unwrap();
+    let mut owned: Vec<(String, Vec<usize>, Vec<u8>)> = st
+        .tensors()
+        .into_iter()
+        .map(|(n, v)| (n, v.shape().to_vec(), v.data().to_vec()))
+        .collect();
+    let (_, _, data) = owned
+        .iter_mut()
+        .find(|(n, _, _)| n == "force_left_sensor")
+        .unwrap();
+    data[4 * index..4 * index + 4].copy_from_slice(&value.to_le_bytes());
+    let views: Vec<(String, safetensors::tensor::TensorView)> = owned
+        .iter()
+        .map(|(n, s, b)| {
+            let v = safetensors::tensor::TensorView::new(safetensors::Dtype::F32, s.clone(), b);
+            (n.clone(), v.unwrap())
+        })
+        .collect();
+    let planted = safetensors::serialize(views, header.metadata().clone()).unwrap();
+    std::fs::write(&path, &planted).unwrap();
+    let manifest = dataset.join("manifest.json");
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    for e in m["sequences"].as_array_mut().unwrap() {
+        if e["file"] == file {
+            e["sha256"] = serde_json::json!(thorarena::sim::motion::sha256_hex(&planted));
+        }
+    }
+    std::fs::write(&manifest, serde_json::to_string(&m).unwrap()).unwrap();
+}
+
+/// A dataset file holding a 1e30 N hand force (an import bug, a hand-edited file) fails
+/// `data check`, even with the loosest gate, naming the file, the frame and the field;
+/// the same file with 50 N there passes.
+#[test]
+fn data_check_fails_a_sequence_with_a_force_beyond_the_bound() {
+    let tmp = tempfile::tempdir().unwrap();
+    let robot = g1();
+    let ds = tmp.path().join("ds");
+    let mut w = thorarena::sim::motion::DatasetWriter::create(&ds, &robot).unwrap();
+    w.add(&standing(&robot, [0.0, 0.0, 5.0])).unwrap();
+    w.finish().unwrap();
+    let file = "stand/still.safetensors";
+    assert!(ds.join(file).is_file());
+    let check = || {
+        Command::new(BIN)
+            .args(["data", "check", ds.to_str().unwrap(), "--max-outside", "1"])
+            .output()
+            .unwrap()
+    };
+    plant_force(&ds, file, 3 * 12 + 2, 50.0);
+    let ok = check();
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    plant_force(&ds, file, 3 * 12 + 2, 1e30);
+    let bad = check();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success(), "passed: {err}");
+    for needle in [file, "force_left_sensor", "frame 12", "e30 N", "500 N"] {
+        assert!(err.contains(needle), "`{needle}` missing from: {err}");
+    }
+}
+
+/// A gate that is no share (2, −1, NaN, 1e300) is refused before the check runs: no
+/// sequence checked, no `--out` directory made; a dataset of no sequence fails the check
+/// instead of passing any gate.
+#[test]
+fn a_bad_gate_is_refused_before_the_check_and_a_check_over_nothing_fails() {
+    let tmp = tempfile::tempdir().unwrap();
+    for bad in ["2", "-1", "NaN", "1e300"] {
+        let out = tmp.path().join(format!("out-{bad}"));
+        let run = Command::new(BIN)
+            .args(["data", "check", SAMPLE, "--out", out.to_str().unwrap()])
+            .arg(format!("--max-outside={bad}"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{bad}: passed: {err}");
+        assert!(
+            err.contains("--max-outside") && err.contains("share from 0 to 1"),
+            "{bad}: {err}"
+        );
+        assert!(
+            !err.contains("checked "),
+            "{bad}: the check ran first: {err}"
+        );
+        assert!(!out.exists(), "{bad}: {} was written", out.display());
+        assert!(err.len() < 200, "{bad}: {err}");
+    }
+    // A dataset whose manifest lists no sequence.
+    let empty = tmp.path().join("empty");
+    let robot = g1();
+    let mut w = thorarena::sim::motion::DatasetWriter::create(&empty, &robot).unwrap();
+    w.add(&standing(&robot, [0.0; 3])).unwrap();
+    w.finish().unwrap();
+    std::fs::remove_dir_all(empty.join("stand")).unwrap();
+    let manifest = empty.join("manifest.json");
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&manifest).unwrap()).unwrap();
+    m["sequences"] = serde_json::json!([]);
+    std::fs::write(&manifest, m.to_string()).unwrap();
+    assert_eq!(Dataset::open(&empty, &robot).unwrap().len(), 0);
+    let run = Command::new(BIN)
+        .args([
+            "data",
+            "check",
+            empty.to_str().unwrap(),
+            "--max-outside",
+            "0",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success(), "a check over nothing passed: {err}");
+    assert!(err.contains("no sequence"), "{err}");
+}

@@ -405,3 +405,164 @@ fn an_impossible_joint_value_is_refused_and_never_breaks_a_dataset() {
         dataset.load(0).expect("its sequence still loads");
     }
 }
+
+/// A trace as `eval --trace` writes it: 40 steps of 20 ms standing in the default pose
+/// with 10 N on each hand; `edit` changes step 5.
+fn write_trace(path: &Path, edit: impl Fn(&mut thorarena::eval::episode::TraceStep)) {
+    let steps: Vec<thorarena::eval::episode::TraceStep> = (0..40)
+        .map(|k| {
+            let mut s = thorarena::eval::episode::TraceStep {
+                time_s: 0.02 * (k + 1) as f64,
+                root_pos: [0.0, 0.0, 0.78],
+                root_quat_wxyz: [1.0, 0.0, 0.0, 0.0],
+                q: g1().default_pose(),
+                targets: g1().default_pose(),
+                hand_force_w: [[10.0, 0.0, 0.0]; 2],
+                keypoints_w: Vec::new(),
+                reference_keypoints_w: Vec::new(),
+                kp_err_m: 0.0,
+                reference_root_pos: None,
+                reference_root_quat_wxyz: None,
+                reference_q: None,
+                feet: None,
+            };
+            if k == 5 {
+                edit(&mut s);
+            }
+            s
+        })
+        .collect();
+    std::fs::write(path, serde_json::to_string(&steps).unwrap()).unwrap();
+}
+
+fn import_rollout(trace: &Path, out: &Path) -> std::process::Output {
+    thorarena(&[
+        "data",
+        "import",
+        "--format",
+        "rollout",
+        trace.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--task",
+        "rollout",
+    ])
+}
+
+/// `data import --format rollout` meets the bounds every other format meets: a joint at
+/// 1e30 rad or a knee at 10 rad (7 past its limit), a zero root quaternion and a 1e30 N
+/// hand force are refused naming the file, the step and the field — the quaternion as
+/// the quaternion, not as the forces it would have made NaN — and nothing is written.
+#[test]
+fn a_rollout_beyond_the_import_bounds_is_refused_naming_step_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let clean = dir.path().join("clean.json");
+    write_trace(&clean, |_| {});
+    let run = import_rollout(&clean, &dir.path().join("ok"));
+    assert!(
+        run.status.success(),
+        "a clean trace: {}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    type Edit = fn(&mut thorarena::eval::episode::TraceStep);
+    let cases: [(&str, Edit, &[&str]); 4] = [
+        (
+            "far",
+            |s| s.q[0] = 1e30,
+            &["`q`", "left_hip_pitch_joint", "1e30 rad"],
+        ),
+        (
+            "knee",
+            |s| s.q[3] = 10.0,
+            &["`q`", "left_knee_joint", "10 rad", "widened by 1 rad"],
+        ),
+        (
+            "zero",
+            |s| s.root_quat_wxyz = [0.0; 4],
+            &["`root_quat_wxyz`", "root quaternion", "not a rotation"],
+        ),
+        (
+            "force",
+            |s| s.hand_force_w[1] = [0.0, 0.0, 1e30],
+            &["`hand_force_w` (right)", "1e30 N", "500 N"],
+        ),
+    ];
+    for (name, edit, needles) in cases {
+        let trace = dir.path().join(format!("{name}.json"));
+        write_trace(&trace, edit);
+        let out = dir.path().join(format!("ds-{name}"));
+        let run = import_rollout(&trace, &out);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{name}: imported: {err}");
+        assert!(
+            !err.contains("panicked") && !err.contains("force_left_sensor"),
+            "{name}: {err}"
+        );
+        for needle in [&format!("{name}.json"), "step 5"]
+            .into_iter()
+            .chain(needles.iter().copied().map(|s| s))
+        {
+            assert!(
+                err.contains(needle),
+                "{name}: `{needle}` missing from: {err}"
+            );
+        }
+        assert!(
+            !out.join("manifest.json").exists(),
+            "{name}: a dataset was written"
+        );
+    }
+}
+
+/// One 1e30 N sample in a force log is refused naming the log, its row and the force's
+/// columns; a 400 N one (beyond any task, within the bound) imports.
+#[test]
+fn a_force_log_sample_beyond_the_bound_is_refused_naming_file_row_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let motion = dir.path().join("m.csv");
+    write_lafan(&motion, 1.0);
+    let log = |spike: &str| -> String {
+        "time,fx,fy,fz\n".to_string()
+            + &(0..=100)
+                .map(|i| {
+                    let fz = if i == 7 { spike } else { "5" };
+                    format!("{},0,0,{fz}\n", i as f64 * 0.01)
+                })
+                .collect::<String>()
+    };
+    let right = dir.path().join("r.csv");
+    std::fs::write(&right, log("5")).unwrap();
+    for (spike, ok) in [("400", true), ("1e30", false)] {
+        let left = dir.path().join(format!("left-{spike}.csv"));
+        std::fs::write(&left, log(spike)).unwrap();
+        let out = dir.path().join(format!("ds-{spike}"));
+        let run = thorarena(&[
+            "data",
+            "import",
+            "--format",
+            "lafan-csv",
+            motion.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--task",
+            "clean_table",
+            "--forces",
+            left.to_str().unwrap(),
+            right.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.success(), ok, "{spike}: {err}");
+        if !ok {
+            for needle in [
+                &format!("left-{spike}.csv") as &str,
+                "row 9",
+                "fx, fy, fz",
+                "1e30 N",
+                "500 N",
+            ] {
+                assert!(err.contains(needle), "`{needle}` missing from: {err}");
+            }
+            assert!(!out.join("manifest.json").exists());
+        }
+    }
+}

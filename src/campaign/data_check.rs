@@ -11,7 +11,7 @@ use crate::eval::EngineChoice;
 use crate::policy::registry::{self, PolicySource, RegistryError};
 use crate::sim::motion::check::held::{SequenceHeld, TrackerHeld};
 use crate::sim::motion::check::{
-    check_dataset, CheckError, CheckOptions, CheckWriteError, DatasetCheck,
+    check_dataset, CheckError, CheckGateError, CheckOptions, CheckWriteError, DatasetCheck,
 };
 use crate::sim::motion::{DataError, Dataset};
 use std::path::PathBuf;
@@ -34,6 +34,9 @@ pub struct DataCheckJob {
     pub tracker: Option<PolicySource>,
     /// Engine of the tracker's rollouts.
     pub engine: EngineChoice,
+    /// The gate the caller applies afterwards (`DatasetCheck::gate`), checked here
+    /// before anything runs or is written.
+    pub max_outside: Option<f64>,
 }
 
 /// Why a data check could not be made, or did not pass.
@@ -51,6 +54,9 @@ pub enum DataCheckError {
     /// The motions could not be checked.
     #[error(transparent)]
     Check(#[from] CheckError),
+    /// The gate is no share.
+    #[error(transparent)]
+    Gate(#[from] CheckGateError),
     /// The check's files could not be written.
     #[error(transparent)]
     Write(#[from] CheckWriteError),
@@ -98,11 +104,15 @@ impl DataCheckObserver for ProgressLines<'_> {
 }
 
 /// Runs `job`: the check, the tracker's rollouts when asked, and the files when `out` is
-/// given. The gate (`DatasetCheck::gate`) is the caller's, after it has shown the check.
+/// given. The gate (`DatasetCheck::gate`) is the caller's, after it has shown the check;
+/// every option, the gate's share included, is checked before anything runs.
 pub fn run_data_check(
     job: &DataCheckJob,
     observer: &mut dyn DataCheckObserver,
 ) -> Result<DatasetCheck, DataCheckError> {
+    if let Some(max) = job.max_outside {
+        CheckGateError::check_share(max)?;
+    }
     if job.tracker.is_some() && job.out.is_none() {
         return Err(DataCheckError::RolloutNeedsOut);
     }

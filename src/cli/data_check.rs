@@ -47,6 +47,7 @@ pub(super) fn run(args: &CheckArgs) -> anyhow::Result<()> {
         out: args.out.clone(),
         tracker: args.rollout.clone(),
         engine: args.engine.into(),
+        max_outside: args.max_outside,
     };
     let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
     let check = run_data_check(&job, &mut ProgressLines::new(&mut say))?;

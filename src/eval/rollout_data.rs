@@ -74,6 +74,7 @@ pub fn rollout_sequence(
             robot.n_joints()
         )));
     }
+    check_steps(steps, robot).map_err(unusable)?;
     let mut poses = Vec::new();
     let mut force_sensor = [Vec::new(), Vec::new()];
     for s in steps {
@@ -116,6 +117,34 @@ pub fn rollout_sequence(
     };
     seq.validate(path)?;
     Ok(seq)
+}
+
+/// Holds a trace's steps to the bounds every import meets
+/// ([`crate::sim::motion::import::bounds`]): a root quaternion that is a rotation, joint
+/// angles within their limits widened as for motion files, and hand forces within the
+/// plausibility bound; the refusal names the step and the field.
+fn check_steps(steps: &[TraceStep], robot: &RobotModel) -> Result<(), String> {
+    use crate::sim::motion::import::bounds;
+    for (k, s) in steps.iter().enumerate() {
+        if let Some(why) = bounds::rotation_problem(&s.root_quat_wxyz) {
+            return Err(format!("step {k}, field `root_quat_wxyz`: {why}"));
+        }
+        if let Some(why) = robot
+            .joints
+            .iter()
+            .zip(&s.q)
+            .find_map(|(j, v)| bounds::joint_angle_problem(j, *v))
+        {
+            return Err(format!("step {k}, field `q`: {why}"));
+        }
+        for (side, f) in s.hand_force_w.iter().enumerate() {
+            if let Some(why) = bounds::hand_force_problem(f) {
+                let hand = if side == LEFT { "left" } else { "right" };
+                return Err(format!("step {k}, field `hand_force_w` ({hand}): {why}"));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Writes the rollouts of `traces` into the dataset `out` (created, or appended to when it

@@ -81,7 +81,10 @@ impl Sequence {
         self.n_frames().saturating_sub(1) as f64 / self.fps
     }
 
-    /// Checks every invariant of the format; `file` names the source in errors.
+    /// Checks every invariant of the format; `file` names the source in errors. Hand
+    /// forces are held to the import bound
+    /// ([`crate::sim::motion::import::bounds::MAX_HAND_FORCE_N`]) here, so a dataset file
+    /// holding one beyond it is refused on load as on import.
     pub fn validate(&self, file: &Path) -> Result<(), DataError> {
         let t = self.n_frames();
         if let Some(problem) = crate::sim::motion::fps_problem(self.fps) {
@@ -122,16 +125,6 @@ impl Sequence {
         }
         check_finite(file, "root_pos", self.root_pos.iter().flatten())?;
         check_finite(file, "root_quat_wxyz", self.root_quat_wxyz.iter().flatten())?;
-        check_finite(
-            file,
-            "force_left_sensor",
-            self.force_sensor[LEFT].iter().flatten(),
-        )?;
-        check_finite(
-            file,
-            "force_right_sensor",
-            self.force_sensor[RIGHT].iter().flatten(),
-        )?;
         for (k, q) in self.root_quat_wxyz.iter().enumerate() {
             let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
             if (n - 1.0).abs() > QUAT_NORM_TOLERANCE {
@@ -139,9 +132,17 @@ impl Sequence {
                     file,
                     "root_quat_wxyz",
                     format!(
-                        "frame {k}: norm {n:.6} is off unit by more than {QUAT_NORM_TOLERANCE}"
+                        "frame {k}: root quaternion norm {n:.6} is off unit by more than {QUAT_NORM_TOLERANCE}"
                     ),
                 ));
+            }
+        }
+        for (side, name) in [(LEFT, "force_left_sensor"), (RIGHT, "force_right_sensor")] {
+            check_finite(file, name, self.force_sensor[side].iter().flatten())?;
+            for (k, f) in self.force_sensor[side].iter().enumerate() {
+                if let Some(why) = super::import::bounds::hand_force_problem(f) {
+                    return Err(bad(file, name, format!("frame {k}: {why}")));
+                }
             }
         }
         for side in [LEFT, RIGHT] {

@@ -458,6 +458,9 @@ pub enum CheckError {
         /// Frames it has.
         frames: usize,
     },
+    /// The dataset holds no sequence: a check over nothing would pass any gate.
+    #[error("{0}: the dataset holds no sequence, so there is nothing to check")]
+    Empty(String),
     /// The low-pass cutoff is no frequency.
     #[error("`option.cutoff_hz` must be a frequency above 0 Hz, got {0}")]
     Cutoff(f64),
@@ -485,7 +488,7 @@ pub fn task_force_spans(
 }
 
 /// Checks every sequence of `ds` (loaded in `seqs`), calling `progress(done, total)` after
-/// each.
+/// each; no sequence at all is an error ([`CheckError::Empty`]), not a pass.
 pub fn check_dataset(
     ds: &Dataset,
     seqs: &[Sequence],
@@ -494,6 +497,9 @@ pub fn check_dataset(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<DatasetCheck, CheckError> {
     let soles = checked_soles(robot, opts)?;
+    if seqs.is_empty() {
+        return Err(CheckError::Empty(ds.dir.display().to_string()));
+    }
     let mut series = Vec::with_capacity(seqs.len());
     for (i, seq) in seqs.iter().enumerate() {
         series.push(sequence_series(seq, robot, &soles, opts)?);

@@ -14,7 +14,7 @@ pub const CHECK_JSON: &str = "check.json";
 #[derive(Debug, thiserror::Error)]
 pub enum CheckGateError {
     /// The gate is no share.
-    #[error("`option.max_outside` is a share from 0 to 1, got {0}")]
+    #[error("`option.max_outside` is a share from 0 to 1, got {}", crate::files::names::short_number(*.0))]
     Share(f64),
     /// Tasks above it.
     #[error("stance frames with the CoP outside the support above `option.max_outside` {max_share}: {tasks}")]
@@ -24,6 +24,18 @@ pub enum CheckGateError {
         /// Each task over it, with its share.
         tasks: String,
     },
+}
+
+impl CheckGateError {
+    /// Refuses a gate that is no share from 0 to 1 (NaN, −1, 2, 1e300), so a command can
+    /// refuse it before the check runs or writes anything.
+    pub fn check_share(max_share: f64) -> Result<(), Self> {
+        if (0.0..=1.0).contains(&max_share) {
+            Ok(())
+        } else {
+            Err(Self::Share(max_share))
+        }
+    }
 }
 
 /// Writing a check's files failed.
@@ -157,9 +169,7 @@ impl DatasetCheck {
     /// Passes when no task's share of stance frames outside (with force or without) is
     /// above `max_share` (0 to 1); else the error names each task over it.
     pub fn gate(&self, max_share: f64) -> Result<(), CheckGateError> {
-        if !(0.0..=1.0).contains(&max_share) {
-            return Err(CheckGateError::Share(max_share));
-        }
+        CheckGateError::check_share(max_share)?;
         let over: Vec<String> = self
             .tasks_over(max_share)
             .iter()

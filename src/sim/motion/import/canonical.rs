@@ -178,11 +178,7 @@ fn trim_root_glitches(
     Ok(glitches)
 }
 
-/// How far beyond a joint's limits an imported angle may lie, rad: retargeted human motion
-/// overshoots a limit by a little (the controller's PD law clamps it), while a value far
-/// beyond one is a broken file (a unit mix-up, a corrupt cell) that would be stored and
-/// scored as if it were motion.
-pub const JOINT_LIMIT_MARGIN_RAD: f64 = 1.0;
+pub use super::bounds::JOINT_LIMIT_MARGIN_RAD;
 
 /// For each robot joint, the file's column holding it (`None`: the file lacks it, and it
 /// is set to 0). A joint name the robot lacks, or named twice, is an error, and so is a
@@ -225,27 +221,15 @@ fn joint_columns(
     for (j, c) in column_of.iter().enumerate() {
         let Some(c) = *c else { continue };
         let joint = &robot.joints[j];
-        let (lo, hi) = (
-            joint.lower_rad - JOINT_LIMIT_MARGIN_RAD,
-            joint.upper_rad + JOINT_LIMIT_MARGIN_RAD,
-        );
-        if let Some((k, v)) = raw
-            .joint_pos
-            .iter()
-            .map(|r| r[c])
-            .enumerate()
-            .find(|(_, v)| !(lo..=hi).contains(v))
+        if let Some((k, why)) =
+            raw.joint_pos.iter().enumerate().find_map(|(k, r)| {
+                super::bounds::joint_angle_problem(joint, r[c]).map(|why| (k, why))
+            })
         {
             return Err(bad_field(
                 source,
                 "joint_pos",
-                format!(
-                    "frame {k}, column {c} (`{}`) is {} rad, outside the joint's limits {:.3} to {:.3} rad widened by {JOINT_LIMIT_MARGIN_RAD} rad",
-                    joint.name,
-                    crate::files::names::short_number(v),
-                    joint.lower_rad,
-                    joint.upper_rad
-                ),
+                format!("frame {k}, column {c}: {why}"),
             ));
         }
     }
@@ -272,14 +256,14 @@ fn root_quaternions(
     let mut quats = root_quat_wxyz.to_vec();
     let mut renormalized = 0usize;
     for (k, q) in quats.iter_mut().enumerate() {
-        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if !n.is_finite() || n < 1e-9 {
+        if let Some(why) = super::bounds::rotation_problem(q) {
             return Err(bad_field(
                 source,
                 "root orientation",
-                format!("frame {k}: not a rotation (norm {n})"),
+                format!("frame {k}: {why}"),
             ));
         }
+        let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
         if (n - 1.0).abs() > QUAT_NORM_TOLERANCE {
             if !opts.renormalize_quaternions {
                 return Err(bad_field(

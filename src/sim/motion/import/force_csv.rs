@@ -20,7 +20,8 @@ pub struct ForceLog {
 }
 
 /// Reads a force log. Errors name the line as `row N` / `row N, column M` (1-based file
-/// lines, header included, so an editor finds them).
+/// lines, header included, so an editor finds them); a sample beyond
+/// [`super::bounds::MAX_HAND_FORCE_N`] is refused.
 pub fn read_force_csv(path: &Path) -> Result<ForceLog, ImportError> {
     let bad = |field: String, reason: String| ImportError::BadField {
         path: path.to_path_buf(),
@@ -86,8 +87,12 @@ pub fn read_force_csv(path: &Path) -> Result<ForceLog, ImportError> {
                 ));
             }
         }
+        let force_n = [values[1], values[2], values[3]];
+        if let Some(why) = super::bounds::hand_force_problem(&force_n) {
+            return Err(bad(format!("{row}, columns 2 to 4 (fx, fy, fz)"), why));
+        }
         log.time_s.push(values[0]);
-        log.force_n.push([values[1], values[2], values[3]]);
+        log.force_n.push(force_n);
     }
     if log.time_s.is_empty() {
         return Err(ImportError::Format {

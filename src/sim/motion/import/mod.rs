@@ -3,6 +3,7 @@
 //! canonical joint order, attaching forces and validating happen once, here.
 
 mod batch;
+pub mod bounds;
 pub mod canonical;
 pub mod force_csv;
 pub mod lafan_csv;
