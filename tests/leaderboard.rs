@@ -429,3 +429,98 @@ fn falcon_and_a_compliant_pair_on_the_leaderboard_equal_separate_eval_runs() {
     assert!(grafted.contains("stand+forces-push_chair_000"), "{grafted}");
     assert!(csv.contains("force-log:push_chair/push_chair_000"), "{csv}");
 }
+
+/// `--pair-seconds 1e300` is refused before anything runs, naming the flag (it once became
+/// a clip of 0 s, blamed on the policy's sanity check after the first member started).
+#[test]
+fn pair_seconds_beyond_any_clip_are_refused_up_front_naming_the_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let sample = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+    let (a, b) = (dir.path().join("a.onnx"), dir.path().join("b.onnx"));
+    let pair = format!(
+        "softmimic:{} vs softmimic:{}@{sample}",
+        a.display(),
+        b.display()
+    );
+    for (seconds, shown) in [("1e300", "1e300"), ("1e5", "100000")] {
+        let out = dir.path().join("lb");
+        let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+            .args(["leaderboard", "--pair", &pair, "--pair-seconds", seconds])
+            .args(["--engines", "rapier", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{seconds}: {stderr}");
+        assert!(
+            stderr.contains(&format!("--pair-seconds {shown}")) && !stderr.contains("sanity"),
+            "{seconds}: {stderr}"
+        );
+        assert!(stderr.len() < 400, "{seconds}: {stderr}");
+        assert!(!out.join("pairs").exists(), "{seconds}: a pair ran");
+    }
+}
+
+/// A policy process whose command changed since its run is not resumed, and the message
+/// says what to do with the leaderboard's own flags (`--rerun NAME`), never `eval`'s
+/// `--resume` or `--overwrite`; with `--rerun` the run starts again and finishes. A
+/// `--rerun` naming no policy of the board is refused before anything runs.
+#[test]
+fn a_changed_policy_command_is_rerun_with_the_leaderboards_own_flag() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lb");
+    let file = dir.path().join("policies.toml");
+    let board = |command: &str, extra: &[&str]| {
+        std::fs::write(
+            &file,
+            format!(
+                "[[policy]]\nname = \"bal\"\ncommand = \"{command}\"\nconnect_timeout_s = 60\n"
+            ),
+        )
+        .unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+            .args(["leaderboard", "--policy-file"])
+            .arg(&file)
+            .args([
+                "--engines",
+                "rapier",
+                "--per-task",
+                "1",
+                "--settings",
+                "force",
+            ])
+            .arg("--out")
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let first = "{thorarena} client --session {session} --policy balance";
+    let (ok, stderr) = board(first, &[]);
+    assert!(ok, "{stderr}");
+    // Another controller behind the same name: the run's header differs in its policy.
+    let changed = "{thorarena} client --session {session} --policy hold";
+    let (ok, stderr) = board(changed, &[]);
+    assert!(!ok, "resumed a run of another command: {stderr}");
+    assert!(
+        stderr.contains("--rerun bal")
+            && !stderr.contains("--overwrite")
+            && !stderr.contains("--resume"),
+        "{stderr}"
+    );
+    let (ok, stderr) = board(changed, &["--rerun", "other"]);
+    assert!(
+        !ok && stderr.contains("--rerun") && stderr.contains("`other`"),
+        "{stderr}"
+    );
+    let (ok, stderr) = board(changed, &["--rerun", "bal"]);
+    assert!(ok, "{stderr}");
+    assert!(stderr.contains("again from the start"), "{stderr}");
+    let header = std::fs::read_to_string(out.join("runs/bal-rapier/run.json")).unwrap();
+    let header: serde_json::Value = serde_json::from_str(&header).unwrap();
+    assert_eq!(header["policy"], "hold", "{header}");
+}

@@ -92,6 +92,11 @@ pub struct Args {
     /// Score policies without their sanity check (recorded in each run.json).
     #[arg(long)]
     pub unchecked: bool,
+    /// A policy (its --policy argument, or a policy file's `name`) whose runs start again
+    /// from the start instead of resuming: after its command, file or settings changed.
+    /// Repeat for each.
+    #[arg(long, value_name = "NAME")]
+    pub rerun: Vec<String>,
 }
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
@@ -118,6 +123,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         out: args.out.clone(),
         unchecked: args.unchecked,
         command: std::env::args().skip(1).collect::<Vec<_>>().join(" "),
+        rerun: args.rerun.clone(),
     };
     let mut say = |line: &str| eprintln!("{}", super::flags::as_flags(line));
     let written = run_leaderboard_job(&job, &mut ProgressLines::new(&mut say))?;

@@ -46,6 +46,8 @@ pub struct LeaderboardJob {
     pub unchecked: bool,
     /// The command line, as the page records it.
     pub command: String,
+    /// Policies whose runs start again from the start (`LeaderboardRequest::rerun`).
+    pub rerun: Vec<String>,
 }
 
 /// Why the leaderboard could not be made.
@@ -137,10 +139,18 @@ pub fn run_leaderboard_job(
         settings: job.settings.clone(),
         out: job.out.clone(),
         unchecked: job.unchecked,
+        rerun: job.rerun.clone(),
     };
     let nothing_general =
         request.policies.is_empty() && request.processes.is_empty() && request.clips.is_empty();
     let entries = if nothing_general {
+        if let Some(name) = job.rerun.first() {
+            return Err(LeaderboardError::Names(format!(
+                "`option.rerun` names `{}`, but the board runs no general policy (a pair's runs are removed by hand)",
+                name.escape_debug()
+            ))
+            .into());
+        }
         Vec::new()
     } else {
         run_leaderboard(&request, observer)?

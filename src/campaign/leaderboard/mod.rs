@@ -71,6 +71,19 @@ pub enum LeaderboardError {
         /// Why.
         source: Box<BenchmarkError>,
     },
+    /// A run found in the board's directory was made under another configuration (a
+    /// process's command, the settings, the dataset changed since): it is not resumed.
+    #[error("{policy} on {engine}: {source}; {advice}")]
+    OtherRun {
+        /// The policy argument, or the process's name.
+        policy: String,
+        /// The engine.
+        engine: &'static str,
+        /// What differs.
+        source: Box<crate::eval::results::ResultsError>,
+        /// What the user can do, in the command's own options.
+        advice: String,
+    },
     /// Two rows of the board would write one run directory, or one engine is asked
     /// twice, or a process's name cannot name a run: refused before anything runs.
     #[error("{0}")]
@@ -225,6 +238,9 @@ pub struct LeaderboardRequest {
     pub out: PathBuf,
     /// Score policies without their sanity check (recorded in each run).
     pub unchecked: bool,
+    /// Policies (as [`Entry`]'s runs name them: the argument, or the process's name) whose
+    /// runs start again from the start instead of resuming.
+    pub rerun: Vec<String>,
 }
 
 /// One (policy, engine) run of the leaderboard.
@@ -389,6 +405,7 @@ pub fn run_leaderboard(
         .map(|c| (Player::Argument(c.policy.clone()), c.dataset.clone(), true));
     let runs: Vec<(Player, PathBuf, bool)> = general.chain(own).collect();
     check_names(&runs, &request.engines)?;
+    check_rerun(&runs, &request.rerun)?;
     check_out(&request.out)?;
     let total = runs.len() * request.engines.len();
     let mut entries = Vec::new();
@@ -408,6 +425,7 @@ pub fn run_leaderboard(
             } else {
                 &request.settings
             };
+            let rerun = request.rerun.contains(&player.name());
             let summary = run_one(
                 request.unchecked,
                 player,
@@ -415,6 +433,7 @@ pub fn run_leaderboard(
                 settings,
                 engine,
                 &run,
+                Resume::Board { rerun },
                 observer,
             )?;
             entries.push(Entry {
@@ -446,9 +465,41 @@ pub fn run_in_process(
     observer: &mut dyn LeaderboardObserver,
 ) -> Result<Summary, LeaderboardError> {
     let player = Player::Argument(source.clone());
-    run_one(false, &player, dataset, settings, engine, run, observer)
+    let resume = Resume::Alone;
+    run_one(
+        false, &player, dataset, settings, engine, run, resume, observer,
+    )
 }
 
+/// How a run already in its directory is treated, and what a refusal to resume it
+/// advises.
+#[derive(Debug, Clone, Copy)]
+enum Resume {
+    /// A leaderboard's run: resumed unless `rerun` (`option.rerun` names its policy).
+    Board {
+        /// Start it again from the start.
+        rerun: bool,
+    },
+    /// A run of another command (`data check --rollout`): resumed, or removed by hand.
+    Alone,
+}
+
+/// Refuses an `option.rerun` that names no policy of the board, before anything runs.
+fn check_rerun(runs: &[(Player, PathBuf, bool)], rerun: &[String]) -> Result<(), LeaderboardError> {
+    for name in rerun {
+        if !runs.iter().any(|(p, _, _)| p.name() == *name) {
+            let names: Vec<String> = runs.iter().map(|(p, _, _)| p.name()).collect();
+            return Err(LeaderboardError::Names(format!(
+                "`option.rerun` names `{}`, no policy of this board (its policies: {})",
+                name.escape_debug(),
+                names.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
 fn run_one(
     unchecked: bool,
     player: &Player,
@@ -456,6 +507,7 @@ fn run_one(
     settings: &[String],
     engine: EngineChoice,
     run: &Path,
+    resume: Resume,
     observer: &mut dyn LeaderboardObserver,
 ) -> Result<Summary, LeaderboardError> {
     let name = player.name();
@@ -483,6 +535,7 @@ fn run_one(
     let target = PolicyTarget {
         robot: &spec.robot,
         profile: &spec.profile,
+        process_profile: spec.process_profile,
         session: &SessionOptions::LAUNCHED,
         envs: spec.envs,
         launch_log: Some(&log),
@@ -497,8 +550,15 @@ fn run_one(
             source: Box::new(source),
         })?;
     let dir = RunDir::new(run);
+    let rerun = matches!(resume, Resume::Board { rerun: true });
+    if rerun && dir.header_file().exists() {
+        observer.note(&format!(
+            "  {}: running it again from the start, as `option.rerun` asks",
+            dir.path().display()
+        ));
+    }
     let options = EvalOptions {
-        resume: resumable(&dir, policy.as_ref(), &spec, observer),
+        resume: !rerun && resumable(&dir, policy.as_ref(), &spec, observer),
         trace_first_s: None,
     };
     let evaluated = evaluate(
@@ -508,10 +568,26 @@ fn run_one(
         options,
         observer.eval_observer(),
     )
-    .map_err(|source| LeaderboardError::Eval {
-        policy: name,
-        engine: engine_name,
-        source: Box::new(source),
+    .map_err(|source| match source {
+        BenchmarkError::ResumedOther(other) => LeaderboardError::OtherRun {
+            advice: match resume {
+                Resume::Board { .. } => format!(
+                    "give `option.rerun` {name} to run it again from the start (its episodes are replaced), or choose another `option.out`"
+                ),
+                Resume::Alone => format!(
+                    "remove {} to run it again from the start, or choose another `option.out`",
+                    dir.path().display()
+                ),
+            },
+            policy: name.clone(),
+            engine: engine_name,
+            source: Box::new(other),
+        },
+        source => LeaderboardError::Eval {
+            policy: name.clone(),
+            engine: engine_name,
+            source: Box::new(source),
+        },
     })?;
     Ok(evaluated.summary)
 }

@@ -11,7 +11,9 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 /// The first `seconds` of `seq` (all of it when shorter; at least two frames).
 pub fn first_seconds(seq: &Sequence, seconds: f64) -> Sequence {
-    let frames = ((seconds * seq.fps).round() as usize + 1).clamp(2, seq.n_frames().max(2));
+    // Capped before the cast: 1e300 s would saturate to usize::MAX and wrap to 0 frames.
+    let steps = (seconds * seq.fps).round().min(seq.n_frames() as f64);
+    let frames = (steps as usize + 1).clamp(2, seq.n_frames().max(2));
     let frames = frames.min(seq.n_frames());
     let mut s = seq.clone();
     s.root_pos.truncate(frames);

@@ -226,10 +226,14 @@ fn one_sequence_dataset(
 /// velocity errors of the scores need a second of motion.
 pub const MIN_PAIR_SECONDS: f64 = 1.0;
 
+/// The longest stretch of a clip a pair runs, s: an hour, longer than any clip (a longer
+/// clip runs whole); a larger number is a mistake, once turned into a clip of 0 s.
+pub const MAX_PAIR_SECONDS: f64 = 3600.0;
+
 /// Checks the pairs and their options before anything runs — the leaderboard's own runs
 /// included — and gives each pair's stiffness sweep (the compliant member's arguments at
 /// each stiffness besides its default): a pair is two different network files, the
-/// seconds are a number of at least [`MIN_PAIR_SECONDS`], the pushes settings `eval`
+/// seconds are a number of [`MIN_PAIR_SECONDS`] to [`MAX_PAIR_SECONDS`], the pushes settings `eval`
 /// takes, and a stiffness the family's declared one (a value repeated, as `30,30.0`, runs
 /// once).
 pub fn check_pairs(
@@ -240,9 +244,9 @@ pub fn check_pairs(
         return Ok(Vec::new());
     }
     let all = |message: String| data_error("(every pair)", message);
-    if !(options.seconds.is_finite() && options.seconds >= MIN_PAIR_SECONDS) {
+    if !(MIN_PAIR_SECONDS..=MAX_PAIR_SECONDS).contains(&options.seconds) {
         return Err(all(format!(
-            "`option.pair_seconds` {}: give at least {MIN_PAIR_SECONDS} s of the clip",
+            "`option.pair_seconds` {}: give {MIN_PAIR_SECONDS} to {MAX_PAIR_SECONDS} s of the clip (a clip shorter runs whole)",
             crate::eval::short_number(options.seconds)
         )));
     }
@@ -358,6 +362,7 @@ pub fn run_pairs(
                     &settings,
                     engine,
                     &run.with_extension("pushes"),
+                    super::Resume::Alone,
                     observer,
                 )?;
                 let force_log = run_one(
@@ -367,6 +372,7 @@ pub fn run_pairs(
                     &["force".to_string()],
                     engine,
                     &run.with_extension("force-log"),
+                    super::Resume::Alone,
                     observer,
                 )?;
                 members.push(PairMember {
