@@ -18,7 +18,7 @@
 /**
  * Version of the wire protocol; bumped on any change of the messages or the layout.
  */
-#define THORARENA_PROTOCOL_VERSION 3
+#define THORARENA_PROTOCOL_VERSION 4
 
 /**
  * `timeout_us` of [`thorarena_next_step`]: wait as long as the simulator lives.
@@ -49,6 +49,11 @@
  * Bytes of a policy-input name in `Hello` (NUL-padded UTF-8).
  */
 #define THORARENA_INPUT_NAME_BYTES 32
+
+/**
+ * Bytes of a declared profile's name in `Hello` (NUL-padded UTF-8).
+ */
+#define THORARENA_PROFILE_NAME_BYTES 32
 
 /**
  * First word of every batch: "THOR" in ASCII, to catch a misrouted or torn block.
@@ -123,6 +128,11 @@ typedef enum ThorarenaStatus {
    */
   THORARENA_STATUS_REFUSED_INPUT = 7,
   /**
+   * Refused: the profile the policy declared is unknown, malformed or not the run's,
+   * or it declared none and the run names none (the message says what to do).
+   */
+  THORARENA_STATUS_REFUSED_PROFILE = 8,
+  /**
    * The run is over: leave the loop and close the client.
    */
   THORARENA_STATUS_END = 10,
@@ -185,6 +195,49 @@ typedef enum ThorarenaStatus {
 typedef struct ThorarenaClient ThorarenaClient;
 
 /**
+ * A dynamics profile by its numbers: what a policy declares it was trained under. Every
+ * array holds `n_joints` values in the robot's canonical joint order (the session's).
+ */
+typedef struct ThorarenaProfile {
+  /**
+   * Its name, for results (NUL-terminated, at most 31 bytes).
+   */
+  const char *name;
+  /**
+   * Control period, s.
+   */
+  double control_dt_s;
+  /**
+   * Physics step, s (divides `control_dt_s`).
+   */
+  double physics_dt_s;
+  /**
+   * Control steps between an action and its effect.
+   */
+  uint32_t action_delay_steps;
+  /**
+   * Raw actions are clipped to ±this before scaling (0: no clip).
+   */
+  double action_clip;
+  /**
+   * PD stiffness, N·m/rad.
+   */
+  const double *kp;
+  /**
+   * PD damping, N·m·s/rad.
+   */
+  const double *kd;
+  /**
+   * Target = offset + scale · action.
+   */
+  const double *action_scale;
+  /**
+   * The action offset (the policy's default pose), rad.
+   */
+  const double *action_offset_rad;
+} ThorarenaProfile;
+
+/**
  * How a policy joins a session. Fill it with [`thorarena_connect_options_default`] first,
  * then set the session, the joints and the reference offsets.
  */
@@ -234,6 +287,17 @@ typedef struct ThorarenaConnectOptions {
    * e.g. "twist2"; NULL or "": none). See `ThorarenaSessionInfo::inputs_offset`.
    */
   const char *input;
+  /**
+   * The dynamics profile the policy was trained under, by the name of one the
+   * simulator bundles (NUL-terminated, e.g. "wbc-mjlab"; NULL: see `profile`).
+   */
+  const char *profile_name;
+  /**
+   * The dynamics profile the policy was trained under, by its numbers (NULL: see
+   * `profile_name`). With neither, the run must name one (`--profile`) or it
+   * refuses the policy (`THORARENA_STATUS_REFUSED_PROFILE`); give at most one.
+   */
+  const struct ThorarenaProfile *profile;
 } ThorarenaConnectOptions;
 
 /**
@@ -425,7 +489,7 @@ typedef struct ThorarenaActionHeader {
 /**
  * Every status, in declaration order.
  */
-#define ThorarenaStatus_ALL { ThorarenaStatus_Ok, ThorarenaStatus_RefusedProtocolVersion, ThorarenaStatus_RefusedJointCount, ThorarenaStatus_RefusedJointNames, ThorarenaStatus_RefusedReferenceOffsets, ThorarenaStatus_RefusedBusy, ThorarenaStatus_RefusedByRun, ThorarenaStatus_RefusedInput, ThorarenaStatus_End, ThorarenaStatus_Timeout, ThorarenaStatus_NoSession, ThorarenaStatus_SessionName, ThorarenaStatus_SessionInUse, ThorarenaStatus_Config, ThorarenaStatus_SimulatorGone, ThorarenaStatus_Layout, ThorarenaStatus_Transport, ThorarenaStatus_InvalidArgument, ThorarenaStatus_CallOrder, ThorarenaStatus_WrongThread, ThorarenaStatus_Panic, }
+#define ThorarenaStatus_ALL { ThorarenaStatus_Ok, ThorarenaStatus_RefusedProtocolVersion, ThorarenaStatus_RefusedJointCount, ThorarenaStatus_RefusedJointNames, ThorarenaStatus_RefusedReferenceOffsets, ThorarenaStatus_RefusedBusy, ThorarenaStatus_RefusedByRun, ThorarenaStatus_RefusedInput, ThorarenaStatus_RefusedProfile, ThorarenaStatus_End, ThorarenaStatus_Timeout, ThorarenaStatus_NoSession, ThorarenaStatus_SessionName, ThorarenaStatus_SessionInUse, ThorarenaStatus_Config, ThorarenaStatus_SimulatorGone, ThorarenaStatus_Layout, ThorarenaStatus_Transport, ThorarenaStatus_InvalidArgument, ThorarenaStatus_CallOrder, ThorarenaStatus_WrongThread, ThorarenaStatus_Panic, }
 
 #ifdef __cplusplus
 extern "C" {

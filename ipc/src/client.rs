@@ -6,8 +6,8 @@
 //! simulator's requests) and a *client* of the hello service.
 
 use crate::handshake::{
-    from_fixed, joint_names_hash, to_fixed, Hello, Status, Welcome, INPUT_NAME_BYTES, MAX_JOINTS,
-    MAX_REFERENCE_OFFSETS,
+    from_fixed, joint_names_hash, to_fixed, DeclaredProfile, Hello, Status, Welcome,
+    INPUT_NAME_BYTES, MAX_JOINTS, MAX_REFERENCE_OFFSETS,
 };
 use crate::layout::{ActionBatchMut, Layout, ObsBatch, COMMAND_END};
 use crate::session::{
@@ -57,6 +57,9 @@ pub struct PolicyConfig {
     /// A network input for the simulator to build into each batch's policy-input block
     /// (`twist2`), or empty for none ([`crate::Hello::input`]).
     pub input: String,
+    /// The dynamics profile the policy was trained under (`None`: the run must name
+    /// one, or it refuses the policy).
+    pub profile: Option<DeclaredProfile>,
 }
 
 impl PolicyConfig {
@@ -76,6 +79,7 @@ impl PolicyConfig {
             protocol_version: PROTOCOL_VERSION,
             announced_pid: std::process::id(),
             input: String::new(),
+            profile: None,
         }
     }
 }
@@ -362,7 +366,15 @@ fn say_hello(
         reference_offsets_s: offsets,
         name: to_fixed(&config.name),
         input: to_fixed(&config.input),
+        ..Hello::blank()
     };
+    let mut hello = hello;
+    DeclaredProfile::write_into(config.profile.as_ref(), &mut hello).map_err(|message| {
+        IpcError::Refused {
+            status: Status::Profile,
+            message,
+        }
+    })?;
     let pending = client
         .send_copy(hello)
         .map_err(transport(TransportOp::Send(Message::Hello)))?;

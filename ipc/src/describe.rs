@@ -5,6 +5,7 @@
 
 use crate::handshake::{
     Hello, Welcome, INPUT_NAME_BYTES, MAX_JOINTS, MAX_REFERENCE_OFFSETS, MESSAGE_BYTES, NAME_BYTES,
+    PROFILE_NAME_BYTES,
 };
 use crate::layout::{
     ActionHeader, BatchHeader, EnvHeader, Layout, COMMAND_END, COMMAND_STEP, ENV_ARRAYS,
@@ -38,6 +39,16 @@ fn structs() -> Vec<(&'static str, &'static str, usize, usize, Fields)> {
                 reference_offsets_s: [f64; MAX_REFERENCE_OFFSETS],
                 name: [u8; NAME_BYTES],
                 input: [u8; INPUT_NAME_BYTES],
+                profile_kind: u32,
+                profile_action_delay_steps: u32,
+                profile_name: [u8; PROFILE_NAME_BYTES],
+                profile_control_dt_s: f64,
+                profile_physics_dt_s: f64,
+                profile_action_clip: f64,
+                profile_kp: [f64; MAX_JOINTS],
+                profile_kd: [f64; MAX_JOINTS],
+                profile_action_scale: [f64; MAX_JOINTS],
+                profile_action_offset_rad: [f64; MAX_JOINTS],
             }),
         ),
         (
@@ -119,7 +130,7 @@ pub fn layout_json() -> String {
     let mut s = String::from("{\n");
     let _ = writeln!(s, "  \"protocol_version\": {},", crate::PROTOCOL_VERSION);
     let _ = writeln!(s, "  \"constants\": {{");
-    let constants: [(&str, u64); 12] = [
+    let constants: [(&str, u64); 13] = [
         ("MAGIC", u64::from(MAGIC)),
         ("COMMAND_STEP", u64::from(COMMAND_STEP)),
         ("COMMAND_END", u64::from(COMMAND_END)),
@@ -134,6 +145,7 @@ pub fn layout_json() -> String {
         ("NAME_BYTES", NAME_BYTES as u64),
         ("MESSAGE_BYTES", MESSAGE_BYTES as u64),
         ("INPUT_NAME_BYTES", INPUT_NAME_BYTES as u64),
+        ("PROFILE_NAME_BYTES", PROFILE_NAME_BYTES as u64),
         ("WORD_BYTES", 8),
     ];
     for (i, (k, v)) in constants.iter().enumerate() {

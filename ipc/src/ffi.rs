@@ -26,7 +26,7 @@
 //! thread that connected it.
 
 use crate::client::{Next, PolicyClient, PolicyConfig, PolicyStep};
-use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
+use crate::handshake::{DeclaredProfile, ProfileContent, MAX_JOINTS, MAX_REFERENCE_OFFSETS};
 use crate::layout::{Field, Layout};
 use crate::session::{IpcError, WaitPolicy};
 use crate::PROTOCOL_VERSION;
@@ -137,6 +137,38 @@ pub struct ThorarenaConnectOptions {
     /// A network input for the simulator to build into each batch (NUL-terminated name,
     /// e.g. "twist2"; NULL or "": none). See `ThorarenaSessionInfo::inputs_offset`.
     pub input: *const c_char,
+    /// The dynamics profile the policy was trained under, by the name of one the
+    /// simulator bundles (NUL-terminated, e.g. "wbc-mjlab"; NULL: see `profile`).
+    pub profile_name: *const c_char,
+    /// The dynamics profile the policy was trained under, by its numbers (NULL: see
+    /// `profile_name`). With neither, the run must name one (`--profile`) or it
+    /// refuses the policy (`THORARENA_STATUS_REFUSED_PROFILE`); give at most one.
+    pub profile: *const ThorarenaProfile,
+}
+
+/// A dynamics profile by its numbers: what a policy declares it was trained under. Every
+/// array holds `n_joints` values in the robot's canonical joint order (the session's).
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct ThorarenaProfile {
+    /// Its name, for results (NUL-terminated, at most 31 bytes).
+    pub name: *const c_char,
+    /// Control period, s.
+    pub control_dt_s: f64,
+    /// Physics step, s (divides `control_dt_s`).
+    pub physics_dt_s: f64,
+    /// Control steps between an action and its effect.
+    pub action_delay_steps: u32,
+    /// Raw actions are clipped to ±this before scaling (0: no clip).
+    pub action_clip: f64,
+    /// PD stiffness, N·m/rad.
+    pub kp: *const f64,
+    /// PD damping, N·m·s/rad.
+    pub kd: *const f64,
+    /// Target = offset + scale · action.
+    pub action_scale: *const f64,
+    /// The action offset (the policy's default pose), rad.
+    pub action_offset_rad: *const f64,
 }
 
 /// The session as the simulator described it, from [`thorarena_session_info`].
@@ -239,6 +271,8 @@ pub unsafe extern "C" fn thorarena_connect_options_default(
             liveness_us: wait.liveness_every.as_micros() as u64,
             protocol_version: PROTOCOL_VERSION,
             input: std::ptr::null(),
+            profile_name: std::ptr::null(),
+            profile: std::ptr::null(),
         };
         // SAFETY: non-NULL and writable per the contract; `write` needs no initialised value.
         unsafe { options.write(defaults) };
@@ -326,6 +360,8 @@ pub unsafe extern "C" fn thorarena_connect(
             // SAFETY: as for `session`.
             config.input = unsafe { utf8(o.input, "options.input") }?.to_string();
         }
+        // SAFETY: `profile_name` and `profile` are NULL or valid per the contract.
+        config.profile = unsafe { declared_profile(o) }?;
         config.wait = WaitPolicy {
             spin: Duration::from_micros(o.spin_us),
             liveness_every: if o.liveness_us == 0 {
@@ -348,6 +384,50 @@ pub unsafe extern "C" fn thorarena_connect(
         unsafe { out.write(Box::into_raw(handle)) };
         Ok(ThorarenaStatus::Ok)
     })
+}
+
+/// The profile `o` declares: by name, by content, or none.
+///
+/// # Safety
+/// `o.profile_name` is NULL or NUL-terminated; `o.profile` is NULL or valid, its arrays
+/// valid for `o.n_joints` values and its name NULL or NUL-terminated.
+unsafe fn declared_profile(
+    o: &ThorarenaConnectOptions,
+) -> Result<Option<DeclaredProfile>, Failure> {
+    match (o.profile_name.is_null(), o.profile.is_null()) {
+        (true, true) => Ok(None),
+        (false, false) => Err(invalid(
+            "options.profile_name and options.profile are both set: declare the profile one way",
+        )),
+        (false, true) => {
+            // SAFETY: non-NULL and NUL-terminated per the contract.
+            let name = unsafe { utf8(o.profile_name, "options.profile_name") }?;
+            Ok(Some(DeclaredProfile::Named(name.to_string())))
+        }
+        (true, false) => {
+            // SAFETY: non-NULL and valid per the contract.
+            let p = unsafe { &*o.profile };
+            let array = |ptr: *const f64, what: &str| {
+                if ptr.is_null() {
+                    return Err(invalid(format!("options.profile->{what} is NULL")));
+                }
+                // SAFETY: non-NULL and valid for `n_joints` values per the contract.
+                Ok(unsafe { std::slice::from_raw_parts(ptr, o.n_joints) }.to_vec())
+            };
+            Ok(Some(DeclaredProfile::Content(ProfileContent {
+                // SAFETY: NULL or NUL-terminated per the contract.
+                name: unsafe { utf8(p.name, "options.profile->name") }?.to_string(),
+                control_dt_s: p.control_dt_s,
+                physics_dt_s: p.physics_dt_s,
+                action_delay_steps: p.action_delay_steps,
+                action_clip: Some(p.action_clip).filter(|c| *c != 0.0),
+                kp: array(p.kp, "kp")?,
+                kd: array(p.kd, "kd")?,
+                action_scale: array(p.action_scale, "action_scale")?,
+                action_offset_rad: array(p.action_offset_rad, "action_offset_rad")?,
+            })))
+        }
+    }
 }
 
 /// The client behind a handle, or an `InvalidArgument` failure.

@@ -21,7 +21,8 @@ pub mod sim;
 
 pub use client::{Next, PolicyClient, PolicyConfig, PolicyStep, SessionInfo};
 pub use handshake::{
-    joint_names_hash, Hello, Status, Welcome, INPUT_NAME_BYTES, MAX_REFERENCE_OFFSETS,
+    joint_names_hash, DeclaredProfile, Hello, ProfileContent, ProfileKind, Status, Welcome,
+    INPUT_NAME_BYTES, MAX_REFERENCE_OFFSETS, PROFILE_NAME_BYTES,
 };
 pub use layout::{
     ActionBatch, ActionBatchMut, BatchHeader, EnvHeader, EnvObs, EnvObsMut, Layout, LayoutError,
@@ -31,7 +32,7 @@ pub use session::{
     check_session_name, process_alive, AnswersNoticed, Event, IpcError, Message, Port,
     TransportCause, TransportOp, WaitPolicy,
 };
-pub use sim::{InputOffer, PolicyInfo, SimConfig, SimSession, StepOutcome};
+pub use sim::{ActionMapping, InputOffer, PolicyInfo, Refusal, SimConfig, SimSession, StepOutcome};
 
 /// Version of the wire protocol; bumped on any change of the messages or the layout.
-pub const PROTOCOL_VERSION: u32 = 3;
+pub const PROTOCOL_VERSION: u32 = 4;

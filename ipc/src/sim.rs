@@ -11,7 +11,7 @@
 
 mod accept;
 
-use crate::handshake::{joint_names_hash, Hello, Welcome, MAX_JOINTS};
+use crate::handshake::{joint_names_hash, DeclaredProfile, Hello, Status, Welcome, MAX_JOINTS};
 use crate::layout::{ActionBatch, Layout, ObsBatchMut, COMMAND_END, COMMAND_STEP};
 use crate::session::{
     create_node, service_names, transport, wait_for, AnswersNoticed, Event, IpcError, Message,
@@ -81,6 +81,39 @@ pub struct PolicyInfo {
     pub reference_offsets_s: Vec<f64>,
     /// The network input it asked the simulator to build, if any ([`InputOffer::name`]).
     pub input: Option<String>,
+    /// The dynamics profile it says it was trained under, if it declared one.
+    pub profile: Option<DeclaredProfile>,
+}
+
+/// The action mapping and control period of the profile a policy runs under, when the
+/// run takes them from the policy's declaration rather than the session's configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ActionMapping {
+    /// Control period, s.
+    pub control_dt_s: f64,
+    /// Target = offset + scale · action, rad, per joint.
+    pub action_offset_rad: Vec<f64>,
+    /// See `action_offset_rad`.
+    pub action_scale: Vec<f64>,
+}
+
+/// Why the run refuses a policy the protocol accepts, as the policy hears it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refusal {
+    /// [`Status::Rejected`], or [`Status::Profile`] for its declared profile.
+    pub status: Status,
+    /// Why, and what to do.
+    pub message: String,
+}
+
+impl From<String> for Refusal {
+    /// A refusal of the run's own ([`Status::Rejected`]).
+    fn from(message: String) -> Self {
+        Self {
+            status: Status::Rejected,
+            message,
+        }
+    }
 }
 
 /// How one step's wait ended.

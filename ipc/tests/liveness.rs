@@ -105,6 +105,7 @@ fn hello_then_die(session: &str, pid: u32) {
             reference_offsets_s: [0.0; MAX_REFERENCE_OFFSETS],
             name: thorarena_ipc::handshake::to_fixed("liar"),
             input: [0; thorarena_ipc::INPUT_NAME_BYTES],
+            ..Hello::blank()
         })
         .unwrap();
     while pending.receive().unwrap().is_none() {

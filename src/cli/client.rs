@@ -22,6 +22,11 @@ pub struct Args {
     /// Name in the results [default: the policy's].
     #[arg(long)]
     pub name: Option<String>,
+    /// The bundled profile this client declares at connect as the one its policy runs
+    /// under (the built-in baselines are made for `default`); `none` declares none, so
+    /// the run must name one with `--profile`.
+    #[arg(long, default_value = "default")]
+    pub profile: String,
     /// Robot (its joint order is checked against the simulator's).
     #[arg(long, default_value = "g1_29dof")]
     pub robot: String,
@@ -59,6 +64,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         session: args.session.clone(),
         policy: args.policy.clone(),
         name: args.name.clone(),
+        profile: Some(args.profile.clone()).filter(|p| p != "none"),
         robot: args.robot.clone(),
         connect_timeout_s: args.connect_timeout,
         spin_us: args.spin_us,

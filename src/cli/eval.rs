@@ -73,6 +73,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         &PolicyTarget {
             robot: &spec.robot,
             profile: &spec.profile,
+            process_profile: spec.process_profile,
             session: &session,
             envs: spec.envs,
             launch_log: launch_log.as_deref(),

@@ -33,6 +33,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let target = PolicyTarget {
         robot: &ctx.robot,
         profile: &ctx.profile,
+        process_profile: ctx.process_profile,
         session: &session,
         envs: ctx.envs,
         launch_log: None,

@@ -4,6 +4,7 @@
 //! sweep's validation of its cells — reads this one shape.
 
 use super::{EngineChoice, EvalRequest, PolicyIoRules, Setting, TerminationRule};
+use crate::policy::declared_profile::{ProcessProfile, ProfileDeclaration};
 use crate::policy::registry::{self, PolicySource, RegistryError};
 use crate::sim::motion::{DataError, Dataset, SelectionError, Sequence, Subset};
 use crate::sim::physics::{make_physics, Engine, EngineError, PhysicsSettings};
@@ -86,8 +87,17 @@ pub struct EvalSpec {
     pub robot: RobotModel,
     /// The dynamics profile (with the physics step asked for).
     pub profile: Profile,
-    /// The profile contradicts the policy family and the request allowed it.
+    /// The profile contradicts the policy family (or the profile a policy process
+    /// declared) and the request allowed it.
     pub profile_mismatch: bool,
+    /// How the run takes the profile a policy process declares: the request's
+    /// (`Named`), or, when it names none for a process, the process's (`Declared`:
+    /// `profile` is then a placeholder until [`Self::adopting`]).
+    pub process_profile: ProcessProfile,
+    /// The physics step the request asked for, s, which a declared profile takes too.
+    pub physics_dt_asked_s: Option<f64>,
+    /// The name of the profile the policy process declared, when it declared one.
+    pub declared_profile: Option<String>,
     /// The policy is scored without its sanity check (`--unchecked`).
     pub unchecked: bool,
     /// The engine (checked: it makes a physics for the robot).
@@ -149,6 +159,14 @@ impl EvalSpec {
         let (profile, profile_mismatch) =
             resolve_profile(request, policy.as_ref(), &robot, &mut advice)?;
         let engine = check_engine(request, &robot, &profile)?;
+        let process_profile = match &policy {
+            Some(source) if !source.in_process() && request.profile.is_none() => {
+                ProcessProfile::Declared
+            }
+            _ => ProcessProfile::Named {
+                mismatch_ok: request.profile_mismatch_ok,
+            },
+        };
         if robot.keypoint_set(&request.keypoints).is_none() {
             return Err(invalid(format!(
                 "unknown keypoint set `{}` for robot {}",
@@ -179,6 +197,9 @@ impl EvalSpec {
         Ok(Self {
             policy,
             profile_mismatch,
+            process_profile,
+            physics_dt_asked_s: request.physics_dt_s,
+            declared_profile: None,
             unchecked: request.unchecked,
             dataset_sha256: picked.sha256,
             robot,
@@ -198,6 +219,45 @@ impl EvalSpec {
             pipeline_depth: request.pipeline_depth,
             advice,
         })
+    }
+
+    /// This evaluation as the connected policy process's declaration makes it: under the
+    /// profile it declared when the run takes it (with the physics step the request asked
+    /// for), marked as a mismatch when it ran anyway against the run's. A run that takes
+    /// its profile from the process and got no declaration is refused: its profile was
+    /// never said.
+    pub fn adopting(&self, declaration: Option<&ProfileDeclaration>) -> Result<Self, SpecError> {
+        let mut spec = self.clone();
+        let Some(declaration) = declaration else {
+            if self.process_profile == ProcessProfile::Declared {
+                return Err(invalid(
+                    "the policy process declared no profile and `request.profile` names none",
+                ));
+            }
+            return Ok(spec);
+        };
+        spec.profile_mismatch |= declaration.mismatch;
+        spec.declared_profile = declaration.declared.as_ref().map(|p| p.name.clone());
+        if let Some(declared) = declaration
+            .declared
+            .as_ref()
+            .filter(|_| declaration.adopted)
+        {
+            let mut profile = declared.clone();
+            if let Some(dt) = self.physics_dt_asked_s {
+                set_physics_dt(&mut profile, dt)?;
+            }
+            check_physics(&spec.engine, &spec.robot, &profile)?;
+            spec.profile = profile;
+        } else if self.process_profile == ProcessProfile::Declared {
+            return Err(invalid(
+                "the policy process's profile was not taken though `request.profile` names none",
+            ));
+        }
+        spec.process_profile = ProcessProfile::Named {
+            mismatch_ok: declaration.mismatch,
+        };
+        Ok(spec)
     }
 
     /// The dataset directory's name, for default output directories.
@@ -274,8 +334,15 @@ fn check_engine(
         }
         (EngineChoice::Mujoco, mjcf) => Engine::mujoco_on(mjcf.clone())?,
     };
+    check_physics(&engine, robot, profile)?;
+    Ok(engine)
+}
+
+/// Makes a physics of `engine` for `robot` under `profile` once, so that the run's
+/// workers cannot fail to.
+fn check_physics(engine: &Engine, robot: &RobotModel, profile: &Profile) -> Result<(), SpecError> {
     make_physics(
-        &engine,
+        engine,
         Arc::new(robot.clone()),
         PhysicsSettings {
             dt_s: profile.physics_dt_s,
@@ -283,7 +350,7 @@ fn check_engine(
         },
         profile.gains.clone(),
     )?;
-    Ok(engine)
+    Ok(())
 }
 
 /// The sequences a request evaluates, with the dataset's hash and the subset they are.

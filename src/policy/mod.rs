@@ -8,6 +8,7 @@ mod batch_plans;
 pub mod beyondmimic;
 mod builtin;
 pub mod client_process;
+pub mod declared_profile;
 pub mod falcon;
 pub mod inputs;
 pub mod launched;
@@ -109,6 +110,12 @@ pub trait Policy {
 
     /// Transport counters of a remote policy (late replies, reconnections).
     fn transport_stats(&self) -> Option<TransportStats> {
+        None
+    }
+
+    /// What a policy process declared about the profile it was trained under, as the run
+    /// judged it when it connected (`declared_profile`); `None` in process.
+    fn profile_declaration(&self) -> Option<&declared_profile::ProfileDeclaration> {
         None
     }
 

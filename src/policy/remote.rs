@@ -2,13 +2,15 @@
 //! control step the batch of observations is written straight into the request, and the
 //! actions are read straight from the response, under the session's latency budget.
 
+use super::declared_profile::{judge, ProcessProfile, ProfileDeclaration};
 use super::inputs::InputBuilder;
 use super::wire::write_observation;
 use super::{ActOutcome, Observation, Policy};
 use std::cell::RefCell;
 use std::time::Duration;
 use thorarena_ipc::{
-    IpcError, ObsBatchMut, PolicyInfo, SimConfig, SimSession, StepOutcome, FLAG_PREVIOUS_TERMINATED,
+    ActionMapping, IpcError, ObsBatchMut, PolicyInfo, Refusal, SimConfig, SimSession, StepOutcome,
+    FLAG_PREVIOUS_TERMINATED,
 };
 
 /// How to serve a session: the session itself, and what to do about connections.
@@ -140,6 +142,11 @@ pub struct RemotePolicy {
     stats: TransportStats,
     /// The network input the policy asked the simulator to build, and its builder.
     input: Option<(String, InputBuilder)>,
+    /// The profile the policy declared, as the run judged it (`None`: connected without
+    /// a run's judgement, [`Self::connect`]).
+    declaration: Option<ProfileDeclaration>,
+    /// What it declared, as it declared it: a reconnecting policy must declare the same.
+    declared: Option<thorarena_ipc::DeclaredProfile>,
     /// Reports a policy that keeps a step waiting (lock-step waits as long as it lives).
     stall_watch: super::stall_watch::StallWatch,
 }
@@ -147,13 +154,17 @@ pub struct RemotePolicy {
 impl RemotePolicy {
     /// Serves session `session` for `robot` under `profile`'s action mapping, `envs`
     /// environment slots wide, and waits for a policy process: one whose declared name is
-    /// not usable in paths, or that `vet` refuses, is told why and the wait goes on.
-    /// `note` hears what a user watching the run should know (waiting, refusals, who
-    /// connected).
+    /// not usable in paths, whose declared profile `rule` refuses
+    /// ([`super::declared_profile::judge`]), or that `vet` refuses, is told why and the
+    /// wait goes on. A profile the run takes from the process is the session's action
+    /// mapping from then on, and [`Policy::profile_declaration`] tells the run. `note`
+    /// hears what a user watching the run should know (waiting, refusals, who connected).
+    #[allow(clippy::too_many_arguments)]
     pub fn serve(
         session: &str,
         robot: &crate::sim::robot::RobotModel,
         profile: &crate::sim::profile::Profile,
+        rule: ProcessProfile,
         options: &SessionOptions,
         envs: usize,
         vet: &mut dyn FnMut(&str) -> Result<(), String>,
@@ -185,16 +196,34 @@ impl RemotePolicy {
         ));
         // The name a policy process declares becomes part of paths: a name the run cannot
         // use is refused in the handshake, so the policy hears why.
-        let mut vet_name = |info: &PolicyInfo| {
+        let mut judged = None;
+        let mut vet_name = |info: &PolicyInfo| -> Result<Option<ActionMapping>, Refusal> {
             crate::files::names::check_name("policy name", &info.name)
                 .map_err(|e| e.to_string())?;
-            vet(&info.name)
+            vet(&info.name)?;
+            let declaration = judge(&info.name, info.profile.as_ref(), profile, rule, robot)?;
+            let mapping = declaration.mapping();
+            judged = Some(declaration);
+            Ok(mapping)
         };
-        let remote = Self::connect(config, &mut vet_name, &mut |m| {
+        let mut remote = Self::connect(config, &mut vet_name, &mut |m| {
             note(&format!("refused a policy: {m}"))
         })?;
+        remote.declaration = judged;
+        let declared = match remote
+            .declaration
+            .as_ref()
+            .and_then(|d| d.declared.as_ref())
+        {
+            None => format!("no profile declared, the run's `{}`", profile.name),
+            Some(p) if remote.declaration.as_ref().is_some_and(|d| d.mismatch) => format!(
+                "declared profile `{}`, run under `{}` (--profile-mismatch-ok)",
+                p.name, profile.name
+            ),
+            Some(p) => format!("profile `{}`", p.name),
+        };
         note(&format!(
-            "policy `{}` (pid {}) connected, reference offsets {:?} s",
+            "policy `{}` (pid {}) connected, reference offsets {:?} s, {declared}",
             remote.name(),
             remote.policy_pid().unwrap_or(0),
             remote.reference_offsets_s()
@@ -204,15 +233,16 @@ impl RemotePolicy {
 
     /// Creates the session and waits for a policy to connect; refused handshakes (wrong
     /// protocol version, joint count or order, or a policy `vet` refuses: the run's own
-    /// conditions on its name) are passed to `on_refused`, told to the policy, and the
-    /// wait goes on.
+    /// conditions on its name and profile) are passed to `on_refused`, told to the
+    /// policy, and the wait goes on. A mapping `vet` returns is the session's from then on.
     pub fn connect(
-        config: RemoteConfig,
-        vet: &mut dyn FnMut(&PolicyInfo) -> Result<(), String>,
+        mut config: RemoteConfig,
+        vet: &mut dyn FnMut(&PolicyInfo) -> Result<Option<ActionMapping>, Refusal>,
         on_refused: &mut dyn FnMut(&str),
     ) -> Result<Self, RemoteError> {
         let mut session = SimSession::create(config.session.clone())?;
         let info = session.accept_vetted(config.connect_timeout, vet, |m| on_refused(m))?;
+        config.session = session.config().clone();
         let input = match &info.input {
             None => None,
             Some(name) => {
@@ -224,6 +254,8 @@ impl RemotePolicy {
         };
         Ok(Self {
             input,
+            declaration: None,
+            declared: info.profile,
             session,
             stall_watch: super::stall_watch::StallWatch::new(info.name.clone()),
             name: info.name,
@@ -361,19 +393,32 @@ impl Policy for RemotePolicy {
         );
         let offsets = self.offsets_s.clone();
         let input = self.input.as_ref().map(|(name, _)| name.clone());
-        let same_offsets = |info: &PolicyInfo| {
+        let declared = self.declared.clone();
+        let same_offsets = |info: &PolicyInfo| -> Result<Option<ActionMapping>, Refusal> {
             if info.reference_offsets_s != offsets {
                 Err(format!(
                     "policy `{}` asks for reference offsets {:?}, the run uses {:?}",
                     info.name, info.reference_offsets_s, offsets
-                ))
+                )
+                .into())
             } else if info.input != input {
                 Err(format!(
                     "policy `{}` asks for policy input {:?}, the run's policy asked for {:?}",
                     info.name, info.input, input
-                ))
+                )
+                .into())
+            } else if info.profile != declared {
+                Err(Refusal {
+                    status: thorarena_ipc::Status::Profile,
+                    message: format!(
+                        "policy `{}` declares profile {:?}, the run's policy declared {:?}: a run goes on under one profile",
+                        info.name,
+                        info.profile.as_ref().map(|p| p.name()),
+                        declared.as_ref().map(|p| p.name())
+                    ),
+                })
             } else {
-                Ok(())
+                Ok(None)
             }
         };
         let accepted = self
@@ -393,6 +438,10 @@ impl Policy for RemotePolicy {
                 false
             }
         }
+    }
+
+    fn profile_declaration(&self) -> Option<&ProfileDeclaration> {
+        self.declaration.as_ref()
     }
 
     fn transport_stats(&self) -> Option<TransportStats> {

@@ -71,6 +71,11 @@ pub fn runner_spec(
         robot: robot.clone(),
         profile: profile.clone(),
         profile_mismatch: false,
+        process_profile: thorarena::policy::declared_profile::ProcessProfile::Named {
+            mismatch_ok: false,
+        },
+        physics_dt_asked_s: None,
+        declared_profile: None,
         unchecked: false,
         engine: Default::default(),
         dataset: "in-memory".into(),

@@ -102,6 +102,20 @@ private:
     const std::uint8_t* block_;
 };
 
+/// A dynamics profile by its numbers: what a policy was trained under. Each vector holds
+/// one value per joint, in the robot's canonical order.
+struct Profile {
+    std::string name;                 ///< its name, for results (at most 31 bytes)
+    double control_dt_s = 0.02;       ///< control period, s
+    double physics_dt_s = 0.005;      ///< physics step, s (divides control_dt_s)
+    std::uint32_t action_delay_steps = 0;  ///< control steps between an action and its effect
+    double action_clip = 0.0;         ///< raw actions clipped to +-this before scaling (0: none)
+    std::vector<double> kp;           ///< PD stiffness, N m/rad
+    std::vector<double> kd;           ///< PD damping, N m s/rad
+    std::vector<double> action_scale;       ///< target = offset + scale * action
+    std::vector<double> action_offset_rad;  ///< the action offset (default pose), rad
+};
+
 /// What a policy declares when it connects.
 struct ConnectOptions {
     std::string session;                                   ///< session to join
@@ -112,6 +126,13 @@ struct ConnectOptions {
     std::chrono::microseconds spin{50};                    ///< busy-poll before blocking
     std::uint32_t protocol_version = 0;                    ///< 0: the library's
     std::string input;                                     ///< a network input the simulator builds ("twist2"), or none
+    /// The profile the policy was trained under, by a bundled profile's name ("default",
+    /// "wbc-mjlab"); empty: `profile` below, or none. A run that names no profile runs
+    /// under the declared one; one whose --profile contradicts it refuses the policy;
+    /// with neither, the policy is refused (THORARENA_STATUS_REFUSED_PROFILE).
+    std::string profile_name;
+    /// The profile by its numbers (used when `profile_name` is empty and `name` is set).
+    Profile profile;
 };
 
 /// What waiting for a step gave.
@@ -140,6 +161,29 @@ public:
         o.spin_us = static_cast<std::uint64_t>(options.spin.count());
         o.protocol_version = options.protocol_version;
         o.input = options.input.c_str();
+        ThorarenaProfile p{};
+        if (!options.profile_name.empty()) {
+            o.profile_name = options.profile_name.c_str();
+        } else if (!options.profile.name.empty()) {
+            const Profile& d = options.profile;
+            for (const auto* v : {&d.kp, &d.kd, &d.action_scale, &d.action_offset_rad}) {
+                if (v->size() != names.size())
+                    throw Error(THORARENA_STATUS_INVALID_ARGUMENT,
+                                "profile " + d.name + ": a per-joint vector has " +
+                                    std::to_string(v->size()) + " values for " +
+                                    std::to_string(names.size()) + " joints");
+            }
+            p.name = d.name.c_str();
+            p.control_dt_s = d.control_dt_s;
+            p.physics_dt_s = d.physics_dt_s;
+            p.action_delay_steps = d.action_delay_steps;
+            p.action_clip = d.action_clip;
+            p.kp = d.kp.data();
+            p.kd = d.kd.data();
+            p.action_scale = d.action_scale.data();
+            p.action_offset_rad = d.action_offset_rad.data();
+            o.profile = &p;
+        }
         check(thorarena_connect(&o, &client_));
         check(thorarena_session_info(client_, &info_));
     }

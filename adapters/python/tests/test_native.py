@@ -22,6 +22,7 @@ C_TYPES = {
     "const char *": ctypes.c_char_p,
     "const char *const *": ctypes.POINTER(ctypes.c_char_p),
     "const double *": ctypes.POINTER(ctypes.c_double),
+    "const struct ThorarenaProfile *": ctypes.POINTER(native.NativeProfile),
     "size_t": ctypes.c_size_t,
     "uint64_t": ctypes.c_uint64,
     "uint32_t": ctypes.c_uint32,
@@ -48,6 +49,7 @@ def header_struct(name: str) -> list[tuple[str, str]]:
     [
         (native.ConnectOptions, "ThorarenaConnectOptions"),
         (native.SessionDescription, "ThorarenaSessionInfo"),
+        (native.NativeProfile, "ThorarenaProfile"),
     ],
 )
 def test_ctypes_mirrors_are_the_headers_structs(mirror: type, c_name: str) -> None:

@@ -47,8 +47,10 @@ from .protocol import (
     BatchHeader,
     Hello,
     Layout,
+    Profile,
     Status,
     Welcome,
+    declare_profile,
     from_fixed,
     joint_names_hash,
     to_fixed,
@@ -543,6 +545,7 @@ def connect(
     spin_us: float = 50.0,
     wake_early_us: float = 150.0,
     input: str | None = None,
+    profile: str | Profile | None = None,
     protocol_version: int = PROTOCOL_VERSION,
     transport: str = "python",
 ) -> Session:
@@ -555,6 +558,11 @@ def connect(
     turnarounds) to stop blocking and busy-poll, until as long after (0: never); `input`
     a network input for the simulator to build into every batch (`"twist2"`), read as
     `Session.policy_inputs` (the simulator refuses a name it does not offer).
+    `profile` the dynamics profile the policy was trained under: a bundled profile's
+    name (`"wbc-mjlab"`; the built-in baselines' is `"default"`) or its numbers
+    (`Profile(...)`). A run that names no profile (`--profile`) runs under the declared
+    one; one that names another refuses the policy (unless `--profile-mismatch-ok`); with
+    neither, the policy is refused (`SessionRefused`, status `PROFILE`).
     `protocol_version` is for tests that announce a wrong one on purpose.
 
     `transport`: `"python"` (default) runs the session over iceoryx2's Python binding;
@@ -597,8 +605,23 @@ def connect(
             timeout_s=timeout_s,
             spin_us=spin_us,
             input=input,
+            profile=profile,
             protocol_version=protocol_version,
         )
+    hello = Hello(
+        protocol_version=protocol_version,
+        n_joints=len(joint_names),
+        joint_names_hash=joint_names_hash(joint_names),
+        pid=os.getpid(),
+        n_refs=len(offsets),
+    )
+    hello.reference_offsets_s[: len(offsets)] = offsets
+    ctypes.memmove(hello.name, to_fixed(name, NAME_BYTES), NAME_BYTES)
+    ctypes.memmove(hello.input, to_fixed(input or "", INPUT_NAME_BYTES), INPUT_NAME_BYTES)
+    try:
+        declare_profile(hello, profile, len(joint_names))
+    except ValueError as e:
+        raise SessionRefused(Status.PROFILE, str(e)) from None
     node = _create_node(session)
     start = time.monotonic()
     while True:
@@ -626,16 +649,6 @@ def connect(
     except Exception as e:
         raise NoSession(session) from e
 
-    hello = Hello(
-        protocol_version=protocol_version,
-        n_joints=len(joint_names),
-        joint_names_hash=joint_names_hash(joint_names),
-        pid=os.getpid(),
-        n_refs=len(offsets),
-    )
-    hello.reference_offsets_s[: len(offsets)] = offsets
-    ctypes.memmove(hello.name, to_fixed(name, NAME_BYTES), NAME_BYTES)
-    ctypes.memmove(hello.input, to_fixed(input or "", INPUT_NAME_BYTES), INPUT_NAME_BYTES)
     try:
         welcome = _say_hello(hello_service, step, session, hello, start, timeout_s)
     except SessionRefused:

@@ -33,16 +33,16 @@ from .errors import (
     Timeout,
     TransportError,
 )
-from .protocol import BATCH_HEADER_WORDS, PROTOCOL_VERSION, Layout
+from .protocol import BATCH_HEADER_WORDS, PROTOCOL_VERSION, Layout, Profile, Status
 
 LIBRARY_ENV = "THORARENA_IPC_LIB"
 """Environment variable naming the shared library (a path to `libthorarena_ipc.so`)."""
 LIBRARY_FILE = "libthorarena_ipc.so"
 
-# `ThorarenaStatus` values (`ipc/src/ffi/status.rs`); 1 to 7 are the handshake's refusals,
+# `ThorarenaStatus` values (`ipc/src/ffi/status.rs`); 1 to 8 are the handshake's refusals,
 # the same numbers as `protocol.Status`.
 _OK = 0
-_LAST_REFUSAL = 7
+_LAST_REFUSAL = 8
 _END = 10
 _TIMEOUT = 11
 _NO_SESSION = 20
@@ -53,6 +53,22 @@ _WAIT_FOREVER = -1
 WAKE_EARLY_US = 150.0
 """How long before the next batch is due the library's wait stops blocking, µs
 (`WaitPolicy::default().wake_early`; not an option of the C ABI)."""
+
+
+class NativeProfile(ctypes.Structure):
+    """`ThorarenaProfile`: a dynamics profile by its numbers."""
+
+    _fields_ = [
+        ("name", ctypes.c_char_p),
+        ("control_dt_s", ctypes.c_double),
+        ("physics_dt_s", ctypes.c_double),
+        ("action_delay_steps", ctypes.c_uint32),
+        ("action_clip", ctypes.c_double),
+        ("kp", ctypes.POINTER(ctypes.c_double)),
+        ("kd", ctypes.POINTER(ctypes.c_double)),
+        ("action_scale", ctypes.POINTER(ctypes.c_double)),
+        ("action_offset_rad", ctypes.POINTER(ctypes.c_double)),
+    ]
 
 
 class ConnectOptions(ctypes.Structure):
@@ -70,6 +86,8 @@ class ConnectOptions(ctypes.Structure):
         ("liveness_us", ctypes.c_uint64),
         ("protocol_version", ctypes.c_uint32),
         ("input", ctypes.c_char_p),
+        ("profile_name", ctypes.c_char_p),
+        ("profile", ctypes.POINTER(NativeProfile)),
     ]
 
 
@@ -293,6 +311,7 @@ def connect_native(
     spin_us: float,
     input: str | None,
     protocol_version: int,
+    profile: str | Profile | None = None,
     library: str | os.PathLike[str] | None = None,
 ) -> NativeSession:
     """`thorarena.connect` through the C ABI (its arguments, checked there already)."""
@@ -311,6 +330,29 @@ def connect_native(
     options.spin_us = max(round(spin_us), 0)
     options.protocol_version = protocol_version
     options.input = (input or "").encode()
+    # The arrays stay alive (locals) until the call returns; the library copies them.
+    if isinstance(profile, str):
+        options.profile_name = profile.encode()
+    elif profile is not None:
+        arrays = {}
+        for field in ("kp", "kd", "action_scale", "action_offset_rad"):
+            values = [float(v) for v in getattr(profile, field)]
+            if len(values) != len(joint_names):
+                raise SessionRefused(
+                    Status.PROFILE,
+                    f"profile {profile.name!r}: {field} has {len(values)} values for "
+                    f"{len(joint_names)} joints",
+                )
+            arrays[field] = (ctypes.c_double * len(values))(*values)
+        native_profile = NativeProfile(
+            name=profile.name.encode(),
+            control_dt_s=float(profile.control_dt_s),
+            physics_dt_s=float(profile.physics_dt_s),
+            action_delay_steps=int(profile.action_delay_steps),
+            action_clip=float(profile.action_clip or 0.0),
+            **arrays,
+        )
+        options.profile = ctypes.pointer(native_profile)
     client = ctypes.c_void_p()
     status = lib.thorarena_connect(ctypes.byref(options), ctypes.byref(client))
     if status != _OK:

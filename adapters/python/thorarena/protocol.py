@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-PROTOCOL_VERSION = 3
+PROTOCOL_VERSION = 4
 """Version of the wire protocol (`thorarena_ipc::PROTOCOL_VERSION`)."""
 
 MAGIC = 0x524F_4854
@@ -62,6 +62,8 @@ MESSAGE_BYTES = 256
 """Bytes of the refusal message in `Welcome` (NUL-padded UTF-8)."""
 INPUT_NAME_BYTES = 32
 """Bytes of the policy-input name in `Hello` (NUL-padded UTF-8)."""
+PROFILE_NAME_BYTES = 32
+"""Bytes of a declared profile's name in `Hello` (NUL-padded UTF-8)."""
 WORD_BYTES = 8
 """Batches travel as iceoryx2 slices of u64 words."""
 
@@ -114,6 +116,64 @@ class Status(enum.IntEnum):
     BUSY = 5
     REJECTED = 6
     INPUT = 7
+    PROFILE = 8
+
+
+class ProfileKind(enum.IntEnum):
+    """`Hello.profile_kind` (`thorarena_ipc::ProfileKind`)."""
+
+    NONE = 0
+    NAMED = 1
+    CONTENT = 2
+
+
+@dataclass(frozen=True)
+class Profile:
+    """A dynamics profile by its numbers: what a policy declares it was trained under.
+
+    Every per-joint sequence holds one value per joint in the robot's canonical order
+    (`G1_JOINT_NAMES`). The simulator checks the numbers as it checks a profile file
+    (`data/profiles/*.toml`); torque limits are the robot's. Declare a bundled profile
+    by its name instead (`connect(..., profile="wbc-mjlab")`).
+    """
+
+    name: str
+    control_dt_s: float
+    physics_dt_s: float
+    kp: Sequence[float]
+    kd: Sequence[float]
+    action_scale: Sequence[float]
+    action_offset_rad: Sequence[float]
+    action_delay_steps: int = 0
+    action_clip: float | None = None
+
+
+def declare_profile(hello: Any, profile: str | Profile | None, n_joints: int) -> None:
+    """Writes the declaration `profile` (a bundled profile's name, the numbers, or None)
+    into `hello` (`DeclaredProfile::write_into`); raises ValueError when it does not fit."""
+    if profile is None:
+        hello.profile_kind = ProfileKind.NONE
+        return
+    name = profile if isinstance(profile, str) else profile.name
+    raw = name.encode("utf-8")
+    if not raw or len(raw) >= PROFILE_NAME_BYTES:
+        raise ValueError(f"profile name {name!r}: give 1 to {PROFILE_NAME_BYTES - 1} bytes")
+    ctypes.memmove(hello.profile_name, to_fixed(name, PROFILE_NAME_BYTES), PROFILE_NAME_BYTES)
+    if isinstance(profile, str):
+        hello.profile_kind = ProfileKind.NAMED
+        return
+    for field in ("kp", "kd", "action_scale", "action_offset_rad"):
+        values = [float(v) for v in getattr(profile, field)]
+        if len(values) != n_joints:
+            raise ValueError(
+                f"profile {name!r}: {field} has {len(values)} values for {n_joints} joints"
+            )
+        getattr(hello, f"profile_{field}")[:n_joints] = values
+    hello.profile_kind = ProfileKind.CONTENT
+    hello.profile_control_dt_s = float(profile.control_dt_s)
+    hello.profile_physics_dt_s = float(profile.physics_dt_s)
+    hello.profile_action_delay_steps = int(profile.action_delay_steps)
+    hello.profile_action_clip = float(profile.action_clip or 0.0)
 
 
 class Hello(ctypes.Structure):
@@ -128,6 +188,16 @@ class Hello(ctypes.Structure):
         ("reference_offsets_s", ctypes.c_double * MAX_REFERENCE_OFFSETS),
         ("name", ctypes.c_uint8 * NAME_BYTES),
         ("input", ctypes.c_uint8 * INPUT_NAME_BYTES),
+        ("profile_kind", ctypes.c_uint32),
+        ("profile_action_delay_steps", ctypes.c_uint32),
+        ("profile_name", ctypes.c_uint8 * PROFILE_NAME_BYTES),
+        ("profile_control_dt_s", ctypes.c_double),
+        ("profile_physics_dt_s", ctypes.c_double),
+        ("profile_action_clip", ctypes.c_double),
+        ("profile_kp", ctypes.c_double * MAX_JOINTS),
+        ("profile_kd", ctypes.c_double * MAX_JOINTS),
+        ("profile_action_scale", ctypes.c_double * MAX_JOINTS),
+        ("profile_action_offset_rad", ctypes.c_double * MAX_JOINTS),
     ]
 
     @staticmethod

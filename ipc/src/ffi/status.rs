@@ -29,6 +29,9 @@ pub enum ThorarenaStatus {
     /// Refused: the simulator builds no policy input of the name asked for (or not from
     /// the reference offsets asked for).
     RefusedInput = 7,
+    /// Refused: the profile the policy declared is unknown, malformed or not the run's,
+    /// or it declared none and the run names none (the message says what to do).
+    RefusedProfile = 8,
     /// The run is over: leave the loop and close the client.
     End = 10,
     /// Nothing arrived within the timeout (waiting for a step, or for the welcome).
@@ -71,6 +74,7 @@ impl ThorarenaStatus {
             Status::Busy => Self::RefusedBusy,
             Status::Rejected => Self::RefusedByRun,
             Status::Input => Self::RefusedInput,
+            Status::Profile => Self::RefusedProfile,
         }
     }
 
@@ -91,7 +95,7 @@ impl ThorarenaStatus {
     }
 
     /// Every status, in declaration order.
-    pub const ALL: [Self; 21] = [
+    pub const ALL: [Self; 22] = [
         Self::Ok,
         Self::RefusedProtocolVersion,
         Self::RefusedJointCount,
@@ -100,6 +104,7 @@ impl ThorarenaStatus {
         Self::RefusedBusy,
         Self::RefusedByRun,
         Self::RefusedInput,
+        Self::RefusedProfile,
         Self::End,
         Self::Timeout,
         Self::NoSession,
@@ -126,6 +131,7 @@ impl ThorarenaStatus {
             Self::RefusedBusy => c"THORARENA_STATUS_REFUSED_BUSY",
             Self::RefusedByRun => c"THORARENA_STATUS_REFUSED_BY_RUN",
             Self::RefusedInput => c"THORARENA_STATUS_REFUSED_INPUT",
+            Self::RefusedProfile => c"THORARENA_STATUS_REFUSED_PROFILE",
             Self::End => c"THORARENA_STATUS_END",
             Self::Timeout => c"THORARENA_STATUS_TIMEOUT",
             Self::NoSession => c"THORARENA_STATUS_NO_SESSION",

@@ -2,8 +2,9 @@
 //! conditions, answered with a welcome (or the reason for refusing it), and a welcomed
 //! policy is connected once its step server is up.
 
-use super::{Connection, HelloFactory, InputOffer, PolicyInfo, SimSession, StepFactory};
-use crate::handshake::{from_fixed, to_fixed, Hello, Status, Welcome};
+use super::{ActionMapping, Connection, HelloFactory, InputOffer, PolicyInfo, Refusal};
+use super::{SimSession, StepFactory};
+use crate::handshake::{from_fixed, to_fixed, DeclaredProfile, Hello, Status, Welcome};
 use crate::handshake::{MAX_JOINTS, MAX_REFERENCE_OFFSETS};
 use crate::layout::Layout;
 use crate::session::{
@@ -31,17 +32,19 @@ impl SimSession {
         timeout: Option<Duration>,
         on_refused: impl FnMut(&str),
     ) -> Result<PolicyInfo, IpcError> {
-        self.accept_vetted(timeout, |_| Ok(()), on_refused)
+        self.accept_vetted(timeout, |_| Ok(None), on_refused)
     }
 
     /// [`Self::accept`], and a policy the protocol accepts is also put to `vet` (the run's
-    /// own conditions: a name it can use, the policy a resumed run was made with): a
-    /// policy it refuses is told so in its welcome ([`Status::Rejected`] and the reason),
-    /// rather than welcomed and then sent away as if the run were over.
+    /// own conditions: a name it can use, the policy a resumed run was made with, the
+    /// profile it declared): a policy it refuses is told so in its welcome (the
+    /// refusal's status and reason), rather than welcomed and then sent away as if the
+    /// run were over. A mapping `vet` returns (the declared profile's) replaces the
+    /// session's from then on, and is the one the welcome carries.
     pub fn accept_vetted(
         &mut self,
         timeout: Option<Duration>,
-        mut vet: impl FnMut(&PolicyInfo) -> Result<(), String>,
+        mut vet: impl FnMut(&PolicyInfo) -> Result<Option<ActionMapping>, Refusal>,
         mut on_refused: impl FnMut(&str),
     ) -> Result<PolicyInfo, IpcError> {
         self.connection = None;
@@ -72,16 +75,27 @@ impl SimSession {
     fn admit(
         &mut self,
         request: HelloRequest,
-        vet: &mut impl FnMut(&PolicyInfo) -> Result<(), String>,
+        vet: &mut impl FnMut(&PolicyInfo) -> Result<Option<ActionMapping>, Refusal>,
         on_refused: &mut impl FnMut(&str),
         timed_out: &impl Fn(&'static str) -> Result<(), IpcError>,
     ) -> Result<Option<PolicyInfo>, IpcError> {
         let hello = *request.payload();
         let (status, message) = self.check(&hello);
-        let mut welcome = self.welcome(&hello, status, &message);
+        let profile = if status == Status::Ok {
+            DeclaredProfile::read_from(&hello)
+        } else {
+            Ok(None)
+        };
+        let (status, message) = match profile {
+            Err(ref why) => (Status::Profile, format!("declared profile: {why}")),
+            Ok(_) => (status, message),
+        };
+        let refuse = |refusal: Refusal, on_refused: &mut dyn FnMut(&str)| {
+            on_refused(&refusal.message);
+            let _ = request.send_copy(self.welcome(&hello, refusal.status, &refusal.message));
+        };
         if status != Status::Ok {
-            on_refused(&message);
-            let _ = request.send_copy(welcome);
+            refuse(Refusal { status, message }, on_refused);
             return Ok(None);
         }
         let n_refs = hello.n_refs as usize;
@@ -90,14 +104,37 @@ impl SimSession {
             pid: hello.pid,
             reference_offsets_s: hello.reference_offsets_s[..n_refs].to_vec(),
             input: Some(from_fixed(&hello.input)).filter(|name| !name.is_empty()),
+            profile: profile.ok().flatten(),
         };
-        if let Err(why) = vet(&info) {
-            on_refused(&why);
-            welcome.status = Status::Rejected as u32;
-            welcome.message = to_fixed(&why);
-            let _ = request.send_copy(welcome);
-            return Ok(None);
+        match vet(&info) {
+            Err(refusal) => {
+                refuse(refusal, on_refused);
+                return Ok(None);
+            }
+            Ok(Some(mapping)) => {
+                let n = self.config.joint_names.len();
+                if mapping.action_offset_rad.len() != n || mapping.action_scale.len() != n {
+                    let message = format!(
+                        "the run's action mapping for this profile has {} offsets and {} scales for {n} joints",
+                        mapping.action_offset_rad.len(),
+                        mapping.action_scale.len()
+                    );
+                    refuse(
+                        Refusal {
+                            status: Status::Profile,
+                            message,
+                        },
+                        on_refused,
+                    );
+                    return Ok(None);
+                }
+                self.config.control_dt_s = mapping.control_dt_s;
+                self.config.action_offset_rad = mapping.action_offset_rad;
+                self.config.action_scale = mapping.action_scale;
+            }
+            Ok(None) => {}
         }
+        let mut welcome = self.welcome(&hello, Status::Ok, "");
         // The node that sent this hello, as iceoryx2 registered its port.
         let Some(peer_id) = client_node(&self.hello_service, request.origin()) else {
             on_refused(&format!("policy `{}` left before its welcome", info.name));

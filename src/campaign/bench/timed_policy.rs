@@ -46,6 +46,7 @@ impl TimedPolicy {
         let target = PolicyTarget {
             robot: &spec.robot,
             profile: &spec.profile,
+            process_profile: spec.process_profile,
             session: &SessionOptions::LAUNCHED,
             envs: spec.envs,
             launch_log: Some(&log),

@@ -59,6 +59,9 @@ pub enum BenchmarkError {
     /// The sanity check could not run.
     #[error("the sanity check could not run: {0}")]
     Sanity(#[from] SanityError),
+    /// The profile a policy process declared cannot be the run's.
+    #[error("the policy process's profile: {0}")]
+    DeclaredProfile(#[from] crate::eval::SpecError),
     /// The policy failed its sanity check: it is refused, its report says why.
     #[error("{policy} failed its sanity check before the run ({}), so its scores would not say how it tracks under force:\n{}\nCheck the policy, its profile and its file (`thorarena policy check`), or give `request.unchecked` to score it anyway (recorded in run.json)", report.failed().join(", "), report.checks.iter().map(|c| format!("  {} {}: {}", if c.passed { "pass" } else { "FAIL" }, c.name, c.detail)).collect::<Vec<_>>().join("\n"))]
     SanityFailed {
@@ -271,6 +274,9 @@ pub fn evaluate(
     observer: &mut dyn EvalObserver,
 ) -> Result<Evaluated, BenchmarkError> {
     let _writer = run.lock()?;
+    // A policy process's declared profile decides the run's (or marks a mismatch).
+    let adopted = spec.adopting(policy.profile_declaration())?;
+    let spec = &adopted;
     let mut header = RunHeader::of(spec, policy.name());
     header.network_kernels = policy.network_kernels().map(|k| k.isa.clone());
     header.policy_parameters = policy

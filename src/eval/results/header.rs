@@ -51,6 +51,11 @@ pub struct RunHeader {
     /// network off its `twist2` profile, a BeyondMimic one off a BeyondMimic profile.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub profile_mismatch_ok: bool,
+    /// The profile the policy process declared at connect, by name (its numbers are in
+    /// the identity's profile fingerprint when the run took it); `None`: in process, or
+    /// a process that declared none under a run's `--profile`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub declared_profile: Option<String>,
     /// The profile's control step (the clock of the metrics and regime thresholds), s.
     pub control_dt_s: f64,
     /// The physics step, s (the profile's, or `--physics-dt`).
@@ -115,6 +120,7 @@ impl RunHeader {
             policy: policy.to_string(),
             profile: spec.profile.name.clone(),
             profile_mismatch_ok: spec.profile_mismatch,
+            declared_profile: spec.declared_profile.clone(),
             control_dt_s: spec.profile.control_dt_s,
             physics_dt_s: spec.profile.physics_dt_s,
             engine: spec.engine.clone(),

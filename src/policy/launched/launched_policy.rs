@@ -29,6 +29,8 @@ pub struct LaunchTarget<'a> {
     pub robot: &'a RobotModel,
     /// The dynamics profile.
     pub profile: &'a Profile,
+    /// How the run takes the profile the process declares.
+    pub process_profile: crate::policy::declared_profile::ProcessProfile,
     /// How the session is served.
     pub session: &'a SessionOptions,
     /// Environment slots per batch.
@@ -63,6 +65,7 @@ impl LaunchedPolicy {
             session,
             target.robot,
             target.profile,
+            target.process_profile,
             &options,
             target.envs,
             &mut |_| Ok(()),
@@ -116,6 +119,9 @@ impl Policy for LaunchedPolicy {
     }
     fn act(&mut self, observations: &[Observation], actions: &mut [Vec<f64>]) -> ActOutcome {
         self.remote.act(observations, actions)
+    }
+    fn profile_declaration(&self) -> Option<&crate::policy::declared_profile::ProfileDeclaration> {
+        self.remote.profile_declaration()
     }
     fn last_round_trip(&self) -> Option<Duration> {
         self.remote.last_round_trip()

@@ -18,6 +18,8 @@ pub struct ClientRequest {
     pub policy: String,
     /// The name it gives in the handshake [default: the policy's].
     pub name: Option<String>,
+    /// The bundled profile declared at connect (`None`: none declared).
+    pub profile: Option<String>,
     /// The robot.
     pub robot: String,
     /// Seconds to wait for the session.
@@ -62,6 +64,10 @@ pub fn run_named_client(
     if let Some(pid) = request.announced_pid {
         config.announced_pid = pid;
     }
+    config.profile = request
+        .profile
+        .clone()
+        .map(thorarena_ipc::DeclaredProfile::Named);
     config.wait = WaitPolicy {
         spin: Duration::from_micros(request.spin_us),
         ..WaitPolicy::default()

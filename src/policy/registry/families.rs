@@ -328,8 +328,8 @@ pub fn profile_help() -> String {
         }
     }
     format!(
-        "Dynamics profile: a bundled name (data/profiles) or a .toml path. Default: a published network known by content runs under its own (`thorarena policies` lists them), any other policy under its family's: {}. A profile the family contradicts is refused",
-        by_family.join(", ")
+        "Dynamics profile: a bundled name (data/profiles) or a .toml path. Default: a published network known by content runs under its own (`thorarena policies` lists them), a policy process (`ipc:`, a command) under the one it declares at connect (one that declares none is refused unless this is given), any other policy under its family's: {}. A profile the family, or the process's declaration, contradicts is refused",
+        by_family.iter().filter(|e| !e.ends_with("for ipc")).cloned().collect::<Vec<_>>().join(", ")
     )
 }
 
@@ -350,9 +350,13 @@ pub fn families_text() -> String {
             Runs::InProcess => "in process",
             Runs::OwnProcess => "its own process",
         };
+        let profile = match f.runs {
+            Runs::InProcess => format!("`{}`", f.profile),
+            Runs::OwnProcess => "the one it declares at connect".to_string(),
+        };
         text += &format!(
-            "| `{}` | {} | {} | `{}` | {runs} |\n",
-            f.spelling, f.what, f.supplies, f.profile
+            "| `{}` | {} | {} | {profile} | {runs} |\n",
+            f.spelling, f.what, f.supplies
         );
     }
     text += "\nForces in training (tables mark a cell whose forces lie outside them):\n\n| family | trained with |\n|---|---|\n";

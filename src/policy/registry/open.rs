@@ -50,6 +50,8 @@ pub struct PolicyTarget<'a> {
     pub robot: &'a RobotModel,
     /// The dynamics profile (default pose, action mapping, control period).
     pub profile: &'a Profile,
+    /// How the run takes the profile a policy process declares (ignored in process).
+    pub process_profile: crate::policy::declared_profile::ProcessProfile,
     /// How a policy process is served (ignored in process).
     pub session: &'a SessionOptions,
     /// Environment slots per batch.
@@ -112,6 +114,7 @@ pub fn launch(
     let launch_target = LaunchTarget {
         robot: target.robot,
         profile: target.profile,
+        process_profile: target.process_profile,
         session: target.session,
         envs: target.envs,
     };
@@ -134,6 +137,7 @@ pub fn serve_session(
         session,
         target.robot,
         target.profile,
+        target.process_profile,
         target.session,
         target.envs,
         vet,

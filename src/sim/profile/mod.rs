@@ -198,6 +198,88 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
         field: field.into(),
         reason,
     };
+    resolve_file(file, path, robot)
+}
+
+/// A profile given by its numbers, each per joint in `robot`'s canonical order (a policy
+/// process declares one so at connect): resolved and checked as a file's would be, its
+/// torque limits the robot's. `origin` names it in errors, where a file's path would be.
+pub fn profile_from_numbers(
+    numbers: ProfileNumbers,
+    origin: &str,
+    robot: &RobotModel,
+) -> Result<Profile, ProfileError> {
+    let origin = Path::new(origin);
+    let per_joint = |field: &str, values: &[f64]| -> Result<PerGroup, ProfileError> {
+        if values.len() != robot.joints.len() {
+            return Err(ProfileError::BadField {
+                path: origin.to_path_buf(),
+                field: field.into(),
+                reason: format!(
+                    "{} values for the {} joints of {}",
+                    values.len(),
+                    robot.joints.len(),
+                    robot.name
+                ),
+            });
+        }
+        Ok(robot
+            .joints
+            .iter()
+            .zip(values)
+            .map(|(j, v)| (j.name.clone(), *v))
+            .collect())
+    };
+    let file = ProfileFile {
+        robot: robot.name.clone(),
+        control_dt_s: numbers.control_dt_s,
+        physics_dt_s: numbers.physics_dt_s,
+        action_delay_steps: numbers.action_delay_steps,
+        action_clip: numbers.action_clip,
+        action_scale: per_joint("action_scale", &numbers.action_scale)?,
+        action_offset_rad: Some(per_joint("action_offset_rad", &numbers.action_offset_rad)?),
+        kp: per_joint("kp", &numbers.kp)?,
+        kd: per_joint("kd", &numbers.kd)?,
+        effort_limit_nm: PerGroup::new(),
+        source: numbers.source,
+        beyondmimic: None,
+        name: numbers.name,
+    };
+    resolve_file(file, origin, robot)
+}
+
+/// What [`profile_from_numbers`] takes: a profile's name, periods, delay, clip and its
+/// per-joint action mapping and gains.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProfileNumbers {
+    /// Its name.
+    pub name: String,
+    /// Where the numbers come from (recorded as the profile's `source`).
+    pub source: String,
+    /// Policy period, s.
+    pub control_dt_s: f64,
+    /// Physics step, s.
+    pub physics_dt_s: f64,
+    /// Control steps between a policy output and its effect.
+    pub action_delay_steps: usize,
+    /// Raw actions are clipped to ±this before scaling (`None`: no clip).
+    pub action_clip: Option<f64>,
+    /// Target = offset + scale · action, per joint.
+    pub action_scale: Vec<f64>,
+    /// The action offset, rad, per joint.
+    pub action_offset_rad: Vec<f64>,
+    /// Stiffness, N·m/rad, per joint.
+    pub kp: Vec<f64>,
+    /// Damping, N·m·s/rad, per joint.
+    pub kd: Vec<f64>,
+}
+
+/// A parsed profile file resolved for `robot` and checked (`path` names it in errors).
+fn resolve_file(
+    file: ProfileFile,
+    path: &Path,
+    robot: &RobotModel,
+) -> Result<Profile, ProfileError> {
     if file.robot != robot.name {
         return Err(bad(
             "robot",
@@ -225,7 +307,7 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
     }
     if let Some(c) = file.action_clip {
         if !(c.is_finite() && c > 0.0) {
-            return Err(bad("action_clip", format!("must be > 0, got {c}")));
+            return Err(bad("action_clip", format!("must be > 0, got {}", short(c))));
         }
     }
     let resolve_signed = |field: &str,
@@ -233,6 +315,25 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
                           fallback: Option<&dyn Fn(usize) -> f64>,
                           allow_negative: bool|
      -> Result<Vec<f64>, ProfileError> {
+    if file.control_dt_s > MAX_CONTROL_DT_S || substeps > MAX_PROFILE_SUBSTEPS as f64 {
+        return Err(bad(
+            "control_dt_s",
+            format!(
+                "{} s of {} s physics steps: give at most {MAX_CONTROL_DT_S} s and {MAX_PROFILE_SUBSTEPS} physics steps a control step",
+                short(file.control_dt_s),
+                short(file.physics_dt_s)
+            ),
+        ));
+    }
+    if file.action_delay_steps > MAX_ACTION_DELAY_STEPS {
+        return Err(bad(
+            "action_delay_steps",
+            format!(
+                "{}: give at most {MAX_ACTION_DELAY_STEPS} control steps",
+                file.action_delay_steps
+            ),
+        ));
+    }
         let max = field_limit(field);
         let groups: Vec<String> = robot.joints.iter().map(|j| joint_group(&j.name)).collect();
         for key in table.keys() {
@@ -318,6 +419,15 @@ pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileE
 /// and its largest motor limit 139 N·m (`data/robots/g1_29dof/robot.toml`, from
 /// Unitree's description); these bounds sit two orders of magnitude above them, so
 /// no real profile meets them while a slip of the exponent (kp 1e300) is refused before
+/// The longest control period a profile may have, s: a humanoid policy runs at 25 Hz
+/// or faster (every bundled profile: 50 Hz), so a period over a second is a slip of units.
+const MAX_CONTROL_DT_S: f64 = 1.0;
+/// Most physics steps a control step may take (every bundled profile: 4 or 10).
+const MAX_PROFILE_SUBSTEPS: usize = 1000;
+/// Most control steps an action may wait (every bundled profile: 0; a robot's
+/// deployment delay is one or two).
+const MAX_ACTION_DELAY_STEPS: usize = 50;
+
 /// it runs, instead of being simulated and labelled with the profile's name.
 fn field_limit(field: &str) -> (f64, &'static str) {
     match field {

@@ -18,13 +18,17 @@
 
 int main(int argc, char** argv) {
     example::Args args(argc, argv,
-                       "usage: echo_policy --session NAME [--name NAME] [--timeout S] [--spin-us U]\n"
+                       "usage: echo_policy --session NAME [--name NAME] [--timeout S] [--spin-us U] [--profile NAME|none]\n"
                        "                   [--die-after-steps N] [--delay-ms X --delay-at-step K]");
     thorarena::ConnectOptions options;
     options.session = args.str("session");
     options.name = args.str("name", "echo-cpp");
     options.joint_names = example::g1_joint_names();
     options.reference_offsets_s = {0.0};
+    // The profile this policy runs under, declared at connect ("none": declare none, so the
+    // run must name one with --profile).
+    const std::string profile = args.str("profile", "default");
+    if (profile != "none") options.profile_name = profile;
     options.timeout = std::chrono::milliseconds(static_cast<long>(1000 * args.num("timeout", 10.0)));
     options.spin = std::chrono::microseconds(static_cast<long>(args.num("spin-us", 50.0)));
     const long die_after = static_cast<long>(args.num("die-after-steps", -1));

@@ -6,7 +6,7 @@
 //
 // Run it against a ThorArena run serving session NAME:
 //
-//     replay_policy --session NAME [--name replay-cpp] [--timeout S]
+//     replay_policy --session NAME [--name replay-cpp] [--timeout S] [--profile default]
 //
 // Exit status: 0 when the run ended; 1 with the typed status on stderr when the session
 // was refused or failed (e.g. "THORARENA_STATUS_REFUSED_JOINT_COUNT").
@@ -19,12 +19,16 @@
 
 int main(int argc, char** argv) {
     example::Args args(argc, argv,
-                       "usage: replay_policy --session NAME [--name NAME] [--timeout S]");
+                       "usage: replay_policy --session NAME [--name NAME] [--timeout S] [--profile NAME|none]");
     thorarena::ConnectOptions options;
     options.session = args.str("session");
     options.name = args.str("name", "replay-cpp");
     options.joint_names = example::g1_joint_names();
     options.reference_offsets_s = {0.0};
+    // The profile this policy runs under, declared at connect ("none": declare none, so the
+    // run must name one with --profile).
+    const std::string profile = args.str("profile", "default");
+    if (profile != "none") options.profile_name = profile;
     options.timeout = std::chrono::milliseconds(static_cast<long>(1000 * args.num("timeout", 10.0)));
     try {
         thorarena::Client client(options);

@@ -37,6 +37,13 @@ def main() -> int:
     parser.add_argument(
         "--delay-at-step", type=int, default=None, metavar="K", help="the step to delay (1-based)"
     )
+    parser.add_argument(
+        "--profile",
+        default="default",
+        help="the bundled profile declared at connect as the one this policy runs under "
+        "(default: %(default)s, the built-in baselines'); 'none' declares none, so the run "
+        "must name one with --profile",
+    )
     args = parser.parse_args()
 
     session = ta.connect(
@@ -45,6 +52,7 @@ def main() -> int:
         joint_names=ta.G1_JOINT_NAMES,
         timeout_s=args.timeout,
         spin_us=args.spin_us,
+        profile=None if args.profile == "none" else args.profile,
     )
     print("connected", flush=True)
     for step, (obs, actions) in enumerate(session.steps(), start=1):

@@ -36,6 +36,13 @@ def main() -> int:
         help="iceoryx2's Python binding (default), or the C ABI (libthorarena_ipc.so, "
         "THORARENA_IPC_LIB), or that when found",
     )
+    parser.add_argument(
+        "--profile",
+        default="default",
+        help="the bundled profile declared at connect as the one this policy runs under "
+        "(default: %(default)s, the built-in baselines'); 'none' declares none, so the run "
+        "must name one with --profile",
+    )
     args = parser.parse_args()
 
     session = ta.connect(
@@ -44,6 +51,7 @@ def main() -> int:
         joint_names=ta.G1_JOINT_NAMES,
         timeout_s=args.timeout,
         transport=args.transport,
+        profile=None if args.profile == "none" else args.profile,
     )
     print(
         f"connected: {session.n_envs} environments, {session.n_joints} joints, "

@@ -20,7 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..client import Session, connect
-from ..protocol import FLAG_ACTIVE, FLAG_RESET, G1_JOINT_NAMES
+from ..protocol import FLAG_ACTIVE, FLAG_RESET, G1_JOINT_NAMES, Profile
 from .runtime import Policy
 
 
@@ -41,6 +41,10 @@ class Adapter(ABC):
     """A network input the simulator builds for this adapter (`connect(input=...)`), the
     same vector `observe` builds: `connect` asks for it unless told `input=None`, and
     `run` then feeds the network from the session's policy-input block."""
+
+    profile: ClassVar[str | Profile | None] = None
+    """The dynamics profile the network was trained under, declared at connect
+    (`connect(profile=...)`): a bundled profile's name or its numbers."""
 
     def __init__(self, policy: Policy | None) -> None:
         self.policy = policy
@@ -164,10 +168,12 @@ class Adapter(ABC):
 
     def connect(self, session: str, **kwargs: Any) -> Session:
         """Joins `session` with this adapter's name, joint order and reference offsets;
-        `kwargs` go to `thorarena.connect` (`timeout_s`, `spin_us`, or `name` to override;
+        `kwargs` go to `thorarena.connect` (`timeout_s`, `spin_us`, or `name` or
+        `profile` to override;
         `input=None` to build the observation here rather than in the simulator)."""
         kwargs.setdefault("name", self.name)
         kwargs.setdefault("input", self.simulator_input)
+        kwargs.setdefault("profile", self.profile)
         return connect(
             session,
             joint_names=self.joint_names,

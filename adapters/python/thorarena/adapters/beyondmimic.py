@@ -261,6 +261,7 @@ class BeyondMimicAdapter(Adapter):
     """A BeyondMimic-style tracking policy; everything policy-specific from its metadata."""
 
     name: ClassVar[str] = "beyondmimic"
+    profile = "beyondmimic"
     reference_offsets_s: ClassVar[tuple[float, ...]] = (0.0,)
 
     def __init__(self, policy: Policy | None, metadata: BeyondMimicMetadata | None = None) -> None:

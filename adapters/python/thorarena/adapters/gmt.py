@@ -111,6 +111,7 @@ class GmtAdapter(Adapter):
     """GMT's observation (2154) and network (23 raw actions, wrists held at action 0)."""
 
     name: ClassVar[str] = "gmt"
+    profile = "gmt"
     reference_offsets_s: ClassVar[tuple[float, ...]] = tuple(
         round(k * CONTROL_DT_S, 9) for k in TARGET_STEPS
     )

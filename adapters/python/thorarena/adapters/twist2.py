@@ -106,6 +106,7 @@ class Twist2Adapter(Adapter):
     """
 
     name: ClassVar[str] = "twist2"
+    profile = "twist2"
     simulator_input: ClassVar[str | None] = "twist2"
     reference_offsets_s: ClassVar[tuple[float, ...]] = (0.0, MIMIC_LOOKAHEAD_S)
     obs_dim = N_OBS
