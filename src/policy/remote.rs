@@ -283,7 +283,7 @@ impl Policy for RemotePolicy {
     }
 
     fn sanity_exempt(&self) -> Option<&'static str> {
-        Some("a policy process (check its network in process with `thorarena policy check`)")
+        Some("a policy process (check it with `thorarena policy check ipc:SESSION`)")
     }
 
     fn episode_ended(&mut self, env: usize, terminated: bool) {

@@ -14,7 +14,8 @@ use std::path::PathBuf;
 /// What to check.
 #[derive(Debug, Clone)]
 pub struct PolicyCheckRequest {
-    /// The policy, as a run names it (in process only).
+    /// The policy, as a run names it (in process, or `ipc:SESSION`: the check serves the
+    /// session and checks the process that joins it).
     pub policy: PolicySource,
     /// Its profile [default: the one a run would choose].
     pub profile: Option<String>,
@@ -60,9 +61,13 @@ pub enum PolicyCheckError {
     /// An empty dataset.
     #[error("{} has no sequences", .0.display())]
     NoSequences(PathBuf),
-    /// A policy process: the check steps the policy itself.
-    #[error("policy check runs a policy in process; `{0}` is a policy process (check it by running its network in process, e.g. beyondmimic:FILE)")]
+    /// A policy the run starts itself (a command): the check serves a session
+    /// (`ipc:SESSION`) for a process started by hand.
+    #[error("policy check serves a session for a policy process (`ipc:SESSION`, then start the process); `{0}` is a command a run starts")]
     PolicyProcess(String),
+    /// The policy process could not be served, or did not connect.
+    #[error(transparent)]
+    Open(Box<OpenPolicyError>),
     /// A profile the policy's family contradicts: a run would refuse it, so the check does
     /// not judge the policy under it.
     #[error("`{policy}`: {why}; a run refuses this profile, so the check does not judge the policy under it (leave out `option.profile` for the family's)")]
@@ -114,10 +119,14 @@ pub fn check_named_policy(request: &PolicyCheckRequest) -> Result<SanityReport, 
         None => walking_sequence(&sequences, request.track_s)
             .ok_or_else(|| PolicyCheckError::NoSequences(dataset_dir.clone()))?,
     };
-    let mut policy = match registry::open_in_process(arg, &robot, &profile) {
-        Ok(policy) => policy,
-        Err(OpenPolicyError::Registry(e)) => return Err(e.into()),
-        Err(_) => return Err(PolicyCheckError::PolicyProcess(request.policy.to_string())),
+    let (mut policy, profile) = if arg.in_process() {
+        match registry::open_in_process(arg, &robot, &profile) {
+            Ok(policy) => (policy, profile),
+            Err(OpenPolicyError::Registry(e)) => return Err(e.into()),
+            Err(e) => return Err(PolicyCheckError::Open(Box::new(e))),
+        }
+    } else {
+        open_process(request, &robot, profile)?
     };
     let options = SanityOptions {
         track_s: request.track_s,
@@ -127,10 +136,52 @@ pub fn check_named_policy(request: &PolicyCheckRequest) -> Result<SanityReport, 
         ..SanityOptions::default()
     };
     Ok(check_policy(
-        policy.as_mut(),
+        &mut *policy,
         &robot,
         &profile,
         &sequences[index],
         &options,
     )?)
+}
+
+/// How long `policy check` waits for a policy process to connect to its session.
+const PROCESS_CONNECT_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(120);
+
+/// Serves the session of `request.policy` (`ipc:SESSION`) and waits for its process: the
+/// policy and the profile it is checked under — the one it declared when no profile is
+/// named (as a run takes it), else the one named, which the declaration must not
+/// contradict (as a run refuses it).
+fn open_process(
+    request: &PolicyCheckRequest,
+    robot: &crate::sim::robot::RobotModel,
+    named: crate::sim::profile::Profile,
+) -> Result<(Box<dyn crate::policy::Policy>, crate::sim::profile::Profile), PolicyCheckError> {
+    use crate::policy::declared_profile::ProcessProfile;
+    let Some(session) = request.policy.session() else {
+        return Err(PolicyCheckError::PolicyProcess(request.policy.to_string()));
+    };
+    let options = crate::policy::SessionOptions {
+        connect_timeout: Some(PROCESS_CONNECT_TIMEOUT),
+        ..crate::policy::SessionOptions::LAUNCHED
+    };
+    let target = registry::PolicyTarget {
+        robot,
+        profile: &named,
+        process_profile: match request.profile {
+            Some(_) => ProcessProfile::Named { mismatch_ok: false },
+            None => ProcessProfile::Declared,
+        },
+        session: &options,
+        envs: 1,
+        launch_log: None,
+    };
+    let policy = registry::serve_session(session, &target, &mut |_| Ok(()), &mut |note| {
+        log::info!("{note}")
+    })
+    .map_err(|e| PolicyCheckError::Open(Box::new(e)))?;
+    let profile = match crate::policy::Policy::profile_declaration(&policy) {
+        Some(d) if d.adopted => d.declared.clone().unwrap_or(named),
+        _ => named,
+    };
+    Ok((Box::new(policy), profile))
 }
