@@ -20,8 +20,8 @@ use thorarena::policy::launched::PolicyCommand;
 /// Arguments of `bench eval`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Dataset directory.
-    #[arg(long, default_value = "data/sample")]
+    /// Dataset directory, or a bundled dataset by name (`sample`, `real-walks`).
+    #[arg(long, value_parser = thorarena::sim::motion::dataset_arg, default_value = "data/sample")]
     pub dataset: PathBuf,
     // Its help lists every family of the registry run in process.
     #[arg(long, default_value = "hold", value_parser = thorarena::policy::registry::PolicySource::parse, help = thorarena::policy::registry::policy_help(true))]

@@ -38,7 +38,8 @@ pub struct ExportArgs {
     /// Output format.
     #[arg(long, value_enum, default_value = "npz")]
     pub format: ExportFormat,
-    /// Dataset directory.
+    /// Dataset directory, or a bundled dataset by name (`sample`, `real-walks`).
+    #[arg(value_parser = thorarena::sim::motion::dataset_arg)]
     pub dataset: PathBuf,
     /// Output directory.
     #[arg(long)]
@@ -129,7 +130,8 @@ pub struct ImportArgs {
 /// Arguments of `data info`.
 #[derive(Debug, clap::Args)]
 pub struct InfoArgs {
-    /// Dataset directory.
+    /// Dataset directory, or a bundled dataset by name (`sample`, `real-walks`).
+    #[arg(value_parser = thorarena::sim::motion::dataset_arg)]
     pub dataset: PathBuf,
     /// Robot of the dataset.
     #[arg(long, default_value = "g1_29dof")]

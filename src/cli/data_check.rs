@@ -9,7 +9,8 @@ use thorarena::sim::motion::check::{CheckOptions, CHECK_JSON, CHECK_MARKDOWN};
 /// Arguments of `data check` (definitions: docs/data-check.md).
 #[derive(Debug, clap::Args)]
 pub struct CheckArgs {
-    /// Dataset directory.
+    /// Dataset directory, or a bundled dataset by name (`sample`, `real-walks`).
+    #[arg(value_parser = thorarena::sim::motion::dataset_arg)]
     pub dataset: PathBuf,
     /// Robot of the dataset.
     #[arg(long, default_value = "g1_29dof")]

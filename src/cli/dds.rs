@@ -13,7 +13,7 @@ use thorarena::eval::TerminationRule;
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Dataset directory [default: the bundled sample dataset, as for `eval`].
-    #[arg(long)]
+    #[arg(long, value_parser = thorarena::sim::motion::dataset_arg)]
     pub dataset: Option<PathBuf>,
     /// The sequence of the episode, `TASK/SEQUENCE_ID`.
     #[arg(long)]

@@ -78,7 +78,7 @@ pub struct Args {
     pub engines: Vec<super::choices::EngineArg>,
     /// Dataset [default: the synthetic six-task dataset, generated once into
     /// OUT/synthetic with --per-task sequences per task].
-    #[arg(long)]
+    #[arg(long, value_parser = thorarena::sim::motion::dataset_arg)]
     pub dataset: Option<PathBuf>,
     /// Sequences per task of the generated synthetic dataset (60: the paper's).
     #[arg(long, default_value_t = 60)]

@@ -25,7 +25,7 @@ pub struct Args {
     pub profile: Option<String>,
     /// Dataset holding the tracking reference [default: the bundled sample]; for a
     /// single-clip policy, its own clip (e.g. the dance imported from holosoma's network).
-    #[arg(long)]
+    #[arg(long, value_parser = thorarena::sim::motion::dataset_arg)]
     pub dataset: Option<PathBuf>,
     /// Sequence id to track [default: the dataset's sequence whose root travels farthest
     /// in the first --track-seconds, a walk].

@@ -39,8 +39,9 @@ pub(super) const REQUEST_CONFLICTS: [&str; 24] = [
 /// What an evaluation needs besides the policy and where results go (shared with `serve`).
 #[derive(Debug, Clone, clap::Args)]
 pub struct RunArgs {
-    /// Dataset directory (canonical format) [default: the bundled data/sample].
-    #[arg(long)]
+    /// Dataset directory (canonical format), or a bundled dataset by name: `sample`
+    /// (synthetic, six tasks), `real-walks` (TWIST2's ten real walks) [default: sample].
+    #[arg(long, value_parser = thorarena::sim::motion::dataset_arg)]
     pub dataset: Option<PathBuf>,
     // Its help says how the registry chooses the default.
     #[arg(long, help = thorarena::policy::registry::profile_help())]

@@ -10,6 +10,7 @@
 //! code; `robot.toml` holds the same order as data.
 
 pub mod check;
+mod bundled;
 mod dataset;
 mod describe;
 mod error;
@@ -39,6 +40,7 @@ pub fn fps_problem(fps: f64) -> Option<String> {
     })
 }
 
+pub use bundled::{bundled_dataset, dataset_arg, BUNDLED_DATASETS};
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use describe::{describe, joint_limit_margin, plural, total_hand_force};
 pub use error::DataError;
