@@ -4,7 +4,11 @@
 //! the identity's profile fingerprint), refuses a `--profile` that contradicts it (or runs
 //! it with `--profile-mismatch-ok`, recorded), and refuses a process that declares none
 //! when the run names none either, telling both sides both ways to fix it. Python clients,
-//! over iceoryx2's binding and over the C ABI.
+//! over iceoryx2's binding and over the C ABI. A process under any profile but the
+//! baselines' `default` passes the sanity check first, as a network in process does, and
+//! `run.json` records the verdict: TWIST2's published network in a Python process passes.
+//! (The replay script here is open loop — no tracker — so its runs under other profiles
+//! are `--unchecked`, which is recorded too.)
 
 mod policy_session;
 mod prereq;
@@ -113,7 +117,7 @@ fn a_profile_declared_by_name_or_by_numbers_is_the_runs_and_is_recorded() {
     let default = registry::profile("default", &robot).unwrap();
     assert_ne!(wbc.fingerprint(), default.fingerprint());
     // By name: the run takes wbc-mjlab's gains, not the default profile's.
-    let (run, client, out, _dir) = pair("named", "\"wbc-mjlab\"", "python", &[]);
+    let (run, client, out, _dir) = pair("named", "\"wbc-mjlab\"", "python", &["--unchecked"]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(client.status.success(), "{}", stderr(&client));
     let header = run_json(&out);
@@ -129,7 +133,7 @@ fn a_profile_declared_by_name_or_by_numbers_is_the_runs_and_is_recorded() {
     // By numbers: the same gains under a name of the user's, resolved as a file's would
     // be (its torque limits the robot's).
     let numbers = python_profile(&wbc, "my-mjlab-run");
-    let (run, client, out, _dir) = pair("numbers", &numbers, "python", &[]);
+    let (run, client, out, _dir) = pair("numbers", &numbers, "python", &["--unchecked"]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(client.status.success(), "{}", stderr(&client));
     let header = run_json(&out);
@@ -175,7 +179,7 @@ fn over_the_c_abi_a_declared_profile_is_the_runs_too() {
     }
     let robot = registry::robot("g1_29dof").unwrap();
     let wbc = registry::profile("wbc-mjlab", &robot).unwrap();
-    let (run, client, out, _dir) = pair("native", "\"wbc-mjlab\"", "native", &[]);
+    let (run, client, out, _dir) = pair("native", "\"wbc-mjlab\"", "native", &["--unchecked"]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(client.status.success(), "{}", stderr(&client));
     assert_eq!(
@@ -183,7 +187,7 @@ fn over_the_c_abi_a_declared_profile_is_the_runs_too() {
         wbc.fingerprint()
     );
     let numbers = python_profile(&wbc, "native-numbers");
-    let (run, client, out, _dir) = pair("native-n", &numbers, "native", &[]);
+    let (run, client, out, _dir) = pair("native-n", &numbers, "native", &["--unchecked"]);
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(client.status.success(), "{}", stderr(&client));
     assert_eq!(run_json(&out)["profile"], "native-numbers");
@@ -201,6 +205,8 @@ fn a_process_that_declares_none_needs_the_runs_profile_and_is_told_both_ways() {
     let header = run_json(&out);
     assert_eq!(header["profile"], "default");
     assert!(header.get("declared_profile").is_none(), "{header}");
+    // Under the baselines' profile a process is judged as a baseline is.
+    assert_eq!(header["sanity"]["status"], "exempt", "{header}");
     // Without, it is refused in its handshake (it hears why and exits), and the run,
     // which had no other policy, ends at its connect timeout saying why it refused it.
     let (run, client, out, _dir) = pair("none", "None", "python", &["--connect-timeout", "8"]);
@@ -248,4 +254,57 @@ fn a_profile_that_contradicts_the_declared_one_is_refused_unless_allowed() {
     assert!(run.status.success(), "{}", stderr(&run));
     assert!(client.status.success(), "{}", stderr(&client));
     assert!(run_json(&out).get("profile_mismatch_ok").is_none());
+}
+
+#[test]
+fn a_network_in_a_process_passes_the_sanity_check_first_and_the_verdict_is_recorded() {
+    let test = "declared_profile::a_network_in_a_process_passes_the_sanity_check_first_and_the_verdict_is_recorded";
+    if !prereq::python_modules(
+        test,
+        &["iceoryx2", "numpy", "onnxruntime"],
+        "pip install './adapters/python[policies]'",
+    ) {
+        return;
+    }
+    let Some(onnx) = prereq::reference(test, "twist2/twist2_1017_25k.onnx") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let s = session("twist2-check");
+    let out = dir.path().join("run");
+    // One walk, so the check and the run are short.
+    let run = Command::new(BIN)
+        .args(["eval", "--dataset", &format!("{ROOT}/data/sample")])
+        .args(["--policy", &format!("ipc:{s}")])
+        .args(["--sequences", "syn_carry_001", "--settings", "no-force"])
+        .args(["--workers", "1", "--out", out.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let client = Command::new("python3")
+        .arg(format!(
+            "{ROOT}/adapters/python/examples/twist2/run_twist2.py"
+        ))
+        .args([
+            "--session",
+            &s,
+            "--onnx",
+            onnx.to_str().unwrap(),
+            "--timeout",
+            "60",
+        ])
+        .args(["--transport", "python"])
+        .env("PYTHONPATH", format!("{ROOT}/adapters/python"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let client = wait_at_most(client, Duration::from_secs(300), "the TWIST2 process");
+    let run = wait_at_most(run, Duration::from_secs(300), "eval");
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(client.status.success(), "{}", stderr(&client));
+    let header = run_json(&out);
+    assert_eq!(header["profile"], "twist2", "{header}");
+    assert_eq!(header["sanity"]["status"], "passed", "{header}");
 }

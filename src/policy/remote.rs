@@ -147,6 +147,9 @@ pub struct RemotePolicy {
     declaration: Option<ProfileDeclaration>,
     /// What it declared, as it declared it: a reconnecting policy must declare the same.
     declared: Option<thorarena_ipc::DeclaredProfile>,
+    /// It runs under the baselines' `default` dynamics (by the numbers): a baseline, not
+    /// a tracker, so the sanity check before a run does not apply to it.
+    under_baseline_profile: bool,
     /// Reports a policy that keeps a step waiting (lock-step waits as long as it lives).
     stall_watch: super::stall_watch::StallWatch,
 }
@@ -209,6 +212,11 @@ impl RemotePolicy {
         let mut remote = Self::connect(config, &mut vet_name, &mut |m| {
             note(&format!("refused a policy: {m}"))
         })?;
+        let effective = judged
+            .as_ref()
+            .and_then(|d| d.declared.as_ref().filter(|_| d.adopted))
+            .unwrap_or(profile);
+        remote.under_baseline_profile = is_baseline_profile(effective, robot);
         remote.declaration = judged;
         let declared = match remote
             .declaration
@@ -256,6 +264,7 @@ impl RemotePolicy {
             input,
             declaration: None,
             declared: info.profile,
+            under_baseline_profile: true,
             session,
             stall_watch: super::stall_watch::StallWatch::new(info.name.clone()),
             name: info.name,
@@ -283,7 +292,9 @@ impl Policy for RemotePolicy {
     }
 
     fn sanity_exempt(&self) -> Option<&'static str> {
-        Some("a policy process (check it with `thorarena policy check ipc:SESSION`)")
+        self.under_baseline_profile.then_some(
+            "a policy process under the baselines' `default` profile, a floor rather than a tracker (check it with `thorarena policy check ipc:SESSION`)",
+        )
     }
 
     fn episode_ended(&mut self, env: usize, terminated: bool) {
@@ -450,6 +461,18 @@ impl Policy for RemotePolicy {
             ..self.stats
         })
     }
+}
+
+/// Whether `profile` gives the built-in baselines' dynamics (`data/profiles/default.toml`,
+/// compared by the numbers): a process running under it is judged as a baseline is —
+/// exempt from the sanity check — and one under any other profile as a network is.
+fn is_baseline_profile(
+    profile: &crate::sim::profile::Profile,
+    robot: &crate::sim::robot::RobotModel,
+) -> bool {
+    let path = crate::sim::profile::bundled_profile_path("default");
+    crate::sim::profile::load_profile(&path, robot)
+        .is_ok_and(|default| super::declared_profile::same_dynamics(profile, &default).is_ok())
 }
 
 impl Drop for RemotePolicy {

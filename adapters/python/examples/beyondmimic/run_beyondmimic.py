@@ -1,7 +1,7 @@
 """Run a BeyondMimic-style ONNX export (whole_body_tracking or mjlab tracking task, metadata
 attached) as the policy of a ThorArena run serving session NAME:
 
-    cargo run --release -- eval --policy ipc:NAME --profile beyondmimic --dataset DIR   # one shell
+    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell (the process declares `beyondmimic`)
     python run_beyondmimic.py --session NAME --onnx policy.onnx                        # another
 
 Joint order, default pose and action scale come from the file's metadata. The gains it was

@@ -1,7 +1,7 @@
 """Run a GMT checkpoint (23 joints; TorchScript `.pt` or ONNX, input [batch, 2154], output
 [batch, 23]) as the policy of a ThorArena run serving session NAME:
 
-    cargo run --release -- eval --policy ipc:NAME --profile gmt --dataset DIR   # one shell
+    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell (the process declares `gmt`)
     python run_gmt.py --session NAME --policy pretrained.pt                    # another
 
 It joins with GMT's 20 reference offsets (0.02 … 1.9 s) under the name "gmt" and answers

@@ -1,7 +1,7 @@
 """Run a TWIST2 checkpoint (ONNX, input `input` [batch, 1432], output `output` [batch, 29])
 as the policy of a ThorArena run serving session NAME:
 
-    cargo run --release -- eval --policy ipc:NAME --profile twist2 --dataset DIR   # one shell
+    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell (the process declares `twist2`)
     python run_twist2.py --session NAME --onnx twist2.onnx                         # another
 
 It joins with the adapter's reference offsets (0 and 0.02 s) under the name "twist2" and
