@@ -79,7 +79,12 @@ fn importing_the_published_walks_again_gives_the_bundled_bytes() {
     let o = Command::new(BIN)
         .args(["data", "import", "--format", "twist-pkl"])
         .args(&pickles)
-        .args(["--task", "twist2_walk", "--trim-glitches", "--ground-correct"])
+        .args([
+            "--task",
+            "twist2_walk",
+            "--trim-glitches",
+            "--ground-correct",
+        ])
         .args(["--out", dir.to_str().unwrap()])
         .output()
         .unwrap();

@@ -25,7 +25,12 @@ fn row(tables: &str, label: &str) -> Vec<String> {
     line.trim_matches('|')
         .split('|')
         .skip(1)
-        .map(|c| c.trim().trim_matches('*').trim_end_matches(" †").to_string())
+        .map(|c| {
+            c.trim()
+                .trim_matches('*')
+                .trim_end_matches(" †")
+                .to_string()
+        })
         .collect()
 }
 
@@ -36,7 +41,12 @@ fn the_real_walks_table_is_what_eval_prints() {
     }
     let policies = [
         ("TWIST2", "twist2", "twist2/twist2_1017_25k.onnx", false),
-        ("wbc-mjlab", "wbc-mjlab", "wbc-mjlab/wbc_g1_policy.onnx", false),
+        (
+            "wbc-mjlab",
+            "wbc-mjlab",
+            "wbc-mjlab/wbc_g1_policy.onnx",
+            false,
+        ),
         ("FALCON", "falcon", "falcon/g1_29dof_falcon.onnx", true),
     ];
     let dir = tempfile::tempdir().unwrap();
@@ -56,10 +66,17 @@ fn the_real_walks_table_is_what_eval_prints() {
             c.arg("--unchecked");
         }
         let o = c.output().unwrap();
-        assert!(o.status.success(), "{label}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.status.success(),
+            "{label}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         let tables = std::fs::read_to_string(out.join("tables.md")).unwrap();
         let fats = row(&tables, "average");
-        let interval = row(&tables, "95 % interval (bootstrap over episodes within tasks)");
+        let interval = row(
+            &tables,
+            "95 % interval (bootstrap over episodes within tasks)",
+        );
         let survival = row(&tables, "Survival (mean)");
         measured.push(vec![
             label.to_string(),

@@ -36,7 +36,10 @@ mod tests {
         let walks = dataset_arg("real-walks").unwrap();
         assert!(walks.join("manifest.json").is_file(), "{}", walks.display());
         assert!(walks.join("LICENSE.TWIST2").is_file());
-        assert_eq!(dataset_arg("no-such-dataset").unwrap(), PathBuf::from("no-such-dataset"));
+        assert_eq!(
+            dataset_arg("no-such-dataset").unwrap(),
+            PathBuf::from("no-such-dataset")
+        );
         let here = tempfile::tempdir().unwrap();
         let own = here.path().join("sample");
         std::fs::create_dir(&own).unwrap();

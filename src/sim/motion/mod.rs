@@ -9,8 +9,8 @@
 //! (`export.rs`). `import::G1_CANONICAL_JOINTS` is the one list of the G1's joint order in
 //! code; `robot.toml` holds the same order as data.
 
-pub mod check;
 mod bundled;
+pub mod check;
 mod dataset;
 mod describe;
 mod error;
