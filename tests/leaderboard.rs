@@ -524,3 +524,69 @@ fn a_changed_policy_command_is_rerun_with_the_leaderboards_own_flag() {
     let header: serde_json::Value = serde_json::from_str(&header).unwrap();
     assert_eq!(header["policy"], "hold", "{header}");
 }
+
+/// `--real-walks SETTINGS`: every general policy again on the bundled real human walks, in
+/// a table and a report of their own, each run the `eval` of the same policy on
+/// `--dataset real-walks` (recorded `unchecked`: the gate is its run on the board's data).
+#[test]
+fn the_real_walks_track_runs_every_general_policy_on_the_bundled_walks() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lb");
+    let sample = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sample");
+    let o = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args(["leaderboard", "--policy", "hold", "--engines", "rapier"])
+        .args([
+            "--dataset",
+            sample.to_str().unwrap(),
+            "--settings",
+            "no-force",
+        ])
+        .args([
+            "--real-walks",
+            "no-force,push:10",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let table = String::from_utf8_lossy(&o.stdout);
+    let (general, real) = table
+        .split_once("on real human walks")
+        .unwrap_or_else(|| panic!("no real-walks table: {table}"));
+    assert!(general.contains("| hold | rapier |"), "{table}");
+    assert!(
+        real.contains("| hold | rapier |") && real.contains("FATS push-10"),
+        "{table}"
+    );
+    assert!(out.join("real-walks.html").is_file());
+    let run = out.join("runs/hold-rapier-real-walks");
+    let header: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("run.json")).unwrap()).unwrap();
+    assert_eq!(header["subset"], serde_json::Value::Null, "{header}");
+    assert_eq!(header["sequences"].as_array().unwrap().len(), 10);
+    // A built-in is exempt from the check wherever it runs; a network would be `unchecked`.
+    assert_eq!(header["sanity"]["status"], "exempt");
+    // The row is what eval prints for the same policy on the same walks.
+    let alone = dir.path().join("alone");
+    let e = Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .args([
+            "eval",
+            "--dataset",
+            "real-walks",
+            "--policy",
+            "hold",
+            "--unchecked",
+        ])
+        .args([
+            "--settings",
+            "no-force,push:10",
+            "--out",
+            alone.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(e.status.success(), "{}", String::from_utf8_lossy(&e.stderr));
+    assert_eq!(summary(&run)["settings"], summary(&alone)["settings"]);
+}

@@ -86,6 +86,10 @@ pub struct Args {
     /// Settings, comma separated, as for `eval`.
     #[arg(long, value_delimiter = ',', default_value = "force,no-force")]
     pub settings: Vec<String>,
+    /// Also score every general policy on the bundled real human walks (`real-walks`)
+    /// under these settings, comma separated (e.g. no-force,push:10,push:20,push:30).
+    #[arg(long, value_delimiter = ',')]
+    pub real_walks: Vec<String>,
     /// Directory of the runs, the dataset it generates and the tables.
     #[arg(long, default_value = "results/leaderboard")]
     pub out: PathBuf,
@@ -120,6 +124,7 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         dataset: args.dataset.clone(),
         per_task: args.per_task,
         settings: args.settings.clone(),
+        real_walks_settings: args.real_walks.clone(),
         out: args.out.clone(),
         unchecked: args.unchecked,
         command: std::env::args().skip(1).collect::<Vec<_>>().join(" "),

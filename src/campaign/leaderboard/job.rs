@@ -28,6 +28,8 @@ pub struct LeaderboardJob {
     pub clips: Vec<OwnClip>,
     /// Settings of the single-clip table.
     pub clip_settings: Vec<String>,
+    /// Settings of the real-walks track (empty: none).
+    pub real_walks_settings: Vec<String>,
     /// Compliant policies with their stiff twins.
     pub pairs: Vec<CompliancePair>,
     /// How the pairs run (its engines, output and checking are the job's).
@@ -77,7 +79,7 @@ fn task_force_spans(
     entries: &[Entry],
 ) -> Result<TaskForceSpans, LeaderboardJobError> {
     let judged = entries.iter().any(|e| {
-        !e.own_clip
+        e.track == super::Track::General
             && e.trained_forces
                 .holds_hand_forces(&HandForceSpan::default())
                 .is_some()
@@ -137,6 +139,7 @@ pub fn run_leaderboard_job(
         engines: engines.clone(),
         dataset: dataset.clone(),
         settings: job.settings.clone(),
+        real_walks_settings: job.real_walks_settings.clone(),
         out: job.out.clone(),
         unchecked: job.unchecked,
         rerun: job.rerun.clone(),

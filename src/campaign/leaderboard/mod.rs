@@ -1,6 +1,7 @@
 //! The leaderboard (`thorarena leaderboard`): every policy given, on one dataset, with and
 //! without force, on each engine asked — one ordinary `eval` run per (policy, engine),
-//! resumed where it stopped — summarised in one table; and single-clip policies, each on
+//! resumed where it stopped — summarised in one table; the same policies on the bundled
+//! real human walks when asked (`--real-walks`), in a table of their own; and single-clip policies, each on
 //! its own clip under pushes of increasing force, in a table of their own. The paper's tables and figures over
 //! the same runs are `report`'s (the command writes them beside the table).
 //!
@@ -159,7 +160,7 @@ pub struct PolicyProcess {
     pub name: String,
     /// The command, its working directory and connect timeout.
     pub command: PolicyCommand,
-    /// Dynamics profile [default: `default`].
+    /// Dynamics profile [default: the one the process declares at connect].
     pub profile: Option<String>,
 }
 
@@ -236,6 +237,9 @@ pub struct LeaderboardRequest {
     /// Directory of the runs (`<out>/runs/<policy>-<engine>`, `…-own-clip` for a
     /// single-clip policy).
     pub out: PathBuf,
+    /// The settings of the real-walks track (every general policy, again, on the bundled
+    /// `real-walks`); empty: no such track.
+    pub real_walks_settings: Vec<String>,
     /// Score policies without their sanity check (recorded in each run).
     pub unchecked: bool,
     /// Policies (as [`Entry`]'s runs name them: the argument, or the process's name) whose
@@ -243,13 +247,35 @@ pub struct LeaderboardRequest {
     pub rerun: Vec<String>,
 }
 
+/// Which table of the leaderboard a run belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Track {
+    /// A general policy on the board's dataset.
+    General,
+    /// A general policy on the real human walks the binary carries (`real-walks`).
+    RealWalks,
+    /// A single-clip policy on its own clip.
+    OwnClip,
+}
+
+impl Track {
+    /// What its run directories' names end with.
+    fn dir_suffix(self) -> &'static str {
+        match self {
+            Self::General => "",
+            Self::RealWalks => "-real-walks",
+            Self::OwnClip => "-own-clip",
+        }
+    }
+}
+
 /// One (policy, engine) run of the leaderboard.
 #[derive(Debug, Clone)]
 pub struct Entry {
     /// How the table names the policy (`twist2 (twist2_1017_25k)`, a process's name).
     pub policy: String,
-    /// Whether it is a single-clip policy on its own clip.
-    pub own_clip: bool,
+    /// The table it belongs to.
+    pub track: Track,
     /// The engine's name.
     pub engine: &'static str,
     /// The run directory.
@@ -327,7 +353,7 @@ fn run_name(base: &str, engine: EngineChoice) -> String {
 /// that would share one run directory (two policies of one name, or whose names clean
 /// to the same directory name).
 fn check_names(
-    runs: &[(Player, PathBuf, bool)],
+    runs: &[(Player, PathBuf, Track)],
     engines: &[EngineChoice],
 ) -> Result<(), LeaderboardError> {
     for (i, e) in engines.iter().enumerate() {
@@ -339,7 +365,7 @@ fn check_names(
         }
     }
     let mut seen: std::collections::BTreeMap<String, String> = Default::default();
-    for (player, _, own_clip) in runs {
+    for (player, _, track) in runs {
         if let Player::Process(p) = player {
             crate::files::names::check_name("policy name", &p.name)
                 .map_err(|e| LeaderboardError::Names(e.to_string()))?;
@@ -347,7 +373,7 @@ fn check_names(
         let dir = format!(
             "{}{}",
             run_name(&player.dir_label(), EngineChoice::Rapier),
-            if *own_clip { "-own-clip" } else { "" }
+            track.dir_suffix()
         );
         if let Some(other) = seen.insert(dir.clone(), player.name()) {
             return Err(LeaderboardError::Names(format!(
@@ -398,36 +424,45 @@ pub fn run_leaderboard(
         .iter()
         .map(|p| Player::Argument(p.clone()))
         .chain(request.processes.iter().cloned().map(Player::Process))
-        .map(|player| (player, request.dataset.clone(), false));
-    let own = request
-        .clips
+        .map(|player| (player, request.dataset.clone(), Track::General));
+    let general: Vec<_> = general.collect();
+    let real = general
         .iter()
-        .map(|c| (Player::Argument(c.policy.clone()), c.dataset.clone(), true));
-    let runs: Vec<(Player, PathBuf, bool)> = general.chain(own).collect();
+        .filter(|_| !request.real_walks_settings.is_empty())
+        .map(|(player, _, _)| (player.clone(), real_walks_dir(), Track::RealWalks))
+        .collect::<Vec<_>>();
+    let own = request.clips.iter().map(|c| {
+        let player = Player::Argument(c.policy.clone());
+        (player, c.dataset.clone(), Track::OwnClip)
+    });
+    let runs: Vec<(Player, PathBuf, Track)> = general.into_iter().chain(real).chain(own).collect();
     check_names(&runs, &request.engines)?;
     check_rerun(&runs, &request.rerun)?;
     check_out(&request.out)?;
     let total = runs.len() * request.engines.len();
     let mut entries = Vec::new();
     for &engine in &request.engines {
-        for (player, dataset, own_clip) in &runs {
+        for (player, dataset, track) in &runs {
             let engine_name = engine.name();
             let name = run_name(&player.dir_label(), engine);
-            let run = request.out.join("runs").join(if *own_clip {
-                format!("{name}-own-clip")
-            } else {
-                name
-            });
+            let run = request
+                .out
+                .join("runs")
+                .join(format!("{name}{}", track.dir_suffix()));
             observer.run_starting(entries.len(), total, &player.name(), engine_name);
             let started = Instant::now();
-            let settings = if *own_clip {
-                &request.clip_settings
-            } else {
-                &request.settings
+            let settings = match track {
+                Track::General => &request.settings,
+                Track::RealWalks => &request.real_walks_settings,
+                Track::OwnClip => &request.clip_settings,
             };
             let rerun = request.rerun.contains(&player.name());
+            // The gate is the general track's: a policy that passed its sanity check on
+            // the board's dataset is not checked again on people's walks, where a
+            // command follower's heading check judges the walk, not the wiring
+            // (recorded `unchecked` in those runs).
             let summary = run_one(
-                request.unchecked,
+                request.unchecked || *track == Track::RealWalks,
                 player,
                 dataset,
                 settings,
@@ -438,7 +473,7 @@ pub fn run_leaderboard(
             )?;
             entries.push(Entry {
                 policy: player.table_label(),
-                own_clip: *own_clip,
+                track: *track,
                 engine: engine_name,
                 run,
                 summary,
@@ -484,8 +519,16 @@ enum Resume {
     Alone,
 }
 
+/// The bundled real human walks (`--dataset real-walks`).
+fn real_walks_dir() -> PathBuf {
+    crate::sim::motion::bundled_dataset("real-walks").expect("real-walks is a bundled dataset")
+}
+
 /// Refuses an `option.rerun` that names no policy of the board, before anything runs.
-fn check_rerun(runs: &[(Player, PathBuf, bool)], rerun: &[String]) -> Result<(), LeaderboardError> {
+fn check_rerun(
+    runs: &[(Player, PathBuf, Track)],
+    rerun: &[String],
+) -> Result<(), LeaderboardError> {
     for name in rerun {
         if !runs.iter().any(|(p, _, _)| p.name() == *name) {
             let names: Vec<String> = runs.iter().map(|(p, _, _)| p.name()).collect();

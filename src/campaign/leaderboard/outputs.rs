@@ -1,11 +1,12 @@
 //! What a leaderboard invocation leaves besides its runs: its tables — the general
-//! policies, the single-clip ones, the compliant and stiff pairs, each group under its
+//! policies, the same on the real walks, the single-clip ones, the compliant and stiff pairs, each group under its
 //! heading — in `leaderboard.md`, the pairs' own files, and a comparison report over each
-//! group of runs (`report.html` over the general policies', `single-clip.html` over the
-//! single-clip ones, engines labelled when they differ).
+//! group of runs (`report.html` over the general policies', `real-walks.html` over their
+//! real-walks runs, `single-clip.html` over the single-clip ones, engines labelled when
+//! they differ).
 
 use super::pairs::{pairs_table, write_pair_files, PairResult};
-use super::{leaderboard_table, write_leaderboard_page, Entry, TaskForceSpans};
+use super::{leaderboard_table, write_leaderboard_page, Entry, TaskForceSpans, Track};
 use crate::report::{
     label_engines, load_runs, mixed_engines, write_comparison_report, ComparisonFiles, ReportError,
     WrittenReport,
@@ -62,11 +63,17 @@ pub fn leaderboard_tables(
     pairs: &[PairResult],
     spans: &TaskForceSpans,
 ) -> String {
-    let general: Vec<&Entry> = entries.iter().filter(|e| !e.own_clip).collect();
-    let own: Vec<&Entry> = entries.iter().filter(|e| e.own_clip).collect();
+    let on = |track| -> Vec<&Entry> { entries.iter().filter(|e| e.track == track).collect() };
+    let (general, real, own) = (on(Track::General), on(Track::RealWalks), on(Track::OwnClip));
     let mut parts = Vec::new();
     if !general.is_empty() {
         parts.push(leaderboard_table(&general, spans));
+    }
+    if !real.is_empty() {
+        parts.push(format!(
+            "The same general policies on real human walks (the bundled `real-walks`: TWIST2's ten, no force logs; their runs are recorded `unchecked`, the gate being the run above):\n\n{}",
+            leaderboard_table(&real, &TaskForceSpans::new())
+        ));
     }
     if !own.is_empty() {
         parts.push(format!(
@@ -113,10 +120,14 @@ pub fn write_leaderboard_outputs(
     )
     .map_err(io(out))?;
     let mut reports = Vec::new();
-    for (own_clip, name) in [(false, "report.html"), (true, "single-clip.html")] {
+    for (track, name) in [
+        (Track::General, "report.html"),
+        (Track::RealWalks, "real-walks.html"),
+        (Track::OwnClip, "single-clip.html"),
+    ] {
         let dirs: Vec<PathBuf> = entries
             .iter()
-            .filter(|e| e.own_clip == own_clip)
+            .filter(|e| e.track == track)
             .map(|e| e.run.clone())
             .collect();
         if dirs.is_empty() {
