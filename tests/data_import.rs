@@ -500,7 +500,7 @@ fn a_rollout_beyond_the_import_bounds_is_refused_naming_step_and_field() {
         );
         for needle in [&format!("{name}.json"), "step 5"]
             .into_iter()
-            .chain(needles.iter().copied().map(|s| s))
+            .chain(needles.iter().copied())
         {
             assert!(
                 err.contains(needle),

@@ -19,6 +19,7 @@ pub fn header(policy: &str) -> RunHeader {
         policy: policy.into(),
         profile: "default".into(),
         profile_mismatch_ok: false,
+        declared_profile: None,
         control_dt_s: 0.02,
         physics_dt_s: 0.005,
         engine: thorarena::sim::physics::Engine::Rapier,

@@ -56,7 +56,7 @@ pub fn rotation_problem(q: &[f64; 4]) -> Option<String> {
 /// [`MAX_HAND_FORCE_N`], or not a number), or `None`.
 pub fn hand_force_problem(force_n: &[f64; 3]) -> Option<String> {
     let n = force_n.iter().map(|x| x * x).sum::<f64>().sqrt();
-    (!(n <= MAX_HAND_FORCE_N)).then(|| {
+    (n.is_nan() || n > MAX_HAND_FORCE_N).then(|| {
         format!(
             "a hand force of {} N, beyond the plausibility bound of {MAX_HAND_FORCE_N} N a hand (no task comes near it)",
             short_number(n)
