@@ -242,7 +242,7 @@ fn info(args: &InfoArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// `data synth`: the synthetic six-task dataset written, then described.
+/// `data synth`: the synthetic six-task dataset written, sequence by sequence, and named.
 fn synth(args: &SynthArgs) -> anyhow::Result<()> {
     thorarena::eval::results::check_dataset_dir(&args.out)?;
     let robot = thorarena::policy::registry::robot(&args.robot)?;
@@ -254,24 +254,30 @@ fn synth(args: &SynthArgs) -> anyhow::Result<()> {
         version: args.generator,
     };
     let started = std::time::Instant::now();
+    let mut shown = false;
     let written = write_synthetic(&args.out, &robot, &opts, args.force, |done, total| {
-        if done % args.per_task.max(1) == 0 || done == total {
-            eprintln!(
-                "synth: {done}/{total} sequences ({:.1} s)",
-                started.elapsed().as_secs_f64()
-            );
-        }
+        shown = true;
+        eprint!(
+            "\rsynth: {done}/{total} sequences written ({:.1} s)",
+            started.elapsed().as_secs_f64()
+        )
     });
-    let (ds, seqs) = match written {
+    if shown {
+        eprintln!();
+    }
+    let (ds, replaced) = match written {
         Err(e @ SynthWriteError::Exists(_)) => anyhow::bail!("{e}: pass --force"),
         written => written?,
     };
-    print!("{}", super::flags::as_flags(&describe(&ds, &seqs, &robot)));
-    eprintln!(
-        "{}: {} sequences in {:.1} s",
+    if let Some(old) = replaced {
+        eprintln!("{old}");
+    }
+    println!(
+        "{}: {} sequences in {:.1} s, content sha256 {} (`thorarena data info` describes it)",
         ds.dir.display(),
         ds.len(),
-        started.elapsed().as_secs_f64()
+        started.elapsed().as_secs_f64(),
+        &ds.content_hash()[..16],
     );
     Ok(())
 }

@@ -28,6 +28,10 @@ const VIEW_STYLE: &str = include_str!("../../web/src/view.css");
 const EMBEDDED_REPORT_JS: &str = include_str!("../../web/bundle/report.js");
 const EMBEDDED_VIEW_JS: &str = include_str!("../../web/bundle/view.js");
 
+/// The largest page script read from `THORARENA_WEB_DIST`, bytes (the bundled ones are
+/// under 1 MiB).
+const MAX_SCRIPT_BYTES: u64 = 32 * crate::files::bounded_read::MIB;
+
 /// A page of the front end, one bundled script each.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Page {
@@ -97,7 +101,12 @@ impl WebBundle {
             Self::Embedded => Ok(inline_script(page.embedded_script())),
             Self::Dir(dir) => {
                 let path = dir.join(page.script_name());
-                let text = std::fs::read_to_string(&path).map_err(|source| ReportError::Io {
+                let text = crate::files::bounded_read::read_to_string(
+                    &path,
+                    "page script",
+                    MAX_SCRIPT_BYTES,
+                )
+                .map_err(|source| ReportError::Io {
                     path: path.clone(),
                     source,
                 })?;

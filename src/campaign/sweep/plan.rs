@@ -21,6 +21,9 @@ pub const PLAN_FILE: &str = "plan.json";
 /// command's table (command, working directory, connect timeout).
 pub const PLAN_FORMAT: u32 = 5;
 
+/// The largest `plan.json` read, bytes (a task is under 1 KiB: this is tens of thousands).
+const MAX_PLAN_BYTES: u64 = 64 * crate::files::bounded_read::MIB;
+
 /// A sweep's plan, written to `DIR/plan.json` by `sweep plan`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Plan {
@@ -353,10 +356,11 @@ impl Plan {
     /// Reads `DIR/plan.json`, refusing another format version.
     pub fn load(dir: &Path) -> Result<Self, SweepError> {
         let path = dir.join(PLAN_FILE);
-        let text = std::fs::read_to_string(&path).map_err(|source| SweepError::Io {
-            path: path.clone(),
-            source,
-        })?;
+        let text = crate::files::bounded_read::read_to_string(&path, "sweep plan", MAX_PLAN_BYTES)
+            .map_err(|source| SweepError::Io {
+                path: path.clone(),
+                source,
+            })?;
         let format = serde_json::from_str::<serde_json::Value>(&text)
             .ok()
             .and_then(|v| v.get("format").and_then(|f| f.as_u64()));

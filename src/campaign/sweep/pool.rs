@@ -123,7 +123,19 @@ pub fn run_pool(
 
 /// Lines of the file at `path` (0 when it cannot be read): episodes a run has written.
 fn count_lines(path: &Path) -> usize {
-    std::fs::read(path)
-        .map(|b| b.iter().filter(|&&c| c == b'\n').count())
-        .unwrap_or(0)
+    use std::io::BufRead;
+    let Ok(file) = crate::files::bounded_read::open(path, "episode log", 16 << 30) else {
+        return 0;
+    };
+    let mut reader = std::io::BufReader::new(file);
+    let mut lines = 0;
+    while let Ok(chunk) = reader.fill_buf() {
+        if chunk.is_empty() {
+            break;
+        }
+        lines += chunk.iter().filter(|&&c| c == b'\n').count();
+        let read = chunk.len();
+        reader.consume(read);
+    }
+    lines
 }

@@ -9,6 +9,9 @@ use crate::eval::results::{ResultsError, RunDir, RunHeader};
 use crate::eval::{EpisodeRecord, Setting};
 use std::path::{Path, PathBuf};
 
+/// The largest `summary.json` or `tables.md` copied from a shard, bytes (a few KiB a cell).
+const MAX_RUN_FILE_BYTES: u64 = 64 * crate::files::bounded_read::MIB;
+
 /// Why the large sweep could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum ScaleFillError {
@@ -104,7 +107,7 @@ pub fn finish_with_shard_runs(dir: &Path, shards: &[PathBuf]) -> Result<usize, S
             (source.summary_file(), run.summary_file()),
             (source.tables_file(), run.tables_file()),
         ] {
-            std::fs::read(&from)
+            crate::files::bounded_read::read(&from, "run file", MAX_RUN_FILE_BYTES)
                 .and_then(|bytes| crate::files::atomic_file::write(&to, bytes))
                 .map_err(|e| ScaleFillError::Io {
                     path: to,

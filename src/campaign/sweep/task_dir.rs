@@ -12,7 +12,6 @@ use crate::files::log_text::{
     log_tail, printable, truncated, LOG_LINE_MAX_BYTES, LOG_TAIL_MAX_BYTES,
 };
 use std::fs::File;
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// `done.json`: written last, atomically, once the task's run is complete and flushed.
@@ -208,20 +207,15 @@ impl TaskDir {
             path: path.clone(),
             message,
         };
-        let f = match File::open(&path) {
-            Ok(f) => f,
+        let text = match crate::files::bounded_read::read_to_string(
+            &path,
+            "task record",
+            RECORD_MAX_BYTES,
+        ) {
+            Ok(text) => text,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(source) => return Err(self.io(path.clone())(source)),
         };
-        let mut text = String::new();
-        f.take(RECORD_MAX_BYTES + 1)
-            .read_to_string(&mut text)
-            .map_err(self.io(path.clone()))?;
-        if text.len() as u64 > RECORD_MAX_BYTES {
-            return Err(bad(format!(
-                "larger than {RECORD_MAX_BYTES} bytes: not a task record"
-            )));
-        }
         let record: T = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         let claimed = task_of(&record);
         if claimed != self.index {

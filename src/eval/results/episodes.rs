@@ -7,6 +7,10 @@ use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// The largest `episodes.jsonl` read, bytes: generous (a record is a few KiB, so this is
+/// millions of episodes), there to refuse a sparse or endless file rather than fill memory.
+pub const MAX_EPISODE_LOG_BYTES: u64 = 16 << 30;
+
 /// The records of a run, read back and checked against its header.
 #[derive(Debug, Clone, Default)]
 pub struct EpisodeLog {
@@ -31,11 +35,12 @@ impl EpisodeLog {
             path: path.to_path_buf(),
             ..Self::default()
         };
-        let bytes = match std::fs::read(path) {
-            Ok(b) => b,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(log),
-            Err(e) => return Err(ResultsError::io(path)(e)),
-        };
+        let bytes =
+            match crate::files::bounded_read::read(path, "episode log", MAX_EPISODE_LOG_BYTES) {
+                Ok(b) => b,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(log),
+                Err(e) => return Err(ResultsError::io(path)(e)),
+            };
         let mut seen = HashSet::new();
         let mut start = 0usize;
         let mut line_no = 0usize;

@@ -300,10 +300,15 @@ pub(super) fn parse_versioned<T: serde::de::DeserializeOwned>(
     serde_json::from_value(value).map_err(json)
 }
 
-/// Reads `<run>/run.json`.
+/// The largest `run.json` read, bytes (it lists the run's sequences: 64 MiB is hundreds of
+/// thousands).
+pub const MAX_HEADER_BYTES: u64 = 64 * crate::files::bounded_read::MIB;
+
+/// Reads `<run>/run.json` (a regular file of at most [`MAX_HEADER_BYTES`]).
 pub fn read_header(run: &Path) -> Result<RunHeader, ResultsError> {
     let path = run.join(HEADER_FILE);
-    let text = std::fs::read_to_string(&path).map_err(ResultsError::io(&path))?;
+    let text = crate::files::bounded_read::read_to_string(&path, "run.json", MAX_HEADER_BYTES)
+        .map_err(ResultsError::io(&path))?;
     parse_versioned(&path, &text)
 }
 

@@ -134,9 +134,11 @@ impl RunDir {
         ))
     }
 
-    /// The directory holds a run (its `run.json`).
+    /// The directory holds a run (its `run.json`): anything under that name counts, so a
+    /// FIFO or a link to a device there is refused when read, never taken for no run and
+    /// started afresh over by `--resume`.
     pub fn holds_run(&self) -> bool {
-        self.header_file().is_file()
+        std::fs::symlink_metadata(self.header_file()).is_ok()
     }
 
     /// Reads `run.json`.
@@ -176,9 +178,11 @@ impl RunDir {
         if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
             let err = std::io::Error::last_os_error();
             if err.raw_os_error() == Some(libc::EWOULDBLOCK) {
-                let holder = std::fs::read_to_string(&path)
-                    .ok()
-                    .and_then(|s| s.trim().parse().ok());
+                // A pid: a few bytes (the lock holds, so the file is the writer's own).
+                let holder =
+                    crate::files::bounded_read::read_to_string(&path, "lock file", 1 << 10)
+                        .ok()
+                        .and_then(|s| s.trim().parse().ok());
                 return Err(ResultsError::Busy {
                     path: self.dir.clone(),
                     holder,

@@ -173,10 +173,14 @@ pub fn write_results(
     Ok(summary)
 }
 
-/// Reads `<run>/summary.json`.
+/// The largest `summary.json` read, bytes (a cell per task and setting: a few KiB each).
+pub const MAX_SUMMARY_BYTES: u64 = 64 * crate::files::bounded_read::MIB;
+
+/// Reads `<run>/summary.json` (a regular file of at most [`MAX_SUMMARY_BYTES`]).
 pub fn read_summary(run: &Path) -> Result<Summary, ResultsError> {
     let path = run.join(SUMMARY_FILE);
-    let text = std::fs::read_to_string(&path).map_err(ResultsError::io(&path))?;
+    let text = crate::files::bounded_read::read_to_string(&path, "summary.json", MAX_SUMMARY_BYTES)
+        .map_err(ResultsError::io(&path))?;
     parse_versioned(&path, &text)
 }
 

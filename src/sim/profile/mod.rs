@@ -183,21 +183,21 @@ pub fn bundled_profile_path(name: &str) -> PathBuf {
         .join(format!("{name}.toml"))
 }
 
-/// Loads and resolves a profile file for `robot`.
+/// The largest profile file read, bytes (a bundled one is under 4 KiB).
+pub const MAX_PROFILE_BYTES: u64 = crate::files::bounded_read::MIB;
+
+/// Loads and resolves a profile file for `robot` (a regular file of at most
+/// [`MAX_PROFILE_BYTES`]).
 pub fn load_profile(path: &Path, robot: &RobotModel) -> Result<Profile, ProfileError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ProfileError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::files::bounded_read::read_to_string(path, "profile", MAX_PROFILE_BYTES)
+        .map_err(|source| ProfileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let file: ProfileFile = toml::from_str(&text).map_err(|e| ProfileError::Toml {
         path: path.to_path_buf(),
         message: e.to_string(),
     })?;
-    let bad = |field: &str, reason: String| ProfileError::BadField {
-        path: path.to_path_buf(),
-        field: field.into(),
-        reason,
-    };
     resolve_file(file, path, robot)
 }
 
@@ -280,6 +280,11 @@ fn resolve_file(
     path: &Path,
     robot: &RobotModel,
 ) -> Result<Profile, ProfileError> {
+    let bad = |field: &str, reason: String| ProfileError::BadField {
+        path: path.to_path_buf(),
+        field: field.into(),
+        reason,
+    };
     if file.robot != robot.name {
         return Err(bad(
             "robot",
@@ -310,11 +315,6 @@ fn resolve_file(
             return Err(bad("action_clip", format!("must be > 0, got {}", short(c))));
         }
     }
-    let resolve_signed = |field: &str,
-                          table: &PerGroup,
-                          fallback: Option<&dyn Fn(usize) -> f64>,
-                          allow_negative: bool|
-     -> Result<Vec<f64>, ProfileError> {
     if file.control_dt_s > MAX_CONTROL_DT_S || substeps > MAX_PROFILE_SUBSTEPS as f64 {
         return Err(bad(
             "control_dt_s",
@@ -334,6 +334,11 @@ fn resolve_file(
             ),
         ));
     }
+    let resolve_signed = |field: &str,
+                          table: &PerGroup,
+                          fallback: Option<&dyn Fn(usize) -> f64>,
+                          allow_negative: bool|
+     -> Result<Vec<f64>, ProfileError> {
         let max = field_limit(field);
         let groups: Vec<String> = robot.joints.iter().map(|j| joint_group(&j.name)).collect();
         for key in table.keys() {
@@ -414,11 +419,6 @@ fn resolve_file(
     })
 }
 
-/// The largest magnitude a per-joint field of a profile takes, and its unit. The G1's
-/// stiffest bundled gains are FALCON's waist at kp 300 N·m/rad (`data/profiles/falcon.toml`)
-/// and its largest motor limit 139 N·m (`data/robots/g1_29dof/robot.toml`, from
-/// Unitree's description); these bounds sit two orders of magnitude above them, so
-/// no real profile meets them while a slip of the exponent (kp 1e300) is refused before
 /// The longest control period a profile may have, s: a humanoid policy runs at 25 Hz
 /// or faster (every bundled profile: 50 Hz), so a period over a second is a slip of units.
 const MAX_CONTROL_DT_S: f64 = 1.0;
@@ -428,6 +428,11 @@ const MAX_PROFILE_SUBSTEPS: usize = 1000;
 /// deployment delay is one or two).
 const MAX_ACTION_DELAY_STEPS: usize = 50;
 
+/// The largest magnitude a per-joint field of a profile takes, and its unit. The G1's
+/// stiffest bundled gains are FALCON's waist at kp 300 N·m/rad (`data/profiles/falcon.toml`)
+/// and its largest motor limit 139 N·m (`data/robots/g1_29dof/robot.toml`, from
+/// Unitree's description); these bounds sit two orders of magnitude above them, so
+/// no real profile meets them while a slip of the exponent (kp 1e300) is refused before
 /// it runs, instead of being simulated and labelled with the profile's name.
 fn field_limit(field: &str) -> (f64, &'static str) {
     match field {

@@ -23,11 +23,18 @@ pub fn load_robot_dir(dir: &Path) -> Result<RobotModel, RobotError> {
     build_model(&config, &urdf, &toml_path, &urdf_path)
 }
 
+/// The largest robot file (`robot.toml`, its URDF) read, bytes (the G1's URDF is about
+/// 100 KiB).
+pub const MAX_ROBOT_FILE_BYTES: u64 = 16 * crate::files::bounded_read::MIB;
+
+/// `path` whole, a regular file of at most [`MAX_ROBOT_FILE_BYTES`].
 fn read(path: &Path) -> Result<String, RobotError> {
-    std::fs::read_to_string(path).map_err(|source| RobotError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    crate::files::bounded_read::read_to_string(path, "robot file", MAX_ROBOT_FILE_BYTES).map_err(
+        |source| RobotError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+    )
 }
 
 /// Assembles and validates a model from an already parsed config and URDF.

@@ -53,7 +53,9 @@ impl SeriesLog {
         let mut foot_slip_m = SeriesByEpisode::new();
         let mut kept = Vec::new();
         if resume && path.exists() {
-            let file = std::fs::File::open(&path).map_err(ResultsError::io(&path))?;
+            // As generous as an episode log: a line per episode.
+            let file = crate::files::bounded_read::open(&path, "series file", 16 << 30)
+                .map_err(ResultsError::io(&path))?;
             for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
                 let line = line.map_err(ResultsError::io(&path))?;
                 match serde_json::from_str::<Line>(&line) {

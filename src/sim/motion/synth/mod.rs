@@ -43,7 +43,7 @@ mod write;
 
 pub use ik::{chain_to_root, Chain, IkParams, Residual, Target};
 pub use solve::IkStats;
-pub use write::{write_synthetic, SynthWriteError};
+pub use write::{write_synthetic, Replaced, SynthWriteError};
 
 use crate::sim::motion::check::{check_sequence, CheckOptions, CheckSummary};
 use crate::sim::motion::{Sequence, LEFT, RIGHT};
@@ -132,20 +132,37 @@ pub enum SynthError {
 }
 
 /// Generates `per_task` sequences for each selected task, calling `progress(done, total)`
-/// after each sequence.
+/// after each sequence. All of them are held; [`write_synthetic`] streams them to disk.
 pub fn synthesize(
     robot: &RobotModel,
     opts: &SynthOptions,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Vec<Sequence>, SynthError> {
+    let mut out = Vec::new();
+    synthesize_each(robot, opts, |seq, done, total| {
+        out.push(seq);
+        progress(done, total);
+        Ok::<(), SynthError>(())
+    })?;
+    Ok(out)
+}
+
+/// Generates the sequences `opts` asks for in order, handing each to `each(sequence,
+/// done, total)` as it is made (none is kept here), and stops at the first error.
+pub(crate) fn synthesize_each<E: From<SynthError>>(
+    robot: &RobotModel,
+    opts: &SynthOptions,
+    mut each: impl FnMut(Sequence, usize, usize) -> Result<(), E>,
+) -> Result<(), E> {
     if !(opts.fps.is_finite() && opts.fps >= 10.0) {
-        return Err(SynthError::Options(format!("fps {} (need ≥ 10)", opts.fps)));
+        return Err(SynthError::Options(format!("fps {} (need ≥ 10)", opts.fps)).into());
     }
     if !GENERATOR_VERSIONS.contains(&opts.version) {
         return Err(SynthError::Options(format!(
             "generator version {}: the versions are {GENERATOR_VERSIONS:?}",
             opts.version
-        )));
+        ))
+        .into());
     }
     let mut selected = Vec::new();
     for name in &opts.tasks {
@@ -163,18 +180,19 @@ pub fn synthesize(
     selected.sort_unstable();
     let sk = skeleton::Skeleton::new(robot)?;
     let total = selected.len() * opts.per_task;
-    let mut out = Vec::with_capacity(total);
+    let mut done = 0;
     for &t in &selected {
         for i in 0..opts.per_task {
-            out.push(if opts.version >= 2 {
+            let seq = if opts.version >= 2 {
                 performable(robot, &sk, opts, t, i)?
             } else {
                 sequence(robot, &sk, opts, t, i, 0)?
-            });
-            progress(out.len(), total);
+            };
+            done += 1;
+            each(seq, done, total)?;
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The generator of one sequence: 32 seed bytes from (seed, task, index) by SplitMix64,
