@@ -72,8 +72,8 @@ pub struct Args {
         default_value = "no-force,push:10,push:20,push:30"
     )]
     pub clip_settings: Vec<String>,
-    /// Engines, comma separated; every policy runs on each [default: rapier, and mujoco
-    /// in a build with the `mujoco` feature].
+    /// Engines, comma separated; every policy runs on each [default: mujoco in a build
+    /// with the `mujoco` feature, else rapier].
     #[arg(long, value_enum, value_delimiter = ',')]
     pub engines: Vec<super::choices::EngineArg>,
     /// Dataset [default: the synthetic six-task dataset, generated once into

@@ -11,7 +11,7 @@ mod data_check;
 mod dds;
 mod eval;
 mod eval_run;
-pub(crate) mod flags;
+pub(crate) use thorarena::eval::flag_names as flags;
 mod leaderboard;
 mod logging;
 mod policy_check;

@@ -1,21 +1,22 @@
-//! The library names what a user set by its field in backticks — a field of the
-//! evaluation's request as `request.envs`, `request.io.budget_s`, another option of a
-//! command as `option.out` — which a request file or a library caller reads as it is; on
-//! the terminal those names become the flags that set them. The flags are named after
-//! the fields (the last part, without its unit suffix, dashed: `request.physics_dt_s` is
-//! `--physics-dt`), so no table has to follow each new option; a `request.` name is only
-//! written as a flag when `EvalRequest` has that field, which keeps file names such as
-//! `request.json` and anything else in backticks (a sweep spec's keys, a user's values)
-//! as they are.
+//! The terminal's spelling of the library's field names. The library names what a user
+//! set by its field in backticks — a field of the evaluation's request as
+//! `request.envs`, `request.io.budget_s`, another option of a command as `option.out` —
+//! which a request file or a library caller reads as it is; on the terminal (the binary
+//! passes every line it prints through [`as_flags`]) those names become the flags that
+//! set them. The flags are named after the fields (the last part, without its unit
+//! suffix, dashed: `request.physics_dt_s` is `--physics-dt`), so no table has to follow
+//! each new option; a `request.` name is only written as a flag when `EvalRequest` has
+//! that field, which keeps file names such as `request.json` and anything else in
+//! backticks (a sweep spec's keys, a user's values) as they are.
 
+use crate::eval::EvalRequest;
 use std::sync::OnceLock;
-use thorarena::eval::EvalRequest;
 
 /// Unit suffixes of field names that their flags leave out.
 const UNIT_SUFFIXES: [&str; 4] = ["_s", "_m", "_rad", "_hz"];
 
 /// `text` with every field the library names in backticks written as its flag.
-pub(crate) fn as_flags(text: &str) -> String {
+pub fn as_flags(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     let mut rest = text;
     while let Some(open) = rest.find('`') {

@@ -13,6 +13,7 @@
 //! either knowing the other.
 
 pub mod episode;
+pub mod flag_names;
 pub mod metrics;
 pub mod pipeline;
 pub mod results;
