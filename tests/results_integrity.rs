@@ -234,3 +234,50 @@ fn a_partial_run_is_reported_as_partial_cell_by_cell() {
         .unwrap()
         .contains("partial run"));
 }
+
+/// A trace lost after its episode was recorded (a full disk fails the trace's write, not
+/// the record's; or the file was removed): `--resume` runs that episode again, says so,
+/// and writes the trace; nothing else runs again.
+#[test]
+fn a_resume_writes_a_lost_trace_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let sample = concat!(env!("CARGO_MANIFEST_DIR"), "/data/sample");
+    let eval = |resume: bool| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"));
+        cmd.args(["eval", "--dataset", sample, "--policy", "hold"])
+            .args([
+                "--settings",
+                "no-force",
+                "--trace",
+                "push_chair/push_chair_000",
+            ])
+            .arg("--out")
+            .arg(&out);
+        if resume {
+            cmd.arg("--resume");
+        }
+        let o = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{stderr}");
+        stderr
+    };
+    eval(false);
+    let trace = out.join("traces/push_chair-push_chair_000-no-force.json");
+    let written = std::fs::read(&trace).unwrap();
+    let records = lines(&out).len();
+    std::fs::remove_file(&trace).unwrap();
+    let said = eval(true);
+    assert!(
+        said.contains("1 finished episode run again, its trace missing from")
+            && said.contains("push_chair/push_chair_000 no-force")
+            && said.contains(&format!("1 episodes to run ({} already done)", records - 1)),
+        "{said}"
+    );
+    assert_eq!(
+        std::fs::read(&trace).unwrap(),
+        written,
+        "the trace written again differs"
+    );
+    assert_eq!(lines(&out).len(), records);
+}

@@ -125,13 +125,9 @@ pub fn run_data_check(
         observer.checked(d, t)
     })?;
     if let (Some(tracker), Some(out)) = (&job.tracker, &job.out) {
-        check.tracker = Some(rollouts(
-            job,
-            tracker,
-            &out.join(format!("rollout-{}", tracker.dir_label())),
-            &check,
-            observer,
-        )?);
+        let run = out.join(format!("rollout-{}", tracker.dir_label()));
+        crate::campaign::leaderboard::make_run_dir(out, &run).map_err(Box::new)?;
+        check.tracker = Some(rollouts(job, tracker, &run, &check, observer)?);
     }
     if let Some(out) = &job.out {
         check.write(out)?;

@@ -7,7 +7,13 @@
 //! our records into their target. The kernel's `protected_symlinks` does not help when
 //! the link sits in the planter's own directory. `O_NOFOLLOW` makes such an open fail
 //! (`ELOOP`), which [`refuse_links`] turns into an error that says what happened.
-//! Directories along the path are followed: they are the user's choice (`--out`).
+//!
+//! The directories a command makes inside its output directory (`traces/`, a report's
+//! figures, a data check's `rollout-NAME/`, the leaderboard's and sweeps' run directories)
+//! are made by [`make_dir_within`]: created fresh, or, when found, entered only if it is a
+//! real directory of this user — never a link, never another user's directory, which its
+//! owner could swap for a link at any time. The path the user typed (`--out`) is followed:
+//! it is their choice.
 
 use std::fs::{File, OpenOptions};
 use std::os::unix::fs::OpenOptionsExt;
@@ -45,6 +51,66 @@ pub fn refuse_links(e: std::io::Error, path: &Path) -> std::io::Error {
     }
 }
 
+/// Makes `dir`, which lies inside `base`: `base` as the user gave it (made if missing,
+/// links along it followed), then each level below it with [`make_dir`]. A `dir` outside
+/// `base` is made level by level below its parent.
+pub fn make_dir_within(base: &Path, dir: &Path) -> std::io::Result<()> {
+    let (base, below) = match dir.strip_prefix(base) {
+        Ok(below) => (base, below),
+        Err(_) => match (dir.parent(), dir.file_name()) {
+            (Some(parent), Some(name)) => (parent, Path::new(name)),
+            _ => (dir, Path::new("")),
+        },
+    };
+    if !base.as_os_str().is_empty() {
+        std::fs::create_dir_all(base)?;
+    }
+    let mut level = base.to_path_buf();
+    for part in below.components() {
+        level.push(part);
+        make_dir(&level)?;
+    }
+    Ok(())
+}
+
+/// Makes the directory `dir` (its parent must exist), or, when something is there, checks
+/// that it is a real directory owned by this user: a link, another kind of file or
+/// another user's directory is refused, saying which.
+pub fn make_dir(dir: &Path) -> std::io::Result<()> {
+    match std::fs::create_dir(dir) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => own_dir(dir),
+        Err(e) => Err(e),
+    }
+}
+
+/// `dir` is a real directory of this (effective) user.
+fn own_dir(dir: &Path) -> std::io::Result<()> {
+    use std::os::unix::fs::MetadataExt;
+    let meta = std::fs::symlink_metadata(dir)?;
+    let refuse = |what: String| {
+        Err(std::io::Error::other(format!(
+            "{} {what}: not entered (remove it, or choose another output directory)",
+            dir.display()
+        )))
+    };
+    if meta.file_type().is_symlink() {
+        return refuse("is a symbolic link".into());
+    }
+    if !meta.is_dir() {
+        return refuse("is not a directory".into());
+    }
+    // SAFETY: geteuid has no preconditions.
+    let me = unsafe { libc::geteuid() };
+    if meta.uid() != me {
+        return refuse(format!(
+            "is another user's directory (uid {}, not {me})",
+            meta.uid()
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -59,6 +125,24 @@ mod tests {
         let e = create(&link).unwrap_err();
         assert!(e.to_string().contains("is a symbolic link"), "{e}");
         assert_eq!(std::fs::read(&target).unwrap(), b"theirs");
+    }
+
+    #[test]
+    fn a_planted_directory_link_is_not_entered_and_a_real_directory_is() {
+        let dir = tempfile::tempdir().unwrap();
+        let elsewhere = dir.path().join("elsewhere");
+        std::fs::create_dir(&elsewhere).unwrap();
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        std::os::unix::fs::symlink(&elsewhere, out.join("traces")).unwrap();
+        let e = make_dir_within(&out, &out.join("traces").join("x")).unwrap_err();
+        assert!(e.to_string().contains("is a symbolic link"), "{e}");
+        assert!(!elsewhere.join("x").exists());
+        make_dir_within(&out, &out.join("runs").join("a")).unwrap();
+        make_dir_within(&out, &out.join("runs").join("a")).unwrap();
+        std::fs::write(out.join("file"), b"").unwrap();
+        let e = make_dir(&out.join("file")).unwrap_err();
+        assert!(e.to_string().contains("is not a directory"), "{e}");
     }
 
     #[test]

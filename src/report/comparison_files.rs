@@ -129,7 +129,14 @@ pub fn write_comparison_report(
 /// Writes each figure as `dir/<id>.svg` (creating `dir`); figure files of an earlier
 /// report that this one does not draw are left as they are.
 pub fn write_figures(dir: &Path, figures: &[SvgFigure]) -> Result<(), ReportError> {
-    create_dir(dir)?;
+    // The report's own directory, made beside the page: a link planted under its name is
+    // not entered.
+    crate::files::no_follow::make_dir_within(dir.parent().unwrap_or(Path::new("")), dir).map_err(
+        |source| ReportError::Write {
+            path: dir.to_path_buf(),
+            source,
+        },
+    )?;
     for f in figures {
         write(&dir.join(f.file_name()), &f.svg)?;
     }

@@ -124,6 +124,24 @@ pub enum LeaderboardError {
         /// What is wrong.
         message: String,
     },
+    /// A run's directory could not be made, or what is there is not entered.
+    #[error("{}: {source}", .path.display())]
+    RunDir {
+        /// The run directory.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+/// Makes the directory `run` of a run under `base` (the command's output directory, the
+/// user's): each level below `base` made fresh or found a real directory of this user, so
+/// a link planted at `runs/NAME-ENGINE` is refused, never written through.
+pub(crate) fn make_run_dir(base: &Path, run: &Path) -> Result<(), LeaderboardError> {
+    crate::files::no_follow::make_dir_within(base, run).map_err(|source| LeaderboardError::RunDir {
+        path: run.to_path_buf(),
+        source,
+    })
 }
 
 /// A single-clip policy and the dataset of its own clip.
@@ -450,6 +468,7 @@ pub fn run_leaderboard(
                 .join("runs")
                 .join(format!("{name}{}", track.dir_suffix()));
             observer.run_starting(entries.len(), total, &player.name(), engine_name);
+            make_run_dir(&request.out, &run)?;
             let started = Instant::now();
             let settings = match track {
                 Track::General => &request.settings,
@@ -849,6 +868,8 @@ pub fn synthetic_dataset(
     };
     let robot = crate::policy::registry::robot("g1_29dof").map_err(|e| failed(e.to_string()))?;
     let want = per_task * TASKS.len();
+    // The board's own directory: a link planted at `synthetic` is not entered.
+    crate::files::no_follow::make_dir_within(out, &dir).map_err(|e| failed(e.to_string()))?;
     if dir.join(crate::sim::motion::MANIFEST).exists() {
         let have = crate::sim::motion::Dataset::open(&dir, &robot)
             .map_err(|e| failed(e.to_string()))?

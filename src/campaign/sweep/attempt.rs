@@ -105,6 +105,12 @@ pub fn run_task(
 
     let session = format!("sweep-{index}-{}", std::process::id());
     let run_dir = tdir.run_dir();
+    // The run's directory, made here inside the task's (a planted link is not entered):
+    // the eval it starts takes it as its `--out`, which it follows.
+    crate::files::no_follow::make_dir(&run_dir).map_err(|source| SweepError::Io {
+        path: run_dir.clone(),
+        source,
+    })?;
     let mut eval_cmd = eval_command(exe, plan, task, &session, workers, &tdir)?;
     let mut policy: Option<Child> = None;
     if let Some(command) = cell.policy.policy.command() {

@@ -344,7 +344,7 @@ impl Plan {
             };
         }
         let tasks = dir.join("tasks");
-        std::fs::create_dir_all(&tasks).map_err(|source| SweepError::Io {
+        crate::files::no_follow::make_dir_within(dir, &tasks).map_err(|source| SweepError::Io {
             path: tasks,
             source,
         })?;

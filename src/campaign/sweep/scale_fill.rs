@@ -86,7 +86,7 @@ pub fn finish_with_shard_runs(dir: &Path, shards: &[PathBuf]) -> Result<usize, S
         header.settings = vec![setting.clone()];
         let tdir = TaskDir::of(dir, task.index);
         let run = RunDir::new(tdir.run_dir());
-        run.start(&header, false)?;
+        run.start(&header, false, &|_| false)?;
         let mut appender = run.appender()?;
         for r in records {
             appender.append(&EpisodeRecord {

@@ -55,6 +55,7 @@ impl TaskLog {
 /// Task `index`'s directory in a sweep directory.
 #[derive(Debug, Clone)]
 pub struct TaskDir {
+    sweep: PathBuf,
     dir: PathBuf,
     index: usize,
 }
@@ -67,6 +68,7 @@ impl TaskDir {
     /// Task `index` of the sweep in `sweep_dir`.
     pub fn of(sweep_dir: &Path, index: usize) -> Self {
         Self {
+            sweep: sweep_dir.to_path_buf(),
             dir: Plan::task_dir(sweep_dir, index),
             index,
         }
@@ -99,7 +101,10 @@ impl TaskDir {
     /// Creates the directory and takes its exclusive lock, waiting while another attempt
     /// holds it (a second copy of a task waits, then finds it done).
     pub fn lock(&self) -> Result<TaskLock, SweepError> {
-        std::fs::create_dir_all(&self.dir).map_err(self.io(self.dir.clone()))?;
+        // Made inside the sweep's directory: a link planted along `tasks/NNNNNN` is not
+        // entered, nor another user's directory.
+        crate::files::no_follow::make_dir_within(&self.sweep, &self.dir)
+            .map_err(self.io(self.dir.clone()))?;
         let path = self.dir.join(LOCK_FILE);
         let file = crate::files::no_follow::create(&path).map_err(self.io(path.clone()))?;
         use std::os::fd::AsRawFd;

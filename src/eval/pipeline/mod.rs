@@ -124,6 +124,18 @@ impl Starting<'_> {
                 run.path().display()
             ));
         }
+        if let [first, ..] = self.started.trace_missing.as_slice() {
+            news.push(format!(
+                "`option.resume`: {} finished episode{} run again, {} trace missing from {} (first: {}/{} {})",
+                self.started.trace_missing.len(),
+                if self.started.trace_missing.len() == 1 { "" } else { "s" },
+                if self.started.trace_missing.len() == 1 { "its" } else { "their" },
+                run.traces_dir().display(),
+                first.task,
+                first.sequence_id,
+                first.setting
+            ));
+        }
         if self.started.torn_tail_dropped {
             news.push(format!(
                 "`option.resume`: {} ended in a line cut short; it is dropped",

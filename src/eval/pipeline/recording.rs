@@ -49,7 +49,8 @@ impl<'a> RunRecording<'a> {
         header: RunHeader,
         resume: bool,
     ) -> Result<(Self, Started), BenchmarkError> {
-        let started = run.start(&header, resume).map_err(|e| match e {
+        let traced = |r: &EpisodeRecord| spec.traces(&r.task, &r.sequence_id);
+        let started = run.start(&header, resume, &traced).map_err(|e| match e {
             e @ ResultsError::OtherConfiguration { .. } => BenchmarkError::ResumedOther(e),
             e => e.into(),
         })?;

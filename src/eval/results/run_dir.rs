@@ -83,6 +83,9 @@ pub struct Started {
     pub resumed: bool,
     /// The previous attempt's last line was cut short (a killed writer) and is dropped.
     pub torn_tail_dropped: bool,
+    /// Finished episodes whose trace was asked for but is not in `traces/` (lost to a
+    /// full disk, or removed): not kept, so they run again and write it.
+    pub trace_missing: Vec<EpisodeKey>,
 }
 
 impl RunDir {
@@ -230,9 +233,15 @@ impl RunDir {
     /// Starts the run `header` describes: afresh (an empty `episodes.jsonl`), or with
     /// `resume` and a previous run of the same configuration there, keeping its finished
     /// episodes — all but those a dead policy cut short, which run again — and rewriting
-    /// the file without a torn last line. A previous run of another configuration is
-    /// refused, naming what differs. `run.json` is written last.
-    pub fn start(&self, header: &RunHeader, resume: bool) -> Result<Started, ResultsError> {
+    /// the file without a torn last line — and those whose trace `traced` asks for but
+    /// which has no trace file, which run again to write it. A previous run of another
+    /// configuration is refused, naming what differs. `run.json` is written last.
+    pub fn start(
+        &self,
+        header: &RunHeader,
+        resume: bool,
+        traced: &dyn Fn(&EpisodeRecord) -> bool,
+    ) -> Result<Started, ResultsError> {
         std::fs::create_dir_all(&self.dir).map_err(ResultsError::io(&self.dir))?;
         let episodes = self.episodes_file();
         let mut started = Started::default();
@@ -247,11 +256,17 @@ impl RunDir {
             let log = self.read_log(header)?;
             started.resumed = true;
             started.torn_tail_dropped = log.torn_tail;
-            started.kept = log
-                .records
-                .into_iter()
-                .filter(|r| r.termination != Some(Termination::PolicyFailed))
-                .collect();
+            for r in log.records {
+                if r.termination == Some(Termination::PolicyFailed) {
+                    continue;
+                }
+                let key = r.key();
+                if traced(&r) && std::fs::symlink_metadata(self.trace_file(&key)).is_err() {
+                    started.trace_missing.push(key);
+                    continue;
+                }
+                started.kept.push(r);
+            }
             EpisodeLog::rewrite(&episodes, &started.kept)?;
         } else {
             crate::files::no_follow::create(&episodes).map_err(ResultsError::io(&episodes))?;
@@ -275,7 +290,9 @@ impl RunDir {
     /// Writes one episode's trace to [`Self::trace_file`].
     pub fn write_trace(&self, key: &EpisodeKey, steps: &[TraceStep]) -> Result<(), ResultsError> {
         let dir = self.traces_dir();
-        std::fs::create_dir_all(&dir).map_err(ResultsError::io(&dir))?;
+        // Made by the run inside its directory: a link planted there is not entered.
+        crate::files::no_follow::make_dir_within(&self.dir, &dir)
+            .map_err(ResultsError::io(&dir))?;
         let path = self.trace_file(key);
         let bytes = serde_json::to_vec(steps).map_err(|source| ResultsError::Json {
             path: path.clone(),

@@ -340,6 +340,8 @@ pub fn run_pairs(
         let grafted = with_forces_of(&robot, &clip, &source);
         let dir = options.out.join("pairs").join(&name);
         let (clip_dir, graft_dir) = (dir.join("clip"), dir.join("force-log"));
+        super::make_run_dir(&options.out, &clip_dir)?;
+        super::make_run_dir(&options.out, &graft_dir)?;
         one_sequence_dataset(&name, &clip_dir, &clip, &robot)?;
         one_sequence_dataset(&name, &graft_dir, &grafted, &robot)?;
         let mut players = vec![
@@ -355,6 +357,8 @@ pub fn run_pairs(
                 index += 1;
                 let started = Instant::now();
                 let run = dir.join("runs").join(run_name(&policy.dir_label(), engine));
+                super::make_run_dir(&dir, &run.with_extension("pushes"))?;
+                super::make_run_dir(&dir, &run.with_extension("force-log"))?;
                 let pushes = run_one(
                     options.unchecked,
                     &player,
