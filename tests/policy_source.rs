@@ -247,3 +247,34 @@ fn a_session_name_the_wire_cannot_carry_is_refused_before_anything_is_served() {
         );
     }
 }
+
+/// A launched policy's output is kept up to a size (`files::capped_log`, 16 MiB), then
+/// cut with a note in the log and a warning on the terminal; the process is not stopped
+/// by it (its pipe keeps being read). Sweeps and the leaderboard start their policy
+/// processes through the same `PolicyCommand::spawn`.
+#[test]
+fn a_chatty_policys_log_is_capped_with_a_note() {
+    let tmp = tempfile::tempdir().unwrap();
+    // `yes` writes as fast as the pipe takes it and never connects: 3 s of it would be
+    // gigabytes.
+    let request = write(
+        &tmp.path().join("chatty.json"),
+        r#"{"policy": {"command": "yes chatter {session}", "workdir": "/", "connect_timeout_s": 3},
+            "settings": ["no-force"], "selection": {"sequences": ["push_chair_001"]}}"#,
+    );
+    let o = eval_request(&request, &tmp.path().join("run"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{e}");
+    let log = tmp.path().join("run.policy.log");
+    let size = std::fs::metadata(&log).unwrap().len();
+    let cap = 16 << 20;
+    assert!(size > cap && size < cap + 1024, "log of {size} bytes");
+    let text = std::fs::read(&log).unwrap();
+    let tail = String::from_utf8_lossy(&text[text.len() - 300..]);
+    assert!(tail.contains("keeps the first 16777216 bytes"), "{tail}");
+    assert!(
+        e.contains("warning: ")
+            && e.contains("run.policy.log: the policy process's output passed 16 MiB"),
+        "{e}"
+    );
+}

@@ -115,7 +115,7 @@ pub fn run_task(
     let mut policy: Option<Child> = None;
     if let Some(command) = cell.policy.policy.command() {
         let log = tdir.create_log(TaskLog::Policy)?;
-        match command.spawn(&session, log) {
+        match command.spawn(&session, log, &tdir.log_file(TaskLog::Policy)) {
             Ok(child) => policy = Some(child),
             Err(why) => return fail(why, &[]),
         }

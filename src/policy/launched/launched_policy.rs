@@ -56,7 +56,7 @@ impl LaunchedPolicy {
         // A descendant that leaves the group (`setsid`) is adopted by this process when
         // its parent dies, and stopped with the rest.
         adopt_orphans();
-        let mut child = command.spawn(session, out)?;
+        let mut child = command.spawn(session, out, log)?;
         let options = SessionOptions {
             connect_timeout,
             ..target.session.clone()

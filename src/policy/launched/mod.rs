@@ -107,8 +107,15 @@ impl PolicyCommand {
     }
 
     /// Starts it on `session` in its own process group, in its working directory, dying
-    /// with this process, its output in `log`; `Err` says why it could not start.
-    pub fn spawn(&self, session: &str, log: std::fs::File) -> Result<Child, String> {
+    /// with this process, its output in `log` (at `log_path`) up to
+    /// [`crate::files::capped_log::PROCESS_LOG_MAX_BYTES`]; `Err` says why it could not
+    /// start.
+    pub fn spawn(
+        &self,
+        session: &str,
+        log: std::fs::File,
+        log_path: &Path,
+    ) -> Result<Child, String> {
         let line = self.line(session).map_err(|e| e.to_string())?;
         if !self.workdir.is_dir() {
             return Err(format!(
@@ -116,7 +123,7 @@ impl PolicyCommand {
                 self.workdir.display()
             ));
         }
-        shell_in_own_group(&line, &self.workdir, log)
+        shell_in_own_group(&line, &self.workdir, log, log_path)
             .and_then(|mut cmd| cmd.spawn())
             .map_err(|e| format!("cannot start the policy command `{line}`: {e}"))
     }

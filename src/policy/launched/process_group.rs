@@ -60,18 +60,22 @@ pub fn die_with_parent(cmd: &mut Command) {
 }
 
 /// `sh -c line` in `workdir`, in its own process group, dying with this process, its
-/// output in `log`, with nothing on its standard input.
+/// output in `log` (at `log_path`), capped ([`crate::files::capped_log`]), with nothing on
+/// its standard input.
 pub fn shell_in_own_group(
     line: &str,
     workdir: &std::path::Path,
     log: std::fs::File,
+    log_path: &std::path::Path,
 ) -> std::io::Result<Command> {
+    use crate::files::capped_log::{capped_output, PROCESS_LOG_MAX_BYTES};
+    let (stdout, stderr) = capped_output(log, log_path, PROCESS_LOG_MAX_BYTES)?;
     let mut cmd = Command::new("sh");
     cmd.args(["-c", line])
         .current_dir(workdir)
         .stdin(std::process::Stdio::null())
-        .stdout(log.try_clone()?)
-        .stderr(log)
+        .stdout(stdout)
+        .stderr(stderr)
         .process_group(0);
     die_with_parent(&mut cmd);
     Ok(cmd)
