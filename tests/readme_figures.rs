@@ -67,3 +67,25 @@ fn the_baseline_table_is_what_eval_prints() {
         );
     }
 }
+
+/// README's "What the scores mean" quotes balance's FATS under force on the sample and its
+/// bootstrap interval: both as `thorarena eval --policy balance` prints them.
+#[test]
+fn the_readmes_interval_sentence_is_what_eval_prints() {
+    let readme = std::fs::read_to_string(Path::new(ROOT).join("README.md")).unwrap();
+    let flat = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    let quoted = flat
+        .split_once("under force balance scores ")
+        .and_then(|(_, rest)| rest.split_once(')'))
+        .map(|(sentence, _)| sentence.to_string())
+        .expect("README quotes balance's score under force on the sample");
+    let dir = tempfile::tempdir().unwrap();
+    let tables = eval_sample("balance", &dir.path().join("balance"));
+    let [fats, _] = row(&tables, "average");
+    let [interval, _] = row(&tables, "95 % interval (bootstrap over episodes within tasks)");
+    assert_eq!(
+        quoted,
+        format!("{fats}, interval {interval}"),
+        "README's sentence differs from `thorarena eval --policy balance`'s tables.md"
+    );
+}
