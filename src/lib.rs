@@ -31,13 +31,14 @@ pub const DATA_DIR_ENV: &str = "THORARENA_DATA";
 
 /// The directory holding robots, profiles and the sample dataset.
 ///
-/// [`DATA_DIR_ENV`] overrides it. By default it is the copy of `data/` compiled into this
+/// [`DATA_DIR_ENV`] overrides it (set and not empty: an empty value, as `VAR=` in a script
+/// leaves it, is unset, never the working directory). By default it is the copy of `data/` compiled into this
 /// binary, written once to a cache directory ([`files::embedded_data`]), so an installed binary
 /// needs no checkout and always reads the data it was built with. If no cache directory
 /// is writable it falls back to `data/` of the checkout the binary was built from, and a
 /// missing file there is reported by whoever reads it, naming the path.
 pub fn data_dir() -> PathBuf {
-    if let Some(dir) = std::env::var_os(DATA_DIR_ENV) {
+    if let Some(dir) = std::env::var_os(DATA_DIR_ENV).filter(|d| !d.is_empty()) {
         return PathBuf::from(dir);
     }
     files::embedded_data::extracted()

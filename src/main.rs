@@ -29,20 +29,7 @@ fn main() -> std::process::ExitCode {
     }
 }
 
-/// The error and its causes joined by `: `, each cause once: the library's typed errors
-/// name their cause in their own message (`{path}: {source}`), which the chain would
-/// otherwise print a second time ("No space left on device (os error 28): No space left
-/// on device (os error 28)").
+/// The error and its causes, each once ([`thorarena::files::log_text::causes_once`]).
 fn chain_text(e: &anyhow::Error) -> String {
-    let mut text = String::new();
-    for cause in e.chain() {
-        let cause = cause.to_string();
-        if !text.contains(&cause) {
-            if !text.is_empty() {
-                text += ": ";
-            }
-            text += &cause;
-        }
-    }
-    text
+    thorarena::files::log_text::causes_once(e.as_ref())
 }

@@ -100,3 +100,69 @@ fn an_escape_sequence_in_a_value_is_shown_not_run() {
         }
     }
 }
+
+/// Issue 67, item 10: numbers echoed short, settings named short, reasons said once, an
+/// empty `THORARENA_DATA` taken as unset, and a file whose own name holds `@key=value`
+/// still nameable.
+#[test]
+fn messages_echo_numbers_short_and_reasons_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A huge parameter is echoed as 1e308, not in 309 digits.
+    let e = error_of(&thorarena(&[
+        "eval",
+        "--policy",
+        "falcon:F.onnx@yaw_ff=1e308",
+    ]));
+    assert!(e.contains("`yaw_ff` = 1e308 "), "{e}");
+    assert!(!e.contains("00000000000"), "{e}");
+    // A termination bound no tilt can reach is refused, its value short.
+    let e = error_of(&thorarena(&[
+        "eval",
+        "--policy",
+        "hold",
+        "--max-torso-tilt-error",
+        "1e300",
+    ]));
+    assert!(
+        e.contains("--max-torso-tilt-error must be > 0 and at most 3.141593 rad")
+            && e.contains("got 1e300"),
+        "{e}"
+    );
+    // A setting whose name would be three hundred characters is refused.
+    let e = error_of(&thorarena(&[
+        "eval",
+        "--policy",
+        "hold",
+        "--settings",
+        "payload:1e-300",
+    ]));
+    assert!(
+        e.contains("more digits than a setting's name carries"),
+        "{e}"
+    );
+    // A reason is said once (anyhow's `{:#}` said it twice).
+    let dir = tmp.path().to_str().unwrap();
+    let e = error_of(&thorarena(&["eval", "--policy", &format!("twist2:{dir}")]));
+    assert_eq!(e.matches("it is a directory, not a file").count(), 1, "{e}");
+    // A file named `sm@stiffness=200.onnx` is that file, not `sm` with a parameter.
+    let named = tmp.path().join("sm@stiffness=200.onnx");
+    std::fs::write(&named, b"not a network").unwrap();
+    let e = error_of(&thorarena(&[
+        "policy",
+        "check",
+        &format!("softmimic:{}", named.display()),
+    ]));
+    assert!(e.contains(&named.display().to_string()), "{e}");
+    assert!(!e.contains("parameter"), "{e}");
+    // THORARENA_DATA= is unset, not the working directory.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_thorarena"))
+        .current_dir(tmp.path())
+        .env("THORARENA_DATA", "")
+        .args(["eval", "--dataset", SAMPLE, "--policy", "hold"])
+        .args(["--settings", "no-force", "--sequences", "push_chair_000"])
+        .arg("--out")
+        .arg(tmp.path().join("run"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -46,7 +46,10 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         let result = evaluate(false, &ctx, &mut policy as &mut dyn Policy, &out);
         drop(policy); // tells the client the run is over
         if let Err(e) = &result {
-            eprintln!("run {n} ended with an error: {e:#}");
+            eprintln!(
+                "run {n} ended with an error: {}",
+                super::flags::as_flags(&thorarena::files::log_text::causes_once(e.as_ref()))
+            );
         }
         if args.once {
             return result;

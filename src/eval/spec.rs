@@ -523,19 +523,29 @@ pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
     Ok(settings)
 }
 
+/// Termination bounds: a tilt error is at most π (a larger bound is no bound), and a
+/// torso height error past 10 m is the robot fallen through the floor or flung off.
 fn check_termination(rule: &TerminationRule) -> Result<(), SpecError> {
-    for (flag, v) in [
+    for (flag, v, max, unit) in [
         (
             "`request.termination.max_torso_height_error_m`",
             rule.max_torso_height_error_m,
+            10.0,
+            "m",
         ),
         (
             "`request.termination.max_torso_tilt_error_rad`",
             rule.max_torso_tilt_error_rad,
+            std::f64::consts::PI,
+            "rad (π: no bound on tilt)",
         ),
     ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(invalid(format!("{flag} must be > 0, got {v}")));
+        if !(v.is_finite() && v > 0.0 && v <= max) {
+            return Err(invalid(format!(
+                "{flag} must be > 0 and at most {} {unit}, got {}",
+                crate::files::log_text::short_number(max),
+                crate::files::log_text::short_number(v)
+            )));
         }
     }
     Ok(())

@@ -40,6 +40,48 @@ pub fn printable_lines(s: &str) -> String {
         .join("\n")
 }
 
+/// `v` as a message shows it: as Rust writes it when that is short (`0.25`, `1000`), to
+/// six decimals when it is of a moderate size (`3.141593`), else in exponent form (`1e308`,
+/// not its three hundred digits).
+pub fn short_number(v: f64) -> String {
+    let trimmed = |digits: &str| {
+        digits
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    };
+    let text = format!("{v}");
+    if text.len() <= 12 {
+        text
+    } else if (1e-3..1e6).contains(&v.abs()) {
+        trimmed(&format!("{v:.6}"))
+    } else {
+        let text = format!("{v:.6e}");
+        let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+        format!("{}e{exponent}", trimmed(mantissa))
+    }
+}
+
+/// The error and its causes joined by `: `, each cause once: a typed error names its
+/// cause in its own message (`{path}: {source}`), which walking the chain (as anyhow's
+/// `{:#}` does) would print a second time ("it is a directory, not a file: it is a
+/// directory, not a file").
+pub fn causes_once(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = String::new();
+    let mut cause = Some(e);
+    while let Some(c) = cause {
+        let said = c.to_string();
+        if !text.contains(&said) {
+            if !text.is_empty() {
+                text += ": ";
+            }
+            text += &said;
+        }
+        cause = c.source();
+    }
+    text
+}
+
 /// `s` cut to at most `max` bytes on a character boundary, `…` marking a cut.
 pub fn truncated(s: &str, max: usize) -> String {
     if s.len() <= max {
@@ -106,6 +148,20 @@ mod tests {
     fn control_characters_are_escaped_and_text_kept() {
         assert_eq!(printable("a\u{1b}]0;t\u{7}b\n"), "a\\u{1b}]0;t\\u{7}b\\n");
         assert_eq!(printable("é ok"), "é ok");
+    }
+
+    #[test]
+    fn numbers_are_shown_short() {
+        for (v, shown) in [
+            (0.25, "0.25"),
+            (1000.0, "1000"),
+            (std::f64::consts::PI, "3.141593"),
+            (1e308, "1e308"),
+            (-1.5e-300, "-1.5e-300"),
+            (1e30, "1e30"),
+        ] {
+            assert_eq!(short_number(v), shown);
+        }
     }
 
     #[test]

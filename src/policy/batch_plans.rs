@@ -102,7 +102,10 @@ impl BatchPlans {
         match self.run_on(plan, input, 1) {
             Ok(out) => Some(out),
             Err(e) => {
-                log::warn!("{family}: inference failed: {e:#}");
+                log::warn!(
+                    "{family}: inference failed: {}",
+                    crate::files::log_text::causes_once(e.as_ref())
+                );
                 None
             }
         }

@@ -257,7 +257,7 @@ impl Twist2Policy {
         };
         let (plans, act_plan, network) = load().map_err(|e| Twist2Error::Load {
             path: path.to_path_buf(),
-            message: format!("{e:#}"),
+            message: crate::files::log_text::causes_once(e.as_ref()),
         })?;
         Ok(Self {
             plans,
@@ -366,7 +366,10 @@ impl Policy for Twist2Policy {
                 // A network that fails at run time answers NaN: the runner's miss rule
                 // keeps it away from the physics and counts it.
                 Err(e) => {
-                    log::warn!("twist2: inference failed: {e:#}");
+                    log::warn!(
+                        "twist2: inference failed: {}",
+                        crate::files::log_text::causes_once(e.as_ref())
+                    );
                     acts.iter_mut().for_each(|a| a.fill(f64::NAN));
                 }
             }

@@ -6,6 +6,7 @@ use super::{diagnostics_table, outside_training_note, task_fats_table};
 use crate::eval::results::{
     PolicyIoReport, ResultsError, RunHeader, SettingResults, Summary, TABLES_FILE,
 };
+use crate::files::log_text::short_number;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -41,8 +42,8 @@ pub fn run_tables(summary: &Summary) -> String {
         header.dataset,
         &header.dataset_sha256[..header.dataset_sha256.len().min(16)],
         header.keypoints,
-        header.termination.max_torso_height_error_m,
-        header.termination.max_torso_tilt_error_rad
+        short_number(header.termination.max_torso_height_error_m),
+        short_number(header.termination.max_torso_tilt_error_rad)
     );
     let results: SettingResults = summary
         .settings

@@ -363,7 +363,8 @@ fn configuration_warnings(runs: &[Run]) -> Vec<ComparisonWarning> {
         let t = r.header.termination;
         format!(
             "torso height error > {} m or tilt error > {} rad",
-            t.max_torso_height_error_m, t.max_torso_tilt_error_rad
+            crate::files::log_text::short_number(t.max_torso_height_error_m),
+            crate::files::log_text::short_number(t.max_torso_tilt_error_rad)
         )
     });
     flag(WarningKind::Keypoints, "Keypoint sets", &|r| {

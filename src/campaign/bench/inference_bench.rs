@@ -21,7 +21,7 @@ pub struct InferenceBench {
 
 /// tract's error as one message, its causes joined.
 fn network_error(e: tract_onnx::prelude::TractError) -> PerfError {
-    PerfError::Network(format!("{e:#}"))
+    PerfError::Network(crate::files::log_text::causes_once(e.as_ref()))
 }
 
 impl InferenceBench {

@@ -72,7 +72,7 @@ pub enum BenchmarkError {
     },
     /// The policy failed mid-run: its finished episodes are written, the rest are not a
     /// result.
-    #[error("the policy failed: {cut_short} episodes ended `policy_failed`, {not_run} did not run (finished ones are in {}; `option.resume` with a working policy runs both again)", .out.display())]
+    #[error("the policy failed: {cut_short} episodes ended `policy_failed`, {not_run} did not run (finished ones are in {0}; `thorarena eval --resume --out {0}` with a working policy runs both again)", .out.display())]
     PolicyFailed {
         /// Episodes the failure cut short.
         cut_short: usize,

@@ -98,7 +98,7 @@ impl Coverage {
         (!self.is_complete()).then(|| {
             let expected: usize = self.cells.iter().map(|c| c.expected).sum();
             format!(
-                "partial run: {} of {expected} planned episodes missing, {} cut short by a policy failure (scored as ended there); resuming the run (`option.resume`) runs them",
+                "partial run: {} of {expected} planned episodes missing, {} cut short by a policy failure (scored as ended there); `thorarena eval --resume` on the run runs them",
                 self.missing(),
                 self.policy_failed()
             )

@@ -196,7 +196,7 @@ impl Network {
 fn load_error(path: &Path) -> impl Fn(TractError) -> BeyondMimicError + Copy + '_ {
     move |e| BeyondMimicError::Load {
         path: path.to_path_buf(),
-        message: format!("{e:#}"),
+        message: crate::files::log_text::causes_once(e.as_ref()),
     }
 }
 

@@ -373,7 +373,11 @@ impl Policy for BeyondMimicPolicy {
             // A network that fails at run time answers NaN: the runner's miss rule keeps
             // it away from the physics and counts it.
             if let Err(e) = self.infer(inputs, obs, action) {
-                log::warn!("{}: inference failed: {e:#}", self.name);
+                log::warn!(
+                    "{}: inference failed: {}",
+                    self.name,
+                    crate::files::log_text::causes_once(e.as_ref())
+                );
                 action.iter_mut().for_each(|a| a.fill(f64::NAN));
             }
         }

@@ -191,7 +191,7 @@ impl FalconPolicy {
         };
         let (plans, plan, network) = load().map_err(|e| FalconError::Load {
             path: path.to_path_buf(),
-            message: format!("{e:#}"),
+            message: crate::files::log_text::causes_once(e.as_ref()),
         })?;
         Ok(Self {
             plans,

@@ -253,9 +253,14 @@ impl std::fmt::Display for NamedPolicy {
 }
 
 /// `FILE@KEY=VALUE,…` → (`FILE`, `Some("KEY=VALUE,…")`); a file with no `@` followed by a
-/// `KEY=` → (it, `None`). A file's own `@` stays in the file.
+/// `KEY=` → (it, `None`). A file's own `@` stays in the file: what follows the last `@`
+/// is no parameter list when it ends in `.onnx` (`sm@stiffness=200.onnx` is a file's
+/// name), and a trailing `@` ends the file's name with no parameters (`FILE@`), so any
+/// name can be given.
 fn split_parameters(file_and_parameters: &str) -> (&str, Option<&str>) {
     match file_and_parameters.rsplit_once('@') {
+        Some((file, "")) => (file, None),
+        Some((_, params)) if params.ends_with(".onnx") => (file_and_parameters, None),
         Some((file, params)) if params.contains('=') => (file, Some(params)),
         _ => (file_and_parameters, None),
     }
@@ -307,6 +312,13 @@ mod tests {
         let twist = NamedPolicy::parse("twist2:x@y.onnx").unwrap();
         assert_eq!(twist.file(), Some(Path::new("x@y.onnx")));
         assert_eq!(twist.parameters(), None);
+        // A file whose own name holds `@key=value`: named as it is, or ended by `@`.
+        let sm = NamedPolicy::parse("softmimic:sm@stiffness=200.onnx").unwrap();
+        assert_eq!(sm.file(), Some(Path::new("sm@stiffness=200.onnx")));
+        assert_eq!(sm.parameters(), None);
+        let odd = NamedPolicy::parse("softmimic:net@stiffness=200@").unwrap();
+        assert_eq!(odd.file(), Some(Path::new("net@stiffness=200")));
+        assert_eq!(odd.parameters(), None);
         let pour = NamedPolicy::parse("softmimic:d/Pour-SoftMimic.onnx@stiffness=200").unwrap();
         assert_eq!(pour.label(), "softmimic:Pour-SoftMimic@stiffness=200");
         assert_eq!(

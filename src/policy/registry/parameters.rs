@@ -78,8 +78,13 @@ pub fn parse_parameters(
             .ok_or_else(|| format!("parameter `{key}`: `{value}` is not a finite number"))?;
         if !(p.range.0..=p.range.1).contains(&v) {
             return Err(format!(
-                "parameter `{key}` = {v} {} is outside {} to {} {} ({})",
-                p.unit, p.range.0, p.range.1, p.unit, p.what
+                "parameter `{key}` = {} {} is outside {} to {} {} ({})",
+                crate::files::log_text::short_number(v),
+                p.unit,
+                p.range.0,
+                p.range.1,
+                p.unit,
+                p.what
             ));
         }
         values.push((p.name, v));

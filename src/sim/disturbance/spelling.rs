@@ -74,13 +74,24 @@ pub fn name(d: &Disturbance) -> String {
 
 type Fields<'a> = [(&'a str, &'a str)];
 
-/// A number within `lo..=hi`, named `what` in the refusal.
+/// The most characters a number takes in a setting's name (`0.000001`, `1234.5678901`):
+/// a name is a file name and a table's label, never three hundred zeros.
+const MAX_NUMBER_CHARS: usize = 12;
+
+/// A number within `lo..=hi`, named `what` in the refusal, that the setting's name can
+/// write back in at most [`MAX_NUMBER_CHARS`] characters.
 fn number(what: &str, value: &str, lo: f64, hi: f64) -> Result<f64, String> {
-    value
+    let x = value
         .parse::<f64>()
         .ok()
         .filter(|x| x.is_finite() && (lo..=hi).contains(x))
-        .ok_or_else(|| format!("{what} `{value}` is not a number from {lo} to {hi}"))
+        .ok_or_else(|| format!("{what} `{value}` is not a number from {lo} to {hi}"))?;
+    if format!("{x}").len() > MAX_NUMBER_CHARS {
+        return Err(format!(
+            "{what} `{value}` has more digits than a setting's name carries (at most {MAX_NUMBER_CHARS} characters, e.g. 0.000001): round it"
+        ));
+    }
+    Ok(x)
 }
 
 /// A range `a-b` (or one value `a`) within `lo..=hi`, `a ≤ b`.

@@ -24,6 +24,7 @@
 //!
 //! Trimming keeps frames `L .. R`, in which no jump remains. It is only offered when no
 //! interior jump exists and at least two frames remain.
+use crate::files::log_text::short_number;
 
 /// Largest root speed between consecutive frames a human motion can have, m/s.
 ///
@@ -53,15 +54,24 @@ pub struct RootJump {
     pub speed_m_per_s: f64,
 }
 
+/// `v` to `decimals` places, or short when it is huge (a 1e30 m jump is not 31 digits).
+fn fixed(v: f64, decimals: usize) -> String {
+    if v.abs() < 1e6 {
+        format!("{v:.decimals$}")
+    } else {
+        short_number(v)
+    }
+}
+
 impl std::fmt::Display for RootJump {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "frame {}→{}: {:.2} m ({:.1} m/s)",
+            "frame {}→{}: {} m ({} m/s)",
             self.frame - 1,
             self.frame,
-            self.distance_m,
-            self.speed_m_per_s
+            fixed(self.distance_m, 2),
+            fixed(self.speed_m_per_s, 1)
         )
     }
 }

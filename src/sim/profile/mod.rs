@@ -444,14 +444,10 @@ fn field_limit(field: &str) -> (f64, &'static str) {
     }
 }
 
-/// `v` in at most six significant digits (`1e300`, not its three hundred).
+/// `v` short ([`crate::files::log_text::short_number`]: `1e300`, not its three hundred
+/// digits).
 fn short(v: f64) -> String {
-    let text = format!("{v}");
-    if text.len() <= 12 {
-        text
-    } else {
-        format!("{v:.3e}")
-    }
+    crate::files::log_text::short_number(v)
 }
 
 /// `left_hip_pitch_joint` → `hip_pitch`; `waist_yaw_joint` → `waist_yaw`.

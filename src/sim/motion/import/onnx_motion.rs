@@ -86,7 +86,7 @@ fn format_error(path: &Path, reason: String) -> ImportError {
 
 /// tract could not load, prepare or run the network.
 fn tract_error(path: &Path) -> impl Fn(TractError) -> ImportError + Copy + '_ {
-    move |e| format_error(path, format!("{e:#}"))
+    move |e| format_error(path, crate::files::log_text::causes_once(e.as_ref()))
 }
 
 /// One step's motion outputs, in [`MOTION_OUTPUTS`] order: joint positions, joint
