@@ -161,7 +161,9 @@ impl RemotePolicy {
     /// ([`super::declared_profile::judge`]), or that `vet` refuses, is told why and the
     /// wait goes on. A profile the run takes from the process is the session's action
     /// mapping from then on, and [`Policy::profile_declaration`] tells the run. `note`
-    /// hears what a user watching the run should know (waiting, refusals, who connected).
+    /// hears what a user watching the run should know (waiting, refusals, who connected);
+    /// `gone` ends the wait at once when the policy expected cannot come any more (the
+    /// process the run started for it exited).
     #[allow(clippy::too_many_arguments)]
     pub fn serve(
         session: &str,
@@ -172,6 +174,7 @@ impl RemotePolicy {
         envs: usize,
         vet: &mut dyn FnMut(&str) -> Result<(), String>,
         note: &mut dyn FnMut(&str),
+        gone: &mut dyn FnMut() -> bool,
     ) -> Result<Self, RemoteError> {
         let config = RemoteConfig {
             session: SimConfig {
@@ -209,9 +212,12 @@ impl RemotePolicy {
             judged = Some(declaration);
             Ok(mapping)
         };
-        let mut remote = Self::connect(config, &mut vet_name, &mut |m| {
-            note(&format!("refused a policy: {m}"))
-        })?;
+        let mut remote = Self::connect(
+            config,
+            &mut vet_name,
+            &mut |m| note(&format!("refused a policy: {m}")),
+            gone,
+        )?;
         let effective = judged
             .as_ref()
             .and_then(|d| d.declared.as_ref().filter(|_| d.adopted))
@@ -243,13 +249,21 @@ impl RemotePolicy {
     /// protocol version, joint count or order, or a policy `vet` refuses: the run's own
     /// conditions on its name and profile) are passed to `on_refused`, told to the
     /// policy, and the wait goes on. A mapping `vet` returns is the session's from then on.
+    /// `gone`: the policy expected cannot come any more (its process exited), so the wait
+    /// ends at once.
     pub fn connect(
         mut config: RemoteConfig,
         vet: &mut dyn FnMut(&PolicyInfo) -> Result<Option<ActionMapping>, Refusal>,
         on_refused: &mut dyn FnMut(&str),
+        gone: &mut dyn FnMut() -> bool,
     ) -> Result<Self, RemoteError> {
         let mut session = SimSession::create(config.session.clone())?;
-        let info = session.accept_vetted(config.connect_timeout, vet, |m| on_refused(m))?;
+        let info = session.accept_unless_gone(
+            config.connect_timeout,
+            vet,
+            |m| on_refused(m),
+            || gone(),
+        )?;
         config.session = session.config().clone();
         let input = match &info.input {
             None => None,

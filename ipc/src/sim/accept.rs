@@ -44,12 +44,26 @@ impl SimSession {
     pub fn accept_vetted(
         &mut self,
         timeout: Option<Duration>,
+        vet: impl FnMut(&PolicyInfo) -> Result<Option<ActionMapping>, Refusal>,
+        on_refused: impl FnMut(&str),
+    ) -> Result<PolicyInfo, IpcError> {
+        self.accept_unless_gone(timeout, vet, on_refused, || false)
+    }
+
+    /// [`Self::accept_vetted`], giving up with [`IpcError::PeerGone`] as soon as `gone`
+    /// says the policy expected cannot come any more (a process the run started for it
+    /// exited), rather than waiting out the timeout; `gone` is asked about every 50 ms.
+    pub fn accept_unless_gone(
+        &mut self,
+        timeout: Option<Duration>,
         mut vet: impl FnMut(&PolicyInfo) -> Result<Option<ActionMapping>, Refusal>,
         mut on_refused: impl FnMut(&str),
+        mut gone: impl FnMut() -> bool,
     ) -> Result<PolicyInfo, IpcError> {
         self.connection = None;
         self.node.try_cleanup_dead_nodes();
         let start = Instant::now();
+        let mut last_asked = start;
         let timed_out = |what| match timeout {
             Some(t) if start.elapsed() > t => Err(IpcError::Timeout(t, what)),
             _ => Ok(()),
@@ -65,6 +79,12 @@ impl SimSession {
                 }
             }
             timed_out("a policy to connect")?;
+            if last_asked.elapsed() >= Duration::from_millis(50) {
+                if gone() {
+                    return Err(IpcError::PeerGone("policy"));
+                }
+                last_asked = Instant::now();
+            }
             std::thread::sleep(Duration::from_millis(1));
         }
     }

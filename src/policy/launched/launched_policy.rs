@@ -70,6 +70,7 @@ impl LaunchedPolicy {
             target.envs,
             &mut |_| Ok(()),
             note,
+            &mut || launch_gone(&mut child),
         ) {
             Ok(remote) => Ok(Self { remote, child }),
             Err(e) => {
@@ -94,6 +95,22 @@ impl LaunchedPolicy {
     /// measure its CPU time by.
     pub fn process_group(&self) -> u32 {
         self.child.id()
+    }
+}
+
+/// The command started for the policy can no longer connect: its shell exited with a
+/// failure, or exited and left nothing of its process group running (a command that
+/// starts its policy in the background and exits 0 is waited for as before).
+fn launch_gone(child: &mut std::process::Child) -> bool {
+    match child.try_wait() {
+        Ok(Some(status)) if !status.success() => true,
+        Ok(Some(_)) => {
+            // SAFETY: signal 0 to a process group this run created only asks whether it
+            // has members.
+            let rc = unsafe { libc::kill(-(child.id() as libc::pid_t), 0) };
+            rc == -1 && std::io::Error::last_os_error().raw_os_error() == Some(libc::ESRCH)
+        }
+        _ => false,
     }
 }
 

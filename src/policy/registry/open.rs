@@ -142,6 +142,7 @@ pub fn serve_session(
         target.envs,
         vet,
         note,
+        &mut || false,
     )
     .map_err(|source| OpenPolicyError::Serve {
         session: session.to_string(),
