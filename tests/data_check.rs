@@ -562,3 +562,30 @@ fn a_bad_gate_is_refused_before_the_check_and_a_check_over_nothing_fails() {
     assert!(!run.status.success(), "a check over nothing passed: {err}");
     assert!(err.contains("no sequence"), "{err}");
 }
+
+/// The force spans a run judges a force-trained family's training against
+/// (`task_force_spans`, forward kinematics only) are the check's own spans, to the bit,
+/// on every task of the sample.
+#[test]
+fn the_runs_force_spans_are_the_checks_without_its_dynamics() {
+    use thorarena::sim::motion::check::task_force_spans;
+    let robot = g1();
+    let ds = Dataset::open(Path::new(SAMPLE), &robot).unwrap();
+    let seqs = ds.load_all().unwrap();
+    let started = std::time::Instant::now();
+    let check = check_dataset(&ds, &seqs, &robot, &CheckOptions::default(), |_, _| {}).unwrap();
+    let check_s = started.elapsed().as_secs_f64();
+    let started = std::time::Instant::now();
+    let spans = task_force_spans(&seqs, &robot).unwrap();
+    let spans_s = started.elapsed().as_secs_f64();
+    eprintln!(
+        "force spans of the sample: {:.1} ms, the whole check {:.1} ms ({:.1}x)",
+        spans_s * 1e3,
+        check_s * 1e3,
+        check_s / spans_s
+    );
+    assert_eq!(spans.len(), check.tasks.len());
+    for task in &check.tasks {
+        assert_eq!(spans[&task.task], task.forces.span, "{}", task.task);
+    }
+}

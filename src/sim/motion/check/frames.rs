@@ -7,8 +7,10 @@ use super::derivatives::SmoothedMotion;
 use super::support::{convex_hull, SolePoints, SoleSample};
 use super::{CheckError, CheckOptions};
 use crate::sim::motion::{heading_rad, ForceFrame, Sequence, LEFT, RIGHT};
-use crate::sim::robot::{center_of_mass, inverse_dynamics, MotionState, RobotModel};
-use nalgebra::{Point2, Point3, Quaternion, UnitQuaternion, Vector3};
+use crate::sim::robot::{
+    center_of_mass, forward_kinematics, inverse_dynamics, MotionState, RobotModel,
+};
+use nalgebra::{Isometry3, Point2, Point3, Quaternion, UnitQuaternion, Vector3};
 
 /// A wrench on the robot: force and moment about the world origin, world frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,33 +71,11 @@ pub fn frame_states(
     soles: &SolePoints,
     opts: &CheckOptions,
 ) -> Result<Vec<FrameState>, CheckError> {
-    let canonical = seq.joint_names.len() == robot.n_joints()
-        && seq
-            .joint_names
-            .iter()
-            .zip(&robot.joints)
-            .all(|(a, b)| *a == b.name);
-    if !canonical {
-        return Err(CheckError::Joints {
-            task: seq.task.clone(),
-            sequence: seq.sequence_id.clone(),
-            robot: robot.name.clone(),
-        });
-    }
-    let n = seq.n_frames();
-    if n < 5 {
-        return Err(CheckError::TooShort {
-            task: seq.task.clone(),
-            sequence: seq.sequence_id.clone(),
-            frames: n,
-        });
-    }
+    checkable(seq, robot)?;
     let motion = SmoothedMotion::of(seq, opts.cutoff_hz);
     let gravity = Vector3::from(opts.gravity_w);
-    let hand_from_sensor = [LEFT, RIGHT].map(|s| {
-        let q = seq.hand_from_sensor_wxyz[s];
-        UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
-    });
+    let hand_from_sensor = hands_from_sensor(seq);
+    let n = seq.n_frames();
     let mut poses = Vec::new();
     let mut out = Vec::with_capacity(n - 2);
     for k in 1..n - 1 {
@@ -129,17 +109,10 @@ pub fn frame_states(
         let mut hand_force_n = [0.0; 2];
         let mut hand_force_w = [Vector3::zeros(); 2];
         for s in [LEFT, RIGHT] {
-            let frame = &robot.frames[robot.hands[s].frame];
-            let world_from_hand = poses[frame.body] * frame.body_from_frame;
-            let f_sensor = Vector3::from(seq.force_sensor[s][k]);
-            let f_w = match seq.force_frame {
-                ForceFrame::Sensor => world_from_hand.rotation * (hand_from_sensor[s] * f_sensor),
-                ForceFrame::World => f_sensor,
-            };
-            let at = world_from_hand * Point3::from(seq.force_point_hand[s]);
+            let (f_w, at) = hand_force(seq, robot, &poses, &hand_from_sensor, s, k);
             hands.force += f_w;
             hands.moment_o += at.coords.cross(&f_w);
-            hand_force_n[s] = f_sensor.norm();
+            hand_force_n[s] = Vector3::from(seq.force_sensor[s][k]).norm();
             hand_force_w[s] = f_w;
         }
         let alone = Wrench {
@@ -165,4 +138,80 @@ pub fn frame_states(
         });
     }
     Ok(out)
+}
+
+/// The hand forces of frames `1..n−1` in the world and the root's horizontal speed, as
+/// [`frame_states`] gives them, without its dynamics: the hand poses by forward
+/// kinematics alone. What a run needs to say which forces a family was trained with.
+pub fn hand_forces_w(
+    seq: &Sequence,
+    robot: &RobotModel,
+    opts: &CheckOptions,
+) -> Result<Vec<([Vector3<f64>; 2], f64)>, CheckError> {
+    checkable(seq, robot)?;
+    let motion = SmoothedMotion::of(seq, opts.cutoff_hz);
+    let hand_from_sensor = hands_from_sensor(seq);
+    let n = seq.n_frames();
+    let mut poses = Vec::new();
+    let mut out = Vec::with_capacity(n - 2);
+    for k in 1..n - 1 {
+        forward_kinematics(robot, &motion.world_from_root[k], &motion.q[k], &mut poses);
+        let f = [LEFT, RIGHT].map(|s| hand_force(seq, robot, &poses, &hand_from_sensor, s, k).0);
+        out.push((f, motion.root_lin_vel_w[k].xy().norm()));
+    }
+    Ok(out)
+}
+
+/// Each hand's rotation from its force sensor's frame.
+fn hands_from_sensor(seq: &Sequence) -> [UnitQuaternion<f64>; 2] {
+    [LEFT, RIGHT].map(|s| {
+        let q = seq.hand_from_sensor_wxyz[s];
+        UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+    })
+}
+
+/// Hand `s`'s recorded force at frame `k` in the world, N, and the world point it acts
+/// at, through the reference's hand pose among the body poses `poses`.
+fn hand_force(
+    seq: &Sequence,
+    robot: &RobotModel,
+    poses: &[Isometry3<f64>],
+    hand_from_sensor: &[UnitQuaternion<f64>; 2],
+    s: usize,
+    k: usize,
+) -> (Vector3<f64>, Point3<f64>) {
+    let frame = &robot.frames[robot.hands[s].frame];
+    let world_from_hand = poses[frame.body] * frame.body_from_frame;
+    let f_sensor = Vector3::from(seq.force_sensor[s][k]);
+    let f_w = match seq.force_frame {
+        ForceFrame::Sensor => world_from_hand.rotation * (hand_from_sensor[s] * f_sensor),
+        ForceFrame::World => f_sensor,
+    };
+    (f_w, world_from_hand * Point3::from(seq.force_point_hand[s]))
+}
+
+/// The sequence holds the robot's canonical joints and at least 5 frames.
+fn checkable(seq: &Sequence, robot: &RobotModel) -> Result<(), CheckError> {
+    let canonical = seq.joint_names.len() == robot.n_joints()
+        && seq
+            .joint_names
+            .iter()
+            .zip(&robot.joints)
+            .all(|(a, b)| *a == b.name);
+    if !canonical {
+        return Err(CheckError::Joints {
+            task: seq.task.clone(),
+            sequence: seq.sequence_id.clone(),
+            robot: robot.name.clone(),
+        });
+    }
+    let n = seq.n_frames();
+    if n < 5 {
+        return Err(CheckError::TooShort {
+            task: seq.task.clone(),
+            sequence: seq.sequence_id.clone(),
+            frames: n,
+        });
+    }
+    Ok(())
 }

@@ -477,10 +477,16 @@ pub fn task_force_spans(
     robot: &RobotModel,
 ) -> Result<std::collections::BTreeMap<String, HandForceSpan>, CheckError> {
     let opts = CheckOptions::default();
-    let soles = checked_soles(robot, &opts)?;
     let mut spans = std::collections::BTreeMap::<String, HandForceSpan>::new();
     for seq in seqs {
-        let span = sequence_series(seq, robot, &soles, &opts)?.forces.span;
+        // The hand poses by forward kinematics only: the same span the check's series
+        // gives (`forces.span`), without its inverse dynamics and support hulls.
+        let mut span = HandForceSpan::default();
+        for (forces_w, root_speed_xy_m_s) in frames::hand_forces_w(seq, robot, &opts)? {
+            for f_w in &forces_w {
+                span.add(f_w, root_speed_xy_m_s > style::MOVING_M_S);
+            }
+        }
         let task = spans.entry(seq.task.clone()).or_default();
         *task = task.union(span);
     }
