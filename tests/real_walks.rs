@@ -101,3 +101,27 @@ fn importing_the_published_walks_again_gives_the_bundled_bytes() {
         );
     }
 }
+
+/// `data list` names the bundled datasets as `--dataset` takes them, each with its
+/// content hash and what it is (the licence named for the real walks).
+#[test]
+fn data_list_names_the_bundled_datasets() {
+    let o = std::process::Command::new(BIN)
+        .args(["data", "list"])
+        .current_dir(std::env::temp_dir())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let walks = text
+        .lines()
+        .find(|l| l.starts_with("real-walks "))
+        .unwrap_or_else(|| panic!("no real-walks line:\n{text}"));
+    assert!(
+        walks.contains("10 sequences")
+            && walks.contains(&REAL_WALKS_SHA256[..16])
+            && walks.contains("LICENSE.TWIST2"),
+        "{walks}"
+    );
+    assert!(text.lines().any(|l| l.starts_with("sample ")), "{text}");
+}

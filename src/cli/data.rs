@@ -23,6 +23,8 @@ pub enum DataCommand {
     /// ground's centre of pressure from inverse dynamics against the feet's support, with
     /// and without the hand forces; PHUMA/PBHC kinematic checks; force levels.
     Check(super::data_check::CheckArgs),
+    /// The datasets the binary carries, by the name `--dataset` takes.
+    List,
 }
 
 /// Export formats.
@@ -173,6 +175,7 @@ pub(super) fn run(cmd: &DataCommand) -> anyhow::Result<()> {
         DataCommand::Export(a) => export(a),
         DataCommand::Synth(a) => synth(a),
         DataCommand::Check(a) => super::data_check::run(a),
+        DataCommand::List => super::data_list::run(),
     }
 }
 

@@ -8,6 +8,7 @@ mod client;
 mod crosscheck;
 mod data;
 mod data_check;
+mod data_list;
 mod dds;
 mod eval;
 mod eval_run;

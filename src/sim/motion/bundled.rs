@@ -10,6 +10,40 @@ use std::path::PathBuf;
 /// The bundled datasets' names: each a directory of `data/` with a `manifest.json`.
 pub const BUNDLED_DATASETS: [&str; 2] = ["sample", "real-walks"];
 
+/// What each bundled dataset is, in `data list`'s words (the same order as the names).
+const BUNDLED_WHAT: [&str; 2] = [
+    "synthetic, two sequences of each of the six tasks (data synth's generator)",
+    "TWIST2's ten real human walks, retargeted to the G1 (amazon-far/TWIST2, MIT: LICENSE.TWIST2 beside it)",
+];
+
+/// A bundled dataset as `data list` shows it.
+#[derive(Debug, Clone)]
+pub struct BundledDataset {
+    /// Its name, as `--dataset` takes it.
+    pub name: &'static str,
+    /// What it is.
+    pub what: &'static str,
+    /// The dataset, opened.
+    pub dataset: super::Dataset,
+}
+
+/// Every bundled dataset, opened for `robot` (a damaged one is an error naming it).
+pub fn bundled_datasets(
+    robot: &crate::sim::robot::RobotModel,
+) -> Result<Vec<BundledDataset>, super::DataError> {
+    BUNDLED_DATASETS
+        .iter()
+        .zip(BUNDLED_WHAT)
+        .map(|(&name, what)| {
+            Ok(BundledDataset {
+                name,
+                what,
+                dataset: super::Dataset::open(&crate::data_dir().join(name), robot)?,
+            })
+        })
+        .collect()
+}
+
 /// The directory of bundled dataset `name`, when it is one.
 pub fn bundled_dataset(name: &str) -> Option<PathBuf> {
     BUNDLED_DATASETS

@@ -40,7 +40,9 @@ pub fn fps_problem(fps: f64) -> Option<String> {
     })
 }
 
-pub use bundled::{bundled_dataset, dataset_arg, BUNDLED_DATASETS};
+pub use bundled::{
+    bundled_dataset, bundled_datasets, dataset_arg, BundledDataset, BUNDLED_DATASETS,
+};
 pub use dataset::{Dataset, DatasetWriter, Manifest, ManifestEntry, MANIFEST};
 pub use describe::{describe, joint_limit_margin, plural, total_hand_force};
 pub use error::DataError;
