@@ -60,8 +60,13 @@ fn the_simulator_builds_twist2s_input_as_the_in_process_policy_does() {
             .unwrap();
         batches
     });
-    let mut policy =
-        RemotePolicy::connect(config, &mut |_| Ok(None), &mut |m| panic!("{m}")).unwrap();
+    let mut policy = RemotePolicy::connect(
+        config,
+        &mut |_| Ok(None),
+        &mut |m| panic!("{m}"),
+        &mut || false,
+    )
+    .unwrap();
     // Slot 0 runs 12 steps; slot 1 starts a new episode at step 6; slot 2 is idle until
     // step 4.
     let mut expected = Vec::new();

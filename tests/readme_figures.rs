@@ -82,7 +82,10 @@ fn the_readmes_interval_sentence_is_what_eval_prints() {
     let dir = tempfile::tempdir().unwrap();
     let tables = eval_sample("balance", &dir.path().join("balance"));
     let [fats, _] = row(&tables, "average");
-    let [interval, _] = row(&tables, "95 % interval (bootstrap over episodes within tasks)");
+    let [interval, _] = row(
+        &tables,
+        "95 % interval (bootstrap over episodes within tasks)",
+    );
     assert_eq!(
         quoted,
         format!("{fats}, interval {interval}"),

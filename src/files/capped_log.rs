@@ -10,7 +10,7 @@
 
 use std::fs::File;
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Stdio;
 
 /// The most bytes of a launched process's output its log keeps: 16 MiB, tens of
@@ -31,7 +31,7 @@ pub fn capped_output(log: File, path: &Path, max_bytes: u64) -> std::io::Result<
 }
 
 /// Copies `from` into `log` up to `max_bytes`, then reads the rest away.
-fn pump(mut from: impl Read, mut log: File, path: &PathBuf, max_bytes: u64) {
+fn pump(mut from: impl Read, mut log: File, path: &Path, max_bytes: u64) {
     let mut buf = vec![0u8; 64 * 1024];
     let (mut kept, mut cut) = (0u64, 0u64);
     loop {

@@ -258,12 +258,8 @@ impl RemotePolicy {
         gone: &mut dyn FnMut() -> bool,
     ) -> Result<Self, RemoteError> {
         let mut session = SimSession::create(config.session.clone())?;
-        let info = session.accept_unless_gone(
-            config.connect_timeout,
-            vet,
-            |m| on_refused(m),
-            || gone(),
-        )?;
+        let info =
+            session.accept_unless_gone(config.connect_timeout, vet, |m| on_refused(m), gone)?;
         config.session = session.config().clone();
         let input = match &info.input {
             None => None,

@@ -1,8 +1,10 @@
 """Run a BeyondMimic-style ONNX export (whole_body_tracking or mjlab tracking task, metadata
 attached) as the policy of a ThorArena run serving session NAME:
 
-    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell (the process declares `beyondmimic`)
+    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell
     python run_beyondmimic.py --session NAME --onnx policy.onnx                        # another
+
+The process declares the `beyondmimic` profile at connect, so the run needs no `--profile`.
 
 Joint order, default pose and action scale come from the file's metadata. The gains it was
 trained with are printed: the simulator's profile sets the real ones, so check them against

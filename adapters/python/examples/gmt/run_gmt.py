@@ -1,8 +1,10 @@
 """Run a GMT checkpoint (23 joints; TorchScript `.pt` or ONNX, input [batch, 2154], output
 [batch, 23]) as the policy of a ThorArena run serving session NAME:
 
-    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell (the process declares `gmt`)
+    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell
     python run_gmt.py --session NAME --policy pretrained.pt                    # another
+
+The process declares the `gmt` profile at connect, so the run needs no `--profile`.
 
 It joins with GMT's 20 reference offsets (0.02 … 1.9 s) under the name "gmt" and answers
 each step with the network's raw output on the 23 joints it drives (wrists: action 0).

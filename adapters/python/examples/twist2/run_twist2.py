@@ -1,8 +1,10 @@
 """Run a TWIST2 checkpoint (ONNX, input `input` [batch, 1432], output `output` [batch, 29])
 as the policy of a ThorArena run serving session NAME:
 
-    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell (the process declares `twist2`)
+    cargo run --release -- eval --policy ipc:NAME --dataset DIR   # one shell
     python run_twist2.py --session NAME --onnx twist2.onnx                         # another
+
+The process declares the `twist2` profile at connect, so the run needs no `--profile`.
 
 It joins with the adapter's reference offsets (0 and 0.02 s) under the name "twist2" and
 answers each step with the network's raw output for every active slot. By default the

@@ -147,7 +147,7 @@ pub fn hand_forces_w(
     seq: &Sequence,
     robot: &RobotModel,
     opts: &CheckOptions,
-) -> Result<Vec<([Vector3<f64>; 2], f64)>, CheckError> {
+) -> Result<Vec<HandForcesAt>, CheckError> {
     checkable(seq, robot)?;
     let motion = SmoothedMotion::of(seq, opts.cutoff_hz);
     let hand_from_sensor = hands_from_sensor(seq);
@@ -157,9 +157,21 @@ pub fn hand_forces_w(
     for k in 1..n - 1 {
         forward_kinematics(robot, &motion.world_from_root[k], &motion.q[k], &mut poses);
         let f = [LEFT, RIGHT].map(|s| hand_force(seq, robot, &poses, &hand_from_sensor, s, k).0);
-        out.push((f, motion.root_lin_vel_w[k].xy().norm()));
+        out.push(HandForcesAt {
+            force_w: f,
+            root_speed_xy_m_s: motion.root_lin_vel_w[k].xy().norm(),
+        });
     }
     Ok(out)
+}
+
+/// One frame's recorded hand forces in the world, with the root's horizontal speed.
+#[derive(Debug, Clone, Copy)]
+pub struct HandForcesAt {
+    /// Each hand's force, world frame, N.
+    pub force_w: [Vector3<f64>; 2],
+    /// The root's horizontal speed, m/s.
+    pub root_speed_xy_m_s: f64,
 }
 
 /// Each hand's rotation from its force sensor's frame.

@@ -482,9 +482,9 @@ pub fn task_force_spans(
         // The hand poses by forward kinematics only: the same span the check's series
         // gives (`forces.span`), without its inverse dynamics and support hulls.
         let mut span = HandForceSpan::default();
-        for (forces_w, root_speed_xy_m_s) in frames::hand_forces_w(seq, robot, &opts)? {
-            for f_w in &forces_w {
-                span.add(f_w, root_speed_xy_m_s > style::MOVING_M_S);
+        for at in frames::hand_forces_w(seq, robot, &opts)? {
+            for f_w in &at.force_w {
+                span.add(f_w, at.root_speed_xy_m_s > style::MOVING_M_S);
             }
         }
         let task = spans.entry(seq.task.clone()).or_default();
