@@ -104,8 +104,7 @@ fn standing_facing_y(robot: &RobotModel, id: &str) -> Sequence {
 /// Runs `setting` on `seq` holding the pose; returns the recording.
 fn run(robot: &Arc<RobotModel>, seq: &Sequence, setting: &str) -> RecordingPhysics {
     let profile = load_profile(&bundled_profile_path("default"), robot).unwrap();
-    let setting =
-        Setting::parse(setting).unwrap_or_else(|| panic!("{}", Setting::refusal(setting)));
+    let setting = Setting::parse(setting).unwrap_or_else(|e| panic!("{e}"));
     let setup = EpisodeSetup::for_setting(
         robot,
         &profile,

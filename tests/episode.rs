@@ -356,6 +356,6 @@ fn a_push_with_a_direction_turns_with_the_references_initial_heading() {
         ("push-20@90", 20.0, Some(90.0))
     );
     for bad in ["push:20@400", "push:20@x", "push:20@", "push:2000@0"] {
-        assert!(thorarena::eval::Setting::parse(bad).is_none(), "{bad}");
+        assert!(thorarena::eval::Setting::parse(bad).is_err(), "{bad}");
     }
 }

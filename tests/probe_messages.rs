@@ -115,7 +115,7 @@ fn messages_echo_numbers_short_and_reasons_once() {
     ]));
     assert!(e.contains("`yaw_ff` = 1e308 "), "{e}");
     assert!(!e.contains("00000000000"), "{e}");
-    // A termination bound no tilt can reach is refused, its value short.
+    // A termination bound past any meaning is refused, its value short.
     let e = error_of(&thorarena(&[
         "eval",
         "--policy",
@@ -124,7 +124,7 @@ fn messages_echo_numbers_short_and_reasons_once() {
         "1e300",
     ]));
     assert!(
-        e.contains("--max-torso-tilt-error must be > 0 and at most 3.141593 rad")
+        e.contains("--max-torso-tilt-error must be > 0 and at most 1000 rad")
             && e.contains("got 1e300"),
         "{e}"
     );
@@ -165,4 +165,36 @@ fn messages_echo_numbers_short_and_reasons_once() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// A request file's bad setting is refused naming the reason once (the parse returns it;
+/// nothing parses the text a second time to find it), and a push or coefficient with more
+/// digits than a setting's name carries is refused as the force menu's numbers are.
+#[test]
+fn a_request_files_bad_setting_is_refused_with_its_reason_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (setting, reason) in [
+        (
+            "event:20@0:hand=sideways",
+            "hand `sideways` is not left, right or both",
+        ),
+        ("push:1e-300", "at most 12 characters a number"),
+        ("0.1234567890123", "at most 12 characters a number"),
+    ] {
+        let request = tmp.path().join("request.json");
+        std::fs::write(
+            &request,
+            format!(r#"{{"policy": "hold", "settings": ["no-force", "{setting}"]}}"#),
+        )
+        .unwrap();
+        let e = error_of(&thorarena(&[
+            "eval",
+            "--request",
+            request.to_str().unwrap(),
+            "--out",
+            tmp.path().join("run").to_str().unwrap(),
+        ]));
+        assert_eq!(e.matches(reason).count(), 1, "{setting}: {e}");
+        assert!(e.contains(setting), "{setting}: {e}");
+    }
 }

@@ -247,11 +247,8 @@ pub fn run_dds_session(
         return Err(super::DdsError::Domain(req.domain).into());
     }
     // Checked here, so the refusal names this command's one setting, not `eval`'s list.
-    if crate::eval::Setting::parse(&req.setting).is_none() {
-        return Err(refused(
-            DdsSetting::Setting,
-            crate::eval::Setting::refusal(&req.setting),
-        ));
+    if let Err(why) = crate::eval::Setting::parse(&req.setting) {
+        return Err(refused(DdsSetting::Setting, why.to_string()));
     }
     let Some((task, _)) = req.sequence.split_once('/') else {
         return Err(refused(

@@ -42,7 +42,7 @@ pub use rules::{check_budget_s, parse_budget, short_number, Budget, MAX_BUDGET, 
 pub use rules::{LatencyMode, MissRule, PolicyIoRules, TerminationRule};
 pub use sanity_record::SanityRecord;
 pub use schedule::{reference_steps, schedule};
-pub use setting::Setting;
+pub use setting::{Setting, SettingError};
 pub use spec::{
     parse_settings, Advice, EvalSpec, SpecError, DEFAULT_SETTINGS, MAX_ENVS, MAX_PIPELINE_DEPTH,
     MAX_SUBSTEPS, MAX_WORKERS,

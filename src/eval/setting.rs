@@ -32,6 +32,54 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
+/// The most characters a number takes in a setting's name (`push-0.000001`): a name is a
+/// file name and a table's label, never three hundred zeros (as in the force menu).
+const MAX_NUMBER_CHARS: usize = 12;
+
+/// `v` when its name writes it in at most [`MAX_NUMBER_CHARS`] characters.
+fn short(v: f64) -> Option<f64> {
+    (format!("{v}").len() <= MAX_NUMBER_CHARS).then_some(v)
+}
+
+/// Why a text is no setting, naming it (cut to 80 characters, so a number of three
+/// hundred digits is not echoed whole).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SettingError {
+    /// A disturbance (`event:`, `impulse:`, `payload:`) spelled wrong.
+    #[error("`{shown}`: {why} ({})", Disturbance::SYNTAX)]
+    Disturbance {
+        /// The text, as shown.
+        shown: String,
+        /// What is wrong with it.
+        why: String,
+    },
+    /// No setting at all, or a number out of range or with too many digits.
+    #[error("`{shown}` is not force, no-force, a replay coefficient within ±{}, push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360 (at most {MAX_NUMBER_CHARS} characters a number), or a disturbance ({})", Setting::MAX_COEFFICIENT, Setting::MAX_PUSH_N, Disturbance::SYNTAX)]
+    Unknown {
+        /// The text, as shown.
+        shown: String,
+    },
+}
+
+impl SettingError {
+    /// Why `s` is no setting.
+    fn of(s: &str) -> Self {
+        let cut: String = s.chars().take(80).collect();
+        let shown = format!(
+            "{}{}",
+            cut.escape_default(),
+            if cut.len() < s.len() { "…" } else { "" }
+        );
+        match Disturbance::parse(s) {
+            Some(Err(why)) => Self::Disturbance {
+                shown,
+                why: why.chars().take(120).collect(),
+            },
+            _ => Self::Unknown { shown },
+        }
+    }
+}
+
 impl Setting {
     /// True when both settings load the robot the same way, however spelled (`force` and
     /// `1`; `no-force` and `push:0`; a zero push in any direction).
@@ -68,29 +116,16 @@ impl Setting {
     /// measures nothing but divergence).
     pub const MAX_PUSH_N: f64 = 1000.0;
 
-    /// Why `s` is no setting [`Self::parse`] takes, naming it (cut short when long, so
-    /// a number of three hundred digits is not echoed whole).
-    pub fn refusal(s: &str) -> String {
-        let shown: String = s.chars().take(80).collect();
-        let cut = if shown.len() < s.len() { "…" } else { "" };
-        let shown = shown.escape_default();
-        if let Some(Err(why)) = Disturbance::parse(s) {
-            let why: String = why.chars().take(120).collect();
-            return format!("`{shown}{cut}`: {why} ({})", Disturbance::SYNTAX);
-        }
-        format!(
-            "`{shown}{cut}` is not force, no-force, a replay coefficient within ±{}, push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360, or a disturbance ({})",
-            Self::MAX_COEFFICIENT,
-            Self::MAX_PUSH_N,
-            Disturbance::SYNTAX
-        )
-    }
-
     /// Parses `force`, `no-force`, a replay coefficient (|c| ≤ [`Self::MAX_COEFFICIENT`]),
     /// `push:<N>` (|N| ≤ [`Self::MAX_PUSH_N`]) with an optional `@<deg>` direction from
     /// the reference's initial heading (−360 ≤ deg ≤ 360), or a disturbance
-    /// ([`Disturbance::SYNTAX`]; named by its canonical spelling).
-    pub fn parse(s: &str) -> Option<Self> {
+    /// ([`Disturbance::SYNTAX`]; named by its canonical spelling); a refusal says why once.
+    pub fn parse(s: &str) -> Result<Self, SettingError> {
+        Self::parse_known(s).ok_or_else(|| SettingError::of(s))
+    }
+
+    /// [`Self::parse`] without the reason.
+    fn parse_known(s: &str) -> Option<Self> {
         let plain = |name: String, coefficient: f64| Self {
             name,
             coefficient,
@@ -117,12 +152,14 @@ impl Setting {
                     let n: f64 = n
                         .parse()
                         .ok()
-                        .filter(|n: &f64| n.is_finite() && n.abs() <= Self::MAX_PUSH_N)?;
+                        .filter(|n: &f64| n.is_finite() && n.abs() <= Self::MAX_PUSH_N)
+                        .and_then(short)?;
                     let deg: Option<f64> = match deg {
                         Some(d) => Some(
                             d.parse()
                                 .ok()
-                                .filter(|d: &f64| d.is_finite() && d.abs() <= 360.0)?,
+                                .filter(|d: &f64| d.is_finite() && d.abs() <= 360.0)
+                                .and_then(short)?,
                         ),
                         None => None,
                     };
@@ -141,6 +178,7 @@ impl Setting {
                     .parse::<f64>()
                     .ok()
                     .filter(|c| c.is_finite() && c.abs() <= Self::MAX_COEFFICIENT)
+                    .and_then(short)
                     .map(|c| plain(format!("coef-{c}"), c))
             }
         }

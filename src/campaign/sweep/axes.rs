@@ -22,7 +22,11 @@ pub(super) fn refuse_equivalent(
         message,
     };
     // Settings by the load they put on the robot, as `eval --settings` compares them.
-    let settings: Vec<Option<Setting>> = spec.settings.iter().map(|s| Setting::parse(s)).collect();
+    let settings: Vec<Option<Setting>> = spec
+        .settings
+        .iter()
+        .map(|s| Setting::parse(s).ok())
+        .collect();
     let same_load = |a: &Option<Setting>, b: &Option<Setting>| match (a, b) {
         (Some(a), Some(b)) => a.same_load(b),
         _ => false,

@@ -14,7 +14,7 @@ pub fn sweep_title(plan: &Plan) -> String {
     let settings: Vec<Option<crate::eval::Setting>> = plan
         .cells
         .iter()
-        .map(|c| crate::eval::Setting::parse(&c.setting))
+        .map(|c| crate::eval::Setting::parse(&c.setting).ok())
         .collect();
     let setting_noun = if settings
         .iter()
@@ -293,12 +293,16 @@ fn curve_lines(
 
 /// A force-replay cell's coefficient (not a push).
 fn coefficient_of(c: &Cell) -> Option<f64> {
-    crate::eval::Setting::parse(&c.setting).and_then(|s| s.replay_only())
+    crate::eval::Setting::parse(&c.setting)
+        .ok()
+        .and_then(|s| s.replay_only())
 }
 
 /// A push cell's force per hand, N.
 fn push_of(c: &Cell) -> Option<f64> {
-    crate::eval::Setting::parse(&c.setting).and_then(|s| s.push_only())
+    crate::eval::Setting::parse(&c.setting)
+        .ok()
+        .and_then(|s| s.push_only())
 }
 
 /// A measured-latency cell's budget, ms.

@@ -431,7 +431,7 @@ fn selected_durations(
             let replaying = spec
                 .settings
                 .iter()
-                .find(|s| crate::eval::Setting::parse(s).is_some_and(|s| s.coefficient != 0.0));
+                .find(|s| crate::eval::Setting::parse(s).is_ok_and(|s| s.coefficient != 0.0));
             if let Some(setting) = replaying {
                 return Err(format!(
                     "setting `{setting}` replays recorded hand forces, but no sequence of dataset `{spelled}` has force logs (imported without force logs): it would run as no-force under another name; use no-force or push:<N>"

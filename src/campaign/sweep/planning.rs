@@ -65,7 +65,7 @@ pub fn check_cells_load(plan: &Plan) -> Result<(), SweepError> {
     let mut checked: HashSet<String> = HashSet::new();
     for task in plan.tasks.iter().filter(|t| t.shard.0 == 0) {
         let cell = &plan.cells[task.cell];
-        if Setting::parse(&cell.setting).is_none() {
+        if Setting::parse(&cell.setting).is_err() {
             return Err(SweepError::CellSetting {
                 cell: cell.index,
                 setting: cell.setting.clone(),

@@ -79,7 +79,7 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
         .iter()
         .zip(results)
         .map(|(cell, r)| {
-            let setting = crate::eval::Setting::parse(&cell.setting);
+            let setting = crate::eval::Setting::parse(&cell.setting).ok();
             let scores = r.as_ref().and_then(|r| r.summary.settings.values().next());
             let d = |f: fn(&Diagnostics) -> f64| scores.and_then(|s| finite(f(&s.average)));
             let ci = scores.and_then(|s| s.fats_ci95);

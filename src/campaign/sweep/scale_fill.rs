@@ -80,7 +80,7 @@ pub fn finish_with_shard_runs(dir: &Path, shards: &[PathBuf]) -> Result<usize, S
         let cell = &plan.cells[task.cell];
         let (source, records) = &sources[task.shard.0];
         let setting = Setting::parse(&cell.setting)
-            .ok_or_else(|| ScaleFillError::Setting(cell.setting.clone()))?;
+            .map_err(|_| ScaleFillError::Setting(cell.setting.clone()))?;
         let mut header = source.clone();
         header.policy = cell.policy.policy.family().name.to_string();
         header.settings = vec![setting.clone()];

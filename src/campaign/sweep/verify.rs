@@ -89,7 +89,7 @@ fn header_problem(
         }
     }
     let dataset = cell.dataset.display().to_string();
-    let setting = Setting::parse(&cell.setting);
+    let setting = Setting::parse(&cell.setting).ok();
     let termination = run.termination;
     let io = run.io;
     if header.dataset != dataset {

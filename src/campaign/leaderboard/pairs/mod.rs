@@ -251,10 +251,9 @@ pub fn check_pairs(
         )));
     }
     for setting in options.push_settings() {
-        if crate::eval::Setting::parse(&setting).is_none() {
+        if let Err(why) = crate::eval::Setting::parse(&setting) {
             return Err(all(format!(
-                "`{setting}` (from `option.pair_pushes`, `option.pair_events` and `option.pair_headings`) is no setting `eval` takes: {}",
-                crate::eval::Setting::refusal(&setting)
+                "`{setting}` (from `option.pair_pushes`, `option.pair_events` and `option.pair_headings`) is no setting `eval` takes: {why}"
             )));
         }
     }
@@ -514,7 +513,7 @@ mod tests {
             Some(vec![])
         );
         for s in o.push_settings() {
-            assert!(crate::eval::Setting::parse(&s).is_some(), "{s}");
+            assert!(crate::eval::Setting::parse(&s).is_ok(), "{s}");
         }
     }
 }

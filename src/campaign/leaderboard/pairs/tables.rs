@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 /// (FATS, survival, keypoint error mm) of one setting of a run.
 fn cell(summary: &Summary, setting: &str) -> Option<[f64; 3]> {
     // Results name a setting canonically (`push:10@90` → `push-10@90`).
-    let key = crate::eval::Setting::parse(setting).map_or_else(|| setting.to_string(), |s| s.name);
+    let key = crate::eval::Setting::parse(setting).map_or_else(|_| setting.to_string(), |s| s.name);
     let r = summary.settings.get(&key)?;
     Some([r.average.fats, r.average.survival, r.average.kp_mm])
 }
