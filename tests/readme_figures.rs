@@ -26,21 +26,8 @@ fn eval_sample(policy: &str, out: &Path) -> String {
 
 /// The two numbers of `tables.md`'s row whose first cell is `label` (task table first).
 fn row(tables: &str, label: &str) -> [String; 2] {
-    let line = tables
-        .lines()
-        .find(|l| {
-            l.trim_start_matches('|')
-                .split('|')
-                .next()
-                .is_some_and(|c| c.trim().trim_matches('*') == label)
-        })
-        .unwrap_or_else(|| panic!("tables.md has no row {label}:\n{tables}"));
-    let cells: Vec<String> = line
-        .trim_matches('|')
-        .split('|')
-        .map(|c| c.trim().trim_matches('*').to_string())
-        .collect();
-    [cells[1].clone(), cells[2].clone()]
+    let cells = readme::tables_row(tables, label);
+    [cells[0].clone(), cells[1].clone()]
 }
 
 #[test]

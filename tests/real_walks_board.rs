@@ -12,28 +12,7 @@ use std::process::Command;
 const BIN: &str = env!("CARGO_BIN_EXE_thorarena");
 const TEST: &str = "real_walks_board::the_real_walks_table_is_what_eval_prints";
 
-/// The `(label, number)` cells of `tables.md`'s row `label`, after its first cell.
-fn row(tables: &str, label: &str) -> Vec<String> {
-    let line = tables
-        .lines()
-        .find(|l| {
-            l.trim_start_matches('|')
-                .split('|')
-                .next()
-                .is_some_and(|c| c.trim().trim_matches('*') == label)
-        })
-        .unwrap_or_else(|| panic!("tables.md has no row {label}:\n{tables}"));
-    line.trim_matches('|')
-        .split('|')
-        .skip(1)
-        .map(|c| {
-            c.trim()
-                .trim_matches('*')
-                .trim_end_matches(" †")
-                .to_string()
-        })
-        .collect()
-}
+use readme::tables_row as row;
 
 /// The three general trackers, each with its network's path under the reference folder
 /// and whether it runs `--unchecked`.

@@ -65,3 +65,27 @@ pub fn assert_readme_table(name: &str, measured: &[Vec<String>]) {
         "the documentation's table `{name}` is not what was measured (rows printed above)"
     );
 }
+
+/// The cells after the first of `tables.md`'s row whose first cell is `label` (the task
+/// table's first), bold and a † mark removed.
+pub fn tables_row(tables: &str, label: &str) -> Vec<String> {
+    let line = tables
+        .lines()
+        .find(|l| {
+            l.trim_start_matches('|')
+                .split('|')
+                .next()
+                .is_some_and(|c| c.trim().trim_matches('*') == label)
+        })
+        .unwrap_or_else(|| panic!("tables.md has no row {label}:\n{tables}"));
+    line.trim_matches('|')
+        .split('|')
+        .skip(1)
+        .map(|c| {
+            c.trim()
+                .trim_matches('*')
+                .trim_end_matches(" †")
+                .to_string()
+        })
+        .collect()
+}
