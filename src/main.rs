@@ -19,7 +19,7 @@ fn main() -> std::process::ExitCode {
             // The library names what a user set by its field; the terminal shows the flag.
             // An outside name quoted in it (a file's, a policy's) may hold escape
             // sequences: they are shown, never run by the terminal.
-            let text = cli::flags::as_flags(&chain_text(&e));
+            let text = cli::flags::as_flags(&thorarena::files::log_text::causes_once(e.as_ref()));
             eprintln!(
                 "error: {}",
                 thorarena::files::log_text::printable_lines(&text)
@@ -27,9 +27,4 @@ fn main() -> std::process::ExitCode {
             std::process::ExitCode::FAILURE
         }
     }
-}
-
-/// The error and its causes, each once ([`thorarena::files::log_text::causes_once`]).
-fn chain_text(e: &anyhow::Error) -> String {
-    thorarena::files::log_text::causes_once(e.as_ref())
 }

@@ -32,13 +32,9 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
-/// The most characters a number takes in a setting's name (`push-0.000001`): a name is a
-/// file name and a table's label, never three hundred zeros (as in the force menu).
-const MAX_NUMBER_CHARS: usize = 12;
-
-/// `v` when its name writes it in at most [`MAX_NUMBER_CHARS`] characters.
+/// `v` when a setting's name can carry it ([`crate::sim::disturbance::fits_name`]).
 fn short(v: f64) -> Option<f64> {
-    (format!("{v}").len() <= MAX_NUMBER_CHARS).then_some(v)
+    crate::sim::disturbance::fits_name(v).then_some(v)
 }
 
 /// Why a text is no setting, naming it (cut to 80 characters, so a number of three
@@ -54,7 +50,7 @@ pub enum SettingError {
         why: String,
     },
     /// No setting at all, or a number out of range or with too many digits.
-    #[error("`{shown}` is not force, no-force, a replay coefficient within ±{}, push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360 (at most {MAX_NUMBER_CHARS} characters a number), or a disturbance ({})", Setting::MAX_COEFFICIENT, Setting::MAX_PUSH_N, Disturbance::SYNTAX)]
+    #[error("`{shown}` is not force, no-force, a replay coefficient within ±{}, push:<N>[@<deg>] with |N| ≤ {} and |deg| ≤ 360 (at most {} characters a number), or a disturbance ({})", Setting::MAX_COEFFICIENT, Setting::MAX_PUSH_N, crate::sim::disturbance::MAX_NUMBER_CHARS, Disturbance::SYNTAX)]
     Unknown {
         /// The text, as shown.
         shown: String,

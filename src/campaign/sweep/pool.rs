@@ -124,7 +124,11 @@ pub fn run_pool(
 /// Lines of the file at `path` (0 when it cannot be read): episodes a run has written.
 fn count_lines(path: &Path) -> usize {
     use std::io::BufRead;
-    let Ok(file) = crate::files::bounded_read::open(path, "episode log", 16 << 30) else {
+    let Ok(file) = crate::files::bounded_read::open(
+        path,
+        "episode log",
+        crate::eval::results::MAX_EPISODE_LOG_BYTES,
+    ) else {
         return 0;
     };
     let mut reader = std::io::BufReader::new(file);

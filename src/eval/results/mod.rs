@@ -37,7 +37,7 @@ mod summary;
 
 pub use coverage::{CellCoverage, Coverage};
 pub use episode_table::{episode_rows, write_episodes_csv, EpisodeRow, EPISODES_CSV_FILE};
-pub use episodes::{write_record, EpisodeLog};
+pub use episodes::{write_record, EpisodeLog, MAX_EPISODE_LOG_BYTES};
 pub use header::{read_header, write_header, PlannedSequence, RunHeader};
 pub use identity::{identity_differences, network_label, PolicyIdentity};
 pub use merge::{read_shards, MergeError, Shards};

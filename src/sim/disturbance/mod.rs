@@ -12,6 +12,8 @@ mod event;
 mod impulse;
 mod spelling;
 
+pub use spelling::{fits_name, MAX_NUMBER_CHARS};
+
 pub use event::ForceEvent;
 pub use impulse::{ImpulseTarget, Impulses, Pulse};
 

@@ -75,8 +75,14 @@ pub fn name(d: &Disturbance) -> String {
 type Fields<'a> = [(&'a str, &'a str)];
 
 /// The most characters a number takes in a setting's name (`0.000001`, `1234.5678901`):
-/// a name is a file name and a table's label, never three hundred zeros.
-const MAX_NUMBER_CHARS: usize = 12;
+/// a name is a file name and a table's label, never three hundred zeros. Every setting's
+/// numbers are held to it (`eval::Setting` too).
+pub const MAX_NUMBER_CHARS: usize = 12;
+
+/// Whether a setting's name writes `x` in at most [`MAX_NUMBER_CHARS`] characters.
+pub fn fits_name(x: f64) -> bool {
+    format!("{x}").len() <= MAX_NUMBER_CHARS
+}
 
 /// A number within `lo..=hi`, named `what` in the refusal, that the setting's name can
 /// write back in at most [`MAX_NUMBER_CHARS`] characters.
@@ -86,7 +92,7 @@ fn number(what: &str, value: &str, lo: f64, hi: f64) -> Result<f64, String> {
         .ok()
         .filter(|x| x.is_finite() && (lo..=hi).contains(x))
         .ok_or_else(|| format!("{what} `{value}` is not a number from {lo} to {hi}"))?;
-    if format!("{x}").len() > MAX_NUMBER_CHARS {
+    if !fits_name(x) {
         return Err(format!(
             "{what} `{value}` has more digits than a setting's name carries (at most {MAX_NUMBER_CHARS} characters, e.g. 0.000001): round it"
         ));

@@ -2,6 +2,7 @@
 //! evaluated under — robot, control and physics steps, action mapping, delay, PD gains and
 //! torque limits — resolved against the robot model and validated on load.
 
+use crate::files::log_text::short_number as short;
 use crate::sim::physics::PdGains;
 use crate::sim::robot::RobotModel;
 use serde::Deserialize;
@@ -442,12 +443,6 @@ fn field_limit(field: &str) -> (f64, &'static str) {
         "action_scale" => (100.0, "rad per unit of action"),
         _ => (4.0 * std::f64::consts::PI, "rad"),
     }
-}
-
-/// `v` short ([`crate::files::log_text::short_number`]: `1e300`, not its three hundred
-/// digits).
-fn short(v: f64) -> String {
-    crate::files::log_text::short_number(v)
 }
 
 /// `left_hip_pitch_joint` → `hip_pitch`; `waist_yaw_joint` → `waist_yaw`.

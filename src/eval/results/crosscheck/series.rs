@@ -54,8 +54,12 @@ impl SeriesLog {
         let mut kept = Vec::new();
         if resume && path.exists() {
             // As generous as an episode log: a line per episode.
-            let file = crate::files::bounded_read::open(&path, "series file", 16 << 30)
-                .map_err(ResultsError::io(&path))?;
+            let file = crate::files::bounded_read::open(
+                &path,
+                "series file",
+                crate::eval::results::MAX_EPISODE_LOG_BYTES,
+            )
+            .map_err(ResultsError::io(&path))?;
             for (i, line) in std::io::BufReader::new(file).lines().enumerate() {
                 let line = line.map_err(ResultsError::io(&path))?;
                 match serde_json::from_str::<Line>(&line) {
