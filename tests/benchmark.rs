@@ -160,7 +160,7 @@ fn a_run_resumed_after_a_kill_ends_as_the_uninterrupted_run() {
     // Resuming it under another configuration is a typed error naming what differs,
     // and leaves the run as it was.
     let other = EvalSpec::load(&EvalRequest {
-        settings: vec!["no-force".into()],
+        settings: vec!["no-force".parse().unwrap()],
         ..request()
     })
     .unwrap();
@@ -225,7 +225,7 @@ fn shards_merge_into_the_unsharded_run() {
     }
     // A run of another evaluation is not a shard.
     let other = EvalSpec::load(&EvalRequest {
-        settings: vec!["force".into()],
+        settings: vec!["force".parse().unwrap()],
         ..request()
     })
     .unwrap();
@@ -311,7 +311,7 @@ fn a_spec_is_checked_before_anything_runs() {
         ),
         (
             EvalRequest {
-                settings: vec!["force".into(), "1".into()],
+                settings: vec!["force".parse().unwrap(), "1".parse().unwrap()],
                 ..request()
             },
             "same load on the robot",

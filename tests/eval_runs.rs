@@ -305,7 +305,7 @@ fn a_request_file_runs_the_evaluation_its_flags_would() {
     let request = thorarena::eval::EvalRequest {
         policy: thorarena::policy::registry::PolicySource::parse("hold").unwrap(),
         dataset: Some(SAMPLE.into()),
-        settings: vec!["force".into()],
+        settings: vec!["force".parse().unwrap()],
         ..Default::default()
     };
     let file = dir.path().join("request.json");

@@ -272,7 +272,7 @@ fn the_ppo_policy_tracks_its_dance_with_its_per_joint_scale_and_falls_with_scale
         policy: thorarena::policy::registry::PolicySource::parse(&policy).unwrap(),
         dataset: Some(dance.clone()),
         profile: Some(profile.into()),
-        settings: vec!["no-force".into()],
+        settings: vec!["no-force".parse().unwrap()],
         unchecked,
         ..Default::default()
     };

@@ -179,7 +179,7 @@ fn a_baseline_that_cannot_walk_fails_track_from_the_command_line() {
 fn sanity_of_eval(policy: &str, unchecked: bool, out: &Path) -> Result<serde_json::Value, String> {
     let request = thorarena::eval::EvalRequest {
         policy: thorarena::policy::registry::PolicySource::parse(policy).unwrap(),
-        settings: vec!["no-force".into()],
+        settings: vec!["no-force".parse().unwrap()],
         selection: thorarena::sim::motion::SequenceSelection {
             tasks: Vec::new(),
             sequences: vec!["push_chair_001".into()],

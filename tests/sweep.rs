@@ -487,7 +487,7 @@ fn bad_specs_and_sweep_directories_are_clear_errors_that_write_nothing() {
             TWO_CELLS
                 .replace("DATA", SAMPLE)
                 .replace("\"force\"]", "\"fore\"]"),
-            "setting `fore`",
+            "`fore` is not force, no-force",
         ),
         (
             "bad budget",

@@ -144,7 +144,7 @@ fn rollouts(
     check: &DatasetCheck,
     observer: &mut dyn DataCheckObserver,
 ) -> Result<TrackerHeld, DataCheckError> {
-    let settings = [ROLLOUT_SETTING.to_string()];
+    let settings = [crate::eval::Setting::no_force()];
     run_in_process(
         tracker,
         &job.dataset,

@@ -30,8 +30,8 @@ pub struct Args {
     #[arg(long, help = thorarena::policy::registry::profile_help())]
     pub profile: Option<String>,
     /// Settings, comma separated, as for `eval`.
-    #[arg(long, value_delimiter = ',', default_value = "force,no-force")]
-    pub settings: Vec<String>,
+    #[arg(long, value_delimiter = ',', default_value = "force,no-force", value_parser = super::choices::SettingArg)]
+    pub settings: Vec<thorarena::eval::Setting>,
     /// Physics engine.
     #[arg(long, value_enum, default_value = "rapier")]
     pub engine: EngineArg,

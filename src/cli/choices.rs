@@ -77,3 +77,32 @@ choice! {
         Explicit,
     }
 }
+
+/// `--settings` and `--setting`: [`thorarena::eval::Setting::parse`], refusing a value with
+/// its reason and the value cut short (clap's own message would echo it whole).
+#[derive(Debug, Clone, Copy)]
+pub struct SettingArg;
+
+impl clap::builder::TypedValueParser for SettingArg {
+    type Value = thorarena::eval::Setting;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<Self::Value, clap::Error> {
+        let flag = arg.and_then(clap::Arg::get_long).unwrap_or("settings");
+        let refused = |why: String| {
+            clap::Error::raw(
+                clap::error::ErrorKind::ValueValidation,
+                format!("--{flag}: {why}\n"),
+            )
+            .with_cmd(cmd)
+        };
+        let text = value
+            .to_str()
+            .ok_or_else(|| refused("the value is not UTF-8".into()))?;
+        thorarena::eval::Setting::parse(text).map_err(|why| refused(why.to_string()))
+    }
+}

@@ -20,8 +20,8 @@ pub struct Args {
     pub sequence: String,
     /// Setting: `force` (the recorded hand forces replayed), `no-force`, or one of
     /// `eval --settings`' other forms.
-    #[arg(long, default_value = "force")]
-    pub setting: String,
+    #[arg(long, default_value = "force", value_parser = super::choices::SettingArg)]
+    pub setting: thorarena::eval::Setting,
     /// Dynamics profile (its physics step, torque limits and control period for the
     /// metrics; the gains are the commands').
     #[arg(long, default_value = "default")]

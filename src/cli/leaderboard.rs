@@ -69,9 +69,10 @@ pub struct Args {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "no-force,push:10,push:20,push:30"
+        default_value = "no-force,push:10,push:20,push:30",
+        value_parser = super::choices::SettingArg
     )]
-    pub clip_settings: Vec<String>,
+    pub clip_settings: Vec<thorarena::eval::Setting>,
     /// Engines, comma separated; every policy runs on each [default: mujoco in a build
     /// with the `mujoco` feature, else rapier].
     #[arg(long, value_enum, value_delimiter = ',')]
@@ -84,12 +85,12 @@ pub struct Args {
     #[arg(long, default_value_t = 60)]
     pub per_task: usize,
     /// Settings, comma separated, as for `eval`.
-    #[arg(long, value_delimiter = ',', default_value = "force,no-force")]
-    pub settings: Vec<String>,
+    #[arg(long, value_delimiter = ',', default_value = "force,no-force", value_parser = super::choices::SettingArg)]
+    pub settings: Vec<thorarena::eval::Setting>,
     /// Also score every general policy on the bundled real human walks (`real-walks`)
     /// under these settings, comma separated (e.g. no-force,push:10,push:20,push:30).
-    #[arg(long, value_delimiter = ',')]
-    pub real_walks: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::choices::SettingArg)]
+    pub real_walks: Vec<thorarena::eval::Setting>,
     /// Directory of the runs, the dataset it generates and the tables.
     #[arg(long, default_value = "results/leaderboard")]
     pub out: PathBuf,

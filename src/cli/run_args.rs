@@ -67,8 +67,8 @@ pub struct RunArgs {
     /// pushes), `payload:<kg>[:hand=..]` (a mass held at the wrists). docs/forces.md has
     /// every field and default.
     /// [default: force,no-force; no-force alone on a dataset without force logs].
-    #[arg(long, value_delimiter = ',')]
-    pub settings: Vec<String>,
+    #[arg(long, value_delimiter = ',', value_parser = super::choices::SettingArg)]
+    pub settings: Vec<thorarena::eval::Setting>,
     /// Run replay settings (`force`, a coefficient) on a dataset whose sequences have no
     /// force logs: they replay zero forces, i.e. run as `no-force` under another name.
     #[arg(long)]

@@ -33,8 +33,8 @@ pub struct DdsSessionRequest {
     pub dataset: Option<PathBuf>,
     /// `TASK/SEQUENCE_ID`.
     pub sequence: String,
-    /// One setting, as `eval --settings` spells it.
-    pub setting: String,
+    /// One setting.
+    pub setting: crate::eval::Setting,
     /// Dynamics profile.
     pub profile: String,
     /// Physics engine.
@@ -115,8 +115,6 @@ impl DdsSessionOutcome {
 pub enum DdsSetting {
     /// [`DdsSessionRequest::sequence`].
     Sequence,
-    /// [`DdsSessionRequest::setting`].
-    Setting,
     /// [`DdsSessionRequest::start_timeout_s`].
     StartTimeout,
     /// [`DdsSessionRequest::start_on`].
@@ -130,7 +128,6 @@ impl DdsSetting {
     pub fn field(self) -> &'static str {
         match self {
             Self::Sequence => "option.sequence",
-            Self::Setting => "option.setting",
             Self::StartTimeout => "option.start_timeout",
             Self::StartOn => "option.start_on",
             Self::RtPriority => "option.rt_priority",
@@ -245,10 +242,6 @@ pub fn run_dds_session(
     super::interface::check_local_address(address)?;
     if req.domain > super::MAX_DOMAIN {
         return Err(super::DdsError::Domain(req.domain).into());
-    }
-    // Checked here, so the refusal names this command's one setting, not `eval`'s list.
-    if let Err(why) = crate::eval::Setting::parse(&req.setting) {
-        return Err(refused(DdsSetting::Setting, why.to_string()));
     }
     let Some((task, _)) = req.sequence.split_once('/') else {
         return Err(refused(

@@ -42,9 +42,9 @@ pub use rules::{check_budget_s, parse_budget, short_number, Budget, MAX_BUDGET, 
 pub use rules::{LatencyMode, MissRule, PolicyIoRules, TerminationRule};
 pub use sanity_record::SanityRecord;
 pub use schedule::{reference_steps, schedule};
-pub use setting::{Setting, SettingError};
+pub use setting::{spelled as spelled_settings, Setting, SettingError};
 pub use spec::{
-    parse_settings, Advice, EvalSpec, SpecError, DEFAULT_SETTINGS, MAX_ENVS, MAX_PIPELINE_DEPTH,
+    check_settings, Advice, EvalSpec, SpecError, DEFAULT_SETTINGS, MAX_ENVS, MAX_PIPELINE_DEPTH,
     MAX_SUBSTEPS, MAX_WORKERS,
 };
 pub use thresholds::task_thresholds;

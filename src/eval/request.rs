@@ -2,7 +2,7 @@
 //! say, what a sweep task stores in its plan, and what a request file holds
 //! (`eval --request`). [`super::EvalSpec::load`] checks it.
 
-use super::{PolicyIoRules, TerminationRule};
+use super::{PolicyIoRules, Setting, TerminationRule};
 use crate::policy::registry::PolicySource;
 use crate::sim::motion::SequenceSelection;
 use serde::{Deserialize, Serialize};
@@ -50,9 +50,10 @@ pub struct EvalRequest {
     pub profile_mismatch_ok: bool,
     /// Score the policy without its sanity check (recorded in `run.json`).
     pub unchecked: bool,
-    /// Settings as spelled (empty: [`super::DEFAULT_SETTINGS`], or `no-force` alone on a dataset
-    /// without force logs).
-    pub settings: Vec<String>,
+    /// Settings (empty: [`super::DEFAULT_SETTINGS`], or `no-force` alone on a dataset
+    /// without force logs); a file spells each as `eval --settings` takes it.
+    #[serde(with = "super::setting::spelled")]
+    pub settings: Vec<Setting>,
     /// Run replay settings on a dataset without force logs.
     pub replay_without_force_logs: bool,
     /// Tasks and sequences to evaluate.

@@ -180,3 +180,122 @@ impl Setting {
         }
     }
 }
+
+impl Setting {
+    /// `no-force`: the reference tracked with no force on the robot.
+    pub fn no_force() -> Self {
+        Self {
+            name: "no-force".into(),
+            coefficient: 0.0,
+            push_n: 0.0,
+            push_heading_deg: None,
+            disturbance: None,
+        }
+    }
+
+    /// `force`: the recorded hand forces replayed as recorded.
+    pub fn force() -> Self {
+        Self {
+            name: "force".into(),
+            coefficient: 1.0,
+            ..Self::no_force()
+        }
+    }
+
+    /// The text [`Self::parse`] reads back as this setting: `force`, `no-force`, the
+    /// coefficient, `push:<N>[@<deg>]`, or the disturbance's canonical spelling. A request
+    /// file, a sweep plan and `eval --settings` spell a setting so.
+    pub fn spelling(&self) -> String {
+        if self.disturbance.is_some() || self.name == "force" || self.name == "no-force" {
+            return self.name.clone();
+        }
+        if self.push_n != 0.0 || self.name.starts_with("push-") {
+            return match self.push_heading_deg {
+                Some(d) => format!("push:{}@{d}", self.push_n),
+                None => format!("push:{}", self.push_n),
+            };
+        }
+        format!("{}", self.coefficient)
+    }
+}
+
+impl std::str::FromStr for Setting {
+    type Err = SettingError;
+    fn from_str(s: &str) -> Result<Self, SettingError> {
+        Self::parse(s)
+    }
+}
+
+/// Serde for settings held where a person writes them — a request file, a sweep plan —
+/// as their [`Setting::spelling`], each parsed once on reading with its reason on refusal
+/// (`#[serde(with = "crate::eval::setting::spelled")]` on a `Vec<Setting>`). `run.json`
+/// keeps the full record ([`Setting`]'s own serde).
+pub mod spelled {
+    use super::Setting;
+    use serde::{de::Error as _, Deserialize, Deserializer, Serializer};
+
+    /// Writes each setting as its spelling.
+    pub fn serialize<S: Serializer>(settings: &[Setting], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(settings.iter().map(Setting::spelling))
+    }
+
+    /// Reads each spelling as a setting, refusing the first that is none.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Setting>, D::Error> {
+        Vec::<String>::deserialize(d)?
+            .iter()
+            .map(|s| Setting::parse(s).map_err(D::Error::custom))
+            .collect()
+    }
+
+    /// The same for one setting (a sweep cell's).
+    pub mod one {
+        use super::super::Setting;
+        use serde::{de::Error as _, Deserialize, Deserializer, Serializer};
+
+        /// Writes the setting as its spelling.
+        pub fn serialize<S: Serializer>(setting: &Setting, s: S) -> Result<S::Ok, S::Error> {
+            s.serialize_str(&setting.spelling())
+        }
+
+        /// Reads a spelling as a setting.
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Setting, D::Error> {
+            Setting::parse(&String::deserialize(d)?).map_err(D::Error::custom)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Setting;
+
+    #[test]
+    fn every_kind_of_setting_reads_back_from_its_spelling() {
+        for s in [
+            "force",
+            "no-force",
+            "0.5",
+            "-2",
+            "0",
+            "1",
+            "push:20",
+            "push:0",
+            "push:-7.5@90",
+            "push:30@-45",
+            "event:20@0:hand=both",
+            "impulse:10-30:on=hands:dur=0.2:every=1-2:seed=3",
+            "payload:2",
+        ] {
+            let setting = Setting::parse(s).unwrap_or_else(|e| panic!("{s}: {e}"));
+            let again = Setting::parse(&setting.spelling())
+                .unwrap_or_else(|e| panic!("{s} spelled {}: {e}", setting.spelling()));
+            assert_eq!(again, setting, "{s} spelled {}", setting.spelling());
+        }
+        assert_eq!(Setting::no_force(), Setting::parse("no-force").unwrap());
+        assert_eq!(Setting::force(), Setting::parse("force").unwrap());
+        let defaults: Vec<Setting> = crate::eval::DEFAULT_SETTINGS
+            .iter()
+            .map(|s| Setting::parse(s).unwrap())
+            .collect();
+        assert_eq!(defaults, [Setting::force(), Setting::no_force()]);
+    }
+}

@@ -173,7 +173,7 @@ impl EvalSpec {
                 request.keypoints, robot.name
             )));
         }
-        let settings = parse_settings(&request.settings)?;
+        let settings = check_settings(&request.settings)?;
         check_termination(&request.termination)?;
         let in_process = policy
             .as_ref()
@@ -487,33 +487,26 @@ fn set_physics_dt(profile: &mut Profile, dt: f64) -> Result<(), SpecError> {
     Ok(())
 }
 
-/// Parses the settings as spelled (none: [`DEFAULT_SETTINGS`]) and refuses two that load
-/// the robot the same way: every episode would run and count twice.
-pub fn parse_settings(spelled: &[String]) -> Result<Vec<Setting>, SpecError> {
-    let spelled: Vec<String> = if spelled.is_empty() {
-        DEFAULT_SETTINGS.iter().map(|s| s.to_string()).collect()
+/// The settings asked for (none: [`DEFAULT_SETTINGS`]), refusing two that load the robot
+/// the same way: every episode would run and count twice.
+pub fn check_settings(asked: &[Setting]) -> Result<Vec<Setting>, SpecError> {
+    let settings: Vec<Setting> = if asked.is_empty() {
+        vec![Setting::force(), Setting::no_force()]
     } else {
-        spelled.to_vec()
+        asked.to_vec()
     };
-    let settings: Vec<Setting> = spelled
-        .iter()
-        .map(|s| Setting::parse(s).map_err(|why| invalid(format!("`request.settings`: {why}"))))
-        .collect::<Result<_, _>>()?;
     for (i, a) in settings.iter().enumerate() {
-        if let Some((j, _)) = settings[..i]
-            .iter()
-            .enumerate()
-            .find(|(_, b)| b.same_load(a))
-        {
-            let (first, second) = (&spelled[j], &spelled[i]);
-            if first == second || settings[j].name == a.name {
+        if let Some(b) = settings[..i].iter().find(|b| b.same_load(a)) {
+            if b.name == a.name {
                 return Err(invalid(format!(
                     "`request.settings` lists `{}` twice: every episode would run and count twice",
                     a.name
                 )));
             }
             return Err(invalid(format!(
-                "`request.settings` lists `{first}` and `{second}`, which are the same load on the robot: every episode would run and count twice under two names"
+                "`request.settings` lists `{}` and `{}`, which are the same load on the robot: every episode would run and count twice under two names",
+                b.spelling(),
+                a.spelling()
             )));
         }
     }

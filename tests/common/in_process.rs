@@ -90,7 +90,7 @@ pub fn eval_on(
         policy: thorarena::policy::registry::PolicySource::parse(policy).unwrap(),
         dataset: Some(dataset.to_path_buf()),
         profile: profile.map(String::from),
-        settings: settings.iter().map(|s| s.to_string()).collect(),
+        settings: settings.iter().map(|s| s.parse().unwrap()).collect(),
         engine,
         ..EvalRequest::default()
     };

@@ -123,7 +123,7 @@ pub fn leaderboard_table(entries: &[&Entry], spans: &TaskForceSpans) -> String {
 pub fn write_leaderboard_page(
     out: &Path,
     dataset: &Path,
-    settings: &[String],
+    settings: &[crate::eval::Setting],
     command: &str,
     wall_s: f64,
     tables: &str,
@@ -135,7 +135,11 @@ pub fn write_leaderboard_page(
         format!(
             "Dataset `{}`, settings {}; ",
             dataset.display(),
-            settings.join(", ")
+            settings
+                .iter()
+                .map(crate::eval::Setting::spelling)
+                .collect::<Vec<_>>()
+                .join(", ")
         )
     };
     let text = format!(

@@ -8,7 +8,7 @@ use super::{
     LeaderboardOutputs, LeaderboardRequest, OutputsError, OwnClip, PageHeader, PairOptions,
     TaskForceSpans,
 };
-use crate::eval::{EngineChoice, EvalRequest};
+use crate::eval::{EngineChoice, EvalRequest, Setting};
 use crate::policy::registry::{self, RegistryError};
 use crate::report::{Page, ReportError, WebBundle};
 use crate::sim::motion::check::{check_dataset, CheckError, CheckOptions, HandForceSpan};
@@ -27,9 +27,9 @@ pub struct LeaderboardJob {
     /// Single-clip policies on their own clips.
     pub clips: Vec<OwnClip>,
     /// Settings of the single-clip table.
-    pub clip_settings: Vec<String>,
+    pub clip_settings: Vec<Setting>,
     /// Settings of the real-walks track (empty: none).
-    pub real_walks_settings: Vec<String>,
+    pub real_walks_settings: Vec<Setting>,
     /// Compliant policies with their stiff twins.
     pub pairs: Vec<CompliancePair>,
     /// How the pairs run (its engines, output and checking are the job's).
@@ -41,7 +41,7 @@ pub struct LeaderboardJob {
     /// Sequences per task of the generated synthetic dataset.
     pub per_task: usize,
     /// Settings of the general table.
-    pub settings: Vec<String>,
+    pub settings: Vec<Setting>,
     /// Directory of the runs, the generated dataset and the tables.
     pub out: PathBuf,
     /// Score policies without their sanity check.

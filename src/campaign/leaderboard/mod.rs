@@ -13,7 +13,7 @@
 
 use crate::eval::pipeline::{evaluate, BenchmarkError, EvalObserver, EvalOptions};
 use crate::eval::results::{RunDir, Summary};
-use crate::eval::{EngineChoice, EvalRequest, EvalSpec, SpecError};
+use crate::eval::{EngineChoice, EvalRequest, EvalSpec, Setting, SpecError};
 use crate::policy::launched::PolicyCommand;
 use crate::policy::registry::{self, OpenPolicyError, PolicySource, PolicyTarget};
 use crate::policy::{Policy, SessionOptions};
@@ -248,19 +248,19 @@ pub struct LeaderboardRequest {
     /// Single-clip policies, each on its own clip under [`Self::clip_settings`].
     pub clips: Vec<OwnClip>,
     /// The settings of the single-clip table.
-    pub clip_settings: Vec<String>,
+    pub clip_settings: Vec<Setting>,
     /// The engines, each policy running on every one.
     pub engines: Vec<EngineChoice>,
     /// The dataset.
     pub dataset: PathBuf,
     /// Settings, as `eval --settings` spells them.
-    pub settings: Vec<String>,
+    pub settings: Vec<Setting>,
     /// Directory of the runs (`<out>/runs/<policy>-<engine>`, `…-own-clip` for a
     /// single-clip policy).
     pub out: PathBuf,
     /// The settings of the real-walks track (every general policy, again, on the bundled
     /// `real-walks`); empty: no such track.
-    pub real_walks_settings: Vec<String>,
+    pub real_walks_settings: Vec<Setting>,
     /// Score policies without their sanity check (recorded in each run).
     pub unchecked: bool,
     /// Policies (as [`Entry`]'s runs name them: the argument, or the process's name) whose
@@ -516,7 +516,7 @@ pub fn run_leaderboard(
 pub fn run_in_process(
     source: &PolicySource,
     dataset: &Path,
-    settings: &[String],
+    settings: &[Setting],
     engine: EngineChoice,
     run: &Path,
     observer: &mut dyn LeaderboardObserver,
@@ -569,7 +569,7 @@ fn run_one(
     unchecked: bool,
     player: &Player,
     dataset: &Path,
-    settings: &[String],
+    settings: &[Setting],
     engine: EngineChoice,
     run: &Path,
     resume: Resume,

@@ -19,7 +19,7 @@ pub struct PageHeader<'a> {
     /// The dataset of the general policies.
     pub dataset: &'a Path,
     /// Their settings.
-    pub settings: &'a [String],
+    pub settings: &'a [crate::eval::Setting],
     /// The command's arguments, as typed.
     pub command: &'a str,
     /// Wall time of the invocation so far, s.

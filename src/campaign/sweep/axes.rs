@@ -8,7 +8,7 @@
 use super::plan::DatasetInfo;
 use super::spec::{resolve, SweepSpec};
 use super::SweepError;
-use crate::eval::Setting;
+
 use std::path::Path;
 
 /// `Err` naming the first pair of equivalent values of an axis.
@@ -22,21 +22,13 @@ pub(super) fn refuse_equivalent(
         message,
     };
     // Settings by the load they put on the robot, as `eval --settings` compares them.
-    let settings: Vec<Option<Setting>> = spec
-        .settings
-        .iter()
-        .map(|s| Setting::parse(s).ok())
-        .collect();
-    let same_load = |a: &Option<Setting>, b: &Option<Setting>| match (a, b) {
-        (Some(a), Some(b)) => a.same_load(b),
-        _ => false,
-    };
-    if let Some((a, b)) = first_pair(&settings, same_load) {
-        let s = settings[a].as_ref().expect("parsed");
+    let settings = &spec.settings;
+    if let Some((a, b)) = first_pair(settings, |a, b| a.setting.same_load(&b.setting)) {
+        let s = &settings[a].setting;
         return Err(invalid(format!(
             "`settings`: `{}` and `{}` are the same setting (force replay coefficient {}, push {} N{}): give it once",
-            spec.settings[a],
-            spec.settings[b],
+            settings[a].spelled,
+            settings[b].spelled,
             s.coefficient,
             s.push_n,
             s.push_heading_deg

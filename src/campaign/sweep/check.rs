@@ -76,7 +76,9 @@ impl Plan {
             if task_request(&self.robot, cell, t.shard).as_ref() != Ok(&t.request) {
                 return Err(format!(
                     "task {i}: its evaluation is not that of cell {} (policy `{}`, setting `{}`)",
-                    t.cell, cell.policy.name, cell.setting
+                    t.cell,
+                    cell.policy.name,
+                    cell.setting.spelling()
                 ));
             }
         }

@@ -11,20 +11,9 @@ use std::collections::{BTreeMap, BTreeSet};
 pub fn sweep_title(plan: &Plan) -> String {
     let count =
         |f: &dyn Fn(&Cell) -> String| plan.cells.iter().map(f).collect::<BTreeSet<_>>().len();
-    let settings: Vec<Option<crate::eval::Setting>> = plan
-        .cells
-        .iter()
-        .map(|c| crate::eval::Setting::parse(&c.setting).ok())
-        .collect();
-    let setting_noun = if settings
-        .iter()
-        .all(|s| s.as_ref().is_some_and(|s| s.replay_only().is_some()))
-    {
+    let setting_noun = if plan.cells.iter().all(|c| c.setting.replay_only().is_some()) {
         ("force coefficient", "force coefficients")
-    } else if settings
-        .iter()
-        .all(|s| s.as_ref().is_some_and(|s| s.push_only().is_some()))
-    {
+    } else if plan.cells.iter().all(|c| c.setting.push_only().is_some()) {
         ("push", "pushes")
     } else {
         ("force setting", "force settings")
@@ -51,7 +40,7 @@ pub fn sweep_title(plan: &Plan) -> String {
             ("latency rule", "latency rules"),
             false,
         ),
-        (count(&|c| c.setting.clone()), setting_noun, true),
+        (count(&|c| c.setting.spelling()), setting_noun, true),
     ] {
         if n > 1 || always {
             axes.push(format!("{n} {}", if n == 1 { one } else { many }));
@@ -85,7 +74,7 @@ impl VaryingAxes {
             datasets: varies(&|c| c.dataset.display().to_string()),
             latency: varies(&|c| c.latency.name.clone()),
             engines: varies(&|c| c.engine.name.clone()),
-            settings: varies(&|c| c.setting.clone()),
+            settings: varies(&|c| c.setting.spelling()),
         }
     }
 
@@ -111,7 +100,7 @@ impl VaryingAxes {
             parts.push(c.latency.name.clone());
         }
         if with_setting && self.settings {
-            parts.push(c.setting.clone());
+            parts.push(c.setting.spelling());
         }
         parts.join(" · ")
     }
@@ -293,16 +282,12 @@ fn curve_lines(
 
 /// A force-replay cell's coefficient (not a push).
 fn coefficient_of(c: &Cell) -> Option<f64> {
-    crate::eval::Setting::parse(&c.setting)
-        .ok()
-        .and_then(|s| s.replay_only())
+    c.setting.replay_only()
 }
 
 /// A push cell's force per hand, N.
 fn push_of(c: &Cell) -> Option<f64> {
-    crate::eval::Setting::parse(&c.setting)
-        .ok()
-        .and_then(|s| s.push_only())
+    c.setting.push_only()
 }
 
 /// A measured-latency cell's budget, ms.

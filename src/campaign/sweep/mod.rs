@@ -74,7 +74,7 @@ pub use slurm::{
     sbatch_script, shell_quote, slurm_logs_dir, slurm_script_path, write_sbatch_script,
     SbatchRequest,
 };
-pub use spec::{EngineSpec, LatencySpec, PolicySpec, SweepSpec};
+pub use spec::{EngineSpec, LatencySpec, PolicySpec, SpecSetting, SweepSpec};
 pub use status::{census, task_state, Census, DoneRecord, FailedRecord, TaskState};
 pub use status_report::SweepStatus;
 pub use task_dir::{write_atomic, TaskDir, TaskLock, TaskLog, DONE_FILE, FAILED_FILE};
@@ -206,14 +206,6 @@ pub enum SweepError {
     DatasetEmpty {
         /// The dataset as the spec writes it.
         name: String,
-    },
-    /// A cell's setting does not parse.
-    #[error("cell {cell}: setting `{setting}` is not force, no-force, a number or push:<N>")]
-    CellSetting {
-        /// The cell.
-        cell: usize,
-        /// Its setting.
-        setting: String,
     },
     /// A cell's evaluation is one `eval` refuses.
     #[error("cell {cell} (policy `{policy}`): {source}")]

@@ -4,7 +4,7 @@
 
 use super::spec::{resolve, PolicySpec, SweepSpec};
 use super::SweepError;
-use crate::eval::{parse_budget, EvalRequest, PolicyIoRules};
+use crate::eval::{parse_budget, EvalRequest, PolicyIoRules, Setting};
 use crate::policy::registry::PolicySource;
 use crate::sim::motion::{DataError, Dataset, SequenceSelection};
 use crate::sim::robot::RobotModel;
@@ -62,8 +62,9 @@ pub struct Cell {
     /// The sequences evaluated (`eval --tasks`, `--sequences`; empty: all).
     #[serde(default, skip_serializing_if = "SequenceSelection::is_all")]
     pub selection: SequenceSelection,
-    /// Force setting as `eval --settings` takes it.
-    pub setting: String,
+    /// Force setting (in the plan, spelled as `eval --settings` takes it).
+    #[serde(with = "crate::eval::spelled_settings::one")]
+    pub setting: Setting,
     /// Latency rule.
     pub latency: LatencyRule,
     /// Physics engine (plans written before engines were an axis read as rapier).
@@ -280,7 +281,7 @@ impl Plan {
                                 dataset: ds.dir.clone(),
                                 dataset_sha256: ds.sha256.clone(),
                                 selection: selection.clone(),
-                                setting: setting.clone(),
+                                setting: setting.setting.clone(),
                                 latency: latency.clone(),
                                 engine: engine.clone(),
                                 shards: spec.shards,
@@ -431,7 +432,8 @@ fn selected_durations(
             let replaying = spec
                 .settings
                 .iter()
-                .find(|s| crate::eval::Setting::parse(s).is_ok_and(|s| s.coefficient != 0.0));
+                .find(|s| s.setting.coefficient != 0.0)
+                .map(|s| &s.spelled);
             if let Some(setting) = replaying {
                 return Err(format!(
                     "setting `{setting}` replays recorded hand forces, but no sequence of dataset `{spelled}` has force logs (imported without force logs): it would run as no-force under another name; use no-force or push:<N>"
@@ -585,7 +587,11 @@ pub fn diff_plans(old: &Plan, new: &Plan) -> Option<String> {
                     &b.dataset_sha256[..b.dataset_sha256.len().min(12)]
                 )
             } else if a.setting != b.setting {
-                format!("setting `{}` → `{}`", a.setting, b.setting)
+                format!(
+                    "setting `{}` → `{}`",
+                    a.setting.spelling(),
+                    b.setting.spelling()
+                )
             } else if a.latency != b.latency {
                 format!("latency `{}` → `{}`", a.latency.name, b.latency.name)
             } else if a.engine != b.engine {

@@ -4,7 +4,7 @@
 //! sweep that plans never fails hours later on a request `eval` refuses.
 
 use super::{DatasetInfo, Plan, SweepError, SweepSpec};
-use crate::eval::{EvalSpec, Setting};
+use crate::eval::EvalSpec;
 use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
@@ -65,12 +65,6 @@ pub fn check_cells_load(plan: &Plan) -> Result<(), SweepError> {
     let mut checked: HashSet<String> = HashSet::new();
     for task in plan.tasks.iter().filter(|t| t.shard.0 == 0) {
         let cell = &plan.cells[task.cell];
-        if Setting::parse(&cell.setting).is_err() {
-            return Err(SweepError::CellSetting {
-                cell: cell.index,
-                setting: cell.setting.clone(),
-            });
-        }
         // Loading the dataset, profile and keypoints once per combination keeps planning
         // a sweep of thousands of cells fast.
         // The latency rule too: a budget an in-process policy cannot honour is refused.

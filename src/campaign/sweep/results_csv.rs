@@ -79,7 +79,7 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
         .iter()
         .zip(results)
         .map(|(cell, r)| {
-            let setting = crate::eval::Setting::parse(&cell.setting).ok();
+            let setting = &cell.setting;
             let scores = r.as_ref().and_then(|r| r.summary.settings.values().next());
             let d = |f: fn(&Diagnostics) -> f64| scores.and_then(|s| finite(f(&s.average)));
             let ci = scores.and_then(|s| s.fats_ci95);
@@ -94,14 +94,11 @@ pub fn results_rows(plan: &Plan, results: &[Option<CellResult>]) -> Vec<ResultsR
                     .unwrap_or(&cell.dataset)
                     .display()
                     .to_string(),
-                setting: cell.setting.clone(),
-                force_coefficient: setting.as_ref().map(|s| s.coefficient),
+                setting: cell.setting.spelling(),
+                force_coefficient: Some(setting.coefficient),
                 // Empty for a disturbance (`event:…`, `impulse:…`, `payload:…`): no push,
                 // and not a push of 0 either; the setting column names it.
-                push_n: setting
-                    .as_ref()
-                    .filter(|s| s.disturbance.is_none())
-                    .map(|s| s.push_n),
+                push_n: setting.disturbance.is_none().then_some(setting.push_n),
                 latency_rule: cell.latency.name.clone(),
                 budget: cell.latency.budget.clone(),
                 latency_mode: cell.latency.mode.clone(),

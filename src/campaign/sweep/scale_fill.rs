@@ -6,7 +6,7 @@
 
 use super::{DoneRecord, Plan, SweepError, TaskDir};
 use crate::eval::results::{ResultsError, RunDir, RunHeader};
-use crate::eval::{EpisodeRecord, Setting};
+use crate::eval::EpisodeRecord;
 use std::path::{Path, PathBuf};
 
 /// The largest `summary.json` or `tables.md` copied from a shard, bytes (a few KiB a cell).
@@ -29,9 +29,6 @@ pub enum ScaleFillError {
     /// A task directory could not be written.
     #[error(transparent)]
     Sweep(#[from] SweepError),
-    /// A cell's setting does not parse.
-    #[error("cell setting `{0}` does not parse")]
-    Setting(String),
 }
 
 /// Writes `dir/large.toml`: the balance and hold baselines on `sample` over enough replay
@@ -79,8 +76,7 @@ pub fn finish_with_shard_runs(dir: &Path, shards: &[PathBuf]) -> Result<usize, S
     for task in &plan.tasks {
         let cell = &plan.cells[task.cell];
         let (source, records) = &sources[task.shard.0];
-        let setting = Setting::parse(&cell.setting)
-            .map_err(|_| ScaleFillError::Setting(cell.setting.clone()))?;
+        let setting = cell.setting.clone();
         let mut header = source.clone();
         header.policy = cell.policy.policy.family().name.to_string();
         header.settings = vec![setting.clone()];

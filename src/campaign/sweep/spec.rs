@@ -2,10 +2,29 @@
 //! the key named) so a typo never silently shrinks a sweep.
 
 use super::SweepError;
+use crate::eval::Setting;
 use crate::policy::launched::PolicyCommand;
 use crate::policy::registry::PolicySource;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
+
+/// A setting of a spec, parsed on reading (a refusal names the file, line and reason) and
+/// kept as its user spelled it, so that a message about it echoes that spelling.
+#[derive(Debug, Clone)]
+pub struct SpecSetting {
+    /// As written in the spec.
+    pub spelled: String,
+    /// As parsed.
+    pub setting: Setting,
+}
+
+impl<'de> Deserialize<'de> for SpecSetting {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let spelled = String::deserialize(d)?;
+        let setting = Setting::parse(&spelled).map_err(serde::de::Error::custom)?;
+        Ok(Self { spelled, setting })
+    }
+}
 
 /// A sweep spec (`sweeps/*.toml`). Relative paths (datasets, `twist2:FILE`) and policy
 /// commands are taken relative to the spec file's directory.
@@ -14,9 +33,9 @@ use std::path::{Path, PathBuf};
 pub struct SweepSpec {
     /// Dataset directories (canonical format).
     pub datasets: Vec<String>,
-    /// Force settings, as `eval --settings` takes them: `force`, `no-force`, a replay
-    /// coefficient (`0.5`), or `push:<N>`. Each is its own cell.
-    pub settings: Vec<String>,
+    /// Force settings, spelled as `eval --settings` takes them: `force`, `no-force`, a
+    /// replay coefficient (`0.5`), `push:<N>`, a disturbance. Each is its own cell.
+    pub settings: Vec<SpecSetting>,
     /// Only these tasks of each dataset (`eval --tasks`; default: every task).
     #[serde(default)]
     pub tasks: Vec<String>,
@@ -211,7 +230,10 @@ impl SweepSpec {
         }
         for (key, values) in [
             ("datasets", &self.datasets),
-            ("settings", &self.settings),
+            (
+                "settings",
+                &self.settings.iter().map(|s| s.spelled.clone()).collect(),
+            ),
             (
                 "[[policy]] name",
                 &self.policies.iter().map(PolicySpec::label).collect(),

@@ -70,7 +70,7 @@ impl SweepStatus {
             "task {i} (cell {}, policy `{}`, setting `{}`)",
             cell.index,
             printable(&cell.policy.name),
-            printable(&cell.setting)
+            printable(&cell.setting.spelling())
         )
     }
 }

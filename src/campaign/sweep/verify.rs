@@ -8,7 +8,7 @@
 
 use super::{census, Census, Plan, SweepError, Task, TaskDir};
 use crate::eval::results::{Coverage, ResultsError, RunDir, RunHeader};
-use crate::eval::{EpisodeRecord, EvalRequest, Setting};
+use crate::eval::{EpisodeRecord, EvalRequest};
 use crate::policy::network_file::short_hash;
 
 /// Why a task's run does not count for the task.
@@ -89,7 +89,7 @@ fn header_problem(
         }
     }
     let dataset = cell.dataset.display().to_string();
-    let setting = Setting::parse(&cell.setting).ok();
+    let setting = &cell.setting;
     let termination = run.termination;
     let io = run.io;
     if header.dataset != dataset {
@@ -114,11 +114,8 @@ fn header_problem(
             shown(&header.sequences.len()),
             shown(&cell.episodes),
         )
-    } else if setting
-        .as_ref()
-        .is_none_or(|s| header.settings != [s.clone()])
-    {
-        differs("settings", shown(&header.settings), shown(&setting))
+    } else if header.settings != [setting.clone()] {
+        differs("settings", shown(&header.settings), shown(setting))
     } else if header.shard != run.shard {
         differs("shard", shown(&header.shard), shown(&run.shard))
     } else if header.keypoints != run.keypoints {
