@@ -234,32 +234,7 @@ pub fn run_episode(
     let mut io = RobotIo::new(options.clone(), gains.clone())?;
     let bridge_start = Instant::now();
     io.state.read_from(physics);
-    // Before the start the robot stands still and says so.
-    let mut newest = None;
-    let mut pressed = options.start_button.is_none();
-    let first = loop {
-        io.publish_due(endpoints)?;
-        endpoints.serve_services()?;
-        if let Some(command) = io.take_commands(endpoints)? {
-            newest = Some(command);
-        }
-        if let Some(bits) = options.start_button {
-            pressed |= options.remote.buttons_at(io.started.elapsed()) & bits == bits;
-        }
-        if pressed {
-            if let Some(command) = newest.take() {
-                break command;
-            }
-        }
-        if bridge_start.elapsed() > options.start_timeout {
-            io.counts.undecodable = endpoints.undecodable_commands();
-            return Err(DdsError::NoCommand {
-                waited: options.start_timeout,
-                counts: io.counts,
-            });
-        }
-        std::thread::sleep(Duration::from_micros(500));
-    };
+    let first = first_command(endpoints, &mut io, options, bridge_start)?;
     let start = Instant::now();
     let start_offset_s = (start - bridge_start).as_secs_f64();
     io.episode_offset_s = Some(start_offset_s);
@@ -352,6 +327,42 @@ pub fn run_episode(
         kept_real_time: late_steps * 100 <= steps && real_time_factor >= 0.98,
         scheduling: Scheduling::of_this_thread(),
     })
+}
+
+/// Publishes the standing robot's state and serves its services until the first valid
+/// command (after the start button, when one is asked for), or the start timeout.
+fn first_command(
+    endpoints: &mut RobotEndpoints,
+    io: &mut RobotIo,
+    options: &BridgeOptions,
+    bridge_start: Instant,
+) -> Result<LowCmd, DdsError> {
+    // Before the start the robot stands still and says so.
+    let mut newest = None;
+    let mut pressed = options.start_button.is_none();
+    loop {
+        io.publish_due(endpoints)?;
+        endpoints.serve_services()?;
+        if let Some(command) = io.take_commands(endpoints)? {
+            newest = Some(command);
+        }
+        if let Some(bits) = options.start_button {
+            pressed |= options.remote.buttons_at(io.started.elapsed()) & bits == bits;
+        }
+        if pressed {
+            if let Some(command) = newest.take() {
+                return Ok(command);
+            }
+        }
+        if bridge_start.elapsed() > options.start_timeout {
+            io.counts.undecodable = endpoints.undecodable_commands();
+            return Err(DdsError::NoCommand {
+                waited: options.start_timeout,
+                counts: io.counts,
+            });
+        }
+        std::thread::sleep(Duration::from_micros(500));
+    }
 }
 
 /// The robot's side of the wire: the state it publishes, the commands it takes.

@@ -5,7 +5,7 @@
 //! Indexed Job — runs this.
 
 use super::verify::{check_task_run, RunProblem};
-use super::{DoneRecord, Plan, SweepError, Task, TaskDir, TaskLog, TaskState};
+use super::{Cell, DoneRecord, Plan, SweepError, Task, TaskDir, TaskLog, TaskState};
 use crate::campaign::own_command;
 use crate::eval::results::RunDir;
 use crate::policy::launched::{die_with_parent, stop_group};
@@ -71,36 +71,8 @@ pub fn run_task(
     tdir.clear_failed();
     let started = Instant::now();
 
-    // The dataset must be the one planned.
-    let robot = crate::policy::registry::robot(&plan.robot)?;
-    let ds = match Dataset::open(&cell.dataset, &robot) {
-        Ok(ds) => ds,
-        Err(e) => return fail(format!("dataset {}: {e}", cell.dataset.display()), &[]),
-    };
-    if ds.content_hash() != cell.dataset_sha256 {
-        return fail(
-            format!(
-                "dataset {} changed since the sweep was planned (content hash differs)",
-                cell.dataset.display()
-            ),
-            &[],
-        );
-    }
-
-    // So must the network: a curve over cells is one network's.
-    if let Some(planned) = &cell.policy.network_sha256 {
-        let now = super::plan::planned_network(&cell.policy.policy);
-        if now.as_ref() != Some(planned) {
-            return fail(
-                format!(
-                    "the network of `{}` changed since the sweep was planned (sha256 {} planned, {} now): plan the sweep again in a new directory",
-                    cell.policy.name,
-                    short_hash(planned),
-                    now.as_deref().map_or("unreadable", short_hash)
-                ),
-                &[],
-            );
-        }
+    if let Some(why) = changed_since_planned(plan, cell)? {
+        return fail(why, &[]);
     }
 
     let session = format!("sweep-{index}-{}", std::process::id());
@@ -169,6 +141,34 @@ pub fn run_task(
     tdir.write_done(&done)?;
     drop(lock);
     Ok(Outcome::Done)
+}
+
+/// Why the cell's inputs are not the ones planned — the dataset unreadable or changed, the
+/// network changed (a curve over cells is one network's) — or `None`.
+fn changed_since_planned(plan: &Plan, cell: &Cell) -> Result<Option<String>, SweepError> {
+    let robot = crate::policy::registry::robot(&plan.robot)?;
+    let ds = match Dataset::open(&cell.dataset, &robot) {
+        Ok(ds) => ds,
+        Err(e) => return Ok(Some(format!("dataset {}: {e}", cell.dataset.display()))),
+    };
+    if ds.content_hash() != cell.dataset_sha256 {
+        return Ok(Some(format!(
+            "dataset {} changed since the sweep was planned (content hash differs)",
+            cell.dataset.display()
+        )));
+    }
+    if let Some(planned) = &cell.policy.network_sha256 {
+        let now = super::plan::planned_network(&cell.policy.policy);
+        if now.as_ref() != Some(planned) {
+            return Ok(Some(format!(
+                "the network of `{}` changed since the sweep was planned (sha256 {} planned, {} now): plan the sweep again in a new directory",
+                cell.policy.name,
+                short_hash(planned),
+                now.as_deref().map_or("unreadable", short_hash)
+            )));
+        }
+    }
+    Ok(None)
 }
 
 /// The task's `eval` process: the plan's request (this attempt's session filled in, in

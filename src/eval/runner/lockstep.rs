@@ -171,7 +171,6 @@ pub fn run_eval(
 ) -> RunOutcome {
     let n_slots = plan.spec.envs.max(1);
     let n_workers = plan.spec.workers.clamp(1, n_slots);
-    let n_joints = plan.spec.robot.n_joints();
     let setups = episode_setups(plan, policy.reference_offsets_s());
     let shared = Shared {
         plan,
@@ -192,24 +191,7 @@ pub fn run_eval(
     let groups = slot_groups(n_slots, plan.spec.pipeline_depth.max(1));
 
     std::thread::scope(|scope| {
-        let (report_tx, report_rx) = mpsc::channel::<(usize, Vec<SlotReport>)>();
-        let mut command_txs = Vec::with_capacity(n_workers);
-        for w in 0..n_workers {
-            let (command_tx, command_rx) = mpsc::channel::<GroupCommands>();
-            command_txs.push(command_tx);
-            let report_tx = report_tx.clone();
-            let slots: Vec<usize> = (w..n_slots).step_by(n_workers).collect();
-            let shared = &shared;
-            scope.spawn(move || worker(shared, slots, command_rx, report_tx));
-        }
-        drop(report_tx);
-        let mut pipe = Pipeline {
-            n_workers,
-            command_txs,
-            report_rx,
-            replies_due: vec![0; groups.len()],
-            reports: (0..groups.len()).map(|_| Vec::new()).collect(),
-        };
+        let mut pipe = Pipeline::start(scope, &shared, n_workers, n_slots, groups.len());
 
         let mut commands: Vec<SlotCommand> = (0..n_slots).map(|_| SlotCommand::Idle).collect();
         // Set once a failed policy has been replaced (`--on-policy-failure wait`).
@@ -267,24 +249,13 @@ pub fn run_eval(
                     };
                 }
             } else {
-                for o in observations.iter().filter(|o| o.step == 0) {
-                    policy.reset(o.env);
-                }
-                actions.resize_with(observations.len(), || vec![0.0; n_joints]);
-                let started = Instant::now();
-                let outcome = policy.act(&observations, &mut actions[..observations.len()]);
-                let round_trip = policy
-                    .last_round_trip()
-                    .unwrap_or_else(|| started.elapsed());
-                latency.record(round_trip);
-                answer_to_commands(
+                let outcome = ask_policy(
                     plan,
-                    outcome,
-                    round_trip,
+                    policy,
                     &observations,
-                    &actions,
+                    &mut actions,
                     &mut commands,
-                    |slot| slot,
+                    &mut latency,
                 );
                 if outcome == ActOutcome::Failed {
                     for (other, fails) in fails_unasked.iter_mut().enumerate() {
@@ -310,6 +281,39 @@ pub fn run_eval(
         transport: policy.transport_stats(),
         physics_wall_by_worker,
     }
+}
+
+/// One policy call for a group's `observations` (a slot starting its episode reset
+/// first), its round trip recorded and its answers turned into the slots' commands.
+fn ask_policy(
+    plan: &EvalPlan,
+    policy: &mut dyn Policy,
+    observations: &[Observation],
+    actions: &mut Vec<Vec<f64>>,
+    commands: &mut [SlotCommand],
+    latency: &mut LatencyRecorder,
+) -> ActOutcome {
+    for o in observations.iter().filter(|o| o.step == 0) {
+        policy.reset(o.env);
+    }
+    let n_joints = plan.spec.robot.n_joints();
+    actions.resize_with(observations.len(), || vec![0.0; n_joints]);
+    let started = Instant::now();
+    let outcome = policy.act(observations, &mut actions[..observations.len()]);
+    let round_trip = policy
+        .last_round_trip()
+        .unwrap_or_else(|| started.elapsed());
+    latency.record(round_trip);
+    answer_to_commands(
+        plan,
+        outcome,
+        round_trip,
+        observations,
+        actions,
+        commands,
+        |slot| slot,
+    );
+    outcome
 }
 
 /// Finite and within the plan's bound: safe to hand to the physics.
@@ -382,6 +386,33 @@ struct Pipeline {
 }
 
 impl Pipeline {
+    /// Starts `n_workers` workers in `scope`, worker `w` owning slots `w`, `w + n_workers`,
+    /// … of `n_slots`, and the pipeline of `n_groups` slot groups that drives them.
+    fn start<'scope>(
+        scope: &'scope std::thread::Scope<'scope, '_>,
+        shared: &'scope Shared<'_>,
+        n_workers: usize,
+        n_slots: usize,
+        n_groups: usize,
+    ) -> Self {
+        let (report_tx, report_rx) = mpsc::channel::<(usize, Vec<SlotReport>)>();
+        let mut command_txs = Vec::with_capacity(n_workers);
+        for w in 0..n_workers {
+            let (command_tx, command_rx) = mpsc::channel::<GroupCommands>();
+            command_txs.push(command_tx);
+            let report_tx = report_tx.clone();
+            let slots: Vec<usize> = (w..n_slots).step_by(n_workers).collect();
+            scope.spawn(move || worker(shared, slots, command_rx, report_tx));
+        }
+        Self {
+            n_workers,
+            command_txs,
+            report_rx,
+            replies_due: vec![0; n_groups],
+            reports: (0..n_groups).map(|_| Vec::new()).collect(),
+        }
+    }
+
     /// Sends group `g`'s commands (taken from `commands`, leaving `Idle`) to the workers
     /// that own its slots.
     fn dispatch(&mut self, g: usize, group: &[usize], commands: &mut [SlotCommand]) {

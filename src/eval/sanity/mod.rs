@@ -293,15 +293,43 @@ pub fn check_policy(
     let started = phase("track", &tracking);
     let tracked = run_episode(policy, false, &setup, &tracking, &options.engine)?;
     done(started);
+    checks.push(track_outcome(
+        policy.follows_commands(),
+        &tracked,
+        &tracking,
+        options,
+    ));
+    let started = phase("zero action", &tracking);
+    let zeroed = run_episode(policy, true, &setup, &tracking, &options.engine)?;
+    done(started);
+    checks.push(zero_action_outcome(&zeroed, &tracked, options));
+    Ok(SanityReport {
+        policy: policy.name().to_string(),
+        profile: profile.name.clone(),
+        engine: options.engine.name().to_string(),
+        tracking_reference: format!("{}/{}", tracking.task, tracking.sequence_id),
+        facts: wiring.facts,
+        checks,
+    })
+}
+
+/// The track check: the reference tracked to its end, judged as a command follower's
+/// (`follows`: what it follows) or a tracker's.
+fn track_outcome(
+    follows: Option<&str>,
+    tracked: &Run,
+    tracking: &Sequence,
+    options: &SanityOptions,
+) -> CheckOutcome {
     let kp_ok = tracked.kp_rms_mm.is_some_and(|e| e < options.max_kp_rms_mm);
-    let (passed, detail) = match (policy.follows_commands(), tracked.following) {
+    let (passed, detail) = match (follows, tracked.following) {
         (Some(what), Some(f)) => {
             let problems = f.problems(options.max_kp_rms_mm);
             tracked.verdict(
                 tracked.survival >= 1.0 && problems.is_empty(),
                 format!(
                     "{:.1} s of {}/{}, judged as a command follower ({what}): survival {:.3} (must be 1.0), root velocity error {:.3} m/s over {} s windows (under {}), heading error {:.1}° (under {}°), height error {:.1} mm (under {} mm), upper-body keypoint error in the root frame {:.1} mm (under {:.0} mm); world keypoint error {} (not judged: commands leave drift uncorrected){}",
-                    duration_s(&tracking),
+                    duration_s(tracking),
                     tracking.task,
                     tracking.sequence_id,
                     tracked.survival,
@@ -327,7 +355,7 @@ pub fn check_policy(
             tracked.survival >= 1.0 && kp_ok,
             format!(
                 "{:.1} s of {}/{}: survival {:.3} (must be 1.0), keypoint error {} (must be under {:.0} mm)",
-                duration_s(&tracking),
+                duration_s(tracking),
                 tracking.task,
                 tracking.sequence_id,
                 tracked.survival,
@@ -336,16 +364,18 @@ pub fn check_policy(
             ),
         ),
     };
-    checks.push(CheckOutcome {
+    CheckOutcome {
         name: "track".into(),
         passed,
         detail,
         survival: Some(tracked.survival),
         kp_rms_mm: tracked.kp_rms_mm,
-    });
-    let started = phase("zero action", &tracking);
-    let zeroed = run_episode(policy, true, &setup, &tracking, &options.engine)?;
-    done(started);
+    }
+}
+
+/// The zero-action check: the same reference with zero action must do worse than
+/// `tracked`.
+fn zero_action_outcome(zeroed: &Run, tracked: &Run, options: &SanityOptions) -> CheckOutcome {
     // A command follower's zero action stands still where the reference moves: its
     // velocity error, not its world keypoint error, shows the network at work.
     let worse = zeroed.survival < tracked.survival
@@ -358,7 +388,7 @@ pub fn check_policy(
                 _ => false,
             },
         };
-    checks.push(CheckOutcome {
+    CheckOutcome {
         name: "zero_action".into(),
         passed: worse,
         detail: match (zeroed.following, tracked.following) {
@@ -381,15 +411,7 @@ pub fn check_policy(
         },
         survival: Some(zeroed.survival),
         kp_rms_mm: zeroed.kp_rms_mm,
-    });
-    Ok(SanityReport {
-        policy: policy.name().to_string(),
-        profile: profile.name.clone(),
-        engine: options.engine.name().to_string(),
-        tracking_reference: format!("{}/{}", tracking.task, tracking.sequence_id),
-        facts: wiring.facts,
-        checks,
-    })
+    }
 }
 
 fn mm(v: Option<f64>) -> String {

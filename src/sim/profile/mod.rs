@@ -275,6 +275,72 @@ pub struct ProfileNumbers {
     pub kd: Vec<f64>,
 }
 
+/// A per-joint field of a profile file for `robot`: each joint's own value, else its
+/// group's, else `default`, else `fallback`; each finite, within the field's limit, and
+/// `>= 0` unless `allow_negative`; a key naming no joint or group is refused.
+fn per_joint(
+    robot: &RobotModel,
+    path: &Path,
+    field: &str,
+    table: &PerGroup,
+    fallback: Option<&dyn Fn(usize) -> f64>,
+    allow_negative: bool,
+) -> Result<Vec<f64>, ProfileError> {
+    let bad = |field: &str, reason: String| ProfileError::BadField {
+        path: path.to_path_buf(),
+        field: field.into(),
+        reason,
+    };
+    let max = field_limit(field);
+    let groups: Vec<String> = robot.joints.iter().map(|j| joint_group(&j.name)).collect();
+    for key in table.keys() {
+        if key != "default" && !groups.iter().any(|g| g == key) && robot.joint_index(key).is_none()
+        {
+            return Err(bad(
+                &format!("{field}.{key}"),
+                format!("no joint of {} is named or grouped `{key}`", robot.name),
+            ));
+        }
+    }
+    groups
+        .iter()
+        .enumerate()
+        .map(|(j, g)| {
+            let v = table
+                .get(&robot.joints[j].name)
+                .or_else(|| table.get(g))
+                .or_else(|| table.get("default"))
+                .copied()
+                .or_else(|| fallback.map(|f| f(j)));
+            match v {
+                Some(v) if v.is_finite() && (allow_negative || v >= 0.0) && v.abs() <= max.0 => {
+                    Ok(v)
+                }
+                Some(v) if v.is_finite() && (allow_negative || v >= 0.0) => Err(bad(
+                    &format!("{field}.{g}"),
+                    format!(
+                        "{} is beyond {} ({}): no actuator of a humanoid this size has it, so it is taken for a mistake",
+                        short(v),
+                        short(max.0),
+                        max.1
+                    ),
+                )),
+                Some(v) => Err(bad(
+                    &format!("{field}.{g}"),
+                    format!("must be a finite value >= 0, got {}", short(v)),
+                )),
+                None => Err(bad(
+                    field,
+                    format!(
+                        "no value for joint `{}` (group `{g}`) and no `default`",
+                        robot.joints[j].name
+                    ),
+                )),
+            }
+        })
+        .collect()
+}
+
 /// A parsed profile file resolved for `robot` and checked (`path` names it in errors).
 fn resolve_file(
     file: ProfileFile,
@@ -338,58 +404,8 @@ fn resolve_file(
     let resolve_signed = |field: &str,
                           table: &PerGroup,
                           fallback: Option<&dyn Fn(usize) -> f64>,
-                          allow_negative: bool|
-     -> Result<Vec<f64>, ProfileError> {
-        let max = field_limit(field);
-        let groups: Vec<String> = robot.joints.iter().map(|j| joint_group(&j.name)).collect();
-        for key in table.keys() {
-            if key != "default"
-                && !groups.iter().any(|g| g == key)
-                && robot.joint_index(key).is_none()
-            {
-                return Err(bad(
-                    &format!("{field}.{key}"),
-                    format!("no joint of {} is named or grouped `{key}`", robot.name),
-                ));
-            }
-        }
-        groups
-            .iter()
-            .enumerate()
-            .map(|(j, g)| {
-                let v = table
-                    .get(&robot.joints[j].name)
-                    .or_else(|| table.get(g))
-                    .or_else(|| table.get("default"))
-                    .copied()
-                    .or_else(|| fallback.map(|f| f(j)));
-                match v {
-                    Some(v) if v.is_finite() && (allow_negative || v >= 0.0) && v.abs() <= max.0 => {
-                        Ok(v)
-                    }
-                    Some(v) if v.is_finite() && (allow_negative || v >= 0.0) => Err(bad(
-                        &format!("{field}.{g}"),
-                        format!(
-                            "{} is beyond {} ({}): no actuator of a humanoid this size has it, so it is taken for a mistake",
-                            short(v),
-                            short(max.0),
-                            max.1
-                        ),
-                    )),
-                    Some(v) => Err(bad(
-                        &format!("{field}.{g}"),
-                        format!("must be a finite value >= 0, got {}", short(v)),
-                    )),
-                    None => Err(bad(
-                        field,
-                        format!(
-                            "no value for joint `{}` (group `{g}`) and no `default`",
-                            robot.joints[j].name
-                        ),
-                    )),
-                }
-            })
-            .collect()
+                          allow_negative: bool| {
+        per_joint(robot, path, field, table, fallback, allow_negative)
     };
     let resolve = |field: &str, table: &PerGroup, fallback: Option<&dyn Fn(usize) -> f64>| {
         resolve_signed(field, table, fallback, false)

@@ -114,6 +114,139 @@ fn difference_text(d: &MeanCi, digits: usize) -> String {
     }
 }
 
+/// The members' cells of pair `r` on `engine`, with the note naming what lies outside
+/// a member family's training.
+fn members_table(r: &PairResult, engine: &str) -> String {
+    let mut out = String::new();
+    out.push_str("| member | stiffness (N/m) | no force |");
+    let mut rule = String::from("|---|---:|---:|");
+    for n in &r.push_n {
+        out.push_str(&format!(" {n} N |"));
+        rule.push_str("---:|");
+    }
+    for n in &r.event_n {
+        out.push_str(&format!(" event {n} N |"));
+        rule.push_str("---:|");
+    }
+    out.push_str(" force log | wall time |\n");
+    rule.push_str("---:|---:|\n");
+    out.push_str(&rule);
+    let mut outside_of: Vec<String> = Vec::new();
+    for m in r.members.iter().filter(|m| m.engine == engine) {
+        let trained = m.policy.family().trained_forces;
+        let mut mark = |inside: Option<bool>| {
+            if inside == Some(false) {
+                let note = format!("`{}`: {}", m.policy.family().name, trained.describe());
+                if !outside_of.contains(&note) {
+                    outside_of.push(note);
+                }
+                " †"
+            } else {
+                ""
+            }
+        };
+        let mut line = format!(
+            "| {} ({}) | {} | {} |",
+            super::super::markdown_cell(&m.policy.table_label()),
+            m.role,
+            m.stiffness().map_or_else(|| "–".into(), |k| format!("{k}")),
+            cell_text(cell(&m.pushes, "no-force"))
+        );
+        for n in &r.push_n {
+            // Every push acts on both hands for the whole clip.
+            let inside = trained.holds_push(*n, r.seconds, true, m.stiffness(), false);
+            line.push_str(&format!(
+                " {}{} |",
+                cell_text(mean_over(&m.pushes, &r.settings_of(*n))),
+                mark(inside)
+            ));
+        }
+        for n in &r.event_n {
+            // Every direction of an event has the same envelope verdict.
+            let inside = crate::sim::disturbance::Disturbance::parse(&event_setting(*n, 0.0))
+                .and_then(Result::ok)
+                .and_then(|d| trained.outside_disturbance(&d, m.stiffness()))
+                .map(|why| why.is_empty());
+            line.push_str(&format!(
+                " {}{} |",
+                cell_text(mean_over(&m.pushes, &r.events_of(*n))),
+                mark(inside)
+            ));
+        }
+        let log_inside = match trained {
+            // A continuous history on both hands is no single-wrist event.
+            TrainedForces::WristEvents { .. } => Some(false),
+            _ => None,
+        };
+        line.push_str(&format!(
+            " {}{} | {} |\n",
+            cell_text(cell(&m.force_log, "force")),
+            mark(log_inside),
+            super::super::minutes(m.wall_s)
+        ));
+        out.push_str(&line);
+    }
+    out.push('\n');
+    if !outside_of.is_empty() {
+        out.push_str(&format!(
+            "† outside the forces the member's family was trained with, shown as measured: {}.\n\n",
+            outside_of.join("; ")
+        ));
+    }
+    out
+}
+
+/// The paired differences of pair `r` on `engine`, each column's with its interval.
+fn differences_table(r: &PairResult, engine: &str) -> String {
+    let mut out = String::new();
+    out.push_str("| compliant − baseline | no force |");
+    let mut rule = String::from("|---|---:|");
+    for n in &r.push_n {
+        out.push_str(&format!(" {n} N (over directions) |"));
+        rule.push_str("---:|");
+    }
+    out.push_str(" all pushes (over directions, by magnitude) |");
+    rule.push_str("---:|");
+    for n in &r.event_n {
+        out.push_str(&format!(" event {n} N (over directions) |"));
+        rule.push_str("---:|");
+    }
+    if !r.event_n.is_empty() {
+        out.push_str(" all events (over directions, by magnitude) |");
+        rule.push_str("---:|");
+    }
+    out.push_str(" force log |\n");
+    rule.push_str("---:|\n");
+    out.push_str(&rule);
+    let one = |s: &str| vec![vec![s.to_string()]];
+    let mut columns: Vec<Vec<Vec<String>>> = vec![one("no-force")];
+    columns.extend(r.push_n.iter().map(|n| vec![r.settings_of(*n)]));
+    columns.push(r.all_pushes());
+    columns.extend(r.event_n.iter().map(|n| vec![r.events_of(*n)]));
+    if !r.event_n.is_empty() {
+        columns.push(r.all_events());
+    }
+    columns.push(one("force"));
+    for (k, (what, digits)) in [
+        ("Δ FATS", 1),
+        ("Δ survival", 3),
+        ("Δ keypoint error (mm)", 1),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        out.push_str(&format!("| {what} |"));
+        for settings in &columns {
+            let text = r
+                .differences(engine, settings)
+                .map_or_else(|| "–".into(), |d| difference_text(&d[k], digits));
+            out.push_str(&format!(" {text} |"));
+        }
+        out.push('\n');
+    }
+    out
+}
+
 /// The pairs as Markdown: per pair and engine, one table of every member's cells (FATS ·
 /// survival · keypoint error in mm; a push magnitude's cell averages its directions) and
 /// one of the paired differences with their bootstrap 95 % intervals.
@@ -134,127 +267,8 @@ pub fn pairs_table(results: &[PairResult]) -> String {
                 r.push_headings_deg.iter().map(|h| format!("{h}")).collect::<Vec<_>>().join("/"),
                 r.force_source
             ));
-            out.push_str("| member | stiffness (N/m) | no force |");
-            let mut rule = String::from("|---|---:|---:|");
-            for n in &r.push_n {
-                out.push_str(&format!(" {n} N |"));
-                rule.push_str("---:|");
-            }
-            for n in &r.event_n {
-                out.push_str(&format!(" event {n} N |"));
-                rule.push_str("---:|");
-            }
-            out.push_str(" force log | wall time |\n");
-            rule.push_str("---:|---:|\n");
-            out.push_str(&rule);
-            let mut outside_of: Vec<String> = Vec::new();
-            for m in r.members.iter().filter(|m| m.engine == engine) {
-                let trained = m.policy.family().trained_forces;
-                let mut mark = |inside: Option<bool>| {
-                    if inside == Some(false) {
-                        let note = format!("`{}`: {}", m.policy.family().name, trained.describe());
-                        if !outside_of.contains(&note) {
-                            outside_of.push(note);
-                        }
-                        " †"
-                    } else {
-                        ""
-                    }
-                };
-                let mut line = format!(
-                    "| {} ({}) | {} | {} |",
-                    super::super::markdown_cell(&m.policy.table_label()),
-                    m.role,
-                    m.stiffness().map_or_else(|| "–".into(), |k| format!("{k}")),
-                    cell_text(cell(&m.pushes, "no-force"))
-                );
-                for n in &r.push_n {
-                    // Every push acts on both hands for the whole clip.
-                    let inside = trained.holds_push(*n, r.seconds, true, m.stiffness(), false);
-                    line.push_str(&format!(
-                        " {}{} |",
-                        cell_text(mean_over(&m.pushes, &r.settings_of(*n))),
-                        mark(inside)
-                    ));
-                }
-                for n in &r.event_n {
-                    // Every direction of an event has the same envelope verdict.
-                    let inside =
-                        crate::sim::disturbance::Disturbance::parse(&event_setting(*n, 0.0))
-                            .and_then(Result::ok)
-                            .and_then(|d| trained.outside_disturbance(&d, m.stiffness()))
-                            .map(|why| why.is_empty());
-                    line.push_str(&format!(
-                        " {}{} |",
-                        cell_text(mean_over(&m.pushes, &r.events_of(*n))),
-                        mark(inside)
-                    ));
-                }
-                let log_inside = match trained {
-                    // A continuous history on both hands is no single-wrist event.
-                    TrainedForces::WristEvents { .. } => Some(false),
-                    _ => None,
-                };
-                line.push_str(&format!(
-                    " {}{} | {} |\n",
-                    cell_text(cell(&m.force_log, "force")),
-                    mark(log_inside),
-                    super::super::minutes(m.wall_s)
-                ));
-                out.push_str(&line);
-            }
-            out.push('\n');
-            if !outside_of.is_empty() {
-                out.push_str(&format!(
-                    "† outside the forces the member's family was trained with, shown as measured: {}.\n\n",
-                    outside_of.join("; ")
-                ));
-            }
-            out.push_str("| compliant − baseline | no force |");
-            let mut rule = String::from("|---|---:|");
-            for n in &r.push_n {
-                out.push_str(&format!(" {n} N (over directions) |"));
-                rule.push_str("---:|");
-            }
-            out.push_str(" all pushes (over directions, by magnitude) |");
-            rule.push_str("---:|");
-            for n in &r.event_n {
-                out.push_str(&format!(" event {n} N (over directions) |"));
-                rule.push_str("---:|");
-            }
-            if !r.event_n.is_empty() {
-                out.push_str(" all events (over directions, by magnitude) |");
-                rule.push_str("---:|");
-            }
-            out.push_str(" force log |\n");
-            rule.push_str("---:|\n");
-            out.push_str(&rule);
-            let one = |s: &str| vec![vec![s.to_string()]];
-            let mut columns: Vec<Vec<Vec<String>>> = vec![one("no-force")];
-            columns.extend(r.push_n.iter().map(|n| vec![r.settings_of(*n)]));
-            columns.push(r.all_pushes());
-            columns.extend(r.event_n.iter().map(|n| vec![r.events_of(*n)]));
-            if !r.event_n.is_empty() {
-                columns.push(r.all_events());
-            }
-            columns.push(one("force"));
-            for (k, (what, digits)) in [
-                ("Δ FATS", 1),
-                ("Δ survival", 3),
-                ("Δ keypoint error (mm)", 1),
-            ]
-            .into_iter()
-            .enumerate()
-            {
-                out.push_str(&format!("| {what} |"));
-                for settings in &columns {
-                    let text = r
-                        .differences(engine, settings)
-                        .map_or_else(|| "–".into(), |d| difference_text(&d[k], digits));
-                    out.push_str(&format!(" {text} |"));
-                }
-                out.push('\n');
-            }
+            out.push_str(&members_table(r, engine));
+            out.push_str(&differences_table(r, engine));
             out.push('\n');
         }
     }

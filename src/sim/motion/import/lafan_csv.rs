@@ -95,6 +95,57 @@ pub fn read_softmimic_csv(path: &Path, fps: f64) -> Result<RawMotion, ImportErro
     read_retargeted_csv(path, fps, CsvLayout::SoftMimic)
 }
 
+/// The numbers of one CSV row into `values`, each finite (`line`: the row's number in
+/// messages).
+fn row_values(
+    record: &csv::ByteRecord,
+    line: u64,
+    path: &Path,
+    values: &mut Vec<f64>,
+) -> Result<(), ImportError> {
+    values.clear();
+    for (col, raw) in record.iter().enumerate() {
+        let value = std::str::from_utf8(raw)
+            .ok()
+            .and_then(|s| s.parse::<f64>().ok())
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| ImportError::BadField {
+                path: path.to_path_buf(),
+                field: format!("row {line}, column {}", col + 1),
+                reason: format!("not a finite number: {:?}", String::from_utf8_lossy(raw)),
+            })?;
+        values.push(value);
+    }
+    Ok(())
+}
+
+/// An imported clip's provenance: its format, file, frames, rate, joint order and, when
+/// its rows carry contact flags, the frames each foot is in contact.
+fn csv_provenance(
+    layout: CsvLayout,
+    path: &Path,
+    frames: usize,
+    fps: f64,
+    contact_frames: Option<[usize; 2]>,
+) -> serde_json::Map<String, Value> {
+    let mut provenance = serde_json::Map::new();
+    provenance.insert("format".into(), Value::from(layout.tag()));
+    provenance.insert(
+        "source_file".into(),
+        Value::from(path.display().to_string()),
+    );
+    provenance.insert("frames".into(), Value::from(frames));
+    provenance.insert("source_fps".into(), Value::from(fps));
+    provenance.insert("joint_order".into(), Value::from("canonical"));
+    if let Some([left, right]) = contact_frames {
+        provenance.insert(
+            "foot_contact_frames".into(),
+            serde_json::json!({"left": left, "right": right}),
+        );
+    }
+    provenance
+}
+
 /// Reads `path` in `layout` at `fps`.
 pub fn read_retargeted_csv(
     path: &Path,
@@ -159,20 +210,7 @@ pub fn read_retargeted_csv(
                 ),
             ));
         }
-        values.clear();
-        for (col, raw) in record.iter().enumerate() {
-            let value = std::str::from_utf8(raw)
-                .ok()
-                .and_then(|s| s.parse::<f64>().ok())
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    bad(
-                        format!("row {line}, column {}", col + 1),
-                        format!("not a finite number: {:?}", String::from_utf8_lossy(raw)),
-                    )
-                })?;
-            values.push(value);
-        }
+        row_values(&record, line, path, &mut values)?;
         root_pos.push([values[0], values[1], values[2]]);
         // File order x y z w → w x y z.
         root_quat_wxyz.push([values[6], values[3], values[4], values[5]]);
@@ -208,22 +246,13 @@ pub fn read_retargeted_csv(
         });
     }
 
-    let mut provenance = serde_json::Map::new();
-    provenance.insert("format".into(), Value::from(layout.tag()));
-    provenance.insert(
-        "source_file".into(),
-        Value::from(path.display().to_string()),
+    let provenance = csv_provenance(
+        layout,
+        path,
+        joint_pos.len(),
+        fps,
+        (with_flags == Some(true)).then_some(contact_frames),
     );
-    provenance.insert("frames".into(), Value::from(joint_pos.len()));
-    provenance.insert("source_fps".into(), Value::from(fps));
-    provenance.insert("joint_order".into(), Value::from("canonical"));
-    if with_flags == Some(true) {
-        provenance.insert(
-            "foot_contact_frames".into(),
-            serde_json::json!({"left": contact_frames[0], "right": contact_frames[1]}),
-        );
-    }
-
     Ok(RawMotion {
         fps,
         root_pos,

@@ -103,37 +103,7 @@ pub fn read_beyondmimic_npz(
         }
     };
     let in_file = read_names(&mut archive, path, "joint_names")?;
-    let (names, order) = match (joint_names, in_file) {
-        (Some(given), Some(file)) if given != file.as_slice() => {
-            return Err(bad(
-                "joint_names",
-                format!(
-                    "the file names its joints [{}], which contradicts the order given [{}]",
-                    file.join(", "),
-                    given.join(", ")
-                ),
-            ))
-        }
-        (_, Some(file)) => (file, "file"),
-        (Some(given), None) => (given.to_vec(), "given"),
-        (None, None) => (
-            ISAACLAB_G1_JOINT_ORDER.map(String::from).to_vec(),
-            "isaaclab",
-        ),
-    };
-    if names.len() != columns {
-        return Err(bad(
-            "joint_names",
-            format!("{} names for {columns} joint_pos columns", names.len()),
-        ));
-    }
-    if let Some(dup) = names
-        .iter()
-        .enumerate()
-        .find(|(i, n)| names[..*i].contains(n))
-    {
-        return Err(bad("joint_names", format!("`{}` appears twice", dup.1)));
-    }
+    let (names, order) = column_names(path, joint_names, in_file, columns)?;
 
     let joint_vel = match read_optional(&mut archive, path, "joint_vel")? {
         Some(v) if v.shape == joint_pos.shape => Some(rows(&v.data, columns)),
@@ -192,6 +162,54 @@ pub fn read_beyondmimic_npz(
         joint_vel,
         provenance,
     })
+}
+
+/// The names of `columns` joint columns: the file's own, else those given, else IsaacLab's
+/// order (and which of the three); a file's names that contradict the given ones, a count
+/// that is not the columns' or a name given twice are refused.
+fn column_names(
+    path: &Path,
+    given: Option<&[String]>,
+    in_file: Option<Vec<String>>,
+    columns: usize,
+) -> Result<(Vec<String>, &'static str), ImportError> {
+    let bad = |field: &str, reason: String| ImportError::BadField {
+        path: path.to_path_buf(),
+        field: field.to_string(),
+        reason,
+    };
+    let (names, order) = match (given, in_file) {
+        (Some(given), Some(file)) if given != file.as_slice() => {
+            return Err(bad(
+                "joint_names",
+                format!(
+                    "the file names its joints [{}], which contradicts the order given [{}]",
+                    file.join(", "),
+                    given.join(", ")
+                ),
+            ))
+        }
+        (_, Some(file)) => (file, "file"),
+        (Some(given), None) => (given.to_vec(), "given"),
+        (None, None) => (
+            ISAACLAB_G1_JOINT_ORDER.map(String::from).to_vec(),
+            "isaaclab",
+        ),
+    };
+    if names.len() != columns {
+        return Err(bad(
+            "joint_names",
+            format!("{} names for {columns} joint_pos columns", names.len()),
+        ));
+    }
+    if let Some(dup) = names
+        .iter()
+        .enumerate()
+        .find(|(i, n)| names[..*i].contains(n))
+    {
+        return Err(bad("joint_names", format!("`{}` appears twice", dup.1)));
+    }
+    Ok((names, order))
 }
 
 fn shape_reason(want: &str, got: &[usize]) -> String {
