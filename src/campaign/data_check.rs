@@ -3,12 +3,13 @@
 //! into the output directory, resumed when the command runs again — so the check can say
 //! which sequences a good tracker cannot hold with no force on it.
 
-use crate::campaign::leaderboard::{
-    run_in_process, LeaderboardError, LeaderboardObserver, ProgressLines,
+use crate::eval::pipeline::{
+    BenchmarkError, EvalObserver, Evaluation, OpenError, Place, ProgressLines,
 };
 use crate::eval::results::{check_dir, OutputRefused, ResultsError, RunDir};
-use crate::eval::EngineChoice;
+use crate::eval::{EngineChoice, EvalRequest, Setting};
 use crate::policy::registry::{self, PolicySource, RegistryError};
+use crate::policy::SessionOptions;
 use crate::sim::motion::check::held::{SequenceHeld, TrackerHeld};
 use crate::sim::motion::check::{
     check_dataset, CheckError, CheckGateError, CheckOptions, CheckWriteError, DatasetCheck,
@@ -63,9 +64,31 @@ pub enum DataCheckError {
     /// The tracker's run would have nowhere to go.
     #[error("`option.rollout` runs an evaluation, kept for `view` and reruns: give `option.out`")]
     RolloutNeedsOut,
+    /// The tracker is a policy process: the check's rollouts step it in process.
+    #[error("{0} names a policy process; `option.rollout` steps a tracker in process (a built-in or a network file, e.g. twist2:FILE)")]
+    RolloutNotInProcess(String),
+    /// The tracker's run directory could not be made.
+    #[error("making the tracker's run directory {}: {source}", path.display())]
+    RolloutDir {
+        /// The directory.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The tracker's run could not be opened.
+    #[error("the tracker's rollouts: {0}")]
+    RolloutOpen(#[from] Box<OpenError>),
     /// The tracker's run failed.
     #[error("the tracker's rollouts: {0}")]
-    Rollout(#[from] Box<LeaderboardError>),
+    Rollout(#[from] Box<BenchmarkError>),
+    /// A run of the tracker in the output directory that cannot be continued.
+    #[error("the tracker's rollouts: {source}; remove {} to run it again from the start, or choose another `option.out`", path.display())]
+    RolloutOther {
+        /// The run directory.
+        path: PathBuf,
+        /// Why it cannot be continued.
+        source: Box<ResultsError>,
+    },
     /// The tracker's run could not be read back.
     #[error("reading the tracker's run: {0}")]
     RolloutRead(#[from] ResultsError),
@@ -86,11 +109,10 @@ pub trait DataCheckObserver {
     /// `done` of `total` sequences checked.
     fn checked(&mut self, done: usize, total: usize);
     /// The observer of the tracker's run.
-    fn rollouts(&mut self) -> &mut dyn LeaderboardObserver;
+    fn rollouts(&mut self) -> &mut dyn EvalObserver;
 }
 
-/// Progress as lines: the sequences checked at each tenth, then the tracker's run as the
-/// leaderboard says its runs.
+/// Progress as lines: the sequences checked at each tenth, then the tracker's run's.
 impl DataCheckObserver for ProgressLines<'_> {
     fn checked(&mut self, done: usize, total: usize) {
         if done == total || done.is_multiple_of((total / 10).max(1)) {
@@ -98,7 +120,7 @@ impl DataCheckObserver for ProgressLines<'_> {
         }
     }
 
-    fn rollouts(&mut self) -> &mut dyn LeaderboardObserver {
+    fn rollouts(&mut self) -> &mut dyn EvalObserver {
         self
     }
 }
@@ -126,7 +148,12 @@ pub fn run_data_check(
     })?;
     if let (Some(tracker), Some(out)) = (&job.tracker, &job.out) {
         let run = out.join(format!("rollout-{}", tracker.dir_label()));
-        crate::campaign::leaderboard::make_run_dir(out, &run).map_err(Box::new)?;
+        crate::files::no_follow::make_dir_within(out, &run).map_err(|source| {
+            DataCheckError::RolloutDir {
+                path: run.clone(),
+                source,
+            }
+        })?;
         check.tracker = Some(rollouts(job, tracker, &run, &check, observer)?);
     }
     if let Some(out) = &job.out {
@@ -144,16 +171,34 @@ fn rollouts(
     check: &DatasetCheck,
     observer: &mut dyn DataCheckObserver,
 ) -> Result<TrackerHeld, DataCheckError> {
-    let settings = [crate::eval::Setting::no_force()];
-    run_in_process(
-        tracker,
-        &job.dataset,
-        &settings,
-        job.engine,
-        run,
+    if !tracker.in_process() {
+        return Err(DataCheckError::RolloutNotInProcess(tracker.to_string()));
+    }
+    let request = EvalRequest {
+        policy: tracker.clone(),
+        dataset: Some(job.dataset.clone()),
+        settings: vec![Setting::no_force()],
+        engine: job.engine,
+        ..EvalRequest::default()
+    };
+    let place = Place::Owned {
+        dir: run.to_path_buf(),
+        rerun: false,
+    };
+    let mut evaluation = Evaluation::open(
+        &request,
+        place,
+        &SessionOptions::LAUNCHED,
         observer.rollouts(),
     )
     .map_err(Box::new)?;
+    evaluation.run(observer.rollouts()).map_err(|e| match e {
+        BenchmarkError::ResumedOther(source) => DataCheckError::RolloutOther {
+            path: run.to_path_buf(),
+            source: Box::new(source),
+        },
+        e => DataCheckError::Rollout(Box::new(e)),
+    })?;
     let dir = RunDir::new(run);
     let log = dir.read_log(&dir.read_header()?)?;
     let sequences = check

@@ -3,7 +3,7 @@
 
 use std::path::PathBuf;
 use thorarena::campaign::data_check::{run_data_check, DataCheckJob};
-use thorarena::campaign::leaderboard::ProgressLines;
+use thorarena::eval::pipeline::ProgressLines;
 use thorarena::sim::motion::check::{CheckOptions, CHECK_JSON, CHECK_MARKDOWN};
 
 /// Arguments of `data check` (definitions: docs/data-check.md).

@@ -6,12 +6,13 @@
 //! up to — the same records, summary and tables as an unsharded run
 //! ([`thorarena::eval::pipeline::merge`]).
 
+use super::eval_run::{score, Notes};
 use super::run_args::REQUEST_CONFLICTS;
 pub use super::run_args::{RunArgs, RunOutArgs};
 use anyhow::Context;
 use std::path::PathBuf;
-use thorarena::eval::{pipeline::merge_dirs, results::RunTarget, EvalRequest, EvalSpec};
-use thorarena::policy::registry::{open_policy, PolicyTarget};
+use thorarena::eval::pipeline::{merge_dirs, Evaluation, Place};
+use thorarena::eval::{EvalRequest, EvalSpec};
 
 /// Arguments of `eval`.
 #[derive(Debug, clap::Args)]
@@ -55,38 +56,14 @@ pub(super) fn run(args: &Args) -> anyhow::Result<()> {
         None => args.run.request(args.policy.clone(), args.to.shard),
     };
     let spec = load_request(&request)?;
-    let target = RunTarget {
+    let session = args.run.io.session_options(spec.io.budget_s)?;
+    let place = Place::Given {
         out: args.out.clone(),
         resume: args.to.resume,
         overwrite: args.to.overwrite,
-        spec: &spec,
     };
-    // An unusable --out is found before a policy process is made to connect.
-    target.check_given()?;
-    let session = args.run.io.session_options(spec.io.budget_s)?;
-    let launch_log = args
-        .out
-        .as_deref()
-        .map(thorarena::policy::launched::log_beside);
-    let mut policy = open_policy(
-        &request.policy,
-        &PolicyTarget {
-            robot: &spec.robot,
-            profile: &spec.profile,
-            process_profile: spec.process_profile,
-            session: &session,
-            envs: spec.envs,
-            launch_log: launch_log.as_deref(),
-        },
-        &mut |name| {
-            target
-                .vet(name)
-                .map_err(|e| super::flags::as_flags(&e.to_string()))
-        },
-        &mut |note| eprintln!("{note}"),
-    )?;
-    let out = target.out_for(policy.name())?;
-    super::eval_run::evaluate(args.to.resume, &spec, policy.as_mut(), &out)
+    let mut evaluation = Evaluation::of_spec(spec, &request, place, &session, &mut Notes)?;
+    score(&mut evaluation)
 }
 
 /// Arguments of `merge`.

@@ -2,12 +2,10 @@
 //! printed, and a policy failure turned into the exit status.
 
 use super::flags::as_flags;
-use std::path::Path;
 use thorarena::eval::episode::EpisodeTrace;
-use thorarena::eval::pipeline::{EvalObserver, EvalOptions, Evaluated, Starting};
+use thorarena::eval::pipeline::{EvalObserver, Evaluated, Evaluation, Starting};
 use thorarena::eval::results::RunDir;
 use thorarena::eval::{EpisodeRecord, EvalSpec};
-use thorarena::policy::Policy;
 
 /// The progress of a run on the terminal: what it starts with, a bar over its episodes.
 pub(super) struct Progress {
@@ -53,6 +51,10 @@ impl EvalObserver for Progress {
         self.bar.set_length(s.to_run as u64);
     }
 
+    fn note(&mut self, text: &str) {
+        self.bar.suspend(|| eprintln!("{}", as_flags(text)));
+    }
+
     fn episode(&mut self, r: &EpisodeRecord, _trace: Option<&EpisodeTrace>) {
         self.bar
             .set_message(format!("{}/{} ({})", r.task, r.sequence_id, r.setting));
@@ -68,23 +70,28 @@ pub(super) fn print_evaluated(done: &Evaluated, spec: &EvalSpec, run: &RunDir) {
     }
 }
 
-/// Runs the benchmark for one connected policy into `out` and prints its tables; a run
-/// whose policy failed is an error (after its results are written).
-pub(super) fn evaluate(
-    resume: bool,
-    spec: &EvalSpec,
-    policy: &mut dyn Policy,
-    out: &Path,
-) -> anyhow::Result<()> {
-    let run = RunDir::new(out);
-    let mut progress = Progress::new(policy.name(), spec, &run, resume);
-    let options = EvalOptions {
-        resume,
-        trace_first_s: None,
-    };
-    let result = thorarena::eval::pipeline::evaluate(spec, policy, &run, options, &mut progress);
+/// What opening a run says, on the terminal (its option names as flags).
+pub(super) struct Notes;
+
+impl EvalObserver for Notes {
+    fn note(&mut self, text: &str) {
+        eprintln!("{}", as_flags(text));
+    }
+}
+
+/// Scores an opened run with its progress bar and prints its tables; a run whose policy
+/// failed is an error (after its results are written).
+pub(super) fn score(evaluation: &mut Evaluation) -> anyhow::Result<()> {
+    let run = RunDir::new(evaluation.run.path());
+    let mut progress = Progress::new(
+        evaluation.policy.name(),
+        &evaluation.spec,
+        &run,
+        evaluation.resume,
+    );
+    let result = evaluation.run(&mut progress);
     progress.finish();
     let done = result?;
-    print_evaluated(&done, spec, &run);
-    Ok(done.check_policy(out)?)
+    print_evaluated(&done, &evaluation.spec, &run);
+    Ok(done.check_policy(run.path())?)
 }

@@ -8,8 +8,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 use thorarena::campaign::leaderboard::{
-    run_leaderboard_job, CompliancePair, LeaderboardJob, OwnClip, PairOptions, ProgressLines,
+    run_leaderboard_job, CompliancePair, LeaderboardJob, OwnClip, PairOptions,
 };
+use thorarena::eval::pipeline::ProgressLines;
 
 /// Arguments of `leaderboard`.
 #[derive(Debug, clap::Args)]

@@ -2,10 +2,9 @@
 //! evaluate whichever policy process connects, write its results, wait for the next one.
 
 use super::eval::{load_request, RunArgs};
-use super::eval_run::evaluate;
+use super::eval_run::{score, Notes};
 use std::path::PathBuf;
-use thorarena::policy::registry::{serve_session, PolicyTarget};
-use thorarena::policy::Policy;
+use thorarena::eval::pipeline::{Evaluation, Place};
 
 /// Arguments of `serve`.
 #[derive(Debug, clap::Args)]
@@ -28,23 +27,18 @@ pub struct Args {
 
 pub(super) fn run(args: &Args) -> anyhow::Result<()> {
     let policy = thorarena::policy::registry::PolicySource::on_session(&args.session);
-    let ctx = load_request(&args.run.request(policy, None))?;
-    let session = args.run.io.session_options(ctx.io.budget_s)?;
-    let target = PolicyTarget {
-        robot: &ctx.robot,
-        profile: &ctx.profile,
-        process_profile: ctx.process_profile,
-        session: &session,
-        envs: ctx.envs,
-        launch_log: None,
-    };
+    let request = args.run.request(policy, None);
+    let spec = load_request(&request)?;
+    let session = args.run.io.session_options(spec.io.budget_s)?;
     for n in 1.. {
-        let mut say = |note: &str| eprintln!("{note}");
-        let mut policy = serve_session(&args.session, &target, &mut |_| Ok(()), &mut say)?;
-        let stem = format!("{}-{}", policy.name(), ctx.dataset_name());
-        let out = thorarena::eval::results::free_numbered_dir(&args.out_root, &stem, n);
-        let result = evaluate(false, &ctx, &mut policy as &mut dyn Policy, &out);
-        drop(policy); // tells the client the run is over
+        let place = Place::Numbered {
+            root: args.out_root.clone(),
+            from: n,
+        };
+        let mut evaluation =
+            Evaluation::of_spec(spec.clone(), &request, place, &session, &mut Notes)?;
+        let result = score(&mut evaluation);
+        drop(evaluation); // tells the client the run is over
         if let Err(e) = &result {
             eprintln!(
                 "run {n} ended with an error: {}",

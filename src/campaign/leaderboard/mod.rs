@@ -7,16 +7,18 @@
 //!
 //! Each run is exactly what `eval` with the same flags writes (the same `EvalSpec`, the
 //! same `pipeline::evaluate`, the sanity check first), so a leaderboard row can be
-//! re-derived by one `eval`. A policy in its own process ([`PolicyProcess`], any
-//! language) is started and connected through the same door as every policy
-//! ([`registry::open_policy`]) for each of its runs, then scored like the others.
+//! re-derived by one `eval`: every run is opened through the one door,
+//! [`Evaluation::open`], a policy in its own process ([`PolicyProcess`], any language)
+//! started and connected there for each of its runs, then scored like the others.
 
-use crate::eval::pipeline::{evaluate, BenchmarkError, EvalObserver, EvalOptions};
-use crate::eval::results::{RunDir, Summary};
-use crate::eval::{EngineChoice, EvalRequest, EvalSpec, Setting, SpecError};
+use crate::eval::pipeline::{
+    BenchmarkError, EvalObserver, Evaluation, OpenError, Place, ProgressLines,
+};
+use crate::eval::results::Summary;
+use crate::eval::{EngineChoice, EvalRequest, Setting};
 use crate::policy::launched::PolicyCommand;
-use crate::policy::registry::{self, OpenPolicyError, PolicySource, PolicyTarget};
-use crate::policy::{Policy, SessionOptions};
+use crate::policy::registry::PolicySource;
+use crate::policy::SessionOptions;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -24,7 +26,6 @@ mod board_table;
 mod job;
 mod outputs;
 mod pairs;
-mod progress_lines;
 
 pub use board_table::{leaderboard_table, tasks_outside_training, write_leaderboard_page};
 pub(crate) use board_table::{markdown_cell, minutes};
@@ -36,30 +37,20 @@ pub use pairs::{
     check_pairs, pairs_csv, pairs_table, run_pairs, write_pair_files, CompliancePair, PairMember,
     PairOptions, PairResult,
 };
-pub use progress_lines::ProgressLines;
 
 /// Why the leaderboard could not be made.
 #[derive(Debug, thiserror::Error)]
 pub enum LeaderboardError {
-    /// An evaluation's request is invalid.
+    /// A run could not be opened: its request is invalid, or its policy could not be
+    /// loaded, or its process started or connected.
     #[error("{policy} on {engine}: {source}")]
-    Spec {
-        /// The policy argument.
-        policy: String,
-        /// The engine.
-        engine: &'static str,
-        /// Why.
-        source: Box<SpecError>,
-    },
-    /// The policy could not be loaded, or its process started or connected.
-    #[error("{policy} on {engine}: {source}")]
-    Policy {
+    Open {
         /// The policy argument, or the process's name.
         policy: String,
         /// The engine.
         engine: &'static str,
         /// Why.
-        source: Box<OpenPolicyError>,
+        source: Box<OpenError>,
     },
     /// A policy argument naming a session (`ipc:`): a policy process joins the leaderboard
     /// as a [`PolicyProcess`], started by the leaderboard for each run.
@@ -319,6 +310,25 @@ pub trait LeaderboardObserver {
     fn note(&mut self, _text: &str) {}
 }
 
+/// A leaderboard's progress as lines: one per run, then the run's own
+/// ([`ProgressLines`]).
+impl LeaderboardObserver for ProgressLines<'_> {
+    fn run_starting(&mut self, index: usize, total: usize, policy: &str, engine: &str) {
+        EvalObserver::note(
+            self,
+            &format!("[{}/{total}] {policy} on {engine}", index + 1),
+        );
+    }
+
+    fn eval_observer(&mut self) -> &mut dyn EvalObserver {
+        self
+    }
+
+    fn note(&mut self, text: &str) {
+        EvalObserver::note(self, text);
+    }
+}
+
 /// Who plays a leaderboard run: a policy argument (in process), or a policy process.
 #[derive(Debug, Clone)]
 enum Player {
@@ -483,7 +493,7 @@ pub fn run_leaderboard(
             // the board's dataset is not checked again on people's walks, where a
             // command follower's heading check judges the walk, not the wiring
             // (recorded `unchecked` in those runs).
-            let summary = run_one(
+            let summary = board_run(
                 request.unchecked || *track == Track::RealWalks,
                 player,
                 dataset,
@@ -510,24 +520,6 @@ pub fn run_leaderboard(
     Ok(entries)
 }
 
-/// One evaluation of an in-process policy on `dataset` into `run`, checked and resumed as
-/// the leaderboard's own runs are (a run there of another network starts again): how
-/// `data check --rollout` runs its tracker.
-pub fn run_in_process(
-    source: &PolicySource,
-    dataset: &Path,
-    settings: &[Setting],
-    engine: EngineChoice,
-    run: &Path,
-    observer: &mut dyn LeaderboardObserver,
-) -> Result<Summary, LeaderboardError> {
-    let player = Player::Argument(source.clone());
-    let resume = Resume::Alone;
-    run_one(
-        false, &player, dataset, settings, engine, run, resume, observer,
-    )
-}
-
 /// How a run already in its directory is treated, and what a refusal to resume it
 /// advises.
 #[derive(Debug, Clone, Copy)]
@@ -537,7 +529,7 @@ enum Resume {
         /// Start it again from the start.
         rerun: bool,
     },
-    /// A run of another command (`data check --rollout`): resumed, or removed by hand.
+    /// A run of the pairs: resumed, or removed by hand.
     Alone,
 }
 
@@ -564,8 +556,12 @@ fn check_rerun(
     Ok(())
 }
 
+/// One run of the board: `player` on `dataset` under `settings` on `engine` into `run`,
+/// opened through the one door ([`Evaluation`], the place [`Place::Owned`]: a run there
+/// of the same policy is continued, another started again) and scored; a run that cannot
+/// be continued is refused with what to do (`resume`'s advice).
 #[allow(clippy::too_many_arguments)]
-fn run_one(
+fn board_run(
     unchecked: bool,
     player: &Player,
     dataset: &Path,
@@ -591,98 +587,45 @@ fn run_one(
         unchecked,
         ..EvalRequest::default()
     };
-    let spec = EvalSpec::load(&request).map_err(|source| LeaderboardError::Spec {
+    let place = Place::Owned {
+        dir: run.to_path_buf(),
+        rerun: matches!(resume, Resume::Board { rerun: true }),
+    };
+    let mut evaluation = Evaluation::open(
+        &request,
+        place,
+        &SessionOptions::LAUNCHED,
+        observer.eval_observer(),
+    )
+    .map_err(|source| LeaderboardError::Open {
         policy: name.clone(),
         engine: engine_name,
         source: Box::new(source),
     })?;
-    let log = crate::policy::launched::log_beside(run);
-    let target = PolicyTarget {
-        robot: &spec.robot,
-        profile: &spec.profile,
-        process_profile: spec.process_profile,
-        session: &SessionOptions::LAUNCHED,
-        envs: spec.envs,
-        launch_log: Some(&log),
-    };
-    let mut policy: Box<dyn Policy> =
-        registry::open_policy(&request.policy, &target, &mut |_| Ok(()), &mut |note| {
-            observer.note(note)
-        })
-        .map_err(|source| LeaderboardError::Policy {
-            policy: name.clone(),
-            engine: engine_name,
-            source: Box::new(source),
-        })?;
-    let dir = RunDir::new(run);
-    let rerun = matches!(resume, Resume::Board { rerun: true });
-    if rerun && dir.header_file().exists() {
-        observer.note(&format!(
-            "  {}: running it again from the start, as `option.rerun` asks",
-            dir.path().display()
-        ));
-    }
-    let options = EvalOptions {
-        resume: !rerun && resumable(&dir, policy.as_ref(), &spec, observer),
-        trace_first_s: None,
-    };
-    let evaluated = evaluate(
-        &spec,
-        policy.as_mut(),
-        &dir,
-        options,
-        observer.eval_observer(),
-    )
-    .map_err(|source| match source {
-        BenchmarkError::ResumedOther(other) => LeaderboardError::OtherRun {
-            advice: match resume {
-                Resume::Board { .. } => format!(
-                    "give `option.rerun` {name} to run it again from the start (its episodes are replaced), or choose another `option.out`"
-                ),
-                Resume::Alone => format!(
-                    "remove {} to run it again from the start, or choose another `option.out`",
-                    dir.path().display()
-                ),
+    let evaluated = evaluation
+        .run(observer.eval_observer())
+        .map_err(|source| match source {
+            BenchmarkError::ResumedOther(other) => LeaderboardError::OtherRun {
+                advice: match resume {
+                    Resume::Board { .. } => format!(
+                        "give `option.rerun` {name} to run it again from the start (its episodes are replaced), or choose another `option.out`"
+                    ),
+                    Resume::Alone => format!(
+                        "remove {} to run it again from the start, or choose another `option.out`",
+                        run.display()
+                    ),
+                },
+                policy: name.clone(),
+                engine: engine_name,
+                source: Box::new(other),
             },
-            policy: name.clone(),
-            engine: engine_name,
-            source: Box::new(other),
-        },
-        source => LeaderboardError::Eval {
-            policy: name.clone(),
-            engine: engine_name,
-            source: Box::new(source),
-        },
-    })?;
+            source => LeaderboardError::Eval {
+                policy: name.clone(),
+                engine: engine_name,
+                source: Box::new(source),
+            },
+        })?;
     Ok(evaluated.summary)
-}
-
-/// Whether the run in `dir` is one to resume: it exists and ran the same policy by
-/// content (network, profile, robot) as `policy` under `spec`. A run of another network —
-/// the file was replaced since — or one that never recorded its network is run again from
-/// the start, and `observer` hears why; any other difference is left to the resume to
-/// refuse.
-fn resumable(
-    dir: &RunDir,
-    policy: &dyn Policy,
-    spec: &EvalSpec,
-    observer: &mut dyn LeaderboardObserver,
-) -> bool {
-    let Ok(previous) = dir.read_header() else {
-        return dir.header_file().exists();
-    };
-    let now = crate::eval::results::PolicyIdentity::of(policy, &spec.profile, &spec.robot);
-    let differences =
-        crate::eval::results::identity_differences(previous.identity.as_ref(), Some(&now));
-    if differences.is_empty() {
-        return true;
-    }
-    observer.note(&format!(
-        "  {} ran another policy than this one ({}, the run's first): running it again from the start",
-        dir.path().display(),
-        differences.join("; ")
-    ));
-    false
 }
 
 /// Per task, where the dataset's recorded hand forces point (`data check`'s

@@ -6,14 +6,18 @@
 //! tasks) only parse, call these and print.
 
 mod crosscheck;
+mod evaluation;
 mod named_check;
+mod progress_lines;
 mod recording;
 
 pub use crosscheck::{
     compare_engines, Compared, CrosscheckError, CrosscheckObserver, CrosscheckRequest,
     MAX_BOOTSTRAP,
 };
+pub use evaluation::{same_policy, Evaluation, OpenError, Place};
 pub use named_check::{check_named_policy, PolicyCheckError, PolicyCheckRequest};
+pub use progress_lines::ProgressLines;
 pub use recording::{Recorded, RunRecording};
 
 use crate::eval::episode::EpisodeTrace;
@@ -170,6 +174,9 @@ pub trait EvalObserver {
     /// An episode finished and its record is written; `trace` is its rollout when one was
     /// recorded (a `--trace` sequence, or [`EvalOptions::trace_first_s`]).
     fn episode(&mut self, _record: &EpisodeRecord, _trace: Option<&EpisodeTrace>) {}
+    /// What opening the run says: the spec's advice, a policy process's news (serving,
+    /// connected, a command started and its log).
+    fn note(&mut self, _text: &str) {}
 }
 
 /// An observer that hears nothing.

@@ -14,7 +14,7 @@
 //! population, they say how much the difference depends on where the push comes from. The
 //! tables label them so.
 
-use super::{run_name, run_one, LeaderboardError, LeaderboardObserver, Player};
+use super::{board_run, run_name, LeaderboardError, LeaderboardObserver, Player};
 // `check_out` refuses an output directory holding a dataset or a run.
 use crate::eval::results::Summary;
 use crate::eval::{EngineChoice, Setting};
@@ -367,7 +367,7 @@ pub fn run_pairs(
                 let run = dir.join("runs").join(run_name(&policy.dir_label(), engine));
                 super::make_run_dir(&dir, &run.with_extension("pushes"))?;
                 super::make_run_dir(&dir, &run.with_extension("force-log"))?;
-                let pushes = run_one(
+                let pushes = board_run(
                     options.unchecked,
                     &player,
                     &clip_dir,
@@ -377,7 +377,7 @@ pub fn run_pairs(
                     super::Resume::Alone,
                     observer,
                 )?;
-                let force_log = run_one(
+                let force_log = board_run(
                     options.unchecked,
                     &player,
                     &graft_dir,

@@ -1,14 +1,13 @@
-//! A leaderboard's progress as lines of text for a terminal or a log: one per run, its
-//! sanity check and episode count, one per tenth of its episodes, and the notes of the
-//! runs' policy processes. Lines, not a bar: a leaderboard runs for hours, often with its
-//! output in a file.
+//! Runs' progress as lines of text for a terminal or a log (the leaderboard's, `data
+//! check`'s rollouts): a run's sanity check and episode count, one line per tenth of its
+//! episodes, and the notes of its opening (advice, the policy process's news). Lines, not
+//! a bar: a leaderboard runs for hours, often with its output in a file.
 
-use super::LeaderboardObserver;
+use super::{EvalObserver, Starting};
 use crate::eval::episode::EpisodeTrace;
-use crate::eval::pipeline::{EvalObserver, Starting};
 use crate::eval::EpisodeRecord;
 
-/// Hands each line of a leaderboard's progress to `say`.
+/// Hands each line of the runs' progress to `say`.
 pub struct ProgressLines<'a> {
     say: &'a mut dyn FnMut(&str),
     /// Episodes the current run has to run.
@@ -28,20 +27,6 @@ impl<'a> ProgressLines<'a> {
     }
 }
 
-impl LeaderboardObserver for ProgressLines<'_> {
-    fn run_starting(&mut self, index: usize, total: usize, policy: &str, engine: &str) {
-        (self.say)(&format!("[{}/{total}] {policy} on {engine}", index + 1));
-    }
-
-    fn eval_observer(&mut self) -> &mut dyn EvalObserver {
-        self
-    }
-
-    fn note(&mut self, text: &str) {
-        (self.say)(text);
-    }
-}
-
 impl EvalObserver for ProgressLines<'_> {
     fn starting(&mut self, s: &Starting) {
         self.to_run = s.to_run;
@@ -54,6 +39,10 @@ impl EvalObserver for ProgressLines<'_> {
             "  {} episodes to run ({kept} already done)",
             s.to_run
         ));
+    }
+
+    fn note(&mut self, text: &str) {
+        (self.say)(text);
     }
 
     fn episode(&mut self, _: &EpisodeRecord, _: Option<&EpisodeTrace>) {
