@@ -54,14 +54,20 @@ for obs, actions in s.steps():
     Command::new("python3")
         .args(["-c", &script])
         .env("PYTHONPATH", format!("{ROOT}/adapters/python"))
-        .env(
-            "THORARENA_IPC_LIB",
-            format!("{ROOT}/target/release/libthorarena_ipc.so"),
-        )
+        .env("THORARENA_IPC_LIB", ipc_library())
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap()
+}
+
+/// The C ABI library cargo built for this test binary: `libthorarena_ipc.so` beside it
+/// in `<target>/<profile>/deps` (a test build does not copy it up to `<profile>`, and a
+/// separate `cargo build -p thorarena-ipc` would replace the workspace's own build of the
+/// crate there).
+fn ipc_library() -> std::path::PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    exe.parent().unwrap().join("libthorarena_ipc.so")
 }
 
 fn run_json(out: &Path) -> serde_json::Value {
@@ -170,18 +176,13 @@ fn over_the_c_abi_a_declared_profile_is_the_runs_too() {
     if !python_ready("declared_profile::over_the_c_abi_a_declared_profile_is_the_runs_too") {
         return;
     }
-    let lib = Path::new(ROOT).join("target/release/libthorarena_ipc.so");
-    if !lib.exists() {
-        // The C ABI library is the ipc crate's build output: made here when missing.
-        let _ = std::process::Command::new(env!("CARGO"))
-            .args(["build", "--release", "-p", "thorarena-ipc"])
-            .current_dir(ROOT)
-            .status();
-    }
-    if !lib.exists() {
+    if !ipc_library().exists() {
         return prereq::skip(
             "declared_profile::over_the_c_abi_a_declared_profile_is_the_runs_too",
-            "no target/release/libthorarena_ipc.so (cargo build --release -p thorarena-ipc)",
+            &format!(
+                "no {} (is `cdylib` still in ipc/Cargo.toml's crate-type?)",
+                ipc_library().display()
+            ),
         );
     }
     let robot = registry::robot("g1_29dof").unwrap();
