@@ -82,16 +82,15 @@ impl EvalObserver for Notes {
 /// Scores an opened run with its progress bar and prints its tables; a run whose policy
 /// failed is an error (after its results are written).
 pub(super) fn score(evaluation: &mut Evaluation) -> anyhow::Result<()> {
-    let run = RunDir::new(evaluation.run.path());
     let mut progress = Progress::new(
         evaluation.policy.name(),
         &evaluation.spec,
-        &run,
+        &evaluation.run,
         evaluation.resume,
     );
     let result = evaluation.run(&mut progress);
     progress.finish();
     let done = result?;
-    print_evaluated(&done, &evaluation.spec, &run);
-    Ok(done.check_policy(run.path())?)
+    print_evaluated(&done, &evaluation.spec, &evaluation.run);
+    Ok(done.check_policy(evaluation.run.path())?)
 }

@@ -180,7 +180,8 @@ impl Evaluation {
 
 /// The differences between the policy that made the run in `run` and `policy` under
 /// `spec`, by content (network, profile, robot: [`PolicyIdentity`]); empty when they are
-/// the same. A run that never recorded its policy differs from every policy.
+/// the same, `None` when `run` holds no readable header. A run that never recorded its
+/// policy's identity differs from every policy.
 pub fn same_policy(run: &RunDir, policy: &dyn Policy, spec: &EvalSpec) -> Option<Vec<String>> {
     let previous = run.read_header().ok()?;
     let now = PolicyIdentity::of(policy, &spec.profile, &spec.robot);
